@@ -1,0 +1,55 @@
+"""Command-line interface: ``selfrepair COMMAND ...``.
+
+:func:`main` runs the CLI in-process and returns the exit code, which is how the tests drive it;
+:func:`run` is the console-script entry point.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+
+import typer
+from typer._click.exceptions import ClickException, NoArgsIsHelpError
+
+from selfrepair.cli import basics  # noqa: F401  (registers commands)
+from selfrepair.cli._app import app
+from selfrepair.errors import SelfRepairError
+
+__all__ = ["app", "main", "run"]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the CLI with ``argv`` (default: ``sys.argv[1:]``) and return the exit code.
+
+    Bad input (any :class:`~selfrepair.errors.SelfRepairError` or a usage error) becomes one line
+    on stderr and exit code 2, never a traceback.
+    """
+    command = typer.main.get_command(app)
+    args = list(sys.argv[1:] if argv is None else argv)
+    try:
+        result = command.main(args=args, prog_name="selfrepair", standalone_mode=False)
+    except SelfRepairError as exc:
+        sys.stderr.write(f"selfrepair: error: {_one_line(str(exc))}\n")
+        return 2
+    except NoArgsIsHelpError as exc:
+        sys.stdout.write(exc.ctx.get_help() + "\n" if exc.ctx is not None else "")
+        return 0
+    except typer.Exit as exc:
+        return int(exc.exit_code)
+    except typer.Abort:
+        sys.stderr.write("selfrepair: aborted\n")
+        return 130
+    except ClickException as exc:
+        sys.stderr.write(f"selfrepair: error: {_one_line(exc.format_message())}\n")
+        return 2
+    return result if isinstance(result, int) else 0
+
+
+def _one_line(text: str) -> str:
+    return " ".join(text.split())
+
+
+def run() -> None:
+    """Console-script entry point."""
+    sys.exit(main())

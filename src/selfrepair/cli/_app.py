@@ -1,0 +1,43 @@
+"""The Typer application object and the helpers every command module shares.
+
+Command modules register themselves on :data:`app` (or on one of its groups) at import time;
+:mod:`selfrepair.cli` imports them all. Commands return an ``int`` exit code (0 unless stated) and
+raise :class:`selfrepair.errors.SelfRepairError` for bad input: :func:`selfrepair.cli.main` turns
+that into one line on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from typing import Any
+
+import typer
+from rich.console import Console
+
+app = typer.Typer(
+    name="selfrepair",
+    help="Self-repairing robot plans: replacement tables versus replanning from scratch.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+maze_app = typer.Typer(help="Show and generate mazes.", no_args_is_help=True)
+table_app = typer.Typer(help="Replacement tables: show, check, generate, coverage.", no_args_is_help=True)
+app.add_typer(maze_app, name="maze")
+app.add_typer(table_app, name="table")
+
+
+def console() -> Console:
+    """A rich console on the current stdout (looked up per call so tests can capture it)."""
+    return Console(file=sys.stdout, soft_wrap=True, highlight=False)
+
+
+def echo(text: str = "") -> None:
+    """Print plain text to stdout."""
+    sys.stdout.write(text + "\n")
+
+
+def echo_json(data: Any) -> None:
+    """Print ``data`` as indented JSON to stdout."""
+    sys.stdout.write(json.dumps(data, indent=2) + "\n")

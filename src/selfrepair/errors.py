@@ -1,0 +1,69 @@
+"""The one error hierarchy of selfrepair.
+
+Outcomes (no plan, no replacement, mission failed) are data on result values; these exceptions are
+for misuse and bad input only. The CLI turns every :class:`SelfRepairError` into a single line on
+stderr and exit code 2, so each message must stand on its own: it names the file, the line and
+column where known, and what was expected.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "ConfigError",
+    "InputError",
+    "ProblemError",
+    "SelfRepairError",
+    "TableError",
+    "TraceError",
+]
+
+
+class SelfRepairError(Exception):
+    """Root of every error that selfrepair raises on purpose."""
+
+
+class InputError(SelfRepairError, ValueError):
+    """Text that does not parse: a maze, scenario, action, fault, route, table or trace.
+
+    ``source`` is a file path or a short label such as ``"<string>"`` or ``"--faults"``;
+    ``line`` and ``column`` are 1-based and ``None`` when they do not apply.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        source: str = "<input>",
+        line: int | None = None,
+        column: int | None = None,
+    ) -> None:
+        self.source = source
+        self.line = line
+        self.column = column
+        self.reason = message
+        super().__init__(self._render())
+
+    def _render(self) -> str:
+        where = self.source
+        if self.line is not None:
+            where += f":{self.line}"
+            if self.column is not None:
+                where += f":{self.column}"
+        return f"{where}: {self.reason}"
+
+
+class TableError(InputError):
+    """A replacement table that is malformed or contains an entry that does not re-simulate."""
+
+
+class TraceError(InputError):
+    """A trace file that is malformed (a trace that parses but does not replay is a result)."""
+
+
+class ConfigError(InputError):
+    """An experiment configuration with a missing, unknown or ill-typed key."""
+
+
+class ProblemError(SelfRepairError, ValueError):
+    """A request that cannot be posed: a start inside a wall, a goal outside the grid, an unknown
+    strategy or heuristic name, a negative budget."""
