@@ -2,8 +2,8 @@
 
 Plain-text format: one line per row, ``#`` for a wall, ``.`` for a free cell; ``S`` and ``G`` marks
 are accepted as free cells (they are not kept). Row ``y`` is the ``y``-th line, column ``x`` the
-character index, as in MovingAI maps. MovingAI ``.map`` files are read by :mod:`selfrepair.movingai`;
-:func:`load_maze` picks the reader by file suffix.
+character index, as in MovingAI maps. MovingAI ``.map`` files are read by
+:mod:`selfrepair.movingai`; :func:`load_maze` picks the reader by file suffix.
 """
 
 from __future__ import annotations
@@ -91,7 +91,9 @@ def parse_maze(text: str, *, source: str = "<string>", name: str = "") -> Maze:
     while rows and not rows[-1].strip():
         rows.pop()
     if not rows:
-        raise InputError("expected at least one row of '#' and '.', got an empty maze", source=source)
+        raise InputError(
+            "expected at least one row of '#' and '.', got an empty maze", source=source
+        )
     width = len(rows[0])
     walls = np.zeros((len(rows), width), dtype=bool)
     for y, row in enumerate(rows):

@@ -103,7 +103,7 @@ def parse_map(text: str, *, source: str = "<string>", name: str = "") -> Maze:
 
 def _header_int(header: dict[str, str], key: str, source: str, lines: list[str]) -> int:
     value = header[key]
-    if not value.isdigit() or int(value) < 1:
+    if not (value.isascii() and value.isdigit()) or int(value) < 1:
         line = next(i + 1 for i, text in enumerate(lines) if text.strip().startswith(key))
         raise InputError(
             f"expected a positive integer {key}, got {value!r}", source=source, line=line
@@ -124,7 +124,7 @@ def parse_scenario(
 ) -> tuple[ScenarioQuery, ...]:
     """Parse a ``.map.scen`` text. With ``maze``, also check that starts and goals are free."""
     lines = text.splitlines()
-    if not lines or lines[0].split() != ["version", "1"] and lines[0].strip() != "version 1.0":
+    if not lines or lines[0].split() not in (["version", "1"], ["version", "1.0"]):
         raise InputError("expected the first line 'version 1'", source=source, line=1)
     queries = []
     for number, raw in enumerate(lines[1:], start=2):
@@ -145,7 +145,8 @@ def _parse_scenario_line(raw: str, number: int, source: str, maze: Maze | None) 
     names = ("bucket", "width", "height", "start_x", "start_y", "goal_x", "goal_y")
     ints: dict[str, int] = {}
     for key, value in zip(names, [fields[0], *fields[2:8]], strict=True):
-        if not value.strip().lstrip("-").isdigit():
+        digits = value.strip().removeprefix("-")
+        if not (digits.isascii() and digits.isdigit()):
             raise InputError(
                 f"expected an integer {key}, got {value!r}", source=source, line=number
             )
@@ -171,6 +172,13 @@ def _parse_scenario_line(raw: str, number: int, source: str, maze: Maze | None) 
 
 
 def _check_query(query: ScenarioQuery, source: str, maze: Maze | None) -> None:
+    if maze is not None and (query.width, query.height) != (maze.width, maze.height):
+        raise InputError(
+            f"expected the map size {maze.width}x{maze.height}, "
+            f"got {query.width}x{query.height}",
+            source=source,
+            line=query.line,
+        )
     for label, (x, y) in (("start", query.start), ("goal", query.goal)):
         if not (0 <= x < query.width and 0 <= y < query.height):
             raise InputError(
@@ -184,13 +192,6 @@ def _check_query(query: ScenarioQuery, source: str, maze: Maze | None) -> None:
                 source=source,
                 line=query.line,
             )
-    if maze is not None and (query.width, query.height) != (maze.width, maze.height):
-        raise InputError(
-            f"expected the map size {maze.width}x{maze.height}, "
-            f"got {query.width}x{query.height}",
-            source=source,
-            line=query.line,
-        )
 
 
 def load_scenario(path: str | Path, *, maze: Maze | None = None) -> tuple[ScenarioQuery, ...]:

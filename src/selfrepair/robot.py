@@ -4,8 +4,8 @@ Planner, simulator, table generator and checkers all call this module; nobody re
 
 Coordinates follow MovingAI maps: ``x`` is the column, ``y`` the row, origin top-left. Headings are
 N, E, S, W with N = (0, -1) and E = (+1, 0). An action is one command per wheel in the order
-front-left, front-right, rear-left, rear-right; each command is F (+1), S (0) or B (-1), written as a
-four-letter code such as ``"SFFF"``. With ``l = FL + RL`` and ``r = FR + RR``:
+front-left, front-right, rear-left, rear-right; each command is F (+1), S (0) or B (-1), written as
+a four-letter code such as ``"SFFF"``. With ``l = FL + RL`` and ``r = FR + RR``:
 
 =================  ==========  ==========================================  ==================
 condition          motion      pose change                                 duration (ticks)
@@ -288,7 +288,7 @@ def relative_cell(pose: Pose, forward: int, lateral: int) -> Cell:
 
 
 def swept_cells(pose: Pose, action: Action) -> tuple[Cell, ...]:
-    """Every world cell that ``action`` passes through when started at ``pose``, start cell first."""
+    """Every world cell ``action`` passes through when started at ``pose``, start cell first."""
     return tuple(relative_cell(pose, f, r) for f, r in _MOTION[action.code].swept)
 
 
@@ -322,7 +322,9 @@ class Fault:
 FaultSet = frozenset[Fault]
 """A set of simultaneous faults."""
 
-SINGLE_FAULTS: tuple[Fault, ...] = tuple(Fault(w, m) for w in Wheel for m in (Mode.F, Mode.S, Mode.B))
+SINGLE_FAULTS: tuple[Fault, ...] = tuple(
+    Fault(w, m) for w in Wheel for m in (Mode.F, Mode.S, Mode.B)
+)
 """The 12 single faults, wheel by wheel, F then S then B."""
 
 DOUBLE_FAULTS: tuple[FaultSet, ...] = tuple(
@@ -406,4 +408,5 @@ def parse_pose(text: str, *, source: str = "<pose>") -> Pose:
 
 
 def _is_int(text: str) -> bool:
-    return text.lstrip("+-").isdigit()
+    body = text[1:] if text[:1] in ("+", "-") else text
+    return body.isascii() and body.isdigit()

@@ -23,7 +23,9 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 maze_app = typer.Typer(help="Show and generate mazes.", no_args_is_help=True)
-table_app = typer.Typer(help="Replacement tables: show, check, generate, coverage.", no_args_is_help=True)
+table_app = typer.Typer(
+    help="Replacement tables: show, check, generate, coverage.", no_args_is_help=True
+)
 app.add_typer(maze_app, name="maze")
 app.add_typer(table_app, name="table")
 

@@ -1,0 +1,47 @@
+"""The docs show tables and pictures generated from the code; these tests keep them in step."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from selfrepair import bundled
+from selfrepair.cli import basics
+from selfrepair.render import render_ascii, route_layers
+
+DOCS = Path(__file__).parent.parent / "docs"
+
+
+def generated_block(text: str, name: str) -> str:
+    match = re.search(
+        rf"<!-- BEGIN generated: {name} -->\n(.*?)<!-- END generated: {name} -->", text, re.S
+    )
+    assert match is not None, f"docs block {name} is missing"
+    return match.group(1)
+
+
+@pytest.mark.parametrize(
+    "name",
+    ["markdown_action_table", "markdown_single_fault_table", "markdown_double_fault_summary"],
+)
+def test_robot_doc_tables_match_the_code(name: str) -> None:
+    text = (DOCS / "robot.md").read_text(encoding="utf-8")
+    assert generated_block(text, name) == getattr(basics, name)()
+
+
+def test_action_table_has_81_rows_in_code_order() -> None:
+    text = (DOCS / "robot.md").read_text(encoding="utf-8")
+    table = generated_block(text, "markdown_action_table")
+    rows = [line.split("|")[1].strip() for line in table.splitlines()[2:]]
+    assert len(rows) == 81 and rows[0] == "FFFF" and rows[-1] == "BBBB"
+
+
+@pytest.mark.parametrize("name", bundled.maze_names())
+def test_maze_doc_shows_each_maze_with_its_routes(name: str) -> None:
+    text = (DOCS / "mazes.md").read_text(encoding="utf-8")
+    picture = render_ascii(bundled.load_bundled(name), route_layers(bundled.bundled_routes(name)))
+    assert f"```text\n{picture}```" in text
+    for route in bundled.bundled_routes(name):
+        assert f"`{route.start}` | `{route.goal[0]},{route.goal[1]}`" in text

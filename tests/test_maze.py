@@ -1,0 +1,106 @@
+"""The Maze value, its plain-text format and the clearance map."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
+
+from selfrepair.errors import InputError
+from selfrepair.maze import Maze, clearance_map, format_maze, load_maze, parse_maze, save_maze
+
+wall_grids = hnp.arrays(
+    dtype=bool,
+    shape=st.tuples(st.integers(1, 12), st.integers(1, 12)),
+    elements=st.booleans(),
+)
+
+
+@given(wall_grids)
+def test_format_parse_round_trip(walls: np.ndarray) -> None:
+    maze = Maze(walls)
+    text = format_maze(maze)
+    assert text.endswith("\n") and len(text.splitlines()) == maze.height
+    again = parse_maze(text)
+    assert again == maze
+    assert np.array_equal(again.walls, walls)
+    assert format_maze(again) == text
+
+
+def test_parse_geometry_and_marks() -> None:
+    maze = parse_maze("####\n#S.#\n#.G#\n####\n")
+    assert (maze.width, maze.height) == (4, 4)
+    assert maze.is_free(1, 1) and maze.is_free(2, 2) and maze.is_free(2, 1)
+    assert not maze.is_free(0, 0) and not maze.is_free(4, 1) and not maze.is_free(-1, 1)
+    assert maze.all_free(((1, 1), (2, 1))) and not maze.all_free(((1, 1), (3, 1)))
+    assert maze.free_cells() == [(1, 1), (2, 1), (1, 2), (2, 2)]
+    assert format_maze(maze) == "####\n#..#\n#..#\n####\n"
+
+
+def test_walls_are_read_only_and_equality_ignores_name() -> None:
+    maze = parse_maze("#.\n..\n", name="a")
+    with pytest.raises(ValueError):
+        maze.walls[0, 0] = False
+    assert maze == parse_maze("#.\n..\n", name="b")
+    assert hash(maze) == hash(parse_maze("#.\n..\n"))
+    assert maze != parse_maze("#..\n...\n")
+
+
+def test_ragged_row_names_line_and_column() -> None:
+    with pytest.raises(InputError) as info:
+        parse_maze("####\n#..#\n#.#\n####\n", source="m.maze")
+    err = info.value
+    assert (err.source, err.line, err.column) == ("m.maze", 3, 4)
+    assert "expected 4 cells" in str(err) and str(err).startswith("m.maze:3:4:")
+
+
+def test_unknown_character_names_line_and_column() -> None:
+    with pytest.raises(InputError) as info:
+        parse_maze("####\n#.x#\n####\n", source="m.maze")
+    assert (info.value.line, info.value.column) == (2, 3)
+    assert "'x'" in str(info.value)
+
+
+def test_empty_maze_is_an_error() -> None:
+    with pytest.raises(InputError, match="empty"):
+        parse_maze("\n\n")
+
+
+def test_save_and_load(tmp_path: Path) -> None:
+    maze = parse_maze("###\n#.#\n###\n")
+    path = tmp_path / "tiny.maze"
+    save_maze(maze, path)
+    loaded = load_maze(path)
+    assert loaded == maze and loaded.name == "tiny"
+    with pytest.raises(InputError, match="cannot read"):
+        load_maze(tmp_path / "missing.maze")
+
+
+def brute_force_clearance(walls: np.ndarray) -> np.ndarray:
+    """Chebyshev distance to the nearest wall cell or off-grid cell, by enumeration."""
+    h, w = walls.shape
+    blocked = [(x, y) for y in range(-1, h + 1) for x in range(-1, w + 1)
+               if not (0 <= x < w and 0 <= y < h) or walls[y, x]]
+    out = np.zeros((h, w), dtype=np.int64)
+    for y in range(h):
+        for x in range(w):
+            out[y, x] = min(max(abs(x - bx), abs(y - by)) for bx, by in blocked)
+    return out
+
+
+@given(wall_grids)
+def test_clearance_matches_brute_force(walls: np.ndarray) -> None:
+    got = clearance_map(Maze(walls))
+    assert got.shape == walls.shape
+    assert np.array_equal(got, brute_force_clearance(walls))
+
+
+def test_clearance_of_an_open_room() -> None:
+    maze = parse_maze("#######\n#.....#\n#.....#\n#.....#\n#######\n")
+    c = clearance_map(maze)
+    assert c[2, 3] == 2 and c[1, 1] == 1 and c[0, 0] == 0
+    assert not c.flags.writeable

@@ -1,0 +1,143 @@
+"""MovingAI maps and both generations of scenario files (data in tests/data/movingai/)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from selfrepair.errors import InputError
+from selfrepair.maze import load_maze
+from selfrepair.movingai import load_map, load_scenario, parse_map, parse_scenario
+
+DATA = Path(__file__).parent / "data" / "movingai"
+
+SMALL_MAP = "type octile\nheight 3\nwidth 4\nmap\n@@@@\n@.G@\n@TS@\n"
+
+
+def test_parse_small_map_with_all_passable_and_blocked_characters() -> None:
+    maze = parse_map(SMALL_MAP, name="small")
+    assert (maze.width, maze.height, maze.name) == (4, 3, "small")
+    assert maze.free_cells() == [(1, 1), (2, 1), (2, 2)]
+    blocked = parse_map("type octile\nheight 1\nwidth 4\nmap\n@OTW\n")
+    assert blocked.free_cells() == []
+
+
+@pytest.mark.parametrize("name", ["maze512-1-0", "maze512-4-0", "maze512-32-9"])
+def test_full_maps_load(name: str) -> None:
+    maze = load_map(DATA / f"{name}.map")
+    assert (maze.width, maze.height, maze.name) == (512, 512, name)
+    assert load_maze(DATA / f"{name}.map") == maze  # load_maze picks the reader by suffix
+    free_share = len(maze.free_cells()) / (512 * 512)
+    expected = {"maze512-1-0": 0.50, "maze512-4-0": 0.80, "maze512-32-9": 0.97}[name]
+    assert abs(free_share - expected) < 0.03
+
+
+def test_map_coordinates_are_column_and_row() -> None:
+    maze = load_map(DATA / "maze512-1-0.map")
+    # Row 1 of the file starts "@.........@.@": x is the character index, y the row.
+    assert not maze.is_free(0, 1)
+    assert maze.is_free(1, 1) and maze.is_free(9, 1)
+    assert not maze.is_free(10, 1)
+    assert maze.is_free(1, 2) and not maze.is_free(2, 2)
+
+
+def test_hog2_scenario_generation() -> None:
+    maze = load_map(DATA / "maze512-1-0.map")
+    queries = load_scenario(DATA / "maze512-1-0.map.scen", maze=maze)
+    assert len(queries) == 11960
+    first = queries[0]
+    assert (first.bucket, first.map_name) == (1, "maps/mazes/maze512-1-0.map")
+    assert (first.start, first.goal, first.optimal_length, first.line) == (
+        (407, 136), (405, 134), 4.0, 2
+    )
+    assert all(maze.is_free(*q.start) and maze.is_free(*q.goal) for q in queries)
+
+
+def test_newer_scenario_generation() -> None:
+    maze = load_map(DATA / "maze512-32-9.map")
+    queries = load_scenario(DATA / "maze512-32-9.map.scen", maze=maze)
+    assert len(queries) == 8010
+    first, last = queries[0], queries[-1]
+    assert (first.bucket, first.map_name) == (0, "maze512-32-9.map")
+    assert first.optimal_length == pytest.approx(3.41421356, abs=1e-9)
+    assert (last.bucket, last.line) == (800, 8011)
+
+
+SCEN_HEADER = "version 1\n"
+
+
+def scen_line(sx: int, sy: int, gx: int, gy: int, width: int = 4, height: int = 3) -> str:
+    return f"0\tsmall.map\t{width}\t{height}\t{sx}\t{sy}\t{gx}\t{gy}\t1.00000000\n"
+
+
+def test_small_scenario_parses() -> None:
+    maze = parse_map(SMALL_MAP)
+    (query,) = parse_scenario(SCEN_HEADER + scen_line(1, 1, 2, 2), maze=maze)
+    assert (query.start, query.goal, query.width, query.height) == ((1, 1), (2, 2), 4, 3)
+
+
+@pytest.mark.parametrize(
+    ("text", "line", "message"),
+    [
+        ("height 3\nwidth 4\nmap\n....\n", 3, "'type' header field"),
+        ("type octile\nwidth 4\nmap\n....\n", 3, "'height' header field"),
+        ("type octile\nheight 1\nmap\n....\n", 3, "'width' header field"),
+        ("type octile\nheight 1\nwidth 4\n", 3, "'map' line"),
+        ("type octile\nheight x\nwidth 4\nmap\n....\n", 2, "positive integer height"),
+        ("type octile\nheight 1\nwidth ²\nmap\n....\n", 3, "positive integer width"),
+        ("type octile\nsize 4\nmap\n", 2, "header line"),
+        ("type octile\nheight 2\nwidth 4\nmap\n....\n", 6, "expected 2 map rows"),
+        ("type octile\nheight 1\nwidth 4\nmap\n...\n", 5, "expected 4 cells"),
+        ("type octile\nheight 1\nwidth 4\nmap\n..x.\n", 5, "'x'"),
+    ],
+)
+def test_map_errors(text: str, line: int, message: str) -> None:
+    with pytest.raises(InputError, match=message) as info:
+        parse_map(text, source="bad.map")
+    assert info.value.source == "bad.map"
+    assert info.value.line == line
+    assert str(info.value).startswith(f"bad.map:{line}")
+
+
+def test_map_error_names_column_of_bad_character() -> None:
+    with pytest.raises(InputError) as info:
+        parse_map("type octile\nheight 1\nwidth 4\nmap\n..x.\n", source="bad.map")
+    assert info.value.column == 3
+
+
+@pytest.mark.parametrize(
+    ("body", "message"),
+    [
+        (scen_line(4, 1, 2, 2), "start \\(4,1\\) inside the 4x3 map"),
+        (scen_line(1, 1, 2, -1), "goal \\(2,-1\\) inside"),
+        (scen_line(0, 0, 2, 2), "start \\(0,0\\) on a free cell"),
+        (scen_line(1, 1, 1, 2), "goal \\(1,2\\) on a free cell"),
+        (scen_line(1, 1, 2, 2, width=5), "map size 4x3"),
+        (scen_line(5, 1, 2, 2, width=6), "map size 4x3"),  # size first, not "a wall"
+        ("0\tsmall.map\t4\t3\t1\t1\n", "expected 9 fields"),
+        ("0\tsmall.map\t4\t3\ta\t1\t2\t2\t1.0\n", "integer start_x"),
+        ("0\tsmall.map\t4\t3\t1\t--1\t2\t2\t1.0\n", "integer start_y"),
+        ("0\tsmall.map\t4\t3\t1\t1\t²\t2\t1.0\n", "integer goal_x"),
+        ("0\tsmall.map\t4\t3\t1\t1\t2\t2\tfar\n", "number optimal_length"),
+    ],
+)
+def test_scenario_errors(body: str, message: str) -> None:
+    maze = parse_map(SMALL_MAP)
+    text = SCEN_HEADER + scen_line(1, 1, 2, 2) + body
+    with pytest.raises(InputError, match=message) as info:
+        parse_scenario(text, source="bad.scen", maze=maze)
+    assert (info.value.source, info.value.line) == ("bad.scen", 3)
+
+
+def test_scenario_needs_version_line() -> None:
+    with pytest.raises(InputError, match="version 1") as info:
+        parse_scenario(scen_line(1, 1, 2, 2), source="bad.scen")
+    assert info.value.line == 1
+
+
+def test_missing_files_are_input_errors(tmp_path: Path) -> None:
+    with pytest.raises(InputError, match="cannot read"):
+        load_map(tmp_path / "none.map")
+    with pytest.raises(InputError, match="cannot read"):
+        load_scenario(tmp_path / "none.map.scen")
