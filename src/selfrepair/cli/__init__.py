@@ -12,7 +12,8 @@ from collections.abc import Sequence
 import typer
 from typer._click.exceptions import ClickException, NoArgsIsHelpError
 
-from selfrepair.cli import basics  # noqa: F401  (registers commands)
+# Importing the command modules registers their commands on ``app``.
+from selfrepair.cli import basics, execution, experiments, planning, tables  # noqa: F401
 from selfrepair.cli._app import app
 from selfrepair.errors import SelfRepairError
 

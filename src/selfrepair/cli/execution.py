@@ -1,0 +1,294 @@
+"""Commands that run and check missions: ``selfrepair run``, ``selfrepair replay``,
+``selfrepair table show`` and ``selfrepair table check``.
+
+Exit codes: ``run`` 0 when the goal is reached, 1 when the mission ends otherwise; ``replay`` 0 when
+every step holds, 1 otherwise; ``table check`` 0 without errors (warnings allowed), 1 with errors;
+bad input is exit 2 (see :func:`selfrepair.cli.main`).
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.table import Table
+
+from selfrepair import robot
+from selfrepair.bundled import resolve_maze
+from selfrepair.cli._app import app, console, echo, echo_json, table_app
+from selfrepair.domain import get_domain
+from selfrepair.errors import InputError
+from selfrepair.executor import MissionResult, MissionSpec, run_mission
+from selfrepair.faultmodel import CLOCKS, DETECTIONS, FaultEvent, FaultSchedule
+from selfrepair.render import GOAL_CHAR, HEADING_CHARS, render_ascii
+from selfrepair.replacement import RECURSION_MODES
+from selfrepair.robot import Cell
+from selfrepair.strategies import STRATEGIES, StrategyOptions
+from selfrepair.table import check_table, dump_table, resolve_table
+from selfrepair.trace import replay as replay_trace
+from selfrepair.trace import write_trace
+
+PLANNED_CHAR = "+"
+EXECUTED_CHAR = "*"
+SITE_CHARS = {"replacement": "R", "lookahead": "L", "replan": "P"}
+FAILED_CHAR = "x"
+
+_SHOWN = (
+    "status",
+    "reason",
+    "strategy",
+    "table",
+    "recursion",
+    "faults",
+    "detection",
+    "ticks",
+    "actions_executed",
+    "failed_attempts",
+    "plan_length_before",
+    "plan_cost_before",
+    "plan_length_after",
+    "plan_cost_after",
+    "faulty_encounters",
+    "replacements",
+    "replacement_lengths",
+    "replacement_depths",
+    "lookaheads",
+    "replans",
+    "initial_planning_ns",
+    "repair_latency_median_ns",
+    "repair_latency_p99_ns",
+    "compute_per_action_ns",
+    "plan_distance",
+)
+
+
+def build_schedule(
+    faults: str, at: int, clock: str, detect: str, transient: int | None, intermittent: float | None
+) -> FaultSchedule:
+    """The fault schedule the ``run`` options describe (one persistence for every fault)."""
+    parsed = sorted(robot.parse_faults(faults, source="--faults"))
+    if transient is not None and intermittent is not None:
+        raise InputError(
+            "expected at most one of --transient and --intermittent", source="--transient"
+        )
+    persistence = (
+        "transient"
+        if transient is not None
+        else "intermittent"
+        if intermittent is not None
+        else "permanent"
+    )
+    events = tuple(
+        FaultEvent(
+            f,
+            at=at,
+            clock=clock,
+            persistence=persistence,
+            duration=transient,
+            probability=intermittent,
+        )
+        for f in parsed
+    )
+    return FaultSchedule(events, detect)
+
+
+def mission_picture(result: MissionResult) -> str:
+    """The maze with the planned path, the executed path, the repair sites, start and goal."""
+    spec = result.spec
+    planned: dict[Cell, str] = {}
+    pose = spec.start
+    for action in result.initial_plan.actions:
+        end, swept, _ = robot.step(pose, action)
+        planned.update(dict.fromkeys(swept, PLANNED_CHAR))
+        pose = end
+    executed = {c: EXECUTED_CHAR for s in result.executed for c in robot.step(s.start, s.action)[1]}
+    failed = {s.start.cell: FAILED_CHAR for s in result.steps if s.source == "failed-attempt"}
+    sites = {r.pose.cell: SITE_CHARS.get(r.repair.source, "?") for r in result.repairs}
+    ends = {spec.goal: GOAL_CHAR, spec.start.cell: HEADING_CHARS[spec.start.heading]}
+    return render_ascii(spec.maze, [planned, executed, failed, sites, ends])
+
+
+_LEGEND = (
+    ("#", "wall"),
+    (".", "free"),
+    ("^ > v <", "start pose facing N, E, S, W"),
+    (GOAL_CHAR, "goal"),
+    (PLANNED_CHAR, "planned path (initial plan), not executed"),
+    (EXECUTED_CHAR, "executed path"),
+    ("R L P", "repair site: table replacement, lookahead window, replan"),
+    (FAILED_CHAR, "failed attempt (fault learned on use)"),
+)
+
+
+def _picture_legend() -> str:
+    width = max(len(char) for char, _ in _LEGEND)
+    return "".join(f"{char:<{width}}  {meaning}\n" for char, meaning in _LEGEND)
+
+
+@app.command()
+def run(
+    maze: Annotated[str, typer.Argument(help="Bundled maze name, maze file or MovingAI .map.")],
+    start: Annotated[str, typer.Option("--start", help="Start pose X,Y,H.")],
+    goal: Annotated[str, typer.Option("--goal", help="Goal cell X,Y.")],
+    faults: Annotated[str, typer.Option("--faults", help="Faults, e.g. FL:F,RL:F.")] = "",
+    at: Annotated[int, typer.Option("--at", help="When the faults start (step or tick).")] = 0,
+    clock: Annotated[str, typer.Option("--clock", help="What --at counts: step or tick.")] = "step",
+    detect: Annotated[
+        str, typer.Option("--detect", help="Fault detection: now or on-use.")
+    ] = "now",
+    transient: Annotated[
+        int | None, typer.Option("--transient", help="Faults last this many steps/ticks.")
+    ] = None,
+    intermittent: Annotated[
+        float | None,
+        typer.Option(
+            "--intermittent", help="Faults are active at each step with this probability."
+        ),
+    ] = None,
+    strategy: Annotated[
+        str, typer.Option("--strategy", help="replan, replacement or lookahead.")
+    ] = "replacement",
+    table: Annotated[
+        str, typer.Option("--table", help="Table file or bundled table name.")
+    ] = "handwritten",
+    recursion: Annotated[
+        str, typer.Option("--recursion", help="flat, guarded or layered.")
+    ] = "flat",
+    max_depth: Annotated[int, typer.Option("--max-depth", help="Depth bound of guarded mode.")] = 2,
+    window: Annotated[
+        int, typer.Option("--window", help="Lookahead: actions after the faulty one.")
+    ] = 3,
+    clearance_weight: Annotated[
+        str, typer.Option("--clearance-weight", help="Exact weight, e.g. 1/2.")
+    ] = "0",
+    heuristic: Annotated[str, typer.Option("--heuristic")] = "grid-distance",
+    backend: Annotated[str, typer.Option("--backend")] = "auto",
+    plan_with_faults: Annotated[
+        bool,
+        typer.Option(
+            "--plan-with-faults", help="Make the initial plan with the faults sensed at step 0."
+        ),
+    ] = False,
+    trace: Annotated[
+        Path | None, typer.Option("--trace", help="Write a JSON Lines trace here.")
+    ] = None,
+    seed: Annotated[int, typer.Option("--seed", help="Seed of intermittent faults.")] = 0,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the metrics row as JSON.")] = False,
+) -> int:
+    """Run one mission: plan, execute with faults, repair; show the paths and the metrics."""
+    _check_choice(strategy, tuple(STRATEGIES), "--strategy")
+    _check_choice(recursion, tuple(RECURSION_MODES), "--recursion")
+    _check_choice(detect, DETECTIONS, "--detect")
+    _check_choice(clock, CLOCKS, "--clock")
+    try:
+        weight = Fraction(clearance_weight)
+    except (ValueError, ZeroDivisionError):
+        raise InputError(
+            f"expected an exact number such as 1/2, got {clearance_weight!r}",
+            source="--clearance-weight",
+        ) from None
+    spec = MissionSpec(
+        maze=resolve_maze(maze),
+        start=robot.parse_pose(start, source="--start"),
+        goal=robot.parse_cell(goal, source="--goal"),
+        schedule=build_schedule(faults, at, clock, detect, transient, intermittent),
+        strategy=strategy,
+        options=StrategyOptions(
+            table=_table_spec(table, strategy),
+            recursion=recursion,
+            max_depth=max_depth,
+            window=window,
+        ),
+        clearance_weight=weight,
+        seed=seed,
+        heuristic=heuristic,
+        backend=backend,
+        initial_faults_known=plan_with_faults,
+    )
+    result = run_mission(spec)
+    if trace is not None:
+        write_trace(result, trace)
+    row = result.to_row()
+    if as_json:
+        echo_json(row)
+    else:
+        echo(mission_picture(result) + _picture_legend())
+        metrics = Table(title=f"Mission on {spec.maze.name or maze}")
+        metrics.add_column("metric")
+        metrics.add_column("value", justify="right")
+        for key in _SHOWN:
+            metrics.add_row(key, "" if row[key] is None else str(row[key]))
+        console().print(metrics)
+    return 0 if result.reached else 1
+
+
+def _table_spec(table: str, strategy: str) -> str:
+    """Validate the table up front (a bad file is exit 2 even when no repair needs it)."""
+    if strategy != "replan":
+        resolve_table(table)
+    return table
+
+
+def _check_choice(value: str, choices: tuple[str, ...], option: str) -> None:
+    if value not in choices:
+        raise InputError(f"expected one of {', '.join(choices)}, got {value!r}", source=option)
+
+
+@app.command()
+def replay(
+    trace: Annotated[Path, typer.Argument(help="A JSON Lines trace written by run --trace.")],
+) -> int:
+    """Re-simulate a trace with the robot model; report the first step that does not hold."""
+    report = replay_trace(trace)
+    echo(f"{trace}: {report}")
+    return 0 if report.ok else 1
+
+
+@table_app.command("show")
+def table_show(
+    spec: Annotated[str, typer.Argument(help="Table file or bundled table name (handwritten).")],
+    as_json: Annotated[bool, typer.Option("--json", help="Print the table file text.")] = False,
+) -> int:
+    """Print a replacement table: header, then each action's candidates in order."""
+    table = resolve_table(spec)
+    if as_json:
+        echo(dump_table(table).rstrip("\n"))
+        return 0
+    dom = get_domain(table.domain)
+    title = (
+        f"{spec}: {table.domain}, {table.shape}, made by {table.made_by}, version {table.version}"
+    )
+    view = Table(title=title)
+    for column in ("action", "class", "faults", "candidates"):
+        view.add_column(column)
+    for entry in table.entries:
+        candidates = (
+            " | ".join(" ".join(dom.format_action(a) for a in c) for c in entry.candidates)
+            or "(no replacement)"
+        )
+        faults = "" if entry.faults is None else dom.format_faults(entry.faults)
+        view.add_row(
+            dom.format_action(entry.action), dom.motion_class(entry.action), faults, candidates
+        )
+    console().print(view)
+    return 0
+
+
+@table_app.command("check")
+def table_check(
+    spec: Annotated[str, typer.Argument(help="Table file or bundled table name.")],
+) -> int:
+    """Load a table (re-simulating every candidate) and list gaps and dead candidates."""
+    table = resolve_table(spec)
+    problems = check_table(table)
+    for problem in problems:
+        echo(f"{spec}: {problem}")
+    errors = sum(1 for p in problems if p.severity == "error")
+    candidates = sum(len(e.candidates) for e in table.entries)
+    echo(
+        f"{spec}: {len(table.entries)} entries, {candidates} candidates re-simulated; "
+        f"{errors} errors, {len(problems) - errors} warnings"
+    )
+    return 1 if errors else 0

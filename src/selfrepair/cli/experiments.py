@@ -1,0 +1,193 @@
+"""Experiment commands: ``selfrepair experiment``, ``selfrepair report``, ``selfrepair animate``."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated
+
+import joblib
+import typer
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TaskProgressColumn,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+from rich.table import Table
+from rich.text import Text
+
+from selfrepair.cli._app import app, console, echo
+from selfrepair.experiment.config import load_config
+from selfrepair.experiment.findings import Finding, StrategySummary, check_findings, summarize
+from selfrepair.experiment.missions import expand
+from selfrepair.experiment.runner import check_backend, run_missions
+from selfrepair.experiment.store import ResultStore
+
+__all__ = ["animate", "experiment", "print_findings", "print_summary", "report"]
+
+
+def resolve_experiment(spec: str) -> Path:
+    """A bundled experiment name (``paper``, ``full``) or a path to a TOML file."""
+    from importlib import resources
+
+    folder = resources.files("selfrepair").joinpath("data", "experiments")
+    bundled = folder.joinpath(f"{spec}.toml")
+    if "/" not in spec and not spec.endswith(".toml") and bundled.is_file():
+        return Path(str(bundled))
+    return Path(spec)
+
+
+@app.command()
+def experiment(
+    config: Annotated[str, typer.Argument(help="Bundled experiment (paper, full) or FILE.toml.")],
+    db: Annotated[
+        Path | None, typer.Option("--db", help="Results database (default results/NAME.sqlite).")
+    ] = None,
+    jobs: Annotated[
+        int, typer.Option("--jobs", "-j", help="Local worker processes (-1: all cores).")
+    ] = -1,
+    backend: Annotated[str, typer.Option(help="local, dask or ray.")] = "local",
+    scheduler: Annotated[
+        str | None, typer.Option(help="Dask scheduler address (with --backend dask).")
+    ] = None,
+    address: Annotated[
+        str | None, typer.Option(help="Ray cluster address (with --backend ray).")
+    ] = None,
+    export_csv: Annotated[
+        Path | None, typer.Option("--export-csv", help="Also write every row to a CSV file.")
+    ] = None,
+    export_parquet: Annotated[
+        Path | None, typer.Option("--export-parquet", help="Also write a Parquet file (pyarrow).")
+    ] = None,
+) -> int:
+    """Run an experiment (resumable: missions already in the database are skipped), then print the
+    per-strategy summary and the original study's findings checked on all stored rows."""
+    check_backend(backend, jobs=jobs, scheduler=scheduler)
+    cfg = load_config(resolve_experiment(config))
+    missions = expand(cfg)
+    db_path = db if db is not None else Path("results") / f"{cfg.name}.sqlite"
+    n_jobs = joblib.cpu_count() if jobs == -1 else jobs
+    with ResultStore(db_path) as store:
+        with _progress(f"{cfg.name}: {len(missions)} missions") as on_progress:
+            summary = run_missions(
+                missions,
+                store,
+                jobs=n_jobs,
+                backend=backend,
+                scheduler=scheduler,
+                address=address,
+                on_progress=on_progress,
+            )
+        echo(
+            f"{cfg.name}: {summary.total} missions, {summary.skipped} already stored, "
+            f"{summary.ran} run in {summary.seconds:.1f} s -> {db_path}"
+        )
+        keys = {m.key for m in missions}
+        rows = [r for r in store.rows() if r["key"] in keys]
+        if export_csv is not None:
+            echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
+        if export_parquet is not None:
+            echo(f"wrote {store.export_parquet(export_parquet)} rows to {export_parquet}")
+    print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
+    print_findings(check_findings(rows))
+    return 0
+
+
+@contextmanager
+def _progress(label: str) -> Iterator[object]:
+    """A rich progress bar (done/total, rate, ETA) on a terminal; nothing when piped."""
+    if not sys.stdout.isatty():
+        yield None
+        return
+    columns = (
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TaskProgressColumn(),
+        TextColumn("{task.fields[rate]}"),
+        TimeElapsedColumn(),
+        TextColumn("ETA"),
+        TimeRemainingColumn(),
+    )
+    with Progress(*columns, console=console(), transient=False) as progress:
+        task = progress.add_task(label, total=None, rate="")
+
+        def update(done: int, total: int) -> None:
+            speed = progress.tasks[0].speed
+            rate = f"{speed:.1f}/s" if speed else ""
+            progress.update(task, completed=done, total=total, rate=rate)
+
+        yield update
+
+
+def print_summary(summaries: list[StrategySummary], *, title: str) -> None:
+    """The per-strategy summary as a rich table."""
+    table = Table(title=title)
+    for header in StrategySummary.HEADERS:
+        table.add_column(
+            header,
+            justify="left" if header == "strategy" else "right",
+            no_wrap=header == "strategy",
+        )
+    for s in summaries:
+        table.add_row(*(Text(cell) for cell in s.cells()))
+    out = console()
+    if not sys.stdout.isatty():
+        out = Console(file=sys.stdout, width=200, soft_wrap=True, highlight=False)
+    out.print(table)
+
+
+def print_findings(findings: list[Finding]) -> None:
+    """Each finding on one line: held / not held / not tested, with its numbers."""
+    for f in findings:
+        echo(f"Finding {f.number} {f.verdict.upper()}: {f.claim} -- {f.evidence}")
+
+
+@app.command()
+def report(
+    results: Annotated[Path, typer.Argument(help="Results database written by `experiment`.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="Directory for report.md and figures.")],
+    mission: Annotated[
+        str | None,
+        typer.Option(help="Key (or key prefix) of the mission to draw; default: a telling one."),
+    ] = None,
+) -> int:
+    """Write a Markdown report with tables and PNG figures (needs matplotlib: extra `viz`)."""
+    from selfrepair.experiment.report import write_report
+
+    if not results.is_file():
+        from selfrepair.errors import InputError
+
+        raise InputError(
+            "expected a results database written by `selfrepair experiment`", source=str(results)
+        )
+    written = write_report(results, out, mission_key=mission)
+    for path in written:
+        echo(str(path))
+    return 0
+
+
+@app.command()
+def animate(
+    trace: Annotated[
+        Path, typer.Argument(help="Trace file (JSON Lines) written by `run --trace`.")
+    ],
+    out: Annotated[Path, typer.Option("--out", "-o", help="GIF file to write.")],
+    fps: Annotated[int, typer.Option(help="Frames per second.", min=1, max=60)] = 4,
+    max_frames: Annotated[
+        int, typer.Option(help="At most this many frames (long traces are subsampled).", min=1)
+    ] = 120,
+) -> int:
+    """Animate a mission trace as a GIF: the robot, its path, faults and replaced segments."""
+    from selfrepair.experiment.animate import animate_trace
+
+    frames = animate_trace(trace, out, fps=fps, max_frames=max_frames)
+    echo(f"wrote {out} ({frames} frames)")
+    return 0

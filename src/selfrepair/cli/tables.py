@@ -1,0 +1,208 @@
+"""Commands that make and measure replacement tables: ``selfrepair table generate|coverage``."""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.table import Table
+
+from selfrepair.bundled import load_bundled, maze_names, resolve_maze
+from selfrepair.cli._app import console, echo, echo_json, table_app
+from selfrepair.coverage import CoverageReport, coverage_report
+from selfrepair.errors import InputError
+from selfrepair.maze import Maze
+from selfrepair.replacement import RECURSION_MODES
+from selfrepair.table import dump_table, resolve_table
+from selfrepair.tablegen import (
+    FAULT_SCOPES,
+    OBJECTIVES,
+    PRIORITIES,
+    SHAPES,
+    GenerateOptions,
+    generate_table,
+)
+
+
+def _choice(value: str, allowed: tuple[str, ...] | list[str], option: str) -> str:
+    if value not in allowed:
+        raise InputError(f"expected one of {', '.join(allowed)}, got {value!r}", source=option)
+    return value
+
+
+@table_app.command("generate")
+def table_generate(
+    output: Annotated[Path, typer.Option("-o", "--output", help="Where to write the table.")],
+    domain: Annotated[str, typer.Option(help="Domain: four-wheel or three-action.")] = (
+        "four-wheel"
+    ),
+    max_length: Annotated[int, typer.Option(help="Longest candidate, in actions.")] = 5,
+    per_action: Annotated[int, typer.Option(help="Candidates per entry (K).")] = 5,
+    faults: Annotated[str, typer.Option(help="Fault sets: all, singles, doubles or none.")] = (
+        "all"
+    ),
+    objective: Annotated[str, typer.Option(help="Cost: duration (ticks) or length.")] = (
+        "duration"
+    ),
+    shape: Annotated[str, typer.Option(help="fault-agnostic or fault-indexed.")] = (
+        "fault-agnostic"
+    ),
+    priority: Annotated[
+        str, typer.Option(help="Fault-agnostic tie-break after coverage: cost or walls.")
+    ] = "cost",
+) -> int:
+    """Generate a replacement table from the robot model and write it as JSON."""
+    options = GenerateOptions(
+        domain=domain,
+        shape=_choice(shape, SHAPES, "--shape"),
+        max_length=max_length,
+        per_action=per_action,
+        faults=_choice(faults, FAULT_SCOPES, "--faults"),
+        objective=_choice(objective, OBJECTIVES, "--objective"),
+        priority=_choice(priority, PRIORITIES, "--priority"),
+    )
+    started = time.perf_counter()
+    table = generate_table(options)
+    elapsed = time.perf_counter() - started
+    text = dump_table(table)
+    output.write_text(text, encoding="utf-8")
+    candidates = sum(len(e.candidates) for e in table.entries)
+    echo(
+        f"{output}: {table.domain} {table.shape} table, {len(table.entries)} entries, "
+        f"{candidates} candidates, {len(text.encode())} bytes, generated in {elapsed:.2f} s"
+    )
+    return 0
+
+
+def _mazes(names: list[str] | None, no_walls: bool) -> list[tuple[str, Maze]]:
+    if no_walls:
+        return []
+    if not names:
+        return [(name, load_bundled(name)) for name in maze_names()]
+    return [(name, resolve_maze(name)) for name in names]
+
+
+@table_app.command("coverage")
+def table_coverage(
+    spec: Annotated[str, typer.Argument(help="Table file or bundled table name.")],
+    faults: Annotated[str, typer.Option(help="Fault sets: all, singles, doubles or none.")] = (
+        "all"
+    ),
+    objective: Annotated[
+        str | None,
+        typer.Option(help="Cost for optimality: duration or length (default: the table's own)."),
+    ] = None,
+    recursion: Annotated[
+        str, typer.Option(help="Recursion mode for free-space coverage: flat, guarded or layered.")
+    ] = "flat",
+    maze: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--maze", help="Maze for wall coverage (repeatable; default: every bundled maze)."
+        ),
+    ] = None,
+    no_walls: Annotated[bool, typer.Option("--no-walls", help="Skip wall coverage.")] = False,
+    per_fault: Annotated[
+        bool, typer.Option("--per-fault", help="Also print one row per fault set.")
+    ] = False,
+    json_out: Annotated[Path | None, typer.Option(help="Write the full report as JSON.")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of tables.")] = False,
+) -> int:
+    """Coverage and optimality of a table against the exact optimum, in free space and next to
+    the walls of mazes."""
+    table = resolve_table(spec)
+    _choice(faults, FAULT_SCOPES, "--faults")
+    _choice(recursion, list(RECURSION_MODES), "--recursion")
+    if objective is not None:
+        _choice(objective, OBJECTIVES, "--objective")
+    report = coverage_report(
+        table,
+        faults=faults,
+        objective=objective,
+        mode=recursion,
+        mazes=_mazes(maze, no_walls),
+        label=spec,
+    )
+    data = report.to_json()
+    if json_out is not None:
+        json_out.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
+    if as_json:
+        echo_json(data)
+        return 0
+    if per_fault:
+        console().print(_fault_table(report))
+    console().print(_summary_table(report))
+    if report.walls:
+        console().print(_wall_table(report))
+    return 0
+
+
+def _percent(value: float | None) -> str:
+    return "n/a" if value is None else f"{100 * value:.1f}%"
+
+
+def _summary_table(report: CoverageReport) -> Table:
+    t: dict[str, Any] = report.totals()
+    view = Table(
+        title=f"{report.table}: {report.shape}, made by {report.made_by} "
+        f"(faults {report.scope}, {report.mode}, objective {report.objective})"
+    )
+    rows = [
+        ("fault sets", str(t["fault_sets"])),
+        ("(fault set, disabled action) pairs", str(t["disabled"])),
+        ("replaceable (exact search)", str(t["replaceable"])),
+        ("covered by the table", f"{t['covered']} ({_percent(t['coverage'])} of replaceable)"),
+        ("fault sets fully covered", f"{t['fault_sets_fully_covered']} of {t['fault_sets']}"),
+        (
+            "picked replacement optimal",
+            f"{t['optimal']} ({_percent(t['optimal_share'])} of covered)",
+        ),
+        (
+            "mean / max cost above optimum",
+            f"{_percent(t['mean_excess'])} / {_percent(t['max_excess'])}",
+        ),
+    ]
+    if report.walls:
+        rows.append(
+            (
+                "next to walls: uncovered executable pairs",
+                f"{t['wall_uncovered']} of {t['wall_pairs']} "
+                f"({_percent(t['wall_uncovered_share'])})",
+            )
+        )
+    view.add_column("measure")
+    view.add_column("value", justify="right")
+    for row in rows:
+        view.add_row(*row)
+    return view
+
+
+def _fault_table(report: CoverageReport) -> Table:
+    view = Table(title="Per fault set (free space)")
+    for column in ("faults", "disabled", "replaceable", "covered", "optimal", "max excess"):
+        view.add_column(column, justify="left" if column == "faults" else "right")
+    for r in report.rows:
+        view.add_row(
+            r.faults,
+            str(r.disabled),
+            str(r.replaceable),
+            str(r.covered),
+            str(r.optimal),
+            _percent(float(r.excess_max)),
+        )
+    return view
+
+
+def _wall_table(report: CoverageReport) -> Table:
+    view = Table(
+        title="Next to walls (flat): executable (pose, fault set, action) triples with "
+        "no fitting usable candidate"
+    )
+    for column in ("maze", "pairs", "uncovered", "share"):
+        view.add_column(column, justify="left" if column == "maze" else "right")
+    for w in report.walls:
+        view.add_row(w.maze, str(w.pairs), str(w.uncovered), _percent(w.share))
+    return view

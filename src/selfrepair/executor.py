@@ -1,0 +1,385 @@
+"""The fault-tolerant executor: plan, execute step by step, repair when the next action is faulty.
+
+:func:`run_mission` takes a :class:`MissionSpec` (everything needed to run the mission again) and
+returns a :class:`MissionResult` (status, every executed step, every repair, and the metrics).
+
+The loop, per step:
+
+1. Update the known faults: with detection ``now`` the simulator's sensors report the active
+   faults; with ``on-use`` the known faults are those revealed by failed attempts so far.
+2. If the next queued action is unavailable under the known faults, ask the strategy for a repair
+   (timed with ``time.perf_counter_ns``: the repair latency runs from meeting the faulty action to
+   having the next executable action) and splice it into the queue.
+3. Send the next action to the simulator. A failed attempt (a fault the executor did not know
+   yet) is recorded as a step with source ``failed-attempt`` and reveals its blocking faults.
+
+The initial plan is made, by default, before any fault is known (``initial_faults_known=False``),
+as in the original experiment. The executor holds only detected faults; the true ones live in the
+:class:`~selfrepair.simulator.Simulator`.
+
+Why ``replacement`` never replans more than ``replan`` when every fault is permanent, present from
+step 0 and detected at once: both start from the same (deterministic) initial plan and follow it
+through the same poses until its first action that uses a faulty wheel command. ``replan`` replans
+there (1 replan) or never meets one (0). ``replacement`` meets that same action first; every action
+it inserts is healthy, and after a replan the plan is made with all faults known, so nothing needs
+repair afterwards. Hence it makes at most one replan, and only when the initial plan contains a
+faulty action, i.e. only when ``replan`` makes one too.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import overload
+
+from selfrepair import robot
+from selfrepair.domain import FOUR_WHEEL
+from selfrepair.faultmodel import FaultSchedule
+from selfrepair.maze import Maze
+from selfrepair.planner import PlanningProblem, PlanResult, PlanStatus, action_cost, plan
+from selfrepair.replacement import prepare_grid_geometry
+from selfrepair.robot import Action, Cell, FaultSet, Heading, Pose
+from selfrepair.simulator import Simulator
+from selfrepair.strategies import (
+    PlannerSettings,
+    Repair,
+    RepairRequest,
+    StrategyOptions,
+    get_strategy,
+)
+from selfrepair.table import ReplacementTable
+
+__all__ = [
+    "STATUSES",
+    "MissionResult",
+    "MissionSpec",
+    "RepairRecord",
+    "TraceStep",
+    "run_mission",
+]
+
+STATUSES = ("reached", "stuck", "budget_exhausted", "no_initial_plan", "step_limit", "collision")
+"""Mission outcomes: goal reached; a repair replan found no plan (``stuck``); a replan hit its
+planner budget (``budget_exhausted``); the initial plan failed (``no_initial_plan``, see
+``MissionResult.reason``); ``max_steps`` steps without reaching the goal (``step_limit``); the
+simulator refused a move into a wall (``collision``, never expected)."""
+
+SOURCES = ("plan", "replacement", "lookahead", "replan", "failed-attempt")
+"""Where an executed step's action came from."""
+
+
+@dataclass(frozen=True, slots=True)
+class MissionSpec:
+    """Everything needed to run (and so replay) one mission.
+
+    ``seed`` drives intermittent faults (see :mod:`selfrepair.faultmodel`). ``max_steps`` bounds
+    the executed steps (failed attempts included); ``None`` means ``20 * cells + 100``.
+    """
+
+    maze: Maze
+    start: Pose
+    goal: Cell
+    goal_heading: Heading | None = None
+    schedule: FaultSchedule = field(default_factory=FaultSchedule)
+    strategy: str = "replacement"
+    options: StrategyOptions = field(default_factory=StrategyOptions)
+    clearance_weight: Fraction = Fraction(0)
+    clearance_radius: int = 2
+    seed: int = 0
+    heuristic: str = "grid-distance"
+    backend: str = "auto"
+    replan_max_expansions: int | None = None
+    initial_faults_known: bool = False
+    max_steps: int | None = None
+
+    @property
+    def planner(self) -> PlannerSettings:
+        """The planner settings shared by every planner call of the mission."""
+        return PlannerSettings(
+            self.heuristic,
+            self.backend,
+            Fraction(self.clearance_weight),
+            self.clearance_radius,
+            self.replan_max_expansions,
+        )
+
+    def step_limit(self) -> int:
+        """``max_steps`` or its default."""
+        if self.max_steps is not None:
+            return self.max_steps
+        return 20 * self.maze.width * self.maze.height + 100
+
+
+@dataclass(frozen=True, slots=True)
+class TraceStep:
+    """One executed command: what, from where to where, how long, why, and what was known."""
+
+    step: int
+    action: Action
+    start: Pose
+    end: Pose
+    duration: Fraction
+    source: str
+    known: FaultSet
+
+
+@dataclass(frozen=True, slots=True)
+class RepairRecord:
+    """One meeting with a faulty action and what the strategy did about it. ``action`` is
+    ``None`` for the defensive replan made when the queue runs out away from the goal."""
+
+    step: int
+    pose: Pose
+    action: Action | None
+    repair: Repair
+    latency_ns: int
+
+
+@dataclass(frozen=True, slots=True)
+class MissionResult:
+    """The outcome of one mission; :meth:`to_row` flattens it (columns in docs/replacement.md)."""
+
+    spec: MissionSpec
+    status: str
+    reason: str
+    steps: tuple[TraceStep, ...]
+    repairs: tuple[RepairRecord, ...]
+    initial_plan: PlanResult
+    initial_planning_ns: int
+    final_pose: Pose
+    ticks: Fraction
+
+    @property
+    def reached(self) -> bool:
+        """Whether the goal was reached."""
+        return self.status == "reached"
+
+    @property
+    def executed(self) -> tuple[TraceStep, ...]:
+        """The steps that moved the robot (failed attempts left out): the executed plan."""
+        return tuple(s for s in self.steps if s.source != "failed-attempt")
+
+    def executed_cost(self) -> Fraction:
+        """The executed plan's cost under the mission's cost model."""
+        spec = self.spec
+        return sum(
+            (
+                action_cost(
+                    spec.maze,
+                    s.start,
+                    s.action,
+                    clearance_weight=Fraction(spec.clearance_weight),
+                    clearance_radius=spec.clearance_radius,
+                )
+                for s in self.executed
+            ),
+            Fraction(0),
+        )
+
+    def to_row(self) -> dict[str, int | float | str | None]:
+        """A flat, JSON- and SQLite-friendly row (see :func:`selfrepair.metrics.mission_row`)."""
+        from selfrepair.metrics import mission_row
+
+        return mission_row(self)
+
+
+class _ActionView(Sequence[Action]):
+    """A read-only view of the queue's actions, so a repair request costs O(1) to build."""
+
+    __slots__ = ("_queue",)
+
+    def __init__(self, queue: deque[tuple[Action, str]]) -> None:
+        self._queue = queue
+
+    def __len__(self) -> int:
+        return len(self._queue)
+
+    @overload
+    def __getitem__(self, index: int) -> Action: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> tuple[Action, ...]: ...
+
+    def __getitem__(self, index: int | slice) -> Action | tuple[Action, ...]:
+        if isinstance(index, slice):
+            start, stop, stride = index.indices(len(self._queue))
+            return tuple(self._queue[i][0] for i in range(start, stop, stride))
+        return self._queue[index][0]
+
+
+def _at_goal(spec: MissionSpec, pose: Pose) -> bool:
+    return pose.cell == spec.goal and (
+        spec.goal_heading is None or pose.heading == spec.goal_heading
+    )
+
+
+@dataclass(slots=True)
+class _Run:
+    """Mutable state of one mission run."""
+
+    spec: MissionSpec
+    sim: Simulator
+    queue: deque[tuple[Action, str]]
+    known: FaultSet = frozenset()
+    table: ReplacementTable | None = None
+    planner: PlannerSettings = field(default_factory=PlannerSettings)
+    steps: list[TraceStep] = field(default_factory=list)
+    repairs: list[RepairRecord] = field(default_factory=list)
+
+    def sense(self) -> None:
+        if self.spec.schedule.detection == "now":
+            self.known = self.sim.sense()
+
+    def repair(self, action: Action) -> Repair:
+        spec = self.spec
+        t0 = time.perf_counter_ns()
+        request = RepairRequest(
+            spec.maze,
+            self.sim.pose,
+            _ActionView(self.queue),
+            self.known,
+            spec.goal,
+            spec.goal_heading,
+            spec.options,
+            self.planner,
+            self.table,
+        )
+        repair = get_strategy(spec.strategy)(request)
+        if repair.status == "repaired":
+            for _ in range(repair.consumed):
+                self.queue.popleft()
+            self.queue.extendleft((a, repair.source) for a in reversed(repair.actions))
+        latency = time.perf_counter_ns() - t0
+        self.repairs.append(RepairRecord(self.sim.steps, self.sim.pose, action, repair, latency))
+        return repair
+
+    def execute(self, action: Action, source: str) -> str | None:
+        """Run one command; returns a terminal status or ``None`` to go on."""
+        outcome = self.sim.execute(action)
+        if outcome.status == "collision":
+            return "collision"
+        known = self.known  # what was known when the command was given
+        if outcome.status == "failed-attempt":
+            self.known = known | outcome.blocking
+            source = "failed-attempt"
+        else:
+            self.queue.popleft()
+        self.steps.append(
+            TraceStep(
+                outcome.step, action, outcome.start, outcome.end, outcome.duration, source, known
+            )
+        )
+        return None
+
+
+def run_mission(spec: MissionSpec) -> MissionResult:
+    """Plan, execute and repair one mission (see the module docstring)."""
+    get_strategy(spec.strategy)  # fail fast on a bad name
+    sim = Simulator(spec.maze, spec.start, spec.schedule, spec.seed)
+    initial_known = sim.sense() if spec.initial_faults_known else frozenset()
+    settings = spec.planner
+    problem = PlanningProblem(
+        spec.maze,
+        spec.start,
+        spec.goal,
+        spec.goal_heading,
+        initial_known,
+        settings.clearance_weight,
+        settings.clearance_radius,
+    )
+    t0 = time.perf_counter_ns()
+    initial = plan(
+        problem,
+        heuristic=spec.heuristic,
+        max_expansions=spec.replan_max_expansions,
+        backend=spec.backend,
+    )
+    planning_ns = time.perf_counter_ns() - t0
+    table = spec.options.resolved_table() if spec.strategy != "replan" else None
+    if table is not None and spec.options.recursion == "flat":
+        prepare_grid_geometry(FOUR_WHEEL, table)  # once per table object, like loading it
+    run = _Run(
+        spec, sim, deque((a, "plan") for a in initial.actions), initial_known, table, settings
+    )
+    if initial.status is not PlanStatus.SOLVED:
+        return _result(
+            run, initial, planning_ns, "no_initial_plan", f"initial plan: {initial.status.value}"
+        )
+    status, reason = _loop(run)
+    return _result(run, initial, planning_ns, status, reason)
+
+
+def _loop(run: _Run) -> tuple[str, str]:
+    spec = run.spec
+    limit = spec.step_limit()
+    while True:
+        if _at_goal(spec, run.sim.pose):
+            return "reached", "goal reached"
+        if run.sim.steps >= limit:
+            return "step_limit", f"{limit} steps without reaching the goal"
+        run.sense()
+        if not run.queue or not robot.available(run.queue[0][0], run.known):
+            faulty = run.queue[0][0] if run.queue else None
+            repair = _repair_or_replan(run, faulty)
+            if repair.status != "repaired":
+                return repair.status, _why(repair, run)
+            continue
+        action, source = run.queue[0]
+        terminal = run.execute(action, source)
+        if terminal is not None:
+            return terminal, f"{action} at {run.sim.pose} would sweep a wall"
+
+
+def _repair_or_replan(run: _Run, faulty: Action | None) -> Repair:
+    """A repair for the faulty next action; with an empty queue off the goal, a plain replan."""
+    if faulty is not None:
+        return run.repair(faulty)
+    from selfrepair.strategies import replan
+
+    spec = run.spec
+    t0 = time.perf_counter_ns()
+    request = RepairRequest(
+        spec.maze,
+        run.sim.pose,
+        (),
+        run.known,
+        spec.goal,
+        spec.goal_heading,
+        spec.options,
+        spec.planner,
+    )
+    repair = replan(request)
+    if repair.status == "repaired":
+        run.queue.extend((a, "replan") for a in repair.actions)
+    run.repairs.append(
+        RepairRecord(run.sim.steps, run.sim.pose, None, repair, time.perf_counter_ns() - t0)
+    )
+    return repair
+
+
+def _why(repair: Repair, run: _Run) -> str:
+    tried = " then ".join(repair.attempts)
+    what = "no plan exists" if repair.status == "stuck" else "the planner budget ran out"
+    return (
+        f"at {run.sim.pose} with known faults "
+        f"{robot.format_faults(run.known) or 'none'}: tried {tried}; {what}"
+    )
+
+
+def _result(
+    run: _Run, initial: PlanResult, planning_ns: int, status: str, reason: str
+) -> MissionResult:
+    return MissionResult(
+        run.spec,
+        status,
+        reason,
+        tuple(run.steps),
+        tuple(run.repairs),
+        initial,
+        planning_ns,
+        run.sim.pose,
+        run.sim.ticks,
+    )

@@ -1,0 +1,431 @@
+"""Experiment configuration: a TOML file read into a validated, frozen :class:`ExperimentConfig`.
+
+The file format is described in ``docs/experiments.md``; in short::
+
+    name = "paper"
+    seed = 2024                  # base seed; every mission's seed derives from it
+    repeats = 1                  # seeds per mission
+
+    [[mazes]]
+    bundled = "narrow-short"     # or file = "x.maze" / generate = {width=.., height=.., ...}
+    routes = "bundled"           # or a count of random routes, or [{start="1,1,E", goal="9,9"}]
+
+    [faults]
+    sets = "paper"               # paper | singles | doubles | all | ["FL:F", "FL:F,RR:B"]
+    at = [0]                     # step index at which the faults appear (0: from the start)
+    detection = ["now"]          # now | on-use
+
+    [planner]
+    clearance_weights = [0]
+    clearance_radius = 2
+
+    [[strategies]]
+    name = "replacement"         # replan | replacement | lookahead
+    tables = ["handwritten"]
+    recursion = ["guarded"]
+
+Validation uses pydantic; every problem becomes a :class:`~selfrepair.errors.ConfigError` that
+names the file, the key (as a dotted path such as ``strategies[1].tables``), its line when it can
+be found in the text, and what was expected.
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from fractions import Fraction
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
+
+from selfrepair.errors import ConfigError, InputError
+from selfrepair.robot import parse_cell, parse_faults, parse_pose
+
+__all__ = [
+    "FAULT_PROFILES",
+    "ExperimentConfig",
+    "FaultsConfig",
+    "GeneratedMaze",
+    "LookaheadStrategy",
+    "MazeConfig",
+    "PlannerConfig",
+    "ReplacementStrategy",
+    "ReplanStrategy",
+    "RouteConfig",
+    "StrategyConfig",
+    "load_config",
+    "parse_config",
+]
+
+FAULT_PROFILES = ("paper", "singles", "doubles", "all")
+"""Named fault-set profiles; see :func:`selfrepair.experiment.missions.fault_profile`."""
+
+RECURSION_MODES = ("flat", "guarded", "layered")
+
+
+class _Frozen(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid", strict=False)
+
+
+class GeneratedMaze(_Frozen):
+    """Options of :func:`selfrepair.mazegen.generate_maze`."""
+
+    width: Annotated[int, Field(ge=5, le=1024)]
+    height: Annotated[int, Field(ge=5, le=1024)]
+    corridor: Annotated[int, Field(ge=1, le=64)] = 1
+    braid: Annotated[float, Field(ge=0.0, le=1.0)] = 0.0
+    seed: int = 0
+
+
+class RouteConfig(_Frozen):
+    """One explicit route: a start pose ``"X,Y,H"`` and a goal cell ``"X,Y"``."""
+
+    start: str
+    goal: str
+    name: str | None = None
+
+    @field_validator("start")
+    @classmethod
+    def _pose(cls, value: str) -> str:
+        return str(_reraise(parse_pose, value))
+
+    @field_validator("goal")
+    @classmethod
+    def _cell(cls, value: str) -> str:
+        x, y = _reraise(parse_cell, value)
+        return f"{x},{y}"
+
+
+class MazeConfig(_Frozen):
+    """Where a maze comes from (exactly one of ``bundled``, ``file``, ``generate``) and its routes.
+
+    ``routes`` is ``"bundled"`` (the bundled maze's route file), a number of random routes (drawn
+    from the experiment seed), or a list of explicit routes.
+    """
+
+    bundled: str | None = None
+    file: str | None = None
+    generate: GeneratedMaze | None = None
+    routes: (
+        Literal["bundled"] | Annotated[int, Field(ge=1, le=10_000)] | tuple[RouteConfig, ...]
+    ) = "bundled"
+
+    @model_validator(mode="after")
+    def _one_source(self) -> MazeConfig:
+        given = [k for k in ("bundled", "file", "generate") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(
+                "expected exactly one of 'bundled', 'file' or 'generate', got "
+                + (", ".join(repr(k) for k in given) or "none")
+            )
+        if self.routes == "bundled" and self.bundled is None:
+            raise ValueError(
+                'routes = "bundled" needs a bundled maze; give a number of random routes or a '
+                "list of {start, goal} tables"
+            )
+        return self
+
+
+class FaultsConfig(_Frozen):
+    """Which fault sets, when they appear (``at``, in steps or ticks per ``clock``), how long they
+    last (``persistence`` with ``duration`` or ``probability``) and how they are detected."""
+
+    sets: Literal["paper", "singles", "doubles", "all"] | tuple[str, ...] = "paper"
+    at: tuple[Annotated[int, Field(ge=0)], ...] = (0,)
+    clock: Literal["step", "tick"] = "step"
+    detection: tuple[Literal["now", "on-use"], ...] = ("now",)
+    persistence: Literal["permanent", "transient", "intermittent"] = "permanent"
+    duration: Annotated[int, Field(ge=1)] | None = None
+    probability: Annotated[float, Field(ge=0.0, le=1.0)] | None = None
+
+    @model_validator(mode="after")
+    def _persistence_options(self) -> FaultsConfig:
+        if self.persistence == "transient" and self.duration is None:
+            raise ValueError("persistence = \"transient\" needs a 'duration' (>= 1)")
+        if self.persistence == "intermittent" and self.probability is None:
+            raise ValueError("persistence = \"intermittent\" needs a 'probability' in [0, 1]")
+        return self
+
+    @field_validator("sets")
+    @classmethod
+    def _sets(cls, value: str | tuple[str, ...]) -> str | tuple[str, ...]:
+        if isinstance(value, str):
+            return value
+        if not value:
+            raise ValueError("expected at least one fault set")
+        from selfrepair.robot import format_faults
+
+        return tuple(format_faults(_reraise(parse_faults, text)) for text in value)
+
+    @field_validator("at", "detection")
+    @classmethod
+    def _non_empty(cls, value: tuple[Any, ...]) -> tuple[Any, ...]:
+        if not value:
+            raise ValueError("expected a non-empty list")
+        return value
+
+
+class PlannerConfig(_Frozen):
+    """Planner options shared by every strategy unless a strategy overrides the weights."""
+
+    clearance_weights: tuple[str, ...] = ("0",)
+    clearance_radius: Annotated[int, Field(ge=0, le=64)] = 2
+
+    @field_validator("clearance_weights", mode="before")
+    @classmethod
+    def _weights(cls, value: Any) -> Any:
+        return _weights(value)
+
+
+class ReplanStrategy(_Frozen):
+    """The baseline: replan from scratch at every faulty encounter."""
+
+    name: Literal["replan"]
+    clearance_weights: tuple[str, ...] | None = None
+
+    @field_validator("clearance_weights", mode="before")
+    @classmethod
+    def _weights(cls, value: Any) -> Any:
+        return _weights(value)
+
+
+class ReplacementStrategy(_Frozen):
+    """Replacement tables with recursion mode; one variant per table and mode."""
+
+    name: Literal["replacement"]
+    tables: tuple[str, ...] = ("handwritten",)
+    recursion: tuple[Literal["flat", "guarded", "layered"], ...] = ("guarded",)
+    clearance_weights: tuple[str, ...] | None = None
+
+    @field_validator("clearance_weights", mode="before")
+    @classmethod
+    def _weights(cls, value: Any) -> Any:
+        return _weights(value)
+
+    @field_validator("tables", "recursion")
+    @classmethod
+    def _non_empty(cls, value: tuple[Any, ...]) -> tuple[Any, ...]:
+        if not value:
+            raise ValueError("expected a non-empty list")
+        return value
+
+
+class LookaheadStrategy(ReplacementStrategy):
+    """Replace a window of ``window`` actions after the faulty one; one variant per window."""
+
+    name: Literal["lookahead"]  # type: ignore[assignment]
+    window: tuple[Annotated[int, Field(ge=0, le=64)], ...] = (3,)
+
+
+StrategyConfig = Annotated[
+    ReplanStrategy | ReplacementStrategy | LookaheadStrategy, Field(discriminator="name")
+]
+
+
+class ExperimentConfig(_Frozen):
+    """A whole experiment: the cross product of mazes x routes x fault settings x strategies x
+    clearance weights x repeats. ``source`` is the file it was read from (for error messages and
+    for resolving relative paths)."""
+
+    name: Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")]
+    description: str = ""
+    seed: int = 0
+    repeats: Annotated[int, Field(ge=1, le=1000)] = 1
+    mazes: Annotated[tuple[MazeConfig, ...], Field(min_length=1)]
+    faults: FaultsConfig = FaultsConfig()
+    planner: PlannerConfig = PlannerConfig()
+    strategies: Annotated[tuple[StrategyConfig, ...], Field(min_length=1)]
+    source: str = "<string>"
+
+    @property
+    def base_dir(self) -> Path:
+        """The directory relative paths in the file are resolved against."""
+        return Path(self.source).parent if not self.source.startswith("<") else Path.cwd()
+
+
+def _weights(value: Any) -> Any:
+    """Clearance weights as canonical exact strings (``0.5`` -> ``"1/2"``)."""
+    if value is None:
+        return None
+    if not isinstance(value, list | tuple):
+        raise ValueError("expected a list of non-negative numbers such as [0, 1, 2.5]")
+    if not value:
+        raise ValueError("expected a non-empty list")
+    out = []
+    for item in value:
+        if isinstance(item, bool) or not isinstance(item, int | float | str):
+            raise ValueError(f"expected a non-negative number, got {item!r}")
+        try:
+            weight = Fraction(str(item))
+        except (ValueError, ZeroDivisionError):
+            raise ValueError(f"expected a non-negative number, got {item!r}") from None
+        if weight < 0:
+            raise ValueError(f"expected a non-negative number, got {item!r}")
+        out.append(str(weight))
+    return tuple(out)
+
+
+def _reraise(parser: Any, text: str) -> Any:
+    """Run a robot-model parser, turning its InputError into a plain ValueError for pydantic."""
+    try:
+        return parser(text)
+    except InputError as exc:
+        raise ValueError(exc.reason) from None
+
+
+# --- loading -----------------------------------------------------------------------------------
+
+
+def load_config(path: str | Path) -> ExperimentConfig:
+    """Read and validate an experiment TOML file."""
+    file = Path(path)
+    try:
+        text = file.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ConfigError(
+            f"cannot read experiment file: {exc.strerror}", source=str(file)
+        ) from None
+    return parse_config(text, source=str(file.resolve()))
+
+
+def parse_config(text: str, *, source: str = "<string>") -> ExperimentConfig:
+    """Parse and validate experiment TOML text; ``source`` names it in errors."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        where = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
+        reason = re.sub(r"\s*\(at (line \d+, column \d+|end of document)\)", "", str(exc))
+        line, column = (int(where.group(1)), int(where.group(2))) if where else (None, None)
+        raise ConfigError(
+            f"invalid TOML: {reason}", source=source, line=line, column=column
+        ) from None
+    if "source" in data:
+        raise ConfigError("unknown key 'source' (it is set by the loader)", source=source)
+    try:
+        return ExperimentConfig.model_validate({**data, "source": source})
+    except ValidationError as exc:
+        raise _config_error(exc, text, source) from None
+
+
+def _config_error(exc: ValidationError, text: str, source: str) -> ConfigError:
+    """The first validation problem as a ConfigError naming key, line and expectation."""
+    error = exc.errors()[0]
+    loc = _clean_loc(error["loc"])
+    key = _dotted(loc) or "<top level>"
+    message = error["msg"].removeprefix("Value error, ")
+    if error["type"] == "extra_forbidden":
+        message = "unknown key"
+    elif error["type"] == "missing":
+        message = "missing required key"
+    elif error["type"] == "union_tag_invalid":
+        loc = (*loc, "name")
+        key = _dotted(loc)
+        expected = error.get("ctx", {}).get("expected_tags", "")
+        message = f"expected a strategy name, one of {expected}"
+        got = error.get("input", {}).get("name") if isinstance(error.get("input"), dict) else None
+        return ConfigError(
+            f"key {key!r}: {message} (got {got!r})", source=source, line=find_line(text, loc)
+        )
+    elif error["type"] in ("tuple_type", "list_type"):
+        message = "expected a list"
+    else:
+        message = message.replace("Input should be", "expected")
+    got = error.get("input")
+    if error["type"] not in ("missing", "extra_forbidden") and not isinstance(got, dict | list):
+        message += f" (got {got!r})"
+    return ConfigError(f"key {key!r}: {message}", source=source, line=find_line(text, loc))
+
+
+def _clean_loc(loc: tuple[Any, ...]) -> tuple[str | int, ...]:
+    """Drop pydantic's union-member tags (e.g. ``'replacement'``, ``'int'``) from a location."""
+    out: list[str | int] = []
+    for part in loc:
+        if isinstance(part, str) and (
+            part in ("replan", "replacement", "lookahead")
+            or "[" in part
+            or part in ("int", "str", "tuple", "float", "constrained-int", "function-after")
+        ):
+            continue
+        out.append(part)
+    return tuple(out)
+
+
+def _dotted(loc: tuple[str | int, ...]) -> str:
+    text = ""
+    for part in loc:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else part)
+    return text
+
+
+_HEADER = re.compile(r"^\s*\[\[?\s*([A-Za-z0-9_.\-\"']+)\s*\]\]?")
+
+
+def find_line(text: str, loc: tuple[str | int, ...]) -> int | None:
+    """Best-effort 1-based line of the key at ``loc`` in TOML ``text`` (None when not found).
+
+    Follows ``[[array]]`` headers by index and ``[table]`` headers by name, then looks for
+    ``key =`` inside the section found so far.
+    """
+    lines = text.splitlines()
+    start, end = 0, len(lines)
+    found: int | None = None
+    section = ""
+    i = 0
+    while i < len(loc):
+        part = loc[i]
+        nxt = loc[i + 1] if i + 1 < len(loc) else None
+        if isinstance(part, int):
+            i += 1
+            continue
+        name = f"{section}.{part}" if section else part
+        if isinstance(nxt, int):
+            hit = _nth_header(lines, name, nxt, start, end)
+            if hit is not None:
+                start, end, section, found = hit[0] + 1, hit[1], name, hit[0] + 1
+                i += 2
+                continue
+        hit = _nth_header(lines, name, 0, start, end)
+        if hit is not None:
+            start, end, section, found = hit[0] + 1, hit[1], name, hit[0] + 1
+            i += 1
+            continue
+        key_line = _key_line(lines, part, start, end)
+        if key_line is None:
+            return found
+        return key_line + 1
+    return found
+
+
+def _nth_header(
+    lines: list[str], name: str, index: int, start: int, end: int
+) -> tuple[int, int] | None:
+    """The (header line, section end) of the ``index``-th ``[name]``/``[[name]]`` header."""
+    count = -1
+    for n in range(start, end):
+        match = _HEADER.match(lines[n])
+        if match and match.group(1).strip("\"'") == name:
+            count += 1
+            if count == index:
+                stop = next(
+                    (m for m in range(n + 1, len(lines)) if _HEADER.match(lines[m])), len(lines)
+                )
+                return n, stop
+    return None
+
+
+def _key_line(lines: list[str], key: str, start: int, end: int) -> int | None:
+    pattern = re.compile(rf"^\s*[\"']?{re.escape(key)}[\"']?\s*=|[{{,]\s*{re.escape(key)}\s*=")
+    for n in range(start, end):
+        if _HEADER.match(lines[n]) and n > start:
+            break
+        if pattern.search(lines[n]):
+            return n
+    return None

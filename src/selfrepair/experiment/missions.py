@@ -1,0 +1,455 @@
+"""Expand an :class:`ExperimentConfig` into missions, each with a stable key and an explicit seed.
+
+A :class:`Mission` carries the *canonical configuration* of one run as a JSON string with sorted
+keys: maze identity (bundled name, file path plus content hash, or generator options), route,
+fault set, fault timing and detection, strategy and its options, clearance weight and radius,
+replicate and seed. The mission key is the SHA-256 of that string, so the same mission gets the
+same key in every run and on every machine, and changing anything about a mission (including the
+content of a maze file) gives it a new key. That is what makes a sweep resumable.
+
+The seed of a mission derives from the experiment's base seed and the mission's *situation*
+(maze, route, faults, timing, detection, replicate) but not from its strategy: every strategy
+meets the same random events (e.g. intermittent faults), so comparisons are paired.
+
+The paper's 12 fault sets (:data:`PAPER_FAULT_SETS`) are explained in ``docs/experiments.md``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections import deque
+from collections.abc import Iterator
+from dataclasses import dataclass
+from fractions import Fraction
+from functools import lru_cache
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from selfrepair.errors import ConfigError, InputError
+from selfrepair.experiment.config import (
+    ExperimentConfig,
+    LookaheadStrategy,
+    MazeConfig,
+    ReplacementStrategy,
+)
+from selfrepair.maze import Maze
+from selfrepair.robot import (
+    DOUBLE_FAULTS,
+    SINGLE_FAULTS,
+    Heading,
+    Pose,
+    format_faults,
+    parse_cell,
+    parse_faults,
+    parse_pose,
+)
+from selfrepair.routes import Route
+
+if TYPE_CHECKING:
+    from selfrepair.executor import MissionSpec
+
+__all__ = [
+    "BUNDLED_TABLES",
+    "PAPER_FAULT_SETS",
+    "SCHEMA",
+    "Mission",
+    "expand",
+    "fault_profile",
+    "maze_label",
+    "maze_of",
+    "random_routes",
+    "to_spec",
+    "variant_label",
+]
+
+SCHEMA = 1
+"""Version of the canonical mission configuration; part of every key."""
+
+PAPER_FAULT_SETS: tuple[str, ...] = (
+    # one fault: each wheel mode on the left and on the right side (mazes are not mirror-symmetric)
+    "FL:F",
+    "FR:F",
+    "FL:S",
+    "FR:S",
+    "FL:B",
+    "FR:B",
+    # two faults: one per class of pair
+    "FL:F,RL:F",  # one side can no longer drive forward at all
+    "FL:F,FR:F",  # both front wheels: forward only at half speed
+    "FL:B,FL:F",  # one wheel stuck at stop
+    "FL:F,RR:B",  # diagonal, mixed modes
+    "FL:S,FR:S",  # neither front wheel can stop
+    "FR:B,RR:B",  # one side can no longer drive backward
+)
+"""The reference experiment's 12 fault sets (6 single, 6 double); see docs/experiments.md."""
+
+BUNDLED_TABLES = ("handwritten", "generated-agnostic", "generated-indexed")
+"""Table names resolved from package data; anything else is a path to a table file."""
+
+
+@dataclass(frozen=True, slots=True)
+class Mission:
+    """One run of the executor, as plain data.
+
+    ``config`` is the canonical JSON (sorted keys, no spaces) that ``key`` hashes; ``labels`` are
+    the readable dimension columns stored next to the metrics (maze, route, faults, variant, ...).
+    """
+
+    key: str
+    experiment: str
+    seed: int
+    config: str
+    labels: tuple[tuple[str, str | int | None], ...]
+
+    @property
+    def settings(self) -> dict[str, Any]:
+        """The canonical configuration as a dict."""
+        return dict(json.loads(self.config))
+
+
+def canonical_json(data: Any) -> str:
+    """Sorted-key, compact JSON: the exact text a mission key hashes."""
+    return json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
+
+
+def mission_key(config_json: str) -> str:
+    """The stable key of a mission: the first 32 hex digits of SHA-256 of its canonical JSON."""
+    return hashlib.sha256(config_json.encode("ascii")).hexdigest()[:32]
+
+
+def derive_seed(base_seed: int, situation: dict[str, Any]) -> int:
+    """A 32-bit seed from the base seed and a mission's situation (strategy-independent)."""
+    digest = hashlib.sha256(f"{base_seed}|{canonical_json(situation)}".encode("ascii")).digest()
+    return int.from_bytes(digest[:4], "big")
+
+
+# --- faults ------------------------------------------------------------------------------------
+
+
+def fault_profile(sets: str | tuple[str, ...]) -> tuple[str, ...]:
+    """The fault sets of a profile name or an explicit list, each in canonical text form."""
+    if isinstance(sets, tuple):
+        return sets
+    singles = tuple(format_faults([f]) for f in SINGLE_FAULTS)
+    doubles = tuple(format_faults(pair) for pair in DOUBLE_FAULTS)
+    profiles = {
+        "paper": tuple(format_faults(parse_faults(s)) for s in PAPER_FAULT_SETS),
+        "singles": singles,
+        "doubles": doubles,
+        "all": singles + doubles,
+    }
+    return profiles[sets]
+
+
+# --- mazes and routes --------------------------------------------------------------------------
+
+
+def maze_identity(entry: MazeConfig, base_dir: Path, source: str, index: int) -> dict[str, Any]:
+    """What identifies a maze in a mission key (a file is identified by path and content hash)."""
+    if entry.bundled is not None:
+        from selfrepair.bundled import maze_names
+
+        if entry.bundled not in maze_names():
+            raise ConfigError(
+                f"key 'mazes[{index}].bundled': expected one of {', '.join(maze_names())}, "
+                f"got {entry.bundled!r}",
+                source=source,
+            )
+        return {"bundled": entry.bundled}
+    if entry.file is not None:
+        path = (base_dir / entry.file).resolve()
+        try:
+            digest = hashlib.sha256(path.read_bytes()).hexdigest()
+        except OSError as exc:
+            raise ConfigError(
+                f"key 'mazes[{index}].file': cannot read maze file {str(path)!r}: {exc.strerror}",
+                source=source,
+            ) from None
+        return {"file": str(path), "sha256": digest}
+    assert entry.generate is not None
+    return {"generate": entry.generate.model_dump()}
+
+
+def maze_label(identity: dict[str, Any]) -> str:
+    """A short readable name for a maze identity (bundled name, file stem or generator spec)."""
+    if "bundled" in identity:
+        return str(identity["bundled"])
+    if "file" in identity:
+        return Path(identity["file"]).stem
+    g = identity["generate"]
+    braid = f"-b{g['braid']:g}" if g["braid"] else ""
+    return f"gen{g['width']}x{g['height']}-c{g['corridor']}{braid}-s{g['seed']}"
+
+
+def maze_of(identity_json: str) -> Maze:
+    """The maze of an identity (as canonical JSON, so results can be cached per process)."""
+    return _maze_cached(identity_json)
+
+
+@lru_cache(maxsize=64)
+def _maze_cached(identity_json: str) -> Maze:
+    identity = json.loads(identity_json)
+    if "bundled" in identity:
+        from selfrepair.bundled import load_bundled
+
+        return load_bundled(identity["bundled"])
+    if "file" in identity:
+        from selfrepair.maze import load_maze
+
+        return load_maze(identity["file"])
+    from selfrepair.mazegen import generate_maze
+
+    g = identity["generate"]
+    return generate_maze(
+        g["width"],
+        g["height"],
+        corridor=g["corridor"],
+        braid=g["braid"],
+        seed=g["seed"],
+        name=maze_label(identity),
+    )
+
+
+def random_routes(maze: Maze, count: int, seed: int) -> tuple[Route, ...]:
+    """``count`` seeded routes: a random free start cell and heading, and a goal drawn among the
+    reachable cells at least half the largest 4-connected distance away (so routes are long)."""
+    rng = np.random.default_rng(seed)
+    free = maze.free_cells()
+    if len(free) < 2:
+        raise InputError("expected a maze with at least two free cells for random routes")
+    routes = []
+    for n in range(count):
+        start = free[int(rng.integers(len(free)))]
+        distances = _bfs(maze, start)
+        far = max(distances.values())
+        candidates = sorted(c for c, d in distances.items() if d * 2 >= far and d > 0)
+        if not candidates:
+            candidates = sorted(c for c in distances if c != start) or [start]
+        goal = candidates[int(rng.integers(len(candidates)))]
+        heading = Heading(int(rng.integers(4)))
+        routes.append(Route(f"q{n + 1}", Pose(start[0], start[1], heading), goal))
+    return tuple(routes)
+
+
+def _bfs(maze: Maze, start: tuple[int, int]) -> dict[tuple[int, int], int]:
+    """4-connected distances from ``start`` (a turn in place needs only the robot's own cell, so
+    4-connectivity is exactly what the robot can reach)."""
+    distances = {start: 0}
+    queue = deque([start])
+    while queue:
+        x, y = queue.popleft()
+        for nx, ny in ((x + 1, y), (x - 1, y), (x, y + 1), (x, y - 1)):
+            if (nx, ny) not in distances and maze.is_free(nx, ny):
+                distances[(nx, ny)] = distances[(x, y)] + 1
+                queue.append((nx, ny))
+    return distances
+
+
+def routes_of(
+    entry: MazeConfig, identity: dict[str, Any], base_seed: int, source: str, index: int
+) -> tuple[Route, ...]:
+    """The routes of one maze entry: bundled, random (seeded) or explicit (checked free)."""
+    if entry.routes == "bundled":
+        from selfrepair.bundled import bundled_routes
+
+        assert entry.bundled is not None
+        return bundled_routes(entry.bundled)
+    maze = maze_of(canonical_json(identity))
+    if isinstance(entry.routes, int):
+        return random_routes(maze, entry.routes, derive_seed(base_seed, {"routes": identity}))
+    routes = []
+    for n, r in enumerate(entry.routes):
+        route = Route(r.name or f"r{n + 1}", parse_pose(r.start), parse_cell(r.goal))
+        for what, cell in (("start", route.start.cell), ("goal", route.goal)):
+            if not maze.is_free(*cell):
+                raise ConfigError(
+                    f"key 'mazes[{index}].routes[{n}].{what}': expected a free cell of maze "
+                    f"{maze_label(identity)!r}, got {cell[0]},{cell[1]}",
+                    source=source,
+                )
+        routes.append(route)
+    return tuple(routes)
+
+
+# --- strategies --------------------------------------------------------------------------------
+
+
+def strategy_variants(config: ExperimentConfig) -> Iterator[tuple[dict[str, Any], tuple[str, ...]]]:
+    """Every (strategy settings, clearance weights) pair the config asks for."""
+    for strategy in config.strategies:
+        weights = strategy.clearance_weights or config.planner.clearance_weights
+        if isinstance(strategy, ReplacementStrategy):
+            windows: tuple[int | None, ...] = (
+                strategy.window if isinstance(strategy, LookaheadStrategy) else (None,)
+            )
+            for table in strategy.tables:
+                for recursion in strategy.recursion:
+                    for window in windows:
+                        options: dict[str, Any] = {
+                            "table": _table_identity(table, config),
+                            "recursion": recursion,
+                        }
+                        if window is not None:
+                            options["window"] = window
+                        yield {"strategy": strategy.name, "options": options}, weights
+        else:
+            yield {"strategy": strategy.name, "options": {}}, weights
+
+
+def _table_identity(table: str, config: ExperimentConfig) -> str:
+    """A bundled table name as is; a file path made absolute against the config's directory."""
+    if table in BUNDLED_TABLES:
+        return table
+    path = (config.base_dir / table).resolve()
+    if not path.is_file():
+        raise ConfigError(
+            f"key 'strategies[].tables': expected one of {', '.join(BUNDLED_TABLES)} or a table "
+            f"file, got {table!r}",
+            source=config.source,
+        )
+    return str(path)
+
+
+def variant_label(strategy: str, options: dict[str, Any]) -> str:
+    """A short readable strategy variant, e.g. ``replacement[handwritten,guarded]``."""
+    if not options:
+        return strategy
+    parts = []
+    if "table" in options:
+        table = str(options["table"])
+        parts.append(table if table in BUNDLED_TABLES else Path(table).stem)
+    if "recursion" in options:
+        parts.append(str(options["recursion"]))
+    if "window" in options:
+        parts.append(f"k={options['window']}")
+    return f"{strategy}[{','.join(parts)}]"
+
+
+# --- expansion ---------------------------------------------------------------------------------
+
+
+def expand(config: ExperimentConfig) -> tuple[Mission, ...]:
+    """Every mission of ``config``, in a deterministic order, with keys and seeds.
+
+    Duplicate missions (the same canonical configuration reached twice) appear once.
+    """
+    variants = list(strategy_variants(config))
+    fault_sets = fault_profile(config.faults.sets)
+    missions: dict[str, Mission] = {}
+    for index, entry in enumerate(config.mazes):
+        identity = maze_identity(entry, config.base_dir, config.source, index)
+        label = maze_label(identity)
+        for route in routes_of(entry, identity, config.seed, config.source, index):
+            for faults in fault_sets:
+                for at in config.faults.at:
+                    for detection in config.faults.detection:
+                        for replicate in range(config.repeats):
+                            situation = {
+                                "schema": SCHEMA,
+                                "maze": identity,
+                                "route": route.name,
+                                "start": str(route.start),
+                                "goal": f"{route.goal[0]},{route.goal[1]}",
+                                "faults": faults,
+                                "fault_at": at,
+                                "fault_clock": config.faults.clock,
+                                "persistence": config.faults.persistence,
+                                "fault_duration": config.faults.duration,
+                                "fault_probability": config.faults.probability,
+                                "detection": detection,
+                                "replicate": replicate,
+                            }
+                            seed = derive_seed(config.seed, situation)
+                            for variant, weights in variants:
+                                for weight in weights:
+                                    mission = _mission(
+                                        config, situation, seed, variant, weight, label
+                                    )
+                                    missions.setdefault(mission.key, mission)
+    return tuple(missions.values())
+
+
+def _mission(
+    config: ExperimentConfig,
+    situation: dict[str, Any],
+    seed: int,
+    variant: dict[str, Any],
+    weight: str,
+    label: str,
+) -> Mission:
+    settings = {
+        **situation,
+        **variant,
+        "clearance_weight": weight,
+        "clearance_radius": config.planner.clearance_radius,
+        "seed": seed,
+    }
+    text = canonical_json(settings)
+    options = variant["options"]
+    labels: tuple[tuple[str, str | int | None], ...] = (
+        ("maze", label),
+        ("route", situation["route"]),
+        ("faults", situation["faults"]),
+        ("fault_count", len(situation["faults"].split(",")) if situation["faults"] else 0),
+        ("fault_at", situation["fault_at"]),
+        ("detection", situation["detection"]),
+        ("replicate", situation["replicate"]),
+        ("strategy", variant["strategy"]),
+        ("variant", variant_label(variant["strategy"], options)),
+        ("table", _short_table(options.get("table"))),
+        ("recursion", options.get("recursion")),
+        ("window", options.get("window")),
+        ("clearance_weight", weight),
+    )
+    return Mission(mission_key(text), config.name, seed, text, labels)
+
+
+def _short_table(table: Any) -> str | None:
+    if table is None:
+        return None
+    return table if table in BUNDLED_TABLES else Path(str(table)).stem
+
+
+# --- executor specs ----------------------------------------------------------------------------
+
+
+def to_spec(mission: Mission) -> MissionSpec:
+    """The executor's :class:`~selfrepair.executor.MissionSpec` for ``mission``.
+
+    Mazes and tables are loaded once per process (cached), so a worker pays for them once.
+    """
+    from selfrepair.executor import MissionSpec
+    from selfrepair.faultmodel import FaultEvent, FaultSchedule
+    from selfrepair.strategies import StrategyOptions
+
+    s = mission.settings
+    events = tuple(
+        FaultEvent(
+            fault,
+            at=s["fault_at"],
+            clock=s["fault_clock"],
+            persistence=s["persistence"],
+            duration=s["fault_duration"],
+            probability=s["fault_probability"],
+        )
+        for fault in sorted(parse_faults(s["faults"]))
+    )
+    options = s["options"]
+    return MissionSpec(
+        maze=maze_of(canonical_json(s["maze"])),
+        start=parse_pose(s["start"]),
+        goal=parse_cell(s["goal"]),
+        schedule=FaultSchedule(events=events, detection=s["detection"]),
+        strategy=s["strategy"],
+        options=StrategyOptions(
+            table=options.get("table", "handwritten"),
+            recursion=options.get("recursion", "flat"),
+            window=options.get("window", 3),
+        ),
+        clearance_weight=Fraction(s["clearance_weight"]),
+        clearance_radius=s["clearance_radius"],
+        seed=mission.seed,
+    )

@@ -1,0 +1,553 @@
+"""Figures of the experiment report (matplotlib, PNG; needs the ``viz`` extra).
+
+Every figure is drawn with matplotlib's object API (no pyplot state, no GUI backend) on an
+explicitly white background with dark text, so it reads the same in light and dark viewers.
+Colours come from the Okabe-Ito palette, which stays distinguishable for colour-blind readers.
+Functions take result rows (dicts from the store) and a path, and return the path written.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import defaultdict
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from fractions import Fraction
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from selfrepair.errors import ProblemError
+from selfrepair.experiment.findings import Row, group_label, median, percentile, repairs_of
+from selfrepair.maze import Maze
+from selfrepair.robot import Cell, Pose, step
+
+__all__ = [
+    "SOURCE_COLOURS",
+    "MissionPicture",
+    "draw_mission",
+    "figure_clearance",
+    "figure_heatmap",
+    "figure_latency",
+    "figure_latency_vs_size",
+    "figure_mission",
+    "picture_from_trace",
+]
+
+OKABE_ITO = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#D55E00", "#56B4E9", "#F0E442", "#000000")
+SOURCE_COLOURS = {
+    "plan": "#0072B2",
+    "replacement": "#009E73",
+    "lookahead": "#CC79A7",
+    "replan": "#E69F00",
+    "failed-attempt": "#D55E00",
+}
+WALL = "#3b3b3b"
+STYLE = {
+    "figure.facecolor": "white",
+    "axes.facecolor": "white",
+    "savefig.facecolor": "white",
+    "savefig.edgecolor": "white",
+    "text.color": "#111111",
+    "axes.labelcolor": "#111111",
+    "axes.edgecolor": "#333333",
+    "xtick.color": "#111111",
+    "ytick.color": "#111111",
+    "axes.grid": True,
+    "grid.color": "#d9d9d9",
+    "grid.linewidth": 0.6,
+    "font.size": 10,
+    "axes.titlesize": 11,
+    "legend.framealpha": 1.0,
+    "legend.facecolor": "white",
+}
+
+
+def _matplotlib() -> Any:
+    try:
+        import matplotlib
+    except ImportError:
+        raise ProblemError(
+            "figures need matplotlib, which is not installed: pip install 'selfrepair[viz]'"
+        ) from None
+    return matplotlib
+
+
+@contextmanager
+def _figure(width: float, height: float, ncols: int = 1) -> Iterator[tuple[Any, Any]]:
+    """A white figure with ``ncols`` axes in the report's style."""
+    mpl = _matplotlib()
+    from matplotlib.figure import Figure
+
+    with mpl.rc_context(STYLE):
+        fig = Figure(figsize=(width, height), dpi=110, layout="constrained")
+        axes = fig.subplots(1, ncols, squeeze=False)[0]
+        yield fig, axes
+
+
+def _save(fig: Any, path: Path) -> Path:
+    fig.savefig(path, format="png", facecolor="white", transparent=False)
+    return path
+
+
+def _weight(row: Row) -> Fraction:
+    return Fraction(str(row.get("clearance_weight") or "0"))
+
+
+# --- latency -----------------------------------------------------------------------------------
+
+
+def figure_latency(rows: Sequence[Row], path: Path) -> Path:
+    """Repair latency distributions per strategy variant (weight 0), horizontal box plots on a
+    log scale; whiskers at the 1st and 99th percentiles; table hits and replans of the
+    replacement variants are shown as separate boxes."""
+    groups: dict[str, list[float]] = defaultdict(list)
+    for row in rows:
+        if _weight(row) != 0:
+            continue
+        label = group_label(row)
+        for source, latency in repairs_of(row):
+            key = label if row.get("strategy") == "replan" else f"{label}: {source}"
+            groups[key].append(latency / 1000)
+    labels = sorted(groups, key=lambda k: median(groups[k]) or 0)
+    with _figure(9.5, 1.2 + 0.42 * max(1, len(labels))) as (fig, (ax,)):
+        if not labels:
+            ax.text(0.5, 0.5, "no repairs in these results", ha="center", transform=ax.transAxes)
+        else:
+            data = [groups[k] for k in labels]
+            box = ax.boxplot(
+                data,
+                orientation="horizontal",
+                whis=(1, 99),
+                showfliers=False,
+                patch_artist=True,
+                medianprops={"color": "#111111", "linewidth": 1.5},
+            )
+            for patch, label in zip(box["boxes"], labels, strict=True):
+                source = label.rsplit(": ", 1)[-1] if ": " in label else "replan"
+                patch.set_facecolor(SOURCE_COLOURS.get(source, "#999999"))
+                patch.set_alpha(0.8)
+            ax.set_yticks(range(1, len(labels) + 1), [f"{k} (n={len(groups[k])})" for k in labels])
+            ax.set_xscale("log")
+            ax.set_xlabel("repair latency (µs, log scale)")
+        fig.suptitle(
+            "Repair latency per strategy and repair kind, clearance weight 0\n"
+            "box: quartiles and median; whiskers: 1st to 99th percentile",
+            fontsize=11,
+        )
+        return _save(fig, path)
+
+
+def figure_latency_vs_size(rows: Sequence[Row], path: Path) -> Path:
+    """Median repair latency (with the 99th percentile as a bar) against maze size, for replans
+    of the replanning robot and table hits of the replacing robot."""
+    series: dict[str, dict[int, list[float]]] = {
+        "replan (replanning robot)": defaultdict(list),
+        "table hit (replacing robot)": defaultdict(list),
+    }
+    names: dict[int, set[str]] = defaultdict(set)
+    for row in rows:
+        if _weight(row) != 0:
+            continue
+        cells = row.get("maze_free_cells")
+        if not isinstance(cells, int):
+            continue
+        for source, latency in repairs_of(row):
+            if row.get("strategy") == "replan" and source == "replan":
+                series["replan (replanning robot)"][cells].append(latency / 1000)
+            elif row.get("strategy") == "replacement" and source == "replacement":
+                series["table hit (replacing robot)"][cells].append(latency / 1000)
+            else:
+                continue
+            names[cells].add(str(row.get("maze")))
+    with _figure(7.0, 4.8) as (fig, (ax,)):
+        for (label, by_size), colour in zip(series.items(), ("#E69F00", "#009E73"), strict=True):
+            sizes = sorted(by_size)
+            if not sizes:
+                continue
+            med = np.array([median(by_size[s]) for s in sizes], dtype=float)
+            p99 = np.array([percentile(by_size[s], 0.99) for s in sizes], dtype=float)
+            ax.errorbar(
+                sizes,
+                med,
+                yerr=[np.zeros_like(med), p99 - med],
+                marker="o",
+                color=colour,
+                capsize=4,
+                label=f"{label}: median, bar to p99",
+            )
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("maze size (free cells, log scale)")
+        ax.set_ylabel("repair latency (µs, log scale)")
+        sizes = sorted(names)
+        ax.set_xticks(sizes, [f"{c}\n" + "\n".join(sorted(names[c])) for c in sizes], fontsize=8)
+        ax.minorticks_off()
+        if sizes:
+            ax.set_xlim(sizes[0] / 1.4, sizes[-1] * 1.4)
+        ax.set_title("How repair latency grows with maze size")
+        if ax.get_legend_handles_labels()[0]:
+            fig.legend(loc="outside lower center", fontsize=8, ncols=2)
+        return _save(fig, path)
+
+
+# --- clearance -----------------------------------------------------------------------------------
+
+
+def figure_clearance(rows: Sequence[Row], path: Path) -> Path:
+    """Share of faulty encounters resolved by replacement, and mean extra ticks, against the
+    clearance weight, one line per table and recursion mode."""
+    groups: dict[str, dict[Fraction, list[Row]]] = defaultdict(lambda: defaultdict(list))
+    for row in rows:
+        if row.get("strategy") == "replacement":
+            groups[str(row.get("variant"))][_weight(row)].append(row)
+    groups = {k: v for k, v in groups.items() if len(v) > 1}
+    with _figure(10.0, 4.0, ncols=2) as (fig, (left, right)):
+        weights = sorted({w for g in groups.values() for w in g})
+        positions = {w: i for i, w in enumerate(weights)}
+        for (label, by_weight), colour in zip(sorted(groups.items()), OKABE_ITO, strict=False):
+            ws = sorted(by_weight)
+            xs = [positions[w] for w in ws]
+            shares, extra = [], []
+            for w in ws:
+                enc = sum(float(r.get("faulty_encounters") or 0) for r in by_weight[w])
+                rep = sum(float(r.get("replacements") or 0) for r in by_weight[w])
+                shares.append(100 * rep / enc if enc else math.nan)
+                ticks = [
+                    float(v)
+                    for r in by_weight[w]
+                    if isinstance(v := r.get("extra_ticks"), int | float)
+                ]
+                extra.append(sum(ticks) / len(ticks) if ticks else math.nan)
+            left.plot(xs, shares, marker="o", color=colour, label=label)
+            right.plot(xs, extra, marker="o", color=colour, label=label)
+        for ax in (left, right):
+            ax.set_xticks(range(len(weights)), [str(w) for w in weights])
+            ax.set_xlabel("clearance weight")
+        left.set_ylabel("encounters resolved by replacement (%)")
+        left.set_title("Replacement success vs clearance weight")
+        right.set_ylabel("mean extra ticks vs fault-free plan")
+        right.set_title("Price paid in execution time")
+        if not groups:
+            left.text(
+                0.5,
+                0.5,
+                "needs replacement runs at several weights",
+                ha="center",
+                transform=left.transAxes,
+            )
+        else:
+            left.legend(fontsize=8, loc="lower right")
+        return _save(fig, path)
+
+
+# --- heat map ----------------------------------------------------------------------------------
+
+
+def heatmap_variant(rows: Sequence[Row]) -> str | None:
+    """The variant drawn in the heat map: the hand-written table without recursion if present,
+    else the first replacement variant, else the first variant (all at weight 0)."""
+    variants = sorted({str(r.get("variant")) for r in rows if _weight(r) == 0})
+    for wanted in ("replacement[handwritten,flat]", "replacement[handwritten,guarded]"):
+        if wanted in variants:
+            return wanted
+    replacing = [v for v in variants if v.startswith("replacement")]
+    return (replacing or variants or [None])[0]
+
+
+def figure_heatmap(rows: Sequence[Row], path: Path, variant: str | None = None) -> Path:
+    """Fault set x maze: share of encounters resolved locally and mean extra ticks."""
+    variant = variant or heatmap_variant(rows)
+    chosen = [r for r in rows if str(r.get("variant")) == variant and _weight(r) == 0]
+    mazes = sorted({str(r.get("maze")) for r in chosen}, key=lambda m: (_first_int(chosen, m), m))
+    faults = sorted({str(r.get("faults")) for r in chosen}, key=lambda f: (f.count(","), f))
+    share = np.full((len(faults), len(mazes)), np.nan)
+    extra = np.full((len(faults), len(mazes)), np.nan)
+    for i, f in enumerate(faults):
+        for j, m in enumerate(mazes):
+            cell = [r for r in chosen if r.get("faults") == f and r.get("maze") == m]
+            enc = sum(float(r.get("faulty_encounters") or 0) for r in cell)
+            res = sum(
+                float(r.get("replacements") or 0) + float(r.get("lookaheads") or 0) for r in cell
+            )
+            if enc:
+                share[i, j] = 100 * res / enc
+            ticks = [float(v) for r in cell if isinstance(v := r.get("extra_ticks"), int | float)]
+            if ticks:
+                extra[i, j] = sum(ticks) / len(ticks)
+    with _figure(
+        3.0 + 1.35 * max(2, len(mazes)) * 2, 1.6 + 0.32 * max(4, len(faults)), ncols=2
+    ) as (fig, (left, right)):
+        _heat(
+            fig,
+            left,
+            share,
+            faults,
+            mazes,
+            "encounters resolved locally (%)",
+            "viridis",
+            (0, 100),
+            "{:.0f}",
+        )
+        _heat(
+            fig,
+            right,
+            extra,
+            faults,
+            mazes,
+            "mean extra ticks vs fault-free plan",
+            "magma_r",
+            None,
+            "{:.1f}",
+        )
+        right.set_yticks(range(len(faults)), [""] * len(faults))
+        fig.suptitle(f"{variant}, clearance weight 0 (grey: no faulty encounter)")
+        return _save(fig, path)
+
+
+def _first_int(rows: Sequence[Row], maze: str) -> int:
+    for r in rows:
+        if r.get("maze") == maze and isinstance(v := r.get("maze_free_cells"), int):
+            return v
+    return 0
+
+
+def _heat(
+    fig: Any,
+    ax: Any,
+    data: Any,
+    faults: list[str],
+    mazes: list[str],
+    label: str,
+    cmap_name: str,
+    limits: tuple[float, float] | None,
+    fmt: str,
+) -> None:
+    mpl = _matplotlib()
+    cmap = mpl.colormaps[cmap_name].with_extremes(bad="#cccccc")
+    finite = data[np.isfinite(data)]
+    lo, hi = (
+        limits
+        if limits
+        else ((float(finite.min()), float(finite.max())) if finite.size else (0.0, 1.0))
+    )
+    if hi <= lo:
+        hi = lo + 1
+    image = ax.imshow(np.ma.masked_invalid(data), cmap=cmap, vmin=lo, vmax=hi, aspect="auto")
+    ax.grid(False)
+    ax.set_xticks(range(len(mazes)), mazes, rotation=20, ha="right")
+    ax.set_yticks(range(len(faults)), faults)
+    for (i, j), value in np.ndenumerate(data):
+        if math.isfinite(value):
+            r, g, b, _ = cmap((value - lo) / (hi - lo))
+            light = 0.299 * r + 0.587 * g + 0.114 * b > 0.5
+            ax.text(
+                j,
+                i,
+                fmt.format(value),
+                ha="center",
+                va="center",
+                fontsize=7,
+                color="#111111" if light else "white",
+            )
+        else:
+            ax.text(j, i, "-", ha="center", va="center", fontsize=7, color="#555555")
+    fig.colorbar(image, ax=ax, label=label, shrink=0.9)
+
+
+# --- one mission ---------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class MissionPicture:
+    """What a mission drawing needs: the maze, the route, the initial plan's poses and every
+    executed step as ``(from, to, source)``."""
+
+    maze: Maze
+    start: Pose
+    goal: Cell
+    planned: tuple[Pose, ...]
+    steps: tuple[tuple[Pose, Pose, str], ...]
+    faults: str
+    title: str
+
+
+def picture_from_trace(trace: Any) -> MissionPicture:
+    """A :class:`MissionPicture` from a parsed :class:`selfrepair.trace.Trace`."""
+    from selfrepair.robot import format_faults, parse_action
+    from selfrepair.trace import spec_from_header
+
+    spec = spec_from_header(trace.header, trace.source)
+    poses = [spec.start]
+    for code in trace.header.get("initial_plan", []):
+        poses.append(step(poses[-1], parse_action(code))[0])
+    faults = format_faults(spec.schedule.all_faults()) or "none"
+    strategy = spec.strategy
+    if strategy != "replan":
+        strategy += f" [{spec.options.table_label}, {spec.options.recursion}]"
+    summary = trace.summary or {}
+    status = summary.get("status", "?")
+    title = (
+        f"{spec.maze.name or 'maze'}: {spec.start} -> {spec.goal[0]},{spec.goal[1]}, "
+        f"faults {faults}\n{strategy}, clearance weight {spec.clearance_weight}: {status}"
+    )
+    steps = tuple((s.start, s.end, s.source) for s in trace.steps)
+    return MissionPicture(spec.maze, spec.start, spec.goal, tuple(poses), steps, faults, title)
+
+
+def draw_background(ax: Any, picture: MissionPicture) -> None:
+    """The parts of a mission drawing that never change: maze, initial plan, start and goal."""
+    maze = picture.maze
+    mpl = _matplotlib()
+    cmap = mpl.colors.ListedColormap(["white", WALL])
+    ax.imshow(
+        maze.walls.astype(int),
+        cmap=cmap,
+        vmin=0,
+        vmax=1,
+        interpolation="nearest",
+        extent=(-0.5, maze.width - 0.5, maze.height - 0.5, -0.5),
+    )
+    ax.grid(False)
+    ax.set_xticks([])
+    ax.set_yticks([])
+    ax.plot(
+        [p.x for p in picture.planned],
+        [p.y for p in picture.planned],
+        color="#7f7f7f",
+        linestyle=(0, (3, 2)),
+        linewidth=1.6,
+        zorder=2,
+    )
+    ax.plot(picture.start.x, picture.start.y, marker="o", color="#111111", markersize=9, zorder=7)
+    ax.plot(
+        *picture.goal,
+        marker="*",
+        color="#F0E442",
+        markeredgecolor="#111111",
+        markersize=15,
+        zorder=7,
+    )
+
+
+def draw_steps(ax: Any, picture: MissionPicture, first: int, stop: int) -> None:
+    """Executed steps ``first .. stop - 1``, coloured by source; an X where a repair begins."""
+    maze = picture.maze
+    width = max(1.8, 90 / max(maze.width, maze.height))
+    previous = picture.steps[first - 1][2] if first > 0 else "plan"
+    for start, end, source in picture.steps[first:stop]:
+        colour = SOURCE_COLOURS.get(source, "#000000")
+        if source == "failed-attempt":
+            ax.plot(start.x, start.y, marker="x", color=colour, markersize=7, zorder=5)
+        elif start.cell == end.cell:
+            ax.plot(
+                start.x,
+                start.y,
+                marker="o",
+                color=colour,
+                markersize=width * 1.6,
+                zorder=3,
+                alpha=0.9,
+            )
+        else:
+            ax.plot(
+                [start.x, end.x],
+                [start.y, end.y],
+                color=colour,
+                linewidth=width,
+                solid_capstyle="round",
+                zorder=3 if source == "plan" else 4,
+            )
+        if source in ("replacement", "lookahead", "replan") and previous != source:
+            ax.plot(
+                start.x,
+                start.y,
+                marker="X",
+                color="#D55E00",
+                markersize=9,
+                markeredgecolor="white",
+                zorder=6,
+            )
+        previous = source
+
+
+def robot_marker(pose: Pose) -> tuple[int, int, int]:
+    """A triangle marker pointing along ``pose``'s heading (screen up is north)."""
+    return (3, 0, -90 * pose.heading.value)
+
+
+def draw_mission(ax: Any, picture: MissionPicture) -> None:
+    """The whole mission: maze, initial plan, every executed step, start and goal."""
+    draw_background(ax, picture)
+    draw_steps(ax, picture, 0, len(picture.steps))
+
+
+def mission_legend(fig: Any, picture: MissionPicture, *, with_robot: bool = False) -> None:
+    """A legend for :func:`draw_mission` listing only the sources that occur."""
+    from matplotlib.lines import Line2D
+
+    used = {s for _, _, s in picture.steps}
+    handles = [Line2D([], [], color="#7f7f7f", linestyle=(0, (3, 2)), label="initial plan")]
+    names = {
+        "plan": "executed: plan",
+        "replacement": "executed: table replacement",
+        "lookahead": "executed: lookahead window",
+        "replan": "executed: replanned",
+        "failed-attempt": "failed attempt",
+    }
+    for source, label in names.items():
+        if source == "failed-attempt" and source in used:
+            handles.append(
+                Line2D([], [], color=SOURCE_COLOURS[source], marker="x", linestyle="", label=label)
+            )
+        elif source in used:
+            handles.append(Line2D([], [], color=SOURCE_COLOURS[source], linewidth=3, label=label))
+    handles += [
+        Line2D(
+            [],
+            [],
+            marker="X",
+            color="#D55E00",
+            linestyle="",
+            markeredgecolor="white",
+            markersize=9,
+            label="repair begins",
+        ),
+        Line2D([], [], marker="o", color="#111111", linestyle="", label="start"),
+        Line2D(
+            [],
+            [],
+            marker="*",
+            color="#F0E442",
+            markeredgecolor="#111111",
+            linestyle="",
+            markersize=13,
+            label="goal",
+        ),
+    ]
+    if with_robot:
+        handles.append(
+            Line2D(
+                [],
+                [],
+                marker=(3, 0, -90),
+                color="#D55E00",
+                linestyle="",
+                markeredgecolor="#111111",
+                markersize=10,
+                label="robot",
+            )
+        )
+    fig.legend(handles=handles, loc="outside right upper", fontsize=8)
+
+
+def figure_mission(picture: MissionPicture, path: Path) -> Path:
+    """One mission: maze, planned and executed paths, repairs and replaced segments."""
+    size = 7.0 * min(1.0, max(0.6, picture.maze.width / 40))
+    with _figure(size + 2.6, size * picture.maze.height / picture.maze.width + 0.8) as (fig, (ax,)):
+        draw_mission(ax, picture)
+        mission_legend(fig, picture)
+        ax.set_title(picture.title, fontsize=9)
+        return _save(fig, path)

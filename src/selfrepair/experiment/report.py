@@ -1,0 +1,215 @@
+"""The experiment report: ``report.md`` with the summary table, the findings and PNG figures.
+
+:func:`write_report` reads every row of a results database and writes into a directory:
+
+* ``report.md`` - setup, per-strategy table, the three findings, figures with captions;
+* ``latency.png``, ``latency-vs-size.png``, ``clearance.png``, ``heatmap.png`` - see
+  :mod:`selfrepair.experiment.plots`;
+* ``mission.jsonl``, ``mission.png``, ``mission.gif`` - one telling mission, run again from its
+  stored configuration (results are deterministic), with its trace, picture and animation.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections import Counter
+from collections.abc import Sequence
+from fractions import Fraction
+from pathlib import Path
+
+from selfrepair.errors import InputError
+from selfrepair.experiment.findings import (
+    Finding,
+    Row,
+    StrategySummary,
+    check_findings,
+    summarize,
+)
+from selfrepair.experiment.missions import Mission
+from selfrepair.experiment.store import ResultStore
+
+__all__ = ["choose_mission", "markdown_table", "write_report"]
+
+
+def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = None) -> list[Path]:
+    """Write the report for every row in ``db`` into directory ``out``; returns the files written.
+
+    ``mission_key`` (a key or a unique key prefix) picks the mission to draw; by default
+    :func:`choose_mission` picks one.
+    """
+    from selfrepair.experiment import plots
+
+    out_dir = Path(out)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with ResultStore(db) as store:
+        rows = store.rows()
+    if not rows:
+        raise InputError("expected a results database with at least one mission", source=str(db))
+    written = [
+        plots.figure_latency(rows, out_dir / "latency.png"),
+        plots.figure_latency_vs_size(rows, out_dir / "latency-vs-size.png"),
+        plots.figure_clearance(rows, out_dir / "clearance.png"),
+        plots.figure_heatmap(rows, out_dir / "heatmap.png"),
+    ]
+    chosen = _pick(rows, mission_key, str(db))
+    mission_files = _mission_files(chosen, out_dir)
+    written += mission_files
+    report = out_dir / "report.md"
+    report.write_text(
+        render_markdown(
+            rows,
+            summarize(rows),
+            check_findings(rows),
+            chosen,
+            str(db),
+            heatmap_variant=plots.heatmap_variant(rows),
+        ),
+        encoding="utf-8",
+    )
+    return [report, *written]
+
+
+def _pick(rows: Sequence[Row], mission_key: str | None, source: str) -> Row:
+    if mission_key is None:
+        return choose_mission(rows)
+    hits = [r for r in rows if str(r["key"]).startswith(mission_key)]
+    if len(hits) != 1:
+        raise InputError(
+            f"expected --mission to match exactly one stored key, {len(hits)} match "
+            f"{mission_key!r}",
+            source=source,
+        )
+    return hits[0]
+
+
+def choose_mission(rows: Sequence[Row]) -> Row:
+    """A telling mission to draw: reached, repaired by the table at least once, on a small maze,
+    preferring the hand-written table, a mission that also replanned, and many replacements."""
+
+    def score(row: Row) -> tuple[object, ...]:
+        replacements = int(row.get("replacements") or 0)
+        replans = int(row.get("replans") or 0)
+        width = int(row.get("maze_width") or 999)
+        return (
+            row.get("reached") == 1,
+            replacements > 0,
+            width <= 32,
+            row.get("table") == "handwritten",
+            replans > 0 and replacements > 0,
+            Fraction(str(row.get("clearance_weight") or "0")) == 0,
+            min(replacements, 12),
+            -width,
+            str(row["key"]),
+        )
+
+    return max(rows, key=score)
+
+
+def _mission_files(row: Row, out_dir: Path) -> list[Path]:
+    """Run the chosen mission again, write its trace, picture and GIF."""
+    from selfrepair.executor import run_mission
+    from selfrepair.experiment import plots
+    from selfrepair.experiment.animate import animate_trace
+    from selfrepair.experiment.missions import to_spec
+    from selfrepair.trace import read_trace, write_trace
+
+    mission = Mission(
+        str(row["key"]), str(row["experiment"]), int(row["seed"] or 0), str(row["config"]), ()
+    )
+    result = run_mission(to_spec(mission))
+    trace_path = out_dir / "mission.jsonl"
+    write_trace(result, trace_path)
+    picture = plots.picture_from_trace(read_trace(trace_path))
+    png = plots.figure_mission(picture, out_dir / "mission.png")
+    gif = out_dir / "mission.gif"
+    animate_trace(trace_path, gif, max_frames=60)
+    return [trace_path, png, gif]
+
+
+def markdown_table(headers: Sequence[str], body: Sequence[Sequence[str]]) -> str:
+    """A GitHub-flavoured Markdown table (first column left-aligned, the rest right-aligned)."""
+    lines = ["| " + " | ".join(headers) + " |"]
+    lines.append("|" + "|".join([":---"] + ["---:"] * (len(headers) - 1)) + "|")
+    lines += ["| " + " | ".join(cells) + " |" for cells in body]
+    return "\n".join(lines)
+
+
+def render_markdown(
+    rows: Sequence[Row],
+    summaries: Sequence[StrategySummary],
+    findings: Sequence[Finding],
+    chosen: Row,
+    source: str,
+    *,
+    heatmap_variant: str | None,
+) -> str:
+    """The text of ``report.md``."""
+    experiments = Counter(str(r["experiment"]) for r in rows)
+    versions = sorted({str(r["version"]) for r in rows})
+    mazes = sorted({str(r["maze"]) for r in rows})
+    faults = sorted({str(r["faults"]) for r in rows})
+    seconds = sum(float(r.get("worker_seconds") or 0) for r in rows)
+    config = json.loads(str(chosen["config"]))
+    parts = [
+        "# Replacement versus replanning: experiment report",
+        "",
+        f"Generated {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())} from `{source}`: "
+        f"{len(rows)} missions ("
+        + ", ".join(f"{n} in `{e}`" for e, n in sorted(experiments.items()))
+        + f"), selfrepair {', '.join(versions)}; {len(mazes)} mazes, {len(faults)} fault sets; "
+        f"{seconds:.0f} s of worker time.",
+        "",
+        "## Per strategy",
+        "",
+        "Times in microseconds. *compute/action*: (initial planning + all repairs) / actions "
+        "executed, per mission. *repair latency*: from meeting a faulty action to having the next "
+        "executable action, over all repairs. *resolved locally*: faulty encounters repaired by a "
+        "table replacement or a lookahead window rather than a full replan. *extra ticks*: mean "
+        "over reached missions of ticks taken minus the fault-free plan's duration. *plan "
+        "distance*: mean plan stability distance (Fox et al. 2006) between initial and executed "
+        "plan, lower is more stable. `w=` is the clearance weight (0 when absent).",
+        "",
+        markdown_table(StrategySummary.HEADERS, [s.cells() for s in summaries]),
+        "",
+        "## The original study's findings on these results",
+        "",
+    ]
+    for f in findings:
+        parts.append(f"{f.number}. **{f.verdict.upper()}** - {f.claim}. {f.evidence}.")
+    parts += [
+        "",
+        "## Figures",
+        "",
+        "![Repair latency distributions](latency.png)",
+        "",
+        "*Repair latency per strategy at clearance weight 0, log scale. For the table-based "
+        "strategies the repairs are split by what resolved them (table hit, lookahead window or "
+        "fallback replan).*",
+        "",
+        "![Latency versus maze size](latency-vs-size.png)",
+        "",
+        "*Median repair latency (bar up to the 99th percentile) against maze size: replans of "
+        "the replanning robot versus table hits of the replacing robot.*",
+        "",
+        "![Replacement success versus clearance weight](clearance.png)",
+        "",
+        "*Left: share of faulty encounters resolved by a table replacement for each clearance "
+        "weight. Right: what keeping away from walls costs in execution time.*",
+        "",
+        "![Fault set by maze](heatmap.png)",
+        "",
+        f"*{heatmap_variant}: share of encounters resolved locally (left) and mean extra ticks "
+        "(right) per fault set and maze.*",
+        "",
+        "![One mission](mission.png)",
+        "",
+        f"*Mission `{str(chosen['key'])[:12]}`: maze {chosen['maze']}, route {chosen['route']}, "
+        f"faults {config['faults'] or 'none'}, {chosen['variant']}, clearance weight "
+        f"{chosen['clearance_weight']}; {chosen.get('replacements')} table replacements, "
+        f"{chosen.get('replans')} replans. Grey dashes: the initial plan; coloured: executed steps "
+        "by source (dots: turns in place). Animation: [mission.gif](mission.gif); trace: "
+        "[mission.jsonl](mission.jsonl) (`selfrepair replay mission.jsonl`).*",
+        "",
+    ]
+    return "\n".join(parts)

@@ -1,0 +1,223 @@
+"""Run the missions of an experiment in parallel and store each result as it arrives.
+
+Execution goes through joblib: local worker processes by default (``jobs``), or the ``dask`` or
+``ray`` joblib backends on an existing cluster. Whatever the backend, workers only *compute*: each
+returns ``(key, metrics, seconds)`` and the driver - this process - writes the row to the
+:class:`~selfrepair.experiment.store.ResultStore`, one committed transaction per mission. A run is
+resumable: missions whose key is already stored are skipped before any work is sent out.
+
+Library code does not print: progress is reported through the ``on_progress`` callback (the CLI
+draws a rich progress bar with it on a terminal).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import ExitStack, contextmanager
+from dataclasses import dataclass
+
+import joblib
+from joblib.externals.loky.process_executor import TerminatedWorkerError
+
+from selfrepair.errors import ProblemError, SelfRepairError
+from selfrepair.experiment.missions import Mission
+from selfrepair.experiment.store import ResultStore, Value
+
+__all__ = [
+    "BACKENDS",
+    "MissionFunction",
+    "RunSummary",
+    "check_backend",
+    "execute_mission",
+    "run_missions",
+]
+
+MissionFunction = Callable[[Mission], Mapping[str, Value]]
+"""Computes one mission's metric row; must be a picklable module-level function."""
+
+BACKENDS = ("local", "dask", "ray")
+
+
+@dataclass(frozen=True, slots=True)
+class RunSummary:
+    """What a run did: missions in the experiment, already stored, run now, and wall time."""
+
+    total: int
+    skipped: int
+    ran: int
+    seconds: float
+
+
+DUPLICATE_COLUMNS = frozenset(
+    (
+        "maze",
+        "strategy",
+        "table",
+        "recursion",
+        "window",
+        "faults",
+        "detection",
+        "seed",
+        "clearance_weight",
+    )
+)
+"""Executor row columns left out because the mission's own label columns already hold them
+(in the experiment's naming; the exact values are in the ``config`` JSON)."""
+
+
+_WARMED: set[tuple[object, ...]] = set()
+"""(strategy, table, maze size) combinations this process has already run once."""
+
+
+def execute_mission(mission: Mission) -> Mapping[str, Value]:
+    """The real mission function: run the executor on ``missions.to_spec(mission)``.
+
+    The row is :meth:`MissionResult.to_row` (columns in docs/replacement.md) without the
+    :data:`DUPLICATE_COLUMNS`, plus ``repair_sources`` (JSON list, the source of each repair in
+    the order of ``repair_latencies_ns``), ``plan_ticks_before`` (duration of the initial,
+    fault-free plan), ``extra_ticks`` (ticks taken minus that, for reached missions) and
+    ``maze_free_cells``. Timings leave out one-off costs (JIT compilation, loading a table, the
+    first allocation for a maze size): the first mission of each strategy, table and maze size in
+    a process is run twice and only the second run is kept (results are deterministic).
+    """
+    from selfrepair.executor import run_mission
+    from selfrepair.experiment.missions import to_spec
+
+    spec = to_spec(mission)
+    warm_key = (spec.strategy, str(spec.options.table), spec.maze.width, spec.maze.height)
+    if warm_key not in _WARMED:
+        run_mission(spec)  # one-off JIT compilation and table loading stay out of the timings
+        _WARMED.add(warm_key)
+    result = run_mission(spec)
+    row = {k: v for k, v in result.to_row().items() if k not in DUPLICATE_COLUMNS}
+    plan_ticks = result.initial_plan.duration
+    row["repair_sources"] = json.dumps(
+        [r.repair.source if r.repair.status == "repaired" else "failed" for r in result.repairs]
+    )
+    row["plan_ticks_before"] = float(plan_ticks)
+    row["extra_ticks"] = float(result.ticks - plan_ticks) if result.reached else None
+    row["maze_free_cells"] = int((~result.spec.maze.walls).sum())
+    return row
+
+
+def _work(execute: MissionFunction, mission: Mission) -> tuple[str, dict[str, Value], float]:
+    """Worker side: run one mission, return its key, metric row and wall time in seconds."""
+    t0 = time.perf_counter()
+    try:
+        row = dict(execute(mission))
+    except SelfRepairError as exc:
+        # re-raised as a plain-message error: it crosses process boundaries intact
+        raise ProblemError(f"mission {mission.key[:12]} ({mission.config}): {exc}") from None
+    return mission.key, row, time.perf_counter() - t0
+
+
+def run_missions(
+    missions: Sequence[Mission],
+    store: ResultStore,
+    *,
+    jobs: int = 1,
+    backend: str = "local",
+    scheduler: str | None = None,
+    address: str | None = None,
+    execute: MissionFunction | None = None,
+    on_progress: Callable[[int, int], None] | None = None,
+) -> RunSummary:
+    """Run every mission of ``missions`` not yet in ``store`` and store each result.
+
+    ``on_progress(done, pending)`` is called once before the first result and after each stored
+    row. ``backend`` is ``local`` (``jobs`` processes; 1 runs in this process), ``dask``
+    (``scheduler`` address of a running cluster) or ``ray`` (``address`` of a running cluster, or
+    a local Ray when omitted); on a cluster ``jobs`` is ignored and every worker is used.
+    """
+    check_backend(backend, jobs=jobs, scheduler=scheduler)
+    execute = execute or execute_mission
+    t0 = time.perf_counter()
+    done_keys = store.keys()
+    pending = [m for m in missions if m.key not in done_keys]
+    by_key = {m.key: m for m in pending}
+    if on_progress is not None:
+        on_progress(0, len(pending))
+    done = 0
+    if pending:
+        with _backend(backend, jobs=jobs, scheduler=scheduler, address=address) as n_jobs:
+            parallel = joblib.Parallel(n_jobs=n_jobs, return_as="generator_unordered")
+            try:
+                for key, metrics, seconds in parallel(
+                    joblib.delayed(_work)(execute, m) for m in pending
+                ):
+                    store.add(by_key[key], metrics, seconds)
+                    done += 1
+                    if on_progress is not None:
+                        on_progress(done, len(pending))
+            except TerminatedWorkerError as exc:
+                raise ProblemError(
+                    f"a worker process died ({_first_line(exc)}); {done} missions of this run "
+                    f"were stored in {store.path}; run the same command again to resume"
+                ) from None
+    return RunSummary(len(missions), len(missions) - len(pending), done, time.perf_counter() - t0)
+
+
+def _first_line(exc: BaseException) -> str:
+    return (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+
+
+def check_backend(backend: str, *, jobs: int = 1, scheduler: str | None = None) -> None:
+    """Raise :class:`ProblemError` for an unknown backend, a bad ``jobs`` or a missing address."""
+    if backend not in BACKENDS:
+        raise ProblemError(f"unknown backend {backend!r}: expected one of {', '.join(BACKENDS)}")
+    if jobs < 1 and jobs != -1:
+        raise ProblemError(f"--jobs must be a positive number or -1 (all cores), got {jobs}")
+    if backend == "dask" and not scheduler:
+        raise ProblemError("--backend dask needs --scheduler ADDRESS (e.g. tcp://host:8786)")
+
+
+@contextmanager
+def _backend(
+    backend: str, *, jobs: int, scheduler: str | None, address: str | None
+) -> Iterator[int]:
+    """Enter the joblib backend; yields the ``n_jobs`` to pass to ``Parallel``."""
+    with ExitStack() as stack:
+        if backend == "local":
+            stack.enter_context(joblib.parallel_config(backend="loky"))
+            yield jobs
+        elif backend == "dask":
+            client = stack.enter_context(_dask_client(scheduler))
+            stack.enter_context(joblib.parallel_config(backend="dask", client=client))
+            yield -1
+        else:
+            _start_ray(address)
+            stack.enter_context(joblib.parallel_config(backend="ray"))
+            yield -1
+
+
+@contextmanager
+def _dask_client(scheduler: str | None) -> Iterator[object]:
+    if not scheduler:
+        raise ProblemError("--backend dask needs --scheduler ADDRESS (e.g. tcp://host:8786)")
+    try:
+        from distributed import Client
+    except ImportError:
+        raise ProblemError(
+            "--backend dask needs dask[distributed]: pip install 'selfrepair[dask]'"
+        ) from None
+    try:
+        client = Client(scheduler, set_as_default=False, timeout="20s")
+    except OSError as exc:
+        raise ProblemError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+    try:
+        yield client
+    finally:
+        client.close()
+
+
+def _start_ray(address: str | None) -> None:
+    try:
+        import ray
+        from ray.util.joblib import register_ray
+    except ImportError:
+        raise ProblemError("--backend ray needs ray: pip install 'selfrepair[ray]'") from None
+    if not ray.is_initialized():
+        ray.init(address=address, log_to_driver=False, include_dashboard=False)
+    register_ray()

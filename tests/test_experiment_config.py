@@ -1,0 +1,161 @@
+"""Experiment TOML: validation errors name the file, the key and its line; expansion is stable."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from selfrepair.cli import main
+from selfrepair.errors import ConfigError
+from selfrepair.experiment.config import load_config, parse_config
+from selfrepair.experiment.missions import PAPER_FAULT_SETS, expand, fault_profile
+
+GOOD = """\
+name = "tiny"
+seed = 7
+
+[[mazes]]
+bundled = "narrow-short"
+
+[[mazes]]
+generate = { width = 15, height = 15, corridor = 1, seed = 3 }
+routes = 2
+
+[faults]
+sets = ["FL:F", "FL:F,RR:B"]
+
+[planner]
+clearance_weights = [0, 0.5]
+
+[[strategies]]
+name = "replan"
+
+[[strategies]]
+name = "replacement"
+tables = ["handwritten"]
+"""
+
+
+def test_good_config_parses_to_frozen_values() -> None:
+    config = parse_config(GOOD)
+    assert config.name == "tiny"
+    assert config.planner.clearance_weights == ("0", "1/2")
+    assert config.faults.sets == ("FL:F", "FL:F,RR:B")
+    with pytest.raises(Exception, match="frozen"):
+        config.seed = 3  # type: ignore[misc]
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "key", "line", "expected"),
+    [
+        ('tables = ["handwritten"]', "tables = 3", "strategies[1].tables", 22, "expected a list"),
+        ('name = "replan"', 'name = "repln"', "strategies[0].name", 18, "replacement"),
+        ('["FL:F", "FL:F,RR:B"]', '["FL:X"]', "faults.sets", 12, "WHEEL:MODE"),
+        ("routes = 2", 'routes = "bundled"', "mazes[1]", 7, "needs a bundled maze"),
+        ("seed = 7", 'seed = "x"', "seed", 2, "integer"),
+        ("corridor = 1", "corridor = 0", "mazes[1].generate.corridor", 8, "greater than"),
+        (
+            "clearance_weights = [0, 0.5]",
+            "clearance_weight = [0]",
+            "planner.clearance_weight",
+            15,
+            "unknown key",
+        ),
+        (
+            "clearance_weights = [0, 0.5]",
+            "clearance_weights = [-1]",
+            "planner.clearance_weights",
+            15,
+            "non-negative",
+        ),
+    ],
+)
+def test_bad_config_names_file_key_and_line(
+    tmp_path: Path, old: str, new: str, key: str, line: int, expected: str
+) -> None:
+    assert old in GOOD
+    path = tmp_path / "bad.toml"
+    path.write_text(GOOD.replace(old, new))
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    message = str(info.value)
+    assert message.startswith(f"{path.resolve()}:{line}: key {key!r}"), message
+    assert expected in message
+
+
+def test_missing_strategies_and_unknown_maze(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="'strategies': missing required key"):
+        parse_config('name = "x"\n[[mazes]]\nbundled = "narrow-short"\n')
+    config = parse_config(GOOD.replace('"narrow-short"', '"nowhere"'))
+    with pytest.raises(ConfigError, match=r"mazes\[0\]\.bundled.*narrow-short"):
+        expand(config)
+
+
+def test_bad_toml_syntax_reports_line() -> None:
+    with pytest.raises(ConfigError, match=r"x.toml:2:\d+: invalid TOML"):
+        parse_config('name = "x"\nseed = = 3\n', source="x.toml")
+
+
+def test_cli_bad_toml_is_one_line_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "bad.toml"
+    path.write_text(GOOD.replace('tables = ["handwritten"]', 'tables = ["handwritten"]\ndepth = 3'))
+    assert main(["experiment", str(path), "--db", str(tmp_path / "r.sqlite")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "key 'strategies[1].depth': unknown key" in err and ":23:" in err
+
+
+def test_expansion_is_stable_and_complete() -> None:
+    config = parse_config(GOOD)
+    missions = expand(config)
+    # 4 bundled routes + 2 random routes, 2 fault sets, (replan + replacement) x 2 weights
+    assert len(missions) == 6 * 2 * 2 * 2
+    assert len({m.key for m in missions}) == len(missions)
+    again = expand(parse_config(GOOD))
+    assert [m.key for m in missions] == [m.key for m in again]
+    assert [m.seed for m in missions] == [m.seed for m in again]
+    # seeds are paired across strategies: same situation, same seed
+    by_situation: dict[tuple[object, ...], set[int]] = {}
+    for m in missions:
+        labels = dict(m.labels)
+        by_situation.setdefault((labels["maze"], labels["route"], labels["faults"]), set()).add(
+            m.seed
+        )
+    assert all(len(seeds) == 1 for seeds in by_situation.values())
+    # a different base seed gives different keys and seeds
+    other = expand(parse_config(GOOD.replace("seed = 7", "seed = 8")))
+    assert not {m.key for m in other} & {m.key for m in missions}
+
+
+def test_fault_profiles() -> None:
+    assert len(fault_profile("paper")) == 12 == len(set(PAPER_FAULT_SETS))
+    assert sum(1 for s in fault_profile("paper") if "," in s) == 6
+    assert len(fault_profile("singles")) == 12
+    assert len(fault_profile("doubles")) == 66
+    assert len(set(fault_profile("all"))) == 78
+
+
+@pytest.mark.parametrize("name", ["paper", "full"])
+def test_bundled_experiments_load(name: str) -> None:
+    from selfrepair.cli.experiments import resolve_experiment
+
+    config = load_config(resolve_experiment(name))
+    assert config.name == name
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(st.fractions(min_value=0, max_value=50, max_denominator=8), min_size=1, max_size=4))
+def test_clearance_weights_are_exact_and_canonical(weights: list[Fraction]) -> None:
+    """Weights written as decimals or fractions come out as exact canonical text."""
+    decimals = ", ".join(f'"{w}"' for w in weights)
+    config = parse_config(
+        GOOD.replace("clearance_weights = [0, 0.5]", f"clearance_weights = [{decimals}]")
+    )
+    assert [Fraction(w) for w in config.planner.clearance_weights] == weights
+    assert all(w == str(Fraction(w)) for w in config.planner.clearance_weights)

@@ -1,0 +1,136 @@
+"""Runner: resume skips stored keys, backends agree (local processes, Dask LocalCluster, Ray)."""
+
+from __future__ import annotations
+
+import logging
+from pathlib import Path
+
+import pytest
+
+from selfrepair.errors import ProblemError
+from selfrepair.experiment.config import parse_config
+from selfrepair.experiment.missions import Mission, expand
+from selfrepair.experiment.runner import run_missions
+from selfrepair.experiment.store import ResultStore, without_timings
+
+CONFIG = """\
+name = "runner"
+seed = 11
+[[mazes]]
+bundled = "narrow-short"
+[faults]
+sets = ["FL:F", "FR:B,RR:B"]
+[planner]
+clearance_weights = [0, 1]
+[[strategies]]
+name = "replan"
+[[strategies]]
+name = "replacement"
+tables = ["handwritten"]
+recursion = ["flat"]
+"""
+
+
+def fake_mission(mission: Mission) -> dict[str, int | float | str | None]:
+    """A stand-in for the executor: a pure function of the mission's configuration and seed."""
+    settings = mission.settings
+    return {
+        "ticks": mission.seed % 97 + len(settings["faults"]),
+        "reached": 1,
+        "strategy_seen": settings["strategy"],
+        "latency_ns": 12345,
+    }
+
+
+def _missions() -> tuple[Mission, ...]:
+    return expand(parse_config(CONFIG))
+
+
+def _rows(path: Path) -> list[dict[str, object]]:
+    with ResultStore(path) as store:
+        return [without_timings(r) for r in store.rows()]
+
+
+def test_resume_skips_stored_missions(tmp_path: Path) -> None:
+    missions = _missions()
+    calls: list[tuple[int, int]] = []
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        first = run_missions(
+            missions[:5], store, execute=fake_mission, on_progress=lambda d, t: calls.append((d, t))
+        )
+        assert (first.total, first.skipped, first.ran) == (5, 0, 5)
+        assert calls == [(0, 5), (1, 5), (2, 5), (3, 5), (4, 5), (5, 5)]
+        second = run_missions(missions, store, execute=fake_mission)
+        assert (second.skipped, second.ran) == (5, len(missions) - 5)
+        third = run_missions(missions, store, execute=fake_mission)
+        assert third.ran == 0
+        assert store.count() == len(missions)
+
+
+def test_local_processes_match_in_process(tmp_path: Path) -> None:
+    missions = _missions()
+    with ResultStore(tmp_path / "one.sqlite") as store:
+        run_missions(missions, store, jobs=1, execute=fake_mission)
+    with ResultStore(tmp_path / "two.sqlite") as store:
+        run_missions(missions, store, jobs=2, execute=fake_mission)
+    assert _rows(tmp_path / "one.sqlite") == _rows(tmp_path / "two.sqlite")
+    assert len(_rows(tmp_path / "one.sqlite")) == len(missions)
+
+
+def test_dask_local_cluster_matches_local(tmp_path: Path) -> None:
+    distributed = pytest.importorskip("distributed")
+    logging.getLogger("distributed").setLevel(logging.ERROR)
+    missions = _missions()
+    with ResultStore(tmp_path / "local.sqlite") as store:
+        run_missions(missions, store, jobs=1)  # the real executor
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None
+        ) as cluster,
+        ResultStore(tmp_path / "dask.sqlite") as store,
+    ):
+        summary = run_missions(missions, store, backend="dask", scheduler=cluster.scheduler_address)
+        assert summary.ran == len(missions)
+    local, dask = _rows(tmp_path / "local.sqlite"), _rows(tmp_path / "dask.sqlite")
+    assert len(local) == len(missions) and local == dask
+
+
+def test_backend_misuse_is_a_problem_error(tmp_path: Path) -> None:
+    missions = _missions()[:2]
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        with pytest.raises(ProblemError, match="--scheduler"):
+            run_missions(missions, store, backend="dask", execute=fake_mission)
+        with pytest.raises(ProblemError, match="unknown backend"):
+            run_missions(missions, store, backend="slurm", execute=fake_mission)
+        with pytest.raises(ProblemError, match="--jobs"):
+            run_missions(missions, store, jobs=0, execute=fake_mission)
+
+
+@pytest.mark.ray
+def test_ray_backend_matches_local(tmp_path: Path) -> None:
+    ray = pytest.importorskip("ray")
+    missions = _missions()
+    with ResultStore(tmp_path / "local.sqlite") as store:
+        run_missions(missions, store, jobs=1, execute=fake_mission)
+    try:
+        with ResultStore(tmp_path / "ray.sqlite") as store:
+            run_missions(missions, store, backend="ray", execute=fake_mission)
+    finally:
+        ray.shutdown()
+    assert _rows(tmp_path / "local.sqlite") == _rows(tmp_path / "ray.sqlite")
+
+
+def failing_mission(mission: Mission) -> dict[str, int | float | str | None]:
+    """A mission function that meets bad input (as the executor would with a broken table)."""
+    from selfrepair.errors import TableError
+
+    raise TableError("cannot read table file", source="broken.json")
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_mission_errors_cross_processes_intact(tmp_path: Path, jobs: int) -> None:
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        with pytest.raises(ProblemError, match=r"broken\.json: cannot read table file") as info:
+            run_missions(_missions()[:3], store, jobs=jobs, execute=failing_mission)
+        assert "<input>" not in str(info.value)
+        assert store.count() == 0

@@ -1,0 +1,219 @@
+"""Run-time replacement: validity, the three recursion modes, and the paper's Table 1."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from selfrepair import robot
+from selfrepair.domain import FOUR_WHEEL, THREE_ACTION
+from selfrepair.errors import ProblemError
+from selfrepair.maze import Maze, parse_maze
+from selfrepair.replacement import (
+    RECURSION_MODES,
+    find_replacement,
+    flat_replacement_on_grid,
+    free_cell_set,
+    is_valid_replacement,
+)
+from selfrepair.robot import Heading, Pose
+from selfrepair.table import ReplacementTable, TableEntry, bundled_table
+
+A = robot.parse_action
+F = robot.parse_faults
+OPEN = parse_maze("\n".join(["." * 9] * 9))
+ORIGIN = Pose(4, 4, Heading.N)
+
+
+def _seq(text: str) -> tuple[robot.Action, ...]:
+    return tuple(A(t) for t in text.split())
+
+
+# --- the original paper's Table 1 --------------------------------------------------------------
+
+
+def test_table_one_rows() -> None:
+    table = bundled_table("three-action")
+    rows = {e.action: [" ".join(c) for c in e.candidates] for e in table.entries}
+    assert rows == {"F": [], "L": ["R R R"], "R": ["L L L"]}
+
+
+@pytest.mark.parametrize("mode", list(RECURSION_MODES))
+def test_table_one_replacements_and_the_no_replacement_row(mode: str) -> None:
+    table = bundled_table("three-action")
+    found = {}
+    for action in "FLR":
+        hit = find_replacement(
+            THREE_ACTION, table, action, ORIGIN, {action}, OPEN.all_free, mode=mode
+        )
+        found[action] = None if hit is None else "".join(hit.actions)
+    assert found == {"F": None, "L": "RRR", "R": "LLL"}
+
+
+@pytest.mark.parametrize("mode", list(RECURSION_MODES))
+def test_guard_stops_mutual_recursion(mode: str) -> None:
+    # With L and R both faulty, R -> L L L needs L -> R R R, which uses R (being replaced).
+    table = bundled_table("three-action")
+    assert (
+        find_replacement(
+            THREE_ACTION, table, "R", ORIGIN, {"L", "R"}, OPEN.all_free, mode=mode, max_depth=10
+        )
+        is None
+    )
+
+
+# --- four-wheel recursion modes -------------------------------------------------------------
+
+
+def test_forward_without_left_forward_needs_recursion_into_a_turn_round() -> None:
+    table = bundled_table()
+    faults = F("FL:F,RL:F")
+    args = (FOUR_WHEEL, table, A("FFFF"), ORIGIN, faults, OPEN.all_free)
+    assert find_replacement(*args, mode="flat") is None
+    assert find_replacement(*args, mode="layered") is None  # straight moves are primitive
+    assert find_replacement(*args, mode="guarded", max_depth=0) is None
+    hit = find_replacement(*args, mode="guarded")
+    assert hit is not None and hit.depth >= 1
+    assert is_valid_replacement(FOUR_WHEEL, A("FFFF"), ORIGIN, hit.actions, faults, OPEN.all_free)
+
+
+def test_layered_replaces_an_arc_by_recursively_replaced_primitives() -> None:
+    table = bundled_table()
+    faults = F("FR:F")
+    args = (FOUR_WHEEL, table, A("SFFF"), ORIGIN, faults, OPEN.all_free)
+    assert find_replacement(*args, mode="flat") is None
+    layered = find_replacement(*args, mode="layered")
+    assert layered is not None and layered.depth == 1
+    assert layered.candidate == _seq("FFFF BFBF FFFF")
+    assert layered.actions == _seq("SSFF BSBS SSFF")
+    guarded = find_replacement(*args, mode="guarded")
+    assert guarded is not None and guarded.actions == layered.actions
+
+
+def test_walls_make_a_candidate_invalid() -> None:
+    # A corridor one cell wide: turning round in place is fine, arcs are not.
+    corridor = parse_maze("###\n#.#\n#.#\n#.#\n###")
+    pose = Pose(1, 3, Heading.N)
+    table = bundled_table()
+    faults = F("FL:F,RL:F")
+    hit = find_replacement(
+        FOUR_WHEEL, table, A("FFFF"), pose, faults, corridor.all_free, mode="guarded"
+    )
+    assert hit is not None
+    walled = parse_maze("###\n#.#\n###")
+    assert (
+        find_replacement(
+            FOUR_WHEEL,
+            table,
+            A("FFFF"),
+            Pose(1, 1, Heading.N),
+            faults,
+            walled.all_free,
+            mode="guarded",
+        )
+        is None
+    )
+
+
+def test_candidate_using_an_action_being_replaced_is_skipped() -> None:
+    fwd, back = A("FFFF"), A("BBBB")
+    table = ReplacementTable(
+        "four-wheel",
+        "fault-agnostic",
+        "hand",
+        (
+            TableEntry(fwd, (_seq("FBFB FBFB BBBB FBFB FBFB"),)),
+            TableEntry(back, (_seq("FBFB FBFB FFFF FBFB FBFB"),)),
+        ),
+    )
+    # BBBB is faulty too: replacing it would need FFFF, which is being replaced.
+    faults = F("FL:F,RR:B")
+    assert (
+        find_replacement(
+            FOUR_WHEEL, table, fwd, ORIGIN, faults, OPEN.all_free, mode="guarded", max_depth=5
+        )
+        is None
+    )
+
+
+def test_bad_arguments_raise() -> None:
+    table = bundled_table()
+    with pytest.raises(ProblemError, match="recursion mode"):
+        find_replacement(FOUR_WHEEL, table, A("FFFF"), ORIGIN, (), OPEN.all_free, mode="deep")
+    with pytest.raises(ProblemError, match="domain"):
+        find_replacement(THREE_ACTION, table, "F", ORIGIN, (), OPEN.all_free)
+
+
+@st.composite
+def situations(draw: st.DrawFn) -> tuple[Maze, Pose, robot.Action, frozenset[robot.Fault]]:
+    seed = draw(st.integers(0, 2**31))
+    rng = np.random.default_rng(seed)
+    walls = rng.random((7, 7)) < draw(st.sampled_from([0.0, 0.2, 0.4]))
+    walls[3, 3] = False
+    maze = Maze(walls)
+    pose = Pose(3, 3, draw(st.sampled_from(list(Heading))))
+    action = draw(st.sampled_from(robot.ACTIONS))
+    faults = draw(st.sampled_from(FOUR_WHEEL.fault_sets))
+    return maze, pose, action, faults
+
+
+@settings(max_examples=150, deadline=None)
+@given(situations(), st.sampled_from(list(RECURSION_MODES)))
+def test_every_replacement_found_is_valid(situation, mode: str) -> None:  # type: ignore[no-untyped-def]
+    maze, pose, action, faults = situation
+    hit = find_replacement(
+        FOUR_WHEEL, bundled_table(), action, pose, faults, maze.all_free, mode=mode
+    )
+    if hit is None:
+        return
+    assert is_valid_replacement(FOUR_WHEEL, action, pose, hit.actions, faults, maze.all_free)
+    if mode == "flat":
+        assert hit.depth == 0 and hit.actions == hit.candidate
+
+
+@settings(max_examples=100, deadline=None)
+@given(situations())
+def test_modes_are_nested(situation) -> None:  # type: ignore[no-untyped-def]
+    """Whatever flat finds, layered and guarded find too (they only add recursion)."""
+    maze, pose, action, faults = situation
+    table = bundled_table()
+    found = {
+        m: find_replacement(FOUR_WHEEL, table, action, pose, faults, maze.all_free, mode=m)
+        for m in RECURSION_MODES
+    }
+    if found["flat"] is not None:
+        assert found["layered"] is not None and found["guarded"] is not None
+    if found["layered"] is not None:
+        assert found["guarded"] is not None
+
+
+@settings(max_examples=150, deadline=None)
+@given(situations())
+def test_grid_fast_path_equals_the_general_flat_search(situation) -> None:  # type: ignore[no-untyped-def]
+    maze, pose, action, faults = situation
+    table = bundled_table()
+    general = find_replacement(FOUR_WHEEL, table, action, pose, faults, maze.all_free, mode="flat")
+    fast = flat_replacement_on_grid(FOUR_WHEEL, table, action, pose, faults, free_cell_set(maze))
+    assert fast == general
+
+
+def test_grid_fast_path_on_table_one() -> None:
+    table = bundled_table("three-action")
+    free = free_cell_set(OPEN)
+    hit = flat_replacement_on_grid(THREE_ACTION, table, "R", ORIGIN, frozenset({"R"}), free)
+    assert hit is not None and hit.actions == ("L", "L", "L") and hit.end == Pose(4, 4, Heading.E)
+    assert (
+        flat_replacement_on_grid(THREE_ACTION, table, "F", ORIGIN, frozenset({"F"}), free) is None
+    )
+
+
+def test_docs_show_table_one_as_bundled() -> None:
+    from pathlib import Path
+
+    doc = (Path(__file__).parents[1] / "docs/replacement.md").read_text()
+    table = bundled_table("three-action")
+    for entry in table.entries:
+        shown = " ".join(entry.candidates[0]) if entry.candidates else "(no replacement)"
+        assert f"| {entry.action} (" in doc and f") | {shown} |" in doc

@@ -1,0 +1,258 @@
+"""Replacement tables: the shipped tables, the file format, validation and look-ups."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from selfrepair import robot
+from selfrepair.domain import FOUR_WHEEL, run_open
+from selfrepair.errors import TableError
+from selfrepair.table import (
+    ReplacementTable,
+    TableEntry,
+    bundled_table,
+    bundled_table_names,
+    check_table,
+    dump_table,
+    load_table,
+    parse_table,
+)
+
+A = robot.parse_action
+F = robot.parse_faults
+
+
+def _seq(text: str) -> tuple[robot.Action, ...]:
+    return tuple(A(t) for t in text.split())
+
+
+def test_bundled_tables_are_listed() -> None:
+    assert {"handwritten", "three-action"} <= set(bundled_table_names())
+
+
+def test_handwritten_table_covers_all_81_actions_by_motion_class() -> None:
+    table = bundled_table()
+    assert (table.domain, table.shape, table.made_by, table.version) == (
+        "four-wheel",
+        "fault-agnostic",
+        "hand",
+        1,
+    )
+    assert len(table.entries) == 81
+    assert table.actions_with_entries() == frozenset(robot.ACTIONS)
+    by_class: dict[str, set[tuple[robot.Action, ...]]] = {}
+    for entry in table.entries:
+        assert 4 <= len(entry.candidates) <= 5
+        assert all(entry.action not in c for c in entry.candidates)
+        target = robot.step(FOUR_WHEEL.canonical, entry.action)[0]
+        for candidate in entry.candidates:
+            assert run_open(FOUR_WHEEL, FOUR_WHEEL.canonical, candidate) == target
+        by_class.setdefault(entry.action.motion.name, set()).update(entry.candidates)
+    # Five hand-written candidates per motion class, nine classes.
+    assert len(by_class) == 9
+    assert all(len(c) == 5 for c in by_class.values())
+    assert check_table(table) == []
+
+
+def test_handwritten_table_has_the_obvious_human_ideas() -> None:
+    table = bundled_table()
+    assert _seq("FBFB FBFB FBFB") in table.candidates(A("BFBF"))  # left = three rights
+    assert _seq("FBFB FBFB BBBB FBFB FBFB") in table.candidates(A("FFFF"))  # turn round, back
+    assert _seq("FFSS") == table.candidates(A("FFFF"))[0]  # a slower forward first
+
+
+def test_dump_is_deterministic_and_round_trips(tmp_path: Path) -> None:
+    table = bundled_table()
+    text = dump_table(table)
+    assert text.endswith("\n") and text == dump_table(parse_table(text))
+    path = tmp_path / "t.json"
+    path.write_text(text)
+    assert load_table(path) == table
+    data = json.loads(text)
+    assert data["format"] == "selfrepair-table" and list(data) == sorted(data)
+    shipped = Path(__file__).parents[1] / "src/selfrepair/data/tables/handwritten.json"
+    assert shipped.read_text() == text
+
+
+def _table_text(entries: list[dict[str, object]], shape: str = "fault-agnostic") -> str:
+    return json.dumps(
+        {
+            "format": "selfrepair-table",
+            "version": 1,
+            "domain": "four-wheel",
+            "shape": shape,
+            "made_by": "hand",
+            "parameters": {},
+            "entries": entries,
+        },
+        indent=1,
+    )
+
+
+def test_wrong_end_state_is_rejected_naming_file_entry_and_line(tmp_path: Path) -> None:
+    path = tmp_path / "bad.json"
+    path.write_text(
+        _table_text(
+            [
+                {"action": "FFFF", "candidates": [["SSFF"]]},
+                {"action": "BFBF", "candidates": [["FBFB"]]},
+            ]
+        )
+    )
+    with pytest.raises(TableError) as err:
+        load_table(path)
+    message = str(err.value)
+    assert str(path) in message and "entry 1 (action BFBF" in message
+    assert "expected 0,0,W" in message and "ends at 0,0,E" in message
+    lines = path.read_text().splitlines()
+    assert err.value.line == 1 + next(i for i, t in enumerate(lines) if '"BFBF"' in t)
+
+
+def test_candidate_containing_the_replaced_action_is_rejected() -> None:
+    text = _table_text([{"action": "BFBF", "candidates": [["BFBF", "FBFB", "BFBF"]]}])
+    with pytest.raises(TableError, match="contains the replaced action BFBF"):
+        parse_table(text, source="mine.json")
+
+
+@pytest.mark.parametrize(
+    ("mutation", "expected"),
+    [
+        ({"format": "other"}, "selfrepair-table"),
+        ({"version": 2}, "expected version 1"),
+        ({"domain": "hexapod"}, "expected a domain"),
+        ({"shape": "round"}, "expected shape"),
+        ({"made_by": "elves"}, "expected made_by"),
+        ({"entries": [{"action": "QQQQ", "candidates": []}]}, "entry 0"),
+        ({"entries": [{"action": "FFFF", "candidates": [[]]}]}, "empty"),
+        ({"entries": [{"action": "FFFF", "faults": "FL:F", "candidates": []}]}, 'no "faults"'),
+    ],
+)
+def test_malformed_tables_are_rejected(mutation: dict[str, object], expected: str) -> None:
+    data = json.loads(_table_text([]))
+    data.update(mutation)
+    with pytest.raises(TableError, match=expected):
+        parse_table(json.dumps(data), source="x.json")
+
+
+def test_bad_json_names_line() -> None:
+    with pytest.raises(TableError) as err:
+        parse_table('{\n "format": \n}', source="x.json")
+    assert err.value.line == 3
+
+
+def _indexed() -> ReplacementTable:
+    fwd = A("FFFF")
+    return ReplacementTable(
+        "four-wheel",
+        "fault-indexed",
+        "generator",
+        (
+            TableEntry(fwd, (_seq("SSFF"),), F("FL:F")),
+            TableEntry(fwd, (_seq("FFSS"), _seq("FSSF")), F("RL:F")),
+            TableEntry(fwd, (_seq("SFFS"), _seq("SSFF")), F("")),
+            TableEntry(fwd, (_seq("FBFB FBFB BBBB FBFB FBFB"),), F("FL:F,RL:F")),
+        ),
+        {"max_length": 5},
+    )
+
+
+def test_fault_indexed_lookup_exact_then_subsets_largest_first() -> None:
+    table = _indexed()
+    fwd = A("FFFF")
+    assert table.candidates(fwd, F("FL:F,RL:F")) == (_seq("FBFB FBFB BBBB FBFB FBFB"),)
+    assert table.candidates(fwd, F("FL:F")) == (_seq("SSFF"),)
+    # No entry for {FL:F, RR:B}: subsets {FL:F} then {} (size 1 before size 0), deduplicated.
+    assert table.candidates(fwd, F("FL:F,RR:B")) == (_seq("SSFF"), _seq("SFFS"))
+    assert table.candidates(fwd, F("FL:F,RL:F,RR:B")) == (
+        _seq("FBFB FBFB BBBB FBFB FBFB"),
+        _seq("SSFF"),
+        _seq("FFSS"),
+        _seq("FSSF"),
+        _seq("SFFS"),
+    )
+    assert table.candidates(A("BBBB"), F("FL:F")) == ()
+    assert dump_table(parse_table(dump_table(table))) == dump_table(table)
+
+
+def test_check_table_flags_dead_candidates_in_indexed_tables() -> None:
+    table = ReplacementTable(
+        "four-wheel",
+        "fault-indexed",
+        "generator",
+        (TableEntry(A("FFFF"), (_seq("FFSS"),), F("FL:F")),),
+    )
+    problems = check_table(table)
+    errors = [p for p in problems if p.severity == "error"]
+    assert len(errors) == 1 and "FFSS" in errors[0].message
+    assert sum(1 for p in problems if "has no candidates" in p.message) == 80
+
+
+def test_duplicate_keys_are_rejected() -> None:
+    entry = TableEntry(A("FFFF"), (_seq("FFSS"),))
+    with pytest.raises(TableError, match="second one"):
+        ReplacementTable("four-wheel", "fault-agnostic", "hand", (entry, entry))
+
+
+def test_docs_list_the_hand_written_candidates_of_each_class() -> None:
+    doc = (Path(__file__).parents[1] / "docs/replacement.md").read_text()
+    table = bundled_table()
+    by_class: dict[str, set[str]] = {}
+    for entry in table.entries:
+        for candidate in entry.candidates:
+            by_class.setdefault(entry.action.motion.name, set()).add(
+                " ".join(a.code for a in candidate)
+            )
+    for name, candidates in by_class.items():
+        line = next(t for t in doc.splitlines() if t.startswith(f"| {name} |"))
+        listed = {c.strip().strip("`") for c in line.split("|")[2].split(";")}
+        assert listed == candidates, name
+
+
+def test_tables_are_hashable_values() -> None:
+    table = bundled_table()
+    again = parse_table(dump_table(table))
+    assert table == again and hash(table) == hash(again)
+    assert len({table, again, bundled_table("three-action")}) == 2
+
+
+_FORWARDS = ["FFSS", "SSFF", "FSSF", "SFFS", "FBFB FBFB BBBB FBFB FBFB", "BFBF BFBF BBBB BFBF BFBF"]
+_FAULTS = [frozenset(), *FOUR_WHEEL.fault_sets[:12], *FOUR_WHEEL.fault_sets[12:30]]
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    st.dictionaries(
+        st.sampled_from(_FAULTS),
+        st.lists(st.sampled_from(_FORWARDS), max_size=3, unique=True),
+        max_size=8,
+    ),
+    st.sets(st.sampled_from(robot.SINGLE_FAULTS), max_size=3),
+)
+def test_fault_indexed_lookup_properties(index, known_set) -> None:  # type: ignore[no-untyped-def]
+    fwd = A("FFFF")
+    known = frozenset(known_set)
+    entries = tuple(
+        TableEntry(fwd, tuple(_seq(c) for c in cands), faults) for faults, cands in index.items()
+    )
+    table = ReplacementTable("four-wheel", "fault-indexed", "generator", entries)
+    got = table.candidates(fwd, known)
+    if known in index:
+        assert got == tuple(_seq(c) for c in index[known])
+    else:
+        subsets = sorted((f for f in index if f <= known), key=len, reverse=True)
+        expected = {_seq(c) for f in subsets for c in index[f]}
+        assert len(got) == len(set(got)) and set(got) == expected
+        # A candidate of a larger indexed subset comes before one only found in smaller ones.
+        rank = {}
+        for f in subsets:
+            for c in index[f]:
+                rank.setdefault(_seq(c), len(f))
+        sizes = [rank[c] for c in got]
+        assert sizes == sorted(sizes, reverse=True)
+    again = parse_table(dump_table(table))
+    assert again.candidates(fwd, known) == got

@@ -1,0 +1,144 @@
+"""Traces: the JSON Lines format, reading it back, and replay."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from selfrepair import robot
+from selfrepair.bundled import bundled_routes, load_bundled
+from selfrepair.errors import TraceError
+from selfrepair.executor import MissionResult, MissionSpec, run_mission
+from selfrepair.faultmodel import FaultEvent, FaultSchedule
+from selfrepair.trace import parse_trace, read_trace, replay, spec_from_header, write_trace
+
+
+def _mission(detection: str = "now", strategy: str = "replacement") -> MissionResult:
+    maze = load_bundled("narrow-short")
+    route = bundled_routes("narrow-short")[1]
+    events = (
+        FaultEvent(robot.parse_fault("FL:F"), at=2),
+        FaultEvent(robot.parse_fault("RR:B"), at=1, persistence="intermittent", probability=0.4),
+    )
+    return run_mission(
+        MissionSpec(
+            maze,
+            route.start,
+            route.goal,
+            schedule=FaultSchedule(events, detection),
+            strategy=strategy,
+            seed=11,
+        )
+    )
+
+
+@pytest.fixture
+def trace_file(tmp_path: Path) -> Path:
+    path = tmp_path / "mission.jsonl"
+    write_trace(_mission("on-use"), path)
+    return path
+
+
+def test_trace_lines_have_the_documented_fields(trace_file: Path) -> None:
+    lines = [json.loads(t) for t in trace_file.read_text().splitlines()]
+    header, steps, summary = lines[0], lines[1:-1], lines[-1]
+    assert header["type"] == "header" and header["format"] == "selfrepair-trace"
+    assert header["maze"]["name"] == "narrow-short" and header["maze"]["rows"][0].startswith("#")
+    assert header["seed"] == 11 and header["strategy"] == "replacement"
+    assert header["schedule"]["detection"] == "on-use"
+    for number, step in enumerate(steps):
+        assert step["step"] == number
+        assert set(step) == {"type", "step", "action", "from", "to", "duration", "source", "known"}
+        assert isinstance(step["from"][2], str) and len(step["from"]) == 3
+    assert any(s["source"] == "failed-attempt" for s in steps)
+    assert summary["type"] == "summary" and summary["steps"] == len(steps)
+
+
+@pytest.mark.parametrize("detection", ["now", "on-use"])
+@pytest.mark.parametrize("strategy", ["replan", "replacement", "lookahead"])
+def test_traces_replay(tmp_path: Path, detection: str, strategy: str) -> None:
+    path = tmp_path / "t.jsonl"
+    write_trace(_mission(detection, strategy), path)
+    report = replay(path)
+    assert report.ok and report.steps_checked == len(read_trace(path).steps)
+
+
+def test_the_header_runs_the_same_mission_again(trace_file: Path) -> None:
+    trace = read_trace(trace_file)
+    again = run_mission(spec_from_header(trace.header))
+    assert tuple(s.action for s in again.steps) == tuple(s.action for s in trace.steps)
+    assert tuple(s.source for s in again.steps) == tuple(s.source for s in trace.steps)
+
+
+def _edit(path: Path, index: int, **changes: object) -> None:
+    lines = path.read_text().splitlines()
+    data = json.loads(lines[index])
+    data.update(changes)
+    lines[index] = json.dumps(data)
+    path.write_text("\n".join(lines) + "\n")
+
+
+def test_replay_names_the_first_step_that_does_not_hold(trace_file: Path) -> None:
+    _edit(trace_file, 4, to=[0, 0, "N"])
+    report = replay(trace_file)
+    assert not report.ok and report.first_bad_step == 3 and report.line == 5
+
+
+def test_replay_rejects_a_known_faulty_action(trace_file: Path) -> None:
+    trace = read_trace(trace_file)
+    index = next(i for i, s in enumerate(trace.steps) if s.known and s.source != "failed-attempt")
+    step = trace.steps[index]
+    faulty = next(
+        a
+        for a in robot.ACTIONS
+        if not robot.available(a, step.known) and robot.step(step.start, a)[0] == step.end
+    )
+    _edit(trace_file, index + 1, action=faulty.code)
+    report = replay(trace_file)
+    assert not report.ok and report.first_bad_step == index
+    assert "known-faulty" in report.reason or "true faults" in report.reason
+
+
+def test_replay_checks_the_summary(trace_file: Path) -> None:
+    lines = trace_file.read_text().splitlines()
+    _edit(trace_file, len(lines) - 1, steps=3)
+    report = replay(trace_file)
+    assert not report.ok and report.first_bad_step is None and "summary" in str(report)
+
+
+def test_malformed_traces_raise_with_line(tmp_path: Path, trace_file: Path) -> None:
+    lines = trace_file.read_text().splitlines()
+    bad = tmp_path / "bad.jsonl"
+    bad.write_text("\n".join([lines[0], lines[1], "{not json", *lines[2:]]))
+    with pytest.raises(TraceError) as err:
+        read_trace(bad)
+    assert err.value.line == 3 and str(bad) in str(err.value)
+    bad.write_text(lines[1])
+    with pytest.raises(TraceError, match="header"):
+        read_trace(bad)
+    with pytest.raises(TraceError, match="source"):
+        parse_trace("\n".join([lines[0], lines[1].replace('"plan"', '"magic"')]))
+    with pytest.raises(TraceError, match="cannot read"):
+        read_trace(tmp_path / "missing.jsonl")
+
+
+def test_a_table_object_is_named_so_the_header_can_be_run_again(tmp_path: Path) -> None:
+    from selfrepair.strategies import StrategyOptions
+    from selfrepair.table import bundled_table
+
+    maze = load_bundled("narrow-short")
+    route = bundled_routes("narrow-short")[0]
+    spec = MissionSpec(
+        maze,
+        route.start,
+        route.goal,
+        schedule=FaultSchedule.permanent(robot.parse_faults("FL:F")),
+        options=StrategyOptions(table=bundled_table("handwritten")),
+    )
+    path = tmp_path / "t.jsonl"
+    write_trace(run_mission(spec), path)
+    header = read_trace(path).header
+    assert header["options"]["table"] == "handwritten"
+    assert run_mission(spec_from_header(header)).reached
