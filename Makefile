@@ -16,8 +16,11 @@ $(STAMP): pyproject.toml
 	$(PY) -m pip install --quiet -e '.[dev,viz,dask,gym]'
 	touch $(STAMP)
 
+# The main job: the replacement-vs-replanning study on the bundled mazes, then
+# its Markdown report with figures (results/report/report.md).
 demo: $(STAMP)
-	$(VENV)/bin/selfrepair demo
+	$(VENV)/bin/selfrepair experiment paper --db results/paper.sqlite
+	$(VENV)/bin/selfrepair report results/paper.sqlite -o results/report
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks
@@ -33,6 +36,8 @@ test-slow: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/planner.py
+	$(PY) benchmarks/repair_latency.py
+	$(PY) benchmarks/tablegen.py
 
 clean:
 	rm -rf $(VENV) build dist .pytest_cache .ruff_cache .hypothesis

@@ -45,3 +45,16 @@ def test_maze_doc_shows_each_maze_with_its_routes(name: str) -> None:
     assert f"```text\n{picture}```" in text
     for route in bundled.bundled_routes(name):
         assert f"`{route.start}` | `{route.goal[0]},{route.goal[1]}`" in text
+
+
+def test_readme_library_example_prints_what_the_readme_says(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    readme = (DOCS.parent / "README.md").read_text(encoding="utf-8")
+    match = re.search(r"```python\n(.*?)```", readme, re.S)
+    assert match is not None, "README has no python example"
+    code = match.group(1)
+    expected = [line[2:] for line in code.splitlines() if line.startswith("# ")]
+    assert expected, "the example states its output in '# ' comment lines"
+    exec(compile(code, "README.md", "exec"), {})
+    assert capsys.readouterr().out.splitlines() == expected

@@ -111,13 +111,28 @@ def test_ray_backend_matches_local(tmp_path: Path) -> None:
     ray = pytest.importorskip("ray")
     missions = _missions()
     with ResultStore(tmp_path / "local.sqlite") as store:
-        run_missions(missions, store, jobs=1, execute=fake_mission)
+        run_missions(missions, store, jobs=1)  # the real executor, as Ray workers run it
     try:
         with ResultStore(tmp_path / "ray.sqlite") as store:
-            run_missions(missions, store, backend="ray", execute=fake_mission)
+            summary = run_missions(missions, store, backend="ray")
+            assert summary.ran == len(missions)
     finally:
         ray.shutdown()
-    assert _rows(tmp_path / "local.sqlite") == _rows(tmp_path / "ray.sqlite")
+    local, remote = _rows(tmp_path / "local.sqlite"), _rows(tmp_path / "ray.sqlite")
+    assert len(local) == len(missions) and local == remote
+
+
+def test_batched_results_store_every_mission_once(tmp_path: Path) -> None:
+    """The batch path (Ray's joblib backend returns whole lists) yields every mission once."""
+    from selfrepair.experiment.runner import _results
+
+    missions = _missions()
+    streamed = sorted(_results(1, None, fake_mission, missions))
+    for batch in (1, 3, len(missions) + 5):
+        batched = list(_results(1, batch, fake_mission, missions))
+        assert len(batched) == len(missions)
+        assert sorted(k for k, _, _ in batched) == sorted(k for k, _, _ in streamed)
+        assert sorted((k, r) for k, r, _ in batched) == sorted((k, r) for k, r, _ in streamed)
 
 
 def failing_mission(mission: Mission) -> dict[str, int | float | str | None]:

@@ -173,3 +173,14 @@ def test_docs_plan_examples_match_the_cli(
     assert main(["plan", str(maze), *command[3:]]) == 0
     out = capsys.readouterr().out
     assert out.rsplit("expansions:", 1)[0] == shown.group(2)
+
+
+def test_plan_and_path_accept_bundled_maze_names(capsys: pytest.CaptureFixture[str]) -> None:
+    code, data = run_json(
+        ["plan", "narrow-short", "--start", "1,1,E", "--goal", "3,1", "--json"], capsys
+    )
+    assert code == 0 and data["status"] == "solved" and data["poses"][-1][:2] == [3, 1]
+    code, data = run_json(
+        ["path", "narrow-short", "--from", "1,1", "--to", "3,1", "--json"], capsys
+    )
+    assert code == 0 and data["cost"] == 2

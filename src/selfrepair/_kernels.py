@@ -89,6 +89,20 @@ def _sift_up(
 
 
 @njit(cache=True, inline="always")
+def _push(
+    flag: Any, hn: Any, hf: Any, hh: Any, hc: Any, pos: Any, size: int,
+    node: int, f: Any, h: Any, c: int,
+) -> int:
+    """Insert ``node`` (flag 0 to 1, open) or lower its key if open; returns the new size."""
+    if flag[node] == 0:
+        flag[node] = 1
+        _sift_up(hn, hf, hh, hc, pos, size, node, f, h, c)
+        return size + 1
+    _sift_up(hn, hf, hh, hc, pos, pos[node], node, f, h, c)
+    return size
+
+
+@njit(cache=True, inline="always")
 def _pop(hn: Any, hf: Any, hh: Any, hc: Any, pos: Any, size: int) -> int:
     """Remove and return the minimum node; ``size`` is the heap size before the pop."""
     top = hn[0]
@@ -272,12 +286,7 @@ def _lattice(
             g[ns] = gn
             parent[ns] = s
             pmove[ns] = k
-            if state == 0:
-                flag[ns] = 1
-                size += 1
-                _sift_up(hn, hf, hh, hc, pos, size - 1, ns, gn + hv, hv, counter)
-            else:
-                _sift_up(hn, hf, hh, hc, pos, pos[ns], ns, gn + hv, hv, counter)
+            size = _push(flag, hn, hf, hh, hc, pos, size, ns, gn + hv, hv, counter)
     scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS] = size, counter, expansions
     return status
 
@@ -516,12 +525,7 @@ def _grid(
             counter += 1
             g[q] = gn
             parent[q] = p
-            if state == 0:
-                flag[q] = 1
-                size += 1
-                _sift_up(hn, hf, hh, hc, pos, size - 1, q, gn + hv, hv, counter)
-            else:
-                _sift_up(hn, hf, hh, hc, pos, pos[q], q, gn + hv, hv, counter)
+            size = _push(flag, hn, hf, hh, hc, pos, size, q, gn + hv, hv, counter)
     scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS] = size, counter, expansions
     return status
 

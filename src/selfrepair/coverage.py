@@ -47,7 +47,7 @@ from selfrepair.maze import Maze
 from selfrepair.replacement import find_replacement
 from selfrepair.robot import Heading, Pose, relative_cell
 from selfrepair.table import ReplacementTable
-from selfrepair.tablegen import (
+from selfrepair.tablesearch import (
     candidate_cost,
     class_costs,
     class_of,

@@ -27,7 +27,13 @@ from dataclasses import dataclass
 from selfrepair.errors import ProblemError
 from selfrepair.maze import Maze
 from selfrepair.robot import Cell
-from selfrepair.search import BACKENDS, PlanStatus, astar, deadline_from, use_numba
+from selfrepair.search import (
+    PlanStatus,
+    astar,
+    check_search_inputs,
+    deadline_from,
+    use_numba,
+)
 
 __all__ = [
     "CONNECTIVITIES",
@@ -108,21 +114,15 @@ def grid_astar(
     other than 4 or 8, an unknown backend or a negative budget.
     """
     t0 = time.perf_counter_ns()
-    for label, (x, y) in (("start", start), ("goal", goal)):
-        if not maze.in_bounds(x, y):
-            raise ProblemError(
-                f"the {label} ({x},{y}) is outside the {maze.width}x{maze.height} map"
-            )
-        if not maze.is_free(x, y):
-            raise ProblemError(f"the {label} ({x},{y}) is a wall")
+    check_search_inputs(
+        maze,
+        (("start", start), ("goal", goal)),
+        backend=backend,
+        max_expansions=max_expansions,
+        time_limit=time_limit,
+    )
     if connectivity not in CONNECTIVITIES:
         raise ProblemError(f"connectivity must be 4 or 8, got {connectivity}")
-    if backend not in BACKENDS:
-        raise ProblemError(f"unknown backend {backend!r}; expected one of {', '.join(BACKENDS)}")
-    if max_expansions is not None and max_expansions < 0:
-        raise ProblemError(f"max_expansions must be >= 0, got {max_expansions}")
-    if time_limit is not None and time_limit < 0:
-        raise ProblemError(f"time_limit must be >= 0, got {time_limit}")
     if start == goal:
         return GridResult(PlanStatus.SOLVED, (start,), OctileCost(0, 0), 0, _since(t0))
     deadline = deadline_from(time_limit, t0)

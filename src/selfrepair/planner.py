@@ -55,7 +55,15 @@ from selfrepair import robot
 from selfrepair.errors import ProblemError
 from selfrepair.maze import Maze, clearance_map
 from selfrepair.robot import Action, Cell, FaultSet, Heading, Motion, MotionKind, Pose
-from selfrepair.search import BACKENDS, PlanStatus, astar, deadline_from, numba_available, use_numba
+from selfrepair.search import (
+    BACKENDS,
+    PlanStatus,
+    astar,
+    check_search_inputs,
+    deadline_from,
+    numba_available,
+    use_numba,
+)
 
 __all__ = [
     "BACKENDS",
@@ -382,24 +390,17 @@ def _validate(
     time_limit: float | None,
     backend: str,
 ) -> None:
-    maze = problem.maze
-    for label, (x, y) in (("start", problem.start.cell), ("goal", problem.goal)):
-        if not maze.in_bounds(x, y):
-            raise ProblemError(
-                f"the {label} ({x},{y}) is outside the {maze.width}x{maze.height} maze"
-            )
-        if not maze.is_free(x, y):
-            raise ProblemError(f"the {label} ({x},{y}) is a wall")
+    check_search_inputs(
+        problem.maze,
+        (("start", problem.start.cell), ("goal", problem.goal)),
+        backend=backend,
+        max_expansions=max_expansions,
+        time_limit=time_limit,
+    )
     if heuristic not in HEURISTICS:
         raise ProblemError(
             f"unknown heuristic {heuristic!r}; expected one of {', '.join(HEURISTICS)}"
         )
-    if backend not in BACKENDS:
-        raise ProblemError(f"unknown backend {backend!r}; expected one of {', '.join(BACKENDS)}")
-    if max_expansions is not None and max_expansions < 0:
-        raise ProblemError(f"max_expansions must be >= 0, got {max_expansions}")
-    if time_limit is not None and time_limit < 0:
-        raise ProblemError(f"time_limit must be >= 0, got {time_limit}")
     if problem.clearance_weight < 0:
         raise ProblemError(f"clearance_weight must be >= 0, got {problem.clearance_weight}")
     if problem.clearance_radius < 0:

@@ -151,47 +151,27 @@ class _Search:
         return tuple(out), state, nested
 
 
-ModeFn = Callable[..., "Replacement | None"]
+RecurseRule = Callable[[Any, Any, int], bool]
+"""Whether faulty action ``b`` inside a candidate for ``a`` may be replaced at depth ``d``."""
+
+ModeFn = Callable[[Domain[Any, Any], int], RecurseRule]
+"""A recursion mode: given the domain and the depth bound, its recursion rule."""
 
 
-def _flat(
-    domain: Domain[Any, Any],
-    table: ReplacementTable,
-    action: Any,
-    state: Any,
-    known: frozenset[Any],
-    free: FreeTest,
-    max_depth: int,
-) -> Replacement | None:
-    search = _Search(domain, table, known, free, lambda b, a, d: False)
-    return search.replace(action, state, frozenset({action}), 0)
+def _flat(domain: Domain[Any, Any], max_depth: int) -> RecurseRule:
+    """Never recurse: only candidates whose actions are all healthy."""
+    return lambda b, a, d: False
 
 
-def _guarded(
-    domain: Domain[Any, Any],
-    table: ReplacementTable,
-    action: Any,
-    state: Any,
-    known: frozenset[Any],
-    free: FreeTest,
-    max_depth: int,
-) -> Replacement | None:
-    search = _Search(domain, table, known, free, lambda b, a, d: d < max_depth)
-    return search.replace(action, state, frozenset({action}), 0)
+def _guarded(domain: Domain[Any, Any], max_depth: int) -> RecurseRule:
+    """Recurse while shallower than ``max_depth`` (the guard set is carried by the search)."""
+    return lambda b, a, d: d < max_depth
 
 
-def _layered(
-    domain: Domain[Any, Any],
-    table: ReplacementTable,
-    action: Any,
-    state: Any,
-    known: frozenset[Any],
-    free: FreeTest,
-    max_depth: int,
-) -> Replacement | None:
+def _layered(domain: Domain[Any, Any], max_depth: int) -> RecurseRule:
+    """Recurse only into strictly lower-level actions, so recursion always terminates."""
     level = domain.level
-    search = _Search(domain, table, known, free, lambda b, a, d: level(b) < level(a))
-    return search.replace(action, state, frozenset({action}), 0)
+    return lambda b, a, d: level(b) < level(a)
 
 
 RECURSION_MODES: dict[str, ModeFn] = {"flat": _flat, "guarded": _guarded, "layered": _layered}
@@ -224,7 +204,8 @@ def find_replacement(
         raise ProblemError(f"table is for domain {table.domain!r}, not {domain.name!r}")
     if max_depth < 0:
         raise ProblemError(f"max_depth must be at least 0, got {max_depth}")
-    return fn(domain, table, action, state, frozenset(known_faults), free, max_depth)
+    search = _Search(domain, table, frozenset(known_faults), free, fn(domain, max_depth))
+    return search.replace(action, state, frozenset({action}), 0)
 
 
 def is_valid_replacement(

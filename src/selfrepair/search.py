@@ -22,15 +22,19 @@ import time
 from collections.abc import Callable, Hashable, Iterable
 from dataclasses import dataclass
 from enum import Enum
-from typing import Generic, TypeVar
+from typing import TYPE_CHECKING, Generic, TypeVar
 
 from selfrepair.errors import ProblemError
+
+if TYPE_CHECKING:
+    from selfrepair.maze import Maze
 
 __all__ = [
     "BACKENDS",
     "PlanStatus",
     "SearchOutcome",
     "astar",
+    "check_search_inputs",
     "deadline_from",
     "numba_available",
     "use_numba",
@@ -90,6 +94,31 @@ def use_numba(backend: str) -> bool:
             raise ProblemError("backend 'numba' requested but numba is not installed")
         return True
     return numba_available()
+
+
+def check_search_inputs(
+    maze: Maze,
+    endpoints: Iterable[tuple[str, tuple[int, int]]],
+    *,
+    backend: str,
+    max_expansions: int | None,
+    time_limit: float | None,
+) -> None:
+    """Raise :class:`ProblemError` for an endpoint outside ``maze`` or in a wall, an unknown
+    backend, or a negative budget: the checks the grid and lattice planners share."""
+    for label, (x, y) in endpoints:
+        if not maze.in_bounds(x, y):
+            raise ProblemError(
+                f"the {label} ({x},{y}) is outside the {maze.width}x{maze.height} maze"
+            )
+        if not maze.is_free(x, y):
+            raise ProblemError(f"the {label} ({x},{y}) is a wall")
+    if backend not in BACKENDS:
+        raise ProblemError(f"unknown backend {backend!r}; expected one of {', '.join(BACKENDS)}")
+    if max_expansions is not None and max_expansions < 0:
+        raise ProblemError(f"max_expansions must be >= 0, got {max_expansions}")
+    if time_limit is not None and time_limit < 0:
+        raise ProblemError(f"time_limit must be >= 0, got {time_limit}")
 
 
 def deadline_from(time_limit: float | None, start_ns: int) -> int | None:

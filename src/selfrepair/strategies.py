@@ -33,7 +33,7 @@ from selfrepair import robot
 from selfrepair.domain import FOUR_WHEEL
 from selfrepair.errors import ProblemError
 from selfrepair.maze import Maze
-from selfrepair.planner import PlanningProblem, PlanStatus, plan
+from selfrepair.planner import PlanningProblem, PlanResult, PlanStatus, plan
 from selfrepair.replacement import (
     DEFAULT_MAX_DEPTH,
     RECURSION_MODES,
@@ -162,24 +162,31 @@ class Repair(NamedTuple):
 Strategy = Callable[[RepairRequest], Repair]
 
 
-def replan(request: RepairRequest) -> Repair:
-    """Plan from scratch from the current pose with the known faults."""
+def _plan_to(
+    request: RepairRequest, goal: Cell, heading: Heading | None, max_expansions: int | None
+) -> PlanResult:
+    """Plan from the robot's pose with the known faults and the mission's planner settings."""
     settings = request.planner
     problem = PlanningProblem(
         request.maze,
         request.pose,
-        request.goal,
-        request.goal_heading,
+        goal,
+        heading,
         request.known,
         settings.clearance_weight,
         settings.clearance_radius,
     )
-    result = plan(
+    return plan(
         problem,
         heuristic=settings.heuristic,
-        max_expansions=settings.max_expansions,
+        max_expansions=max_expansions,
         backend=settings.backend,
     )
+
+
+def replan(request: RepairRequest) -> Repair:
+    """Plan from scratch from the current pose with the known faults."""
+    result = _plan_to(request, request.goal, request.goal_heading, request.planner.max_expansions)
     status = {
         PlanStatus.SOLVED: "repaired",
         PlanStatus.UNSOLVABLE: "stuck",
@@ -245,22 +252,7 @@ def lookahead(request: RepairRequest) -> Repair:
     end = request.pose
     for action in window:
         end = robot.step(end, action)[0]
-    settings = request.planner
-    problem = PlanningProblem(
-        request.maze,
-        request.pose,
-        end.cell,
-        end.heading,
-        request.known,
-        settings.clearance_weight,
-        settings.clearance_radius,
-    )
-    result = plan(
-        problem,
-        heuristic=settings.heuristic,
-        max_expansions=request.options.lookahead_expansions,
-        backend=settings.backend,
-    )
+    result = _plan_to(request, end.cell, end.heading, request.options.lookahead_expansions)
     if result.status is PlanStatus.SOLVED:
         return Repair(
             "repaired",

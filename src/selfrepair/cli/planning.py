@@ -16,10 +16,11 @@ import numpy as np
 import typer
 
 from selfrepair import robot
+from selfrepair.bundled import resolve_maze
 from selfrepair.cli._app import app, echo, echo_json
 from selfrepair.errors import InputError
 from selfrepair.grid import CONNECTIVITIES, GridResult, grid_astar
-from selfrepair.maze import Maze, load_maze
+from selfrepair.maze import Maze
 from selfrepair.movingai import ScenarioQuery, load_map, load_scenario
 from selfrepair.planner import HEURISTICS, PlanningProblem, PlanResult, plan
 from selfrepair.render import GOAL_CHAR, path_layer, pose_layer, render_ascii
@@ -104,8 +105,9 @@ def path_json(result: GridResult) -> dict[str, Any]:
 
 @app.command("plan")
 def plan_command(
-    maze_path: Annotated[
-        Path, typer.Argument(metavar="MAZE", help="Maze (.txt or MovingAI .map).")
+    maze_spec: Annotated[
+        str,
+        typer.Argument(metavar="MAZE", help="Bundled maze name, maze file or MovingAI .map."),
     ],
     start: Annotated[str, typer.Option("--start", help="Start pose X,Y,H (H in N, E, S, W).")],
     goal: Annotated[str, typer.Option("--goal", help="Goal cell X,Y or pose X,Y,H.")],
@@ -125,7 +127,7 @@ def plan_command(
     as_json: _Json = False,
 ) -> int:
     """Plan the robot's actions from START to GOAL with exact A* (exit 1 if no plan)."""
-    maze = load_maze(maze_path)
+    maze = resolve_maze(maze_spec)
     goal_cell, goal_heading = parse_goal(goal)
     problem = PlanningProblem(
         maze=maze,
@@ -169,7 +171,9 @@ def _print_plan(problem: PlanningProblem, result: PlanResult) -> None:
 
 @app.command("path")
 def path_command(
-    map_path: Annotated[Path, typer.Argument(metavar="MAP", help="Map (MovingAI .map or .txt).")],
+    map_spec: Annotated[
+        str, typer.Argument(metavar="MAP", help="Bundled maze name, MovingAI .map or maze file.")
+    ],
     source: Annotated[str, typer.Option("--from", help="Start cell X,Y.")],
     target: Annotated[str, typer.Option("--to", help="Goal cell X,Y.")],
     connectivity: Annotated[
@@ -183,7 +187,7 @@ def path_command(
     """Shortest grid path under MovingAI rules (exit 1 if none)."""
     if connectivity not in CONNECTIVITIES:
         raise InputError(f"expected 4 or 8, got {connectivity}", source="--connectivity")
-    maze = load_maze(map_path)
+    maze = resolve_maze(map_spec)
     start = robot.parse_cell(source, source="--from")
     goal = robot.parse_cell(target, source="--to")
     result = grid_astar(

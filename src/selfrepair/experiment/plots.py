@@ -239,7 +239,8 @@ def figure_clearance(rows: Sequence[Row], path: Path) -> Path:
                 transform=left.transAxes,
             )
         else:
-            left.legend(fontsize=8, loc="lower right")
+            # Below the axes, never on top of a data point.
+            fig.legend(*left.get_legend_handles_labels(), loc="outside lower center", ncols=2)
         return _save(fig, path)
 
 

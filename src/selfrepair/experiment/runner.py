@@ -13,6 +13,7 @@ draws a rich progress bar with it on a terminal).
 from __future__ import annotations
 
 import json
+import logging
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import ExitStack, contextmanager
@@ -141,12 +142,9 @@ def run_missions(
         on_progress(0, len(pending))
     done = 0
     if pending:
-        with _backend(backend, jobs=jobs, scheduler=scheduler, address=address) as n_jobs:
-            parallel = joblib.Parallel(n_jobs=n_jobs, return_as="generator_unordered")
+        with _backend(backend, jobs=jobs, scheduler=scheduler, address=address) as (n_jobs, batch):
             try:
-                for key, metrics, seconds in parallel(
-                    joblib.delayed(_work)(execute, m) for m in pending
-                ):
+                for key, metrics, seconds in _results(n_jobs, batch, execute, pending):
                     store.add(by_key[key], metrics, seconds)
                     done += 1
                     if on_progress is not None:
@@ -157,6 +155,26 @@ def run_missions(
                     f"were stored in {store.path}; run the same command again to resume"
                 ) from None
     return RunSummary(len(missions), len(missions) - len(pending), done, time.perf_counter() - t0)
+
+
+def _results(
+    n_jobs: int, batch: int | None, execute: MissionFunction, pending: Sequence[Mission]
+) -> Iterator[tuple[str, dict[str, Value], float]]:
+    """Each mission's result as soon as the driver can store it.
+
+    ``batch`` is ``None`` for backends that stream results in completion order (loky, Dask).
+    Ray's joblib backend returns only whole lists, so missions go in batches of ``batch``:
+    each batch's rows are stored before the next starts, and a killed run loses at most the
+    batch in flight (its rows were never stored, so resuming runs them again).
+    """
+    if batch is None:
+        parallel = joblib.Parallel(n_jobs=n_jobs, return_as="generator_unordered")
+        yield from parallel(joblib.delayed(_work)(execute, m) for m in pending)
+        return
+    with joblib.Parallel(n_jobs=n_jobs, return_as="list") as parallel:
+        for i in range(0, len(pending), batch):
+            chunk = pending[i : i + batch]
+            yield from parallel(joblib.delayed(_work)(execute, m) for m in chunk)
 
 
 def _first_line(exc: BaseException) -> str:
@@ -173,23 +191,28 @@ def check_backend(backend: str, *, jobs: int = 1, scheduler: str | None = None) 
         raise ProblemError("--backend dask needs --scheduler ADDRESS (e.g. tcp://host:8786)")
 
 
+RAY_BATCH_PER_CPU = 4
+"""Missions per Ray batch and cluster CPU: enough to keep every CPU busy, few to lose."""
+
+
 @contextmanager
 def _backend(
     backend: str, *, jobs: int, scheduler: str | None, address: str | None
-) -> Iterator[int]:
-    """Enter the joblib backend; yields the ``n_jobs`` to pass to ``Parallel``."""
+) -> Iterator[tuple[int, int | None]]:
+    """Enter the joblib backend; yields the ``n_jobs`` to pass to ``Parallel`` and the batch size
+    (``None``: results stream one by one; see :func:`_results`)."""
     with ExitStack() as stack:
         if backend == "local":
             stack.enter_context(joblib.parallel_config(backend="loky"))
-            yield jobs
+            yield jobs, None
         elif backend == "dask":
             client = stack.enter_context(_dask_client(scheduler))
             stack.enter_context(joblib.parallel_config(backend="dask", client=client))
-            yield -1
+            yield -1, None
         else:
-            _start_ray(address)
+            cpus = _start_ray(address)
             stack.enter_context(joblib.parallel_config(backend="ray"))
-            yield -1
+            yield -1, RAY_BATCH_PER_CPU * cpus
 
 
 @contextmanager
@@ -212,12 +235,22 @@ def _dask_client(scheduler: str | None) -> Iterator[object]:
         client.close()
 
 
-def _start_ray(address: str | None) -> None:
+def _start_ray(address: str | None) -> int:
+    """Connect to (or start) Ray and register its joblib backend; returns the cluster's CPUs."""
     try:
         import ray
         from ray.util.joblib import register_ray
     except ImportError:
         raise ProblemError("--backend ray needs ray: pip install 'selfrepair[ray]'") from None
     if not ray.is_initialized():
-        ray.init(address=address, log_to_driver=False, include_dashboard=False)
+        try:
+            ray.init(
+                address=address,
+                log_to_driver=False,
+                include_dashboard=False,
+                logging_level=logging.ERROR,  # Ray's start-up notices are not ours to print
+            )
+        except ConnectionError as exc:
+            raise ProblemError(f"cannot reach the Ray cluster at {address}: {exc}") from None
     register_ray()
+    return max(1, int(ray.cluster_resources().get("CPU", 1)))
