@@ -85,6 +85,8 @@ def test_octile_cost_value_and_text() -> None:
         ({"backend": "gpu"}, "unknown backend"),
         ({"max_expansions": -3}, "max_expansions"),
         ({"time_limit": -0.5}, "time_limit"),
+        ({"time_limit": float("nan")}, "time_limit"),
+        ({"time_limit": 1e300}, "time_limit"),
     ],
 )
 def test_misuse_raises_problem_error(kwargs: dict, message: str) -> None:

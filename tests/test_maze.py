@@ -70,6 +70,13 @@ def test_empty_maze_is_an_error() -> None:
         parse_maze("\n\n")
 
 
+@pytest.mark.parametrize(("text", "line"), [("\n....\n", 1), ("....\n\n....\n", 2)])
+def test_blank_line_inside_a_maze_is_named(text: str, line: int) -> None:
+    with pytest.raises(InputError, match="empty line") as info:
+        parse_maze(text, source="m.maze")
+    assert info.value.line == line
+
+
 def test_save_and_load(tmp_path: Path) -> None:
     maze = parse_maze("###\n#.#\n###\n")
     path = tmp_path / "tiny.maze"

@@ -90,6 +90,9 @@ def test_small_scenario_parses() -> None:
         ("type octile\nheight 2\nwidth 4\nmap\n....\n", 6, "expected 2 map rows"),
         ("type octile\nheight 1\nwidth 4\nmap\n...\n", 5, "expected 4 cells"),
         ("type octile\nheight 1\nwidth 4\nmap\n..x.\n", 5, "'x'"),
+        ("type hex\nheight 1\nwidth 4\nmap\n....\n", 1, "type octile"),
+        ("type octile\nheight 1\nwidth 4\nmap\n....\n....\n", 6, "found more"),
+        ("type octile\nheight 1\nwidth 99999999999999\nmap\n....\n", 5, "expected 99999"),
     ],
 )
 def test_map_errors(text: str, line: int, message: str) -> None:
@@ -104,6 +107,13 @@ def test_map_error_names_column_of_bad_character() -> None:
     with pytest.raises(InputError) as info:
         parse_map("type octile\nheight 1\nwidth 4\nmap\n..x.\n", source="bad.map")
     assert info.value.column == 3
+
+
+@pytest.mark.parametrize(("row", "column"), [("...", 4), (".....", 5)])
+def test_map_error_names_column_where_a_ragged_row_goes_wrong(row: str, column: int) -> None:
+    with pytest.raises(InputError) as info:
+        parse_map(f"type octile\nheight 1\nwidth 4\nmap\n{row}\n", source="bad.map")
+    assert (info.value.line, info.value.column) == (5, column)
 
 
 @pytest.mark.parametrize(
@@ -128,6 +138,15 @@ def test_scenario_errors(body: str, message: str) -> None:
     with pytest.raises(InputError, match=message) as info:
         parse_scenario(text, source="bad.scen", maze=maze)
     assert (info.value.source, info.value.line) == ("bad.scen", 3)
+    if "9 fields" not in message:
+        assert info.value.column is not None and info.value.column > 1
+
+
+def test_scenario_error_column_points_at_the_field() -> None:
+    line = "0\tsmall.map\t4\t3\t1\t1\t9\t2\t1.0\n"
+    with pytest.raises(InputError, match="goal") as info:
+        parse_scenario(SCEN_HEADER + line, source="bad.scen", maze=parse_map(SMALL_MAP))
+    assert info.value.column == line.index("\t9\t") + 2
 
 
 def test_scenario_needs_version_line() -> None:

@@ -232,6 +232,9 @@ def test_plan_reports_the_fastest_wheel_action_per_motion() -> None:
         ({"time_limit": -1.0}, "time_limit"),
         ({"weight": Fraction(-1)}, "clearance_weight"),
         ({"radius": -1}, "clearance_radius"),
+        ({"radius": 10**20}, "clearance_radius"),
+        ({"time_limit": float("nan")}, "time_limit"),
+        ({"time_limit": float("inf")}, "time_limit"),
     ],
 )
 def test_misuse_raises_problem_error(kwargs: dict, message: str) -> None:
@@ -250,6 +253,16 @@ def test_misuse_raises_problem_error(kwargs: dict, message: str) -> None:
             max_expansions=kwargs.get("max_expansions"),
             time_limit=kwargs.get("time_limit"),
         )
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_huge_budget_and_weight_fall_back_instead_of_crashing(backend: str) -> None:
+    """A budget beyond int64 is capped; a weight too big for the kernel uses the Python search."""
+    problem = PlanningProblem(
+        U_TURN, parse_pose("0,0,E"), (4, 2), clearance_weight=Fraction(10**40), clearance_radius=0
+    )
+    result = plan(problem, backend=backend, max_expansions=10**23)
+    assert result.status is PlanStatus.SOLVED and result.cost == 7
 
 
 def test_integer_weight_is_accepted_and_exact() -> None:

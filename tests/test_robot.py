@@ -253,6 +253,13 @@ def test_parse_fault_syntax() -> None:
     assert parse_faults("FL:F, RR:S") == both
     assert parse_faults("") == frozenset()
     assert format_faults([Fault(Wheel.RR, Mode.S), Fault(Wheel.FL, Mode.F)]) == "FL:F,RR:S"
+    assert format_faults(parse_faults("FL:F,FL:S,FL:B,RR:F")) == "FL:B,FL:S,FL:F,RR:F"
+
+
+@pytest.mark.parametrize("text", [",", ",,,", "FL:F,,RR:B", "FL:F,"])
+def test_parse_faults_rejects_empty_items(text: str) -> None:
+    with pytest.raises(InputError, match="got ''"):
+        parse_faults(text)
 
 
 @pytest.mark.parametrize("text", ["FL", "FL:X", "XX:F", "FL:F:S", ":F", "FLF"])

@@ -6,7 +6,7 @@ Python from :mod:`selfrepair.robot` and passed in as integer tables; the kernels
 
 Layout: the grid is padded by one wall cell on every side and flattened, so a cell is one integer
 ``p = (y + 1) * (width + 2) + (x + 1)`` and every motion is a fixed integer offset; a lattice
-state is ``4 * p + heading``. The open list is an indexed binary heap keyed ``(f, h, counter)``
+state is ``4 * p + heading``. The open list is an indexed 4-ary heap keyed ``(f, h, counter)``
 per state (decrease-key instead of lazy deletion). It pops exactly the entries that the
 lazy-deletion heap of :func:`selfrepair.search.astar` pops, in the same order, so both backends
 return the same plan.
@@ -439,7 +439,7 @@ def _check_int64(
     """Refuse problems whose scaled costs could overflow int64 or whose states overflow int32."""
     step_max = int(dur.max(initial=0)) + wmul * 4 * int(pen.max(initial=0))
     bound = step_max * n_states + int(hdist.max(initial=0)) * rate.numerator
-    if bound >= 1 << 62 or n_states >= 1 << 31:
+    if bound >= 1 << 62 or wmul >= 1 << 62 or n_states >= 1 << 31:
         raise OverflowError("the problem is too large for the integer kernel")
 
 
@@ -447,7 +447,7 @@ def _drive(
     run: Any, scal: npt.NDArray[np.int64], max_expansions: int | None, deadline_ns: int | None
 ) -> PlanStatus:
     """Call a resumable kernel until it finishes, the node budget is spent or time is up."""
-    budget = (1 << 62) if max_expansions is None else max_expansions
+    budget = min(1 << 62, (1 << 62) if max_expansions is None else max_expansions)
     while True:
         limit = budget
         if deadline_ns is not None:

@@ -95,8 +95,11 @@ def parse_maze(text: str, *, source: str = "<string>", name: str = "") -> Maze:
             "expected at least one row of '#' and '.', got an empty maze", source=source
         )
     width = len(rows[0])
-    walls = np.zeros((len(rows), width), dtype=bool)
     for y, row in enumerate(rows):
+        if not row.strip():
+            raise InputError(
+                "expected a row of '#' and '.', got an empty line", source=source, line=y + 1
+            )
         if len(row) != width:
             raise InputError(
                 f"expected {width} cells in every row (as in row 1), got {len(row)}",
@@ -104,6 +107,8 @@ def parse_maze(text: str, *, source: str = "<string>", name: str = "") -> Maze:
                 line=y + 1,
                 column=min(len(row), width) + 1,
             )
+    walls = np.zeros((len(rows), width), dtype=bool)
+    for y, row in enumerate(rows):
         for x, char in enumerate(row):
             if char == WALL_CHAR:
                 walls[y, x] = True

@@ -69,6 +69,12 @@ def parse_map(text: str, *, source: str = "<string>", name: str = "") -> Maze:
     for key in _HEADER_KEYS:
         if key not in header:
             raise InputError(f"expected a '{key}' header field", source=source, line=index + 1)
+    if header["type"] != "octile":
+        raise InputError(
+            f"expected 'type octile', got 'type {header['type']}'",
+            source=source,
+            line=_header_line(lines, "type"),
+        )
     height = _header_int(header, "height", source, lines)
     width = _header_int(header, "width", source, lines)
     rows = lines[index + 1 : index + 1 + height]
@@ -78,15 +84,23 @@ def parse_map(text: str, *, source: str = "<string>", name: str = "") -> Maze:
             source=source,
             line=len(lines) + 1,
         )
-    walls = np.zeros((height, width), dtype=bool)
-    for y, row in enumerate(rows):
-        line_no = index + 2 + y
+    for extra, text in enumerate(lines[index + 1 + height :], start=index + 2 + height):
+        if text.strip():
+            raise InputError(
+                f"expected {height} map rows (from the header), found more",
+                source=source,
+                line=extra,
+            )
+    for y, row in enumerate(rows):  # all row lengths first: the header may claim any size
         if len(row) != width:
             raise InputError(
                 f"expected {width} cells in the row (from the header), got {len(row)}",
                 source=source,
-                line=line_no,
+                line=index + 2 + y,
+                column=min(len(row), width) + 1,
             )
+    walls = np.zeros((height, width), dtype=bool)
+    for y, row in enumerate(rows):
         for x, char in enumerate(row):
             if char in _BLOCKED:
                 walls[y, x] = True
@@ -95,18 +109,23 @@ def parse_map(text: str, *, source: str = "<string>", name: str = "") -> Maze:
                     f"expected a map character from '.GS' (passable) or '@OTW' (blocked), "
                     f"got {char!r}",
                     source=source,
-                    line=line_no,
+                    line=index + 2 + y,
                     column=x + 1,
                 )
     return Maze(walls, name=name)
 
 
+def _header_line(lines: list[str], key: str) -> int:
+    return next(i + 1 for i, text in enumerate(lines) if text.strip().startswith(key))
+
+
 def _header_int(header: dict[str, str], key: str, source: str, lines: list[str]) -> int:
     value = header[key]
     if not (value.isascii() and value.isdigit()) or int(value) < 1:
-        line = next(i + 1 for i, text in enumerate(lines) if text.strip().startswith(key))
         raise InputError(
-            f"expected a positive integer {key}, got {value!r}", source=source, line=line
+            f"expected a positive integer {key}, got {value!r}",
+            source=source,
+            line=_header_line(lines, key),
         )
     return int(value)
 
@@ -142,20 +161,29 @@ def _parse_scenario_line(raw: str, number: int, source: str, maze: Maze | None) 
             source=source,
             line=number,
         )
+    columns = _field_columns(raw, fields)
     names = ("bucket", "width", "height", "start_x", "start_y", "goal_x", "goal_y")
     ints: dict[str, int] = {}
-    for key, value in zip(names, [fields[0], *fields[2:8]], strict=True):
+    for key, value, column in zip(
+        names, [fields[0], *fields[2:8]], [columns[0], *columns[2:8]], strict=True
+    ):
         digits = value.strip().removeprefix("-")
         if not (digits.isascii() and digits.isdigit()):
             raise InputError(
-                f"expected an integer {key}, got {value!r}", source=source, line=number
+                f"expected an integer {key}, got {value!r}",
+                source=source,
+                line=number,
+                column=column,
             )
         ints[key] = int(value)
     try:
         optimal = float(fields[8])
     except ValueError as exc:
         raise InputError(
-            f"expected a number optimal_length, got {fields[8]!r}", source=source, line=number
+            f"expected a number optimal_length, got {fields[8]!r}",
+            source=source,
+            line=number,
+            column=columns[8],
         ) from exc
     query = ScenarioQuery(
         bucket=ints["bucket"],
@@ -167,30 +195,45 @@ def _parse_scenario_line(raw: str, number: int, source: str, maze: Maze | None) 
         optimal_length=optimal,
         line=number,
     )
-    _check_query(query, source, maze)
+    _check_query(query, source, maze, columns)
     return query
 
 
-def _check_query(query: ScenarioQuery, source: str, maze: Maze | None) -> None:
+def _field_columns(raw: str, fields: list[str]) -> list[int]:
+    """The 1-based column where each field of a scenario line starts."""
+    columns, at = [], 0
+    for field in fields:
+        at = raw.index(field, at)
+        columns.append(at + 1)
+        at += len(field)
+    return columns
+
+
+def _check_query(query: ScenarioQuery, source: str, maze: Maze | None, columns: list[int]) -> None:
     if maze is not None and (query.width, query.height) != (maze.width, maze.height):
         raise InputError(
-            f"expected the map size {maze.width}x{maze.height}, "
-            f"got {query.width}x{query.height}",
+            f"expected the map size {maze.width}x{maze.height}, got {query.width}x{query.height}",
             source=source,
             line=query.line,
+            column=columns[2],
         )
-    for label, (x, y) in (("start", query.start), ("goal", query.goal)):
+    for label, (x, y), column in (
+        ("start", query.start, columns[4]),
+        ("goal", query.goal, columns[6]),
+    ):
         if not (0 <= x < query.width and 0 <= y < query.height):
             raise InputError(
                 f"expected the {label} ({x},{y}) inside the {query.width}x{query.height} map",
                 source=source,
                 line=query.line,
+                column=column,
             )
         if maze is not None and not maze.is_free(x, y):
             raise InputError(
                 f"expected the {label} ({x},{y}) on a free cell, but it is a wall",
                 source=source,
                 line=query.line,
+                column=column,
             )
 
 

@@ -383,6 +383,10 @@ def _at_goal(problem: PlanningProblem, pose: Pose) -> bool:
     )
 
 
+MAX_CLEARANCE_RADIUS = 1_000_000
+"""Far beyond any maze's clearance; keeps the penalties inside ``int64``."""
+
+
 def _validate(
     problem: PlanningProblem,
     heuristic: str,
@@ -403,8 +407,11 @@ def _validate(
         )
     if problem.clearance_weight < 0:
         raise ProblemError(f"clearance_weight must be >= 0, got {problem.clearance_weight}")
-    if problem.clearance_radius < 0:
-        raise ProblemError(f"clearance_radius must be >= 0, got {problem.clearance_radius}")
+    if not 0 <= problem.clearance_radius <= MAX_CLEARANCE_RADIUS:
+        raise ProblemError(
+            f"clearance_radius must be from 0 to {MAX_CLEARANCE_RADIUS}, "
+            f"got {problem.clearance_radius}"
+        )
 
 
 def _since(t0: int) -> int:

@@ -346,13 +346,17 @@ def parse_fault(text: str, *, source: str = "<faults>") -> Fault:
 
 
 def parse_faults(text: str, *, source: str = "<faults>") -> FaultSet:
-    """Parse a comma-separated fault set such as ``"FL:F,RR:B"``; an empty string is no fault."""
-    parts = [p for p in text.split(",") if p.strip()]
-    return frozenset(parse_fault(p, source=source) for p in parts)
+    """Parse a comma-separated fault set such as ``"FL:F,RR:B"``; an empty string is no fault.
+
+    An empty item (``"FL:F,,RR:B"``, ``","``) is an error, not silently no fault."""
+    if not text.strip():
+        return frozenset()
+    return frozenset(parse_fault(p, source=source) for p in text.split(","))
 
 
 def format_faults(faults: Iterable[Fault]) -> str:
-    """Print a fault set in canonical order, comma-separated (``""`` for none)."""
+    """Print a fault set in canonical order (by wheel FL, FR, RL, RR, then by mode value:
+    B, S, F), comma-separated (``""`` for none)."""
     return ",".join(str(f) for f in sorted(faults))
 
 

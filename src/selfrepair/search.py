@@ -5,9 +5,10 @@ on plain grids) both run on :func:`astar`; the numba kernels in :mod:`selfrepair
 implement the same loop with the same keys, so both backends pop nodes in the same order.
 
 Heap entries are ``(f, h, counter, node)``: lowest ``f = g + h`` first, among equal ``f`` the node
-nearer the goal (lowest ``h``), and among those the one pushed first (``counter``), as in
-networkx's ``astar_path``. The counter is unique, so nodes themselves are never compared. A node
-is pushed again when its ``g`` improves (lazy deletion: stale entries are skipped when popped).
+nearer the goal (lowest ``h``), and among those the one pushed first (``counter``; networkx's
+``astar_path`` breaks ties on the counter alone). The counter is unique, so nodes themselves are
+never compared. A node is pushed again when its ``g`` improves (lazy deletion: stale entries are
+skipped when popped).
 
 The heuristic must be consistent (``h(n) <= cost(n, m) + h(m)`` and ``h(goal) = 0``). Then a node is
 never improved after it is expanded, so closed nodes are never reopened and the first goal popped is
@@ -45,6 +46,9 @@ L = TypeVar("L")
 
 BACKENDS = ("auto", "python", "numba")
 """``"python"``: the reference; ``"numba"``: the compiled kernels; ``"auto"``: numba if present."""
+
+MAX_TIME_LIMIT = 1e9
+"""The largest time limit in seconds (about 32 years); NaN and infinity are refused."""
 
 _TIME_CHECK_EVERY = 256
 """Expansions between two looks at the clock (the clock costs more than an expansion)."""
@@ -117,8 +121,8 @@ def check_search_inputs(
         raise ProblemError(f"unknown backend {backend!r}; expected one of {', '.join(BACKENDS)}")
     if max_expansions is not None and max_expansions < 0:
         raise ProblemError(f"max_expansions must be >= 0, got {max_expansions}")
-    if time_limit is not None and time_limit < 0:
-        raise ProblemError(f"time_limit must be >= 0, got {time_limit}")
+    if time_limit is not None and not 0 <= time_limit <= MAX_TIME_LIMIT:
+        raise ProblemError(f"time_limit must be from 0 to {MAX_TIME_LIMIT:g} s, got {time_limit}")
 
 
 def deadline_from(time_limit: float | None, start_ns: int) -> int | None:

@@ -286,7 +286,9 @@ def check_scen_command(
     sample: Annotated[
         int | None, typer.Option("--sample", min=1, help="Check N lines spread evenly.")
     ] = None,
-    seed: Annotated[int, typer.Option("--seed", help="Offset of the evenly spread sample.")] = 0,
+    seed: Annotated[
+        int, typer.Option("--seed", min=0, help="Offset of the evenly spread sample.")
+    ] = 0,
     backend: _Backend = "auto",
     as_json: _Json = False,
 ) -> int:
