@@ -56,6 +56,15 @@ def test_good_config_parses_to_frozen_values() -> None:
         ('name = "replan"', 'name = "repln"', "strategies[0].name", 18, "replacement"),
         ('["FL:F", "FL:F,RR:B"]', '["FL:X"]', "faults.sets", 12, "WHEEL:MODE"),
         ("routes = 2", 'routes = "bundled"', "mazes[1]", 7, "needs a bundled maze"),
+        ("routes = 2", "routes = 0", "mazes[1].routes", 9, "greater than or equal to 1"),
+        ("routes = 2", 'routes = [{start="1,1,E"}]', "mazes[1].routes[0].goal", 9, "missing"),
+        (
+            "routes = 2",
+            'routes = [{start="1,1,Q", goal="3,1"}]',
+            "mazes[1].routes[0].start",
+            9,
+            "H in N, E, S, W, got '1,1,Q'",
+        ),
         ("seed = 7", 'seed = "x"', "seed", 2, "integer"),
         ("corridor = 1", "corridor = 0", "mazes[1].generate.corridor", 8, "greater than"),
         (
@@ -159,3 +168,43 @@ def test_clearance_weights_are_exact_and_canonical(weights: list[Fraction]) -> N
     )
     assert [Fraction(w) for w in config.planner.clearance_weights] == weights
     assert all(w == str(Fraction(w)) for w in config.planner.clearance_weights)
+
+
+FILES = """\
+name = "files"
+seed = 1
+[[mazes]]
+file = "data/m.maze"
+routes = 1
+[faults]
+sets = ["FL:F"]
+[[strategies]]
+name = "replacement"
+tables = ["data/t.json"]
+"""
+
+
+def _write_files_experiment(root: Path) -> Path:
+    from importlib import resources
+
+    data = root / "data"
+    data.mkdir(parents=True)
+    maze = resources.files("selfrepair").joinpath("data", "mazes", "narrow-short.maze")
+    (data / "m.maze").write_text(maze.read_text(encoding="utf-8"), encoding="utf-8")
+    table = resources.files("selfrepair").joinpath("data", "tables", "handwritten.json")
+    (data / "t.json").write_text(table.read_text(encoding="utf-8"), encoding="utf-8")
+    path = root / "files.toml"
+    path.write_text(FILES, encoding="utf-8")
+    return path
+
+
+def test_file_keys_follow_content_not_location(tmp_path: Path) -> None:
+    """Moving the files keeps keys and seeds; editing the table file changes the keys."""
+    first = expand(load_config(_write_files_experiment(tmp_path / "a")))
+    moved = expand(load_config(_write_files_experiment(tmp_path / "elsewhere" / "b")))
+    assert [(m.key, m.seed) for m in first] == [(m.key, m.seed) for m in moved]
+    assert str(tmp_path / "a") in first[0].config  # workers still load from the real path
+    table = tmp_path / "a" / "data" / "t.json"
+    table.write_text(table.read_text(encoding="utf-8").replace("by hand", "by hand!"))
+    edited = expand(load_config(tmp_path / "a" / "files.toml"))
+    assert not {m.key for m in edited} & {m.key for m in first}

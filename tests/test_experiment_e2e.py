@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import sqlite3
@@ -250,3 +251,56 @@ def test_report_and_animate(tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     assert main(["animate", str(out_dir / "mission.jsonl"), "-o", str(tmp_path / "x.png")]) == 2
     assert ".gif" in capsys.readouterr().err
     assert main(["report", str(tmp_path / "missing.sqlite"), "-o", str(out_dir)]) == 2
+    # a trace the robot model does not back is refused, not drawn
+    lines = (out_dir / "mission.jsonl").read_text().splitlines()
+    step = json.loads(lines[1])
+    step["to"] = [999, 8, "S"]
+    bad = tmp_path / "bad.jsonl"
+    bad.write_text("\n".join([lines[0], json.dumps(step), *lines[2:]]) + "\n")
+    capsys.readouterr()
+    assert main(["animate", str(bad), "-o", str(tmp_path / "bad.gif")]) == 2
+    assert "does not replay" in capsys.readouterr().err
+    # a report reads its database and never changes it; a foreign database is refused
+    before = db.read_bytes()
+    assert main(["report", str(db), "-o", str(tmp_path / "again")]) == 0
+    assert db.read_bytes() == before
+    other = tmp_path / "other.sqlite"
+    sqlite3.connect(other).execute("CREATE TABLE foo (x)").connection.commit()
+    assert main(["report", str(other), "-o", str(tmp_path / "o")]) == 2
+    assert "'missions' table" in capsys.readouterr().err
+    with sqlite3.connect(other) as con:
+        assert {r[0] for r in con.execute("SELECT name FROM sqlite_master")} == {"foo"}
+    # output paths that cannot be written are one line and exit 2
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    assert main(["report", str(db), "-o", str(blocker / "out")]) == 2
+    assert capsys.readouterr().err.count("\n") == 1
+
+
+@pytest.mark.parametrize("width", [80, 100, 160])
+def test_terminal_summary_never_truncates_a_number(
+    width: int, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from selfrepair.cli.experiments import print_summary
+    from selfrepair.experiment.findings import StrategySummary
+
+    monkeypatch.setenv("COLUMNS", str(width))
+    monkeypatch.setattr(sys.stdout, "isatty", lambda: True)
+    summary = StrategySummary(
+        label="replacement[generated-agnostic,guarded] w=1/3",
+        missions=192,
+        completed=192,
+        compute_per_action_median_us=12345.6,
+        compute_per_action_p99_us=98765.4,
+        latency_median_us=4321.0,
+        latency_p99_us=123456.7,
+        replans_per_mission=0.77,
+        resolved_locally=0.993,
+        extra_ticks_mean=33.97,
+        plan_distance_mean=104.0,
+    )
+    print_summary([summary], title="t")
+    out = capsys.readouterr().out
+    assert "…" not in out
+    for cell in summary.cells()[1:]:
+        assert cell in out, cell

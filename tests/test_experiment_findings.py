@@ -157,6 +157,9 @@ def test_finding_2_clearance() -> None:
     assert _finding([table("0", 8), table("1", 8)], 2)[0] == "not held"
     assert _finding([table("0", 10), table("1", 10)], 2)[0] == "not tested"  # no room to rise
     assert _finding([table("0", 8)], 2)[0] == "not tested"
+    none = row("replacement", table="handwritten", recursion="flat", weight="1")  # 0 encounters
+    assert _finding([table("0", 5), none], 2)[0] == "not tested"  # nothing to compare at w=1
+    assert _finding([none, {**table("1", 9), "key": "x"}], 2)[0] == "not tested"
 
 
 def test_finding_3_tables() -> None:
@@ -169,3 +172,5 @@ def test_finding_3_tables() -> None:
     assert _finding([table("handwritten", 7), table("generated-indexed", 6)], 3)[0] == "not held"
     assert _finding([table("handwritten", 10), table("generated-indexed", 10)], 3)[0] == "held"
     assert _finding([table("handwritten", 7)], 3)[0] == "not tested"
+    quiet = row("replacement", table="generated-indexed", recursion="flat")  # 0 encounters
+    assert _finding([table("handwritten", 7), quiet], 3)[0] == "not tested"

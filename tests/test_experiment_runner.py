@@ -85,7 +85,7 @@ def test_dask_local_cluster_matches_local(tmp_path: Path) -> None:
         run_missions(missions, store, jobs=1)  # the real executor
     with (
         distributed.LocalCluster(
-            n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
         ) as cluster,
         ResultStore(tmp_path / "dask.sqlite") as store,
     ):

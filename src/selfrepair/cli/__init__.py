@@ -23,8 +23,9 @@ __all__ = ["app", "main", "run"]
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the CLI with ``argv`` (default: ``sys.argv[1:]``) and return the exit code.
 
-    Bad input (any :class:`~selfrepair.errors.SelfRepairError` or a usage error) becomes one line
-    on stderr and exit code 2, never a traceback.
+    Bad input (any :class:`~selfrepair.errors.SelfRepairError`, a usage error, or an
+    :class:`OSError` such as an output path in a missing directory) becomes one line on stderr
+    and exit code 2, never a traceback.
     """
     command = typer.main.get_command(app)
     args = list(sys.argv[1:] if argv is None else argv)
@@ -32,6 +33,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         result = command.main(args=args, prog_name="selfrepair", standalone_mode=False)
     except SelfRepairError as exc:
         sys.stderr.write(f"selfrepair: error: {_one_line(str(exc))}\n")
+        return 2
+    except OSError as exc:  # an output path that cannot be written, a full disk, ...
+        where = f"{exc.filename}: " if exc.filename is not None else ""
+        sys.stderr.write(f"selfrepair: error: {where}{_one_line(exc.strerror or str(exc))}\n")
         return 2
     except NoArgsIsHelpError as exc:
         sys.stdout.write(exc.ctx.get_help() + "\n" if exc.ctx is not None else "")

@@ -10,6 +10,7 @@ from typing import Annotated
 
 import joblib
 import typer
+from rich import box
 from rich.console import Console
 from rich.progress import (
     BarColumn,
@@ -28,7 +29,7 @@ from selfrepair.experiment.config import load_config
 from selfrepair.experiment.findings import Finding, StrategySummary, check_findings, summarize
 from selfrepair.experiment.missions import expand
 from selfrepair.experiment.runner import check_backend, run_missions
-from selfrepair.experiment.store import ResultStore
+from selfrepair.experiment.store import ResultStore, require_pyarrow
 
 __all__ = ["animate", "experiment", "print_findings", "print_summary", "report"]
 
@@ -70,6 +71,8 @@ def experiment(
     """Run an experiment (resumable: missions already in the database are skipped), then print the
     per-strategy summary and the original study's findings checked on all stored rows."""
     check_backend(backend, jobs=jobs, scheduler=scheduler)
+    if export_parquet is not None:
+        require_pyarrow()  # before the sweep, not after it
     cfg = load_config(resolve_experiment(config))
     missions = expand(cfg)
     db_path = db if db is not None else Path("results") / f"{cfg.name}.sqlite"
@@ -91,12 +94,12 @@ def experiment(
         )
         keys = {m.key for m in missions}
         rows = [r for r in store.rows() if r["key"] in keys]
+        print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
+        print_findings(check_findings(rows))
         if export_csv is not None:
             echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
         if export_parquet is not None:
             echo(f"wrote {store.export_parquet(export_parquet)} rows to {export_parquet}")
-    print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
-    print_findings(check_findings(rows))
     return 0
 
 
@@ -127,21 +130,64 @@ def _progress(label: str) -> Iterator[object]:
         yield update
 
 
+_SHORT_HEADERS = {
+    "completed": "done",
+    "compute/action median µs": "compute/\naction\nmedian µs",
+    "compute/action p99 µs": "compute/\naction\np99 µs",
+    "repair latency median µs": "repair\nlatency\nmedian µs",
+    "repair latency p99 µs": "repair\nlatency\np99 µs",
+    "replans/mission": "replans/\nmission",
+    "resolved locally": "resolved\nlocally",
+    "extra ticks": "extra\nticks",
+    "plan distance": "plan\ndistance",
+}
+"""Stacked headers for a terminal, where every column must fit without truncating a number."""
+
+_WIDE_ENOUGH = 120
+"""Below this terminal width the table is split in two (times, then outcomes)."""
+
+
 def print_summary(summaries: list[StrategySummary], *, title: str) -> None:
-    """The per-strategy summary as a rich table."""
-    table = Table(title=title)
-    for header in StrategySummary.HEADERS:
-        table.add_column(
-            header,
-            justify="left" if header == "strategy" else "right",
-            no_wrap=header == "strategy",
-        )
-    for s in summaries:
-        table.add_row(*(Text(cell) for cell in s.cells()))
-    out = console()
+    """The per-strategy summary as a rich table: one wide table when piped (logs keep full
+    headers), stacked headers on a terminal, split in two on a narrow one. Numbers are never
+    truncated; long strategy names wrap after a comma."""
+    rows = [s.cells() for s in summaries]
+    headers = StrategySummary.HEADERS
     if not sys.stdout.isatty():
         out = Console(file=sys.stdout, width=200, soft_wrap=True, highlight=False)
-    out.print(table)
+        out.print(_table(title, headers, rows, range(1, len(headers)), short=False))
+        return
+    out = console()
+    if out.width >= _WIDE_ENOUGH:
+        groups = [range(1, len(headers))]
+    else:
+        groups = [range(1, 6), range(6, len(headers))]
+    for part, columns in enumerate(groups, start=1):
+        label = title if len(groups) == 1 else f"{title} ({part}/{len(groups)})"
+        out.print(_table(label, headers, rows, columns, short=True))
+
+
+def _table(
+    title: str,
+    headers: tuple[str, ...],
+    rows: list[tuple[str, ...]],
+    columns: range,
+    *,
+    short: bool,
+) -> Table:
+    table = Table(title=title, box=box.SIMPLE_HEAD if short else box.HEAVY_HEAD)
+    table.add_column(headers[0], overflow="fold", no_wrap=not short)
+    for i in columns:
+        table.add_column(
+            _SHORT_HEADERS[headers[i]] if short else headers[i],
+            justify="right",
+            no_wrap=True,
+            min_width=max(len(r[i]) for r in rows) if rows else None,
+        )
+    for row in rows:
+        name = row[0].replace(",", ", ") if short else row[0]
+        table.add_row(Text(name), *(Text(row[i]) for i in columns))
+    return table
 
 
 def print_findings(findings: list[Finding]) -> None:

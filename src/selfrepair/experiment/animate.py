@@ -27,7 +27,7 @@ def animate_trace(
 ) -> int:
     """Write a GIF of the mission in ``trace`` to ``out``; returns the number of frames."""
     from selfrepair.experiment import plots
-    from selfrepair.trace import read_trace
+    from selfrepair.trace import read_trace, replay
 
     if not str(out).lower().endswith(".gif"):
         raise TraceError("expected an output file ending in .gif", source=str(out))
@@ -37,6 +37,9 @@ def animate_trace(
     from matplotlib.figure import Figure
 
     parsed = read_trace(trace)
+    check = replay(parsed)  # draw only what the robot model says happened
+    if not check.ok:
+        raise TraceError(f"the trace does not replay: {check}", source=str(trace))
     picture = plots.picture_from_trace(parsed)
     total = len(picture.steps)
     stride = max(1, -(-total // max(1, max_frames)))

@@ -315,9 +315,24 @@ def parse_config(text: str, *, source: str = "<string>") -> ExperimentConfig:
         raise _config_error(exc, text, source) from None
 
 
+_TYPE_MISMATCH = ("literal_error", "int_type", "int_parsing", "string_type", "float_type")
+
+
+def _most_telling(errors: list[Any]) -> Any:
+    """For a value that may take several forms (``routes`` is "bundled", a count or a list),
+    pydantic reports one error per form. The telling one went deepest into the value, and among
+    those, one whose form matched the value's type; otherwise the first error."""
+
+    def rank(error: Any) -> tuple[int, bool]:
+        mismatch = error["type"] in _TYPE_MISMATCH or error["type"].endswith("_type")
+        return len(error["loc"]), not mismatch
+
+    return max(errors, key=rank)
+
+
 def _config_error(exc: ValidationError, text: str, source: str) -> ConfigError:
-    """The first validation problem as a ConfigError naming key, line and expectation."""
-    error = exc.errors()[0]
+    """The most telling validation problem as a ConfigError naming key, line and expectation."""
+    error = _most_telling(exc.errors())
     loc = _clean_loc(error["loc"])
     key = _dotted(loc) or "<top level>"
     message = error["msg"].removeprefix("Value error, ")
@@ -339,7 +354,11 @@ def _config_error(exc: ValidationError, text: str, source: str) -> ConfigError:
     else:
         message = message.replace("Input should be", "expected")
     got = error.get("input")
-    if error["type"] not in ("missing", "extra_forbidden") and not isinstance(got, dict | list):
+    if (
+        error["type"] not in ("missing", "extra_forbidden")
+        and not isinstance(got, dict | list)
+        and "got " not in message
+    ):
         message += f" (got {got!r})"
     return ConfigError(f"key {key!r}: {message}", source=source, line=find_line(text, loc))
 

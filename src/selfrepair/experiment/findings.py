@@ -319,11 +319,14 @@ def _finding_2(rows: Sequence[Row]) -> Finding:
         shares = {w: _replacement_share(rs) for w, rs in sorted(weights.items())}
         base = shares[Fraction(0)]
         listed = ", ".join(f"w={w}: {_pct(s)}" for w, s in shares.items())
-        if base is not None and base >= 1:
+        above = [s for w, s in shares.items() if w > 0 and s is not None]
+        if base is None or not above:
+            parts.append(f"{variant}: {listed} (no faulty encounter to compare)")
+            continue
+        if base >= 1:
             parts.append(f"{variant}: {listed} (already 100% at w=0, no room to rise)")
             continue
-        best_w = max((w for w in shares if w > 0), key=lambda w: shares[w] or 0)
-        ok.append((shares[best_w] or 0) > (base or 0))
+        ok.append(max(above) > base)
         parts.append(f"{variant}: {listed}")
     verdict = "not tested" if not ok else "held" if all(ok) else "not held"
     return Finding(
@@ -354,17 +357,19 @@ def _finding_3(rows: Sequence[Row]) -> Finding:
     parts, ok = [], []
     for mode, tables in sorted(tested.items()):
         shares = {t: _replacement_share(rs) for t, rs in sorted(tables.items())}
-        base = shares["handwritten"] or 0
-        others = [s or 0 for t, s in shares.items() if t != "handwritten"]
+        listed = ", ".join(f"{t}: {_pct(s)}" for t, s in shares.items())
+        base = shares["handwritten"]
+        others = [s for t, s in shares.items() if t != "handwritten" and s is not None]
+        if base is None or not others:
+            parts.append(f"{mode} recursion: {listed} (no faulty encounter to compare)")
+            continue
         # at a 100% ceiling nothing can do better: a tie counts, falling short does not
         ok.extend(s > base or s >= base >= 1 for s in others)
         note = " (hand-written already at 100%: others can only tie)" if base >= 1 else ""
-        parts.append(
-            f"{mode} recursion: " + ", ".join(f"{t}: {_pct(s)}" for t, s in shares.items()) + note
-        )
+        parts.append(f"{mode} recursion: {listed}{note}")
     return Finding(
         3,
         CLAIMS[2],
-        "held" if all(ok) else "not held",
+        "not tested" if not ok else "held" if all(ok) else "not held",
         "share of encounters resolved by replacement at weight 0 - " + "; ".join(parts),
     )

@@ -5,7 +5,9 @@ keys: maze identity (bundled name, file path plus content hash, or generator opt
 fault set, fault timing and detection, strategy and its options, clearance weight and radius,
 replicate and seed. The mission key is the SHA-256 of that string, so the same mission gets the
 same key in every run and on every machine, and changing anything about a mission (including the
-content of a maze file) gives it a new key. That is what makes a sweep resumable.
+content of a maze or table file) gives it a new key. Files enter the key by name and content
+hash, not by absolute path (:func:`portable`), so moving a checkout keeps every key. That is
+what makes a sweep resumable.
 
 The seed of a mission derives from the experiment's base seed and the mission's *situation*
 (maze, route, faults, timing, detection, replicate) but not from its strategy: every strategy
@@ -60,6 +62,7 @@ __all__ = [
     "fault_profile",
     "maze_label",
     "maze_of",
+    "portable",
     "random_routes",
     "to_spec",
     "variant_label",
@@ -259,7 +262,8 @@ def routes_of(
         return bundled_routes(entry.bundled)
     maze = maze_of(canonical_json(identity))
     if isinstance(entry.routes, int):
-        return random_routes(maze, entry.routes, derive_seed(base_seed, {"routes": identity}))
+        where = portable({"maze": identity})["maze"]  # seeded by content, not location
+        return random_routes(maze, entry.routes, derive_seed(base_seed, {"routes": where}))
     routes = []
     for n, r in enumerate(entry.routes):
         route = Route(r.name or f"r{n + 1}", parse_pose(r.start), parse_cell(r.goal))
@@ -289,7 +293,7 @@ def strategy_variants(config: ExperimentConfig) -> Iterator[tuple[dict[str, Any]
                 for recursion in strategy.recursion:
                     for window in windows:
                         options: dict[str, Any] = {
-                            "table": _table_identity(table, config),
+                            **_table_identity(table, config),
                             "recursion": recursion,
                         }
                         if window is not None:
@@ -299,18 +303,34 @@ def strategy_variants(config: ExperimentConfig) -> Iterator[tuple[dict[str, Any]
             yield {"strategy": strategy.name, "options": {}}, weights
 
 
-def _table_identity(table: str, config: ExperimentConfig) -> str:
-    """A bundled table name as is; a file path made absolute against the config's directory."""
+def _table_identity(table: str, config: ExperimentConfig) -> dict[str, str]:
+    """A bundled table by name; a table file by its absolute path (to load it) and the SHA-256
+    of its content (so editing the file gives its missions new keys)."""
     if table in BUNDLED_TABLES:
-        return table
+        return {"table": table}
     path = (config.base_dir / table).resolve()
-    if not path.is_file():
+    try:
+        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
         raise ConfigError(
-            f"key 'strategies[].tables': expected one of {', '.join(BUNDLED_TABLES)} or a table "
-            f"file, got {table!r}",
+            f"key 'strategies[].tables': expected one of {', '.join(BUNDLED_TABLES)} or a "
+            f"readable table file, got {table!r}",
             source=config.source,
-        )
-    return str(path)
+        ) from None
+    return {"table": str(path), "table_sha256": digest}
+
+
+def portable(settings: dict[str, Any]) -> dict[str, Any]:
+    """``settings`` as the key and seed see them: files by name and content hash, not by their
+    absolute path, so a checkout or data directory can move without changing any key."""
+    out = dict(settings)
+    maze = out.get("maze")
+    if isinstance(maze, dict) and "file" in maze:
+        out["maze"] = {**maze, "file": Path(maze["file"]).name}
+    options = out.get("options")
+    if isinstance(options, dict) and "table_sha256" in options:
+        out["options"] = {**options, "table": Path(options["table"]).name}
+    return out
 
 
 def variant_label(strategy: str, options: dict[str, Any]) -> str:
@@ -362,7 +382,7 @@ def expand(config: ExperimentConfig) -> tuple[Mission, ...]:
                                 "detection": detection,
                                 "replicate": replicate,
                             }
-                            seed = derive_seed(config.seed, situation)
+                            seed = derive_seed(config.seed, portable(situation))
                             for variant, weights in variants:
                                 for weight in weights:
                                     mission = _mission(
@@ -388,6 +408,7 @@ def _mission(
         "seed": seed,
     }
     text = canonical_json(settings)
+    key = mission_key(canonical_json(portable(settings)))
     options = variant["options"]
     labels: tuple[tuple[str, str | int | None], ...] = (
         ("maze", label),
@@ -404,7 +425,7 @@ def _mission(
         ("window", options.get("window")),
         ("clearance_weight", weight),
     )
-    return Mission(mission_key(text), config.name, seed, text, labels)
+    return Mission(key, config.name, seed, text, labels)
 
 
 def _short_table(table: Any) -> str | None:

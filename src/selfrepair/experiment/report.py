@@ -40,12 +40,12 @@ def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = N
     """
     from selfrepair.experiment import plots
 
-    out_dir = Path(out)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    with ResultStore(db) as store:
+    with ResultStore(db, read_only=True) as store:  # a report never changes its input
         rows = store.rows()
     if not rows:
         raise InputError("expected a results database with at least one mission", source=str(db))
+    out_dir = Path(out)
+    out_dir.mkdir(parents=True, exist_ok=True)
     written = [
         plots.figure_latency(rows, out_dir / "latency.png"),
         plots.figure_latency_vs_size(rows, out_dir / "latency-vs-size.png"),

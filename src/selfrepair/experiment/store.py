@@ -30,7 +30,14 @@ from selfrepair import __version__
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.experiment.missions import Mission
 
-__all__ = ["FIXED_COLUMNS", "ResultStore", "Value", "is_timing_column", "without_timings"]
+__all__ = [
+    "FIXED_COLUMNS",
+    "ResultStore",
+    "Value",
+    "is_timing_column",
+    "require_pyarrow",
+    "without_timings",
+]
 
 Value = int | float | str | None
 
@@ -69,17 +76,42 @@ def without_timings(row: Mapping[str, Value]) -> dict[str, Value]:
 class ResultStore:
     """An open results database. Use as a context manager, or call :meth:`close`."""
 
-    def __init__(self, path: str | Path) -> None:
+    def __init__(self, path: str | Path, *, read_only: bool = False) -> None:
+        """Open (and, unless ``read_only``, create) the database at ``path``.
+
+        ``read_only`` opens an existing database without changing it (as the report does) and
+        refuses a file that has no ``missions`` table.
+        """
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
         try:
-            self._db = sqlite3.connect(self.path, isolation_level=None, timeout=30.0)
-            self._db.execute("PRAGMA journal_mode=WAL")
-            self._db.execute("PRAGMA synchronous=NORMAL")
-            self._db.executescript(_SCHEMA)
+            if read_only:
+                self._db = self._open_read_only()
+            else:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                self._db = sqlite3.connect(self.path, isolation_level=None, timeout=30.0)
+                self._db.execute("PRAGMA journal_mode=WAL")
+                self._db.execute("PRAGMA synchronous=NORMAL")
+                self._db.executescript(_SCHEMA)
         except sqlite3.DatabaseError as exc:
             raise InputError(f"not a results database: {exc}", source=str(self.path)) from None
+        except OSError as exc:
+            raise InputError(
+                f"cannot open the database: {exc.strerror}", source=str(self.path)
+            ) from None
         self._columns = self._read_columns()
+
+    def _open_read_only(self) -> sqlite3.Connection:
+        if not self.path.is_file():
+            raise InputError("expected an existing results database", source=str(self.path))
+        db = sqlite3.connect(f"{self.path.resolve().as_uri()}?mode=ro", uri=True)
+        tables = {row[0] for row in db.execute("SELECT name FROM sqlite_master")}
+        if "missions" not in tables:
+            db.close()
+            raise InputError(
+                "expected a results database (a 'missions' table), found none",
+                source=str(self.path),
+            )
+        return db
 
     def __enter__(self) -> ResultStore:
         return self
@@ -138,7 +170,8 @@ class ResultStore:
             self._db.execute("ROLLBACK")
             self._columns = self._read_columns()
             raise
-        self._columns = self._read_columns() if len(self._columns) < len(names) else self._columns
+        if not set(names) <= set(self._columns):
+            self._columns = self._read_columns()
         return cursor.rowcount == 1
 
     def rows(self, where: str = "", params: Iterable[Value] = ()) -> list[dict[str, Value]]:
@@ -159,19 +192,26 @@ class ResultStore:
 
     def export_parquet(self, path: str | Path) -> int:
         """Write every row to a Parquet file (needs pyarrow); returns the number of rows."""
-        try:
-            import pyarrow as pa
-            import pyarrow.parquet as pq
-        except ImportError:
-            raise ProblemError(
-                "Parquet export needs pyarrow, which is not installed: pip install pyarrow "
-                "(or use --export-csv)"
-            ) from None
+        require_pyarrow()
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
         rows = self.rows()
         columns = {c: [row[c] for row in rows] for c in self._columns}
         table = pa.table({c: pa.array(v, type=_arrow_type(pa, v)) for c, v in columns.items()})
         pq.write_table(table, str(path))
         return len(rows)
+
+
+def require_pyarrow() -> None:
+    """Raise :class:`ProblemError` when pyarrow (needed for Parquet export) is missing."""
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        raise ProblemError(
+            "Parquet export needs pyarrow, which is not installed: pip install pyarrow "
+            "(or use --export-csv)"
+        ) from None
 
 
 def _quote(name: str) -> str:
