@@ -349,3 +349,15 @@ def test_generated_agnostic_covers_every_pair_in_free_space() -> None:
     hand = coverage_report(bundled_table("handwritten")).totals()
     assert totals["covered"] == totals["replaceable"] == 3402
     assert hand["covered"] < totals["covered"]
+
+
+def test_unknown_objective_in_a_table_header_is_a_table_error() -> None:
+    from dataclasses import replace
+
+    from selfrepair.coverage import coverage_report
+    from selfrepair.errors import TableError
+    from selfrepair.table import bundled_table
+
+    table = replace(bundled_table("handwritten"), parameters={"objective": "foo"})
+    with pytest.raises(TableError, match="objective"):
+        coverage_report(table, faults="singles")

@@ -243,6 +243,39 @@ def test_unknown_strategy_is_a_problem_error() -> None:
         run_mission(MissionSpec(maze, route.start, route.goal, strategy="pray"))
 
 
+@pytest.mark.parametrize("strategy", ["replacement", "lookahead"])
+def test_a_table_of_another_domain_is_a_problem_error(strategy: str) -> None:
+    maze = load_bundled("narrow-short")
+    route = bundled_routes("narrow-short")[0]
+    spec = MissionSpec(
+        maze, route.start, route.goal, strategy=strategy,
+        options=StrategyOptions(table="three-action"),
+    )  # fmt: skip
+    with pytest.raises(ProblemError, match="'three-action' domain"):
+        run_mission(spec)
+
+
+def test_negative_seed_is_a_problem_error() -> None:
+    maze = load_bundled("narrow-short")
+    route = bundled_routes("narrow-short")[0]
+    with pytest.raises(ProblemError, match="seed"):
+        MissionSpec(maze, route.start, route.goal, seed=-1)
+
+
+def test_one_off_costs_stay_out_of_the_first_repair() -> None:
+    """The first table hit of a process on a fresh maze must not be charged for building the
+    maze's free-cell set (slow on a large maze): run_mission builds it before any clock starts,
+    even in a mission that never repairs."""
+    from selfrepair.replacement import _FREE_SETS
+
+    maze = Maze(np.zeros((30, 30), dtype=bool))
+    spec = MissionSpec(maze, Pose(5, 15, Heading.E), (25, 15), strategy="replacement")
+    _FREE_SETS.clear()
+    result = run_mission(spec)
+    assert result.reached and not result.repairs
+    assert id(maze) in _FREE_SETS
+
+
 def test_metrics_helpers() -> None:
     assert plan_distance("aabc", "abd").total == 3
     assert plan_distance("aabc", "abd").removed == 2

@@ -217,3 +217,25 @@ def test_docs_show_table_one_as_bundled() -> None:
     for entry in table.entries:
         shown = " ".join(entry.candidates[0]) if entry.candidates else "(no replacement)"
         assert f"| {entry.action} (" in doc and f") | {shown} |" in doc
+
+
+def test_guard_skips_a_candidate_that_reuses_an_action_being_replaced() -> None:
+    """FL:F disables FFFF and FBFB. FFFF's candidate turns around with FBFB, which is replaced
+    in turn; FBFB's first candidate uses FFFF, the action being replaced, so the guard must skip
+    it for the second. Without the guard the search would recurse into FFFF again and return a
+    different, deeper replacement."""
+    ffff, fbfb = A("FFFF"), A("FBFB")
+    table = ReplacementTable(
+        "four-wheel",
+        "fault-agnostic",
+        "hand",
+        (
+            TableEntry(ffff, (_seq("FBFB FBFB BBBB FBFB FBFB"),)),
+            TableEntry(fbfb, (_seq("FFFF BBBB SBSB"), _seq("SBSB"))),
+        ),
+    )
+    hit = find_replacement(
+        FOUR_WHEEL, table, ffff, ORIGIN, F("FL:F"), OPEN.all_free, mode="guarded", max_depth=5
+    )
+    assert hit is not None
+    assert hit.actions == _seq("SBSB SBSB BBBB SBSB SBSB") and hit.depth == 1

@@ -142,3 +142,21 @@ def test_a_table_object_is_named_so_the_header_can_be_run_again(tmp_path: Path) 
     header = read_trace(path).header
     assert header["options"]["table"] == "handwritten"
     assert run_mission(spec_from_header(header)).reached
+
+
+@pytest.mark.parametrize("field", ["options", "planner", "schedule"])
+def test_header_field_of_the_wrong_type_is_a_trace_error(trace_file: Path, field: str) -> None:
+    lines = trace_file.read_text().splitlines()
+    header = json.loads(lines[0])
+    header[field] = [1]
+    with pytest.raises(TraceError, match="header"):
+        replay(parse_trace("\n".join([json.dumps(header), *lines[1:]])))
+
+
+def test_replay_checks_known_faults_under_detection_now(tmp_path: Path) -> None:
+    path = tmp_path / "now.jsonl"
+    write_trace(_mission("now"), path)
+    assert replay(path).ok
+    _edit(path, 5, known=["FL:F", "RL:F"])  # a claim the sensors never made
+    report = replay(path)
+    assert not report.ok and report.first_bad_step == 4 and "senses" in report.reason

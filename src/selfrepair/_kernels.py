@@ -581,6 +581,18 @@ def grid_search(
     return status, tuple(zip(xs, ys, strict=True)), expansions
 
 
+_WARM = False
+
+
+def ensure_warm() -> None:
+    """Run :func:`warm_up` once per process, so a caller can keep the one-off cost of loading
+    (or compiling) the kernels out of what it times."""
+    global _WARM
+    if not _WARM:
+        warm_up()
+        _WARM = True
+
+
 def warm_up() -> int:
     """Compile (or load from the cache) every kernel on a tiny maze; returns nanoseconds taken."""
     from selfrepair.grid import grid_astar

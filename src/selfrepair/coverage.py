@@ -43,11 +43,13 @@ import numpy as np
 import numpy.typing as npt
 
 from selfrepair.domain import Domain, get_domain
+from selfrepair.errors import TableError
 from selfrepair.maze import Maze
 from selfrepair.replacement import find_replacement
 from selfrepair.robot import Heading, Pose, relative_cell
 from selfrepair.table import ReplacementTable
 from selfrepair.tablesearch import (
+    OBJECTIVES,
     candidate_cost,
     class_costs,
     class_of,
@@ -633,6 +635,11 @@ def coverage_report(
     ``parameters``), else ``duration``."""
     dom = get_domain(table.domain)
     objective = objective or str(table.parameters.get("objective", "duration"))
+    if objective not in OBJECTIVES:
+        raise TableError(
+            f"expected an objective from {', '.join(OBJECTIVES)}, got {objective!r}",
+            source=table.source,
+        )
     fault_sets = scope_fault_sets(dom, faults)
     rows, pairs = free_space(table, fault_sets, objective, mode)
     walls = tuple(wall_coverage(table, maze, fault_sets, name) for name, maze in mazes)

@@ -264,7 +264,8 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
             initial_faults_known=bool(header.get("initial_faults_known", False)),
             max_steps=header.get("max_steps"),
         )
-    except (KeyError, TypeError, ValueError) as exc:
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        # AttributeError: a field that must be an object (options, planner, schedule) is not
         if isinstance(exc, InputError):
             raise
         raise TraceError(f"expected a complete header: {exc!r}", source=source, line=1) from None
@@ -292,11 +293,12 @@ def replay(trace: Trace | str | Path) -> ReplayReport:
     """Re-simulate every step of ``trace`` and report the first one that does not hold.
 
     Every step must start where the previous one ended and use an action available under the
-    faults it recorded as known. A moving step must also be allowed by the true faults of the
-    schedule at that step, sweep only free cells, and end at the pose and after the duration that
-    :func:`selfrepair.robot.step` gives. A failed attempt must use an action the true faults
-    forbid, stay put and last one tick. The summary, when present, must agree on the number of
-    steps, the final pose, the ticks and whether the goal was reached.
+    faults it recorded as known; with detection ``now`` those must be the faults the sensors
+    report at that step (the true ones). A moving step must also be allowed by the true faults
+    of the schedule at that step, sweep only free cells, and end at the pose and after the
+    duration that :func:`selfrepair.robot.step` gives. A failed attempt must use an action the
+    true faults forbid, stay put and last one tick. The summary, when present, must agree on the
+    number of steps, the final pose, the ticks and whether the goal was reached.
     """
     if not isinstance(trace, Trace):
         trace = read_trace(trace)
@@ -320,6 +322,11 @@ def _check_step(
     if step.start != pose:
         return f"starts at {step.start}, but the robot is at {pose}"
     true = spec.schedule.active_faults(index, ticks, spec.seed)
+    if spec.schedule.detection == "now" and step.known != true:
+        return (
+            f"records the known faults {robot.format_faults(step.known) or 'none'}, but with "
+            f"detection 'now' the robot senses {robot.format_faults(true) or 'none'}"
+        )
     if not robot.available(step.action, step.known):
         return f"{step.action} uses a known-faulty command ({robot.format_faults(step.known)})"
     if step.source == "failed-attempt":
