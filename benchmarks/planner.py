@@ -3,11 +3,11 @@
 On each shared MovingAI maze map (corridor widths 1, 4 and 32), ``--queries`` scenario lines
 spread evenly over the file are solved by
 
-* ``selfrepair.grid.grid_astar`` (8-connected, MovingAI rules, numba backend),
+* ``selfrepair.search.grid.grid_astar`` (8-connected, MovingAI rules, numba backend),
 * ``nano_astar.astar`` (C++; its defaults are MovingAI's rules), on the same queries,
 * ``networkx.astar_path`` with the octile heuristic on a prebuilt graph, on every
   ``len/--networkx-queries``-th of those queries (it is slow; the ratio uses the same queries),
-* ``selfrepair.planner.plan`` for the healthy robot from the same start cell (facing east) to the
+* ``selfrepair.search.lattice.plan`` for the healthy robot from the same start cell (facing east) to the
   same goal cell, with clearance weight 0 and with weight ``--weight``.
 
 Each timing (ours and the peers' alike) is the best of ``--repeats`` runs of one query; the tables
@@ -42,14 +42,16 @@ import nano_astar
 import networkx as nx
 import numpy as np
 
-from selfrepair import _kernels
 from selfrepair.cli.planning import sample_indices
-from selfrepair.grid import SQRT2, grid_astar
-from selfrepair.maze import Maze
-from selfrepair.movingai import ScenarioQuery, load_map, load_scenario
-from selfrepair.planner import PlanningProblem, plan
-from selfrepair.robot import Heading, Pose
-from selfrepair.search import PlanStatus
+from selfrepair.geometry import Heading, Pose
+from selfrepair.search.astar import PlanStatus
+from selfrepair.search.backend import numba_available
+from selfrepair.search.grid import grid_astar
+from selfrepair.search.lattice import plan
+from selfrepair.search.problem import SQRT2, PlanningProblem
+from selfrepair.search.warmup import warm_up
+from selfrepair.world.maze import Maze
+from selfrepair.world.movingai import ScenarioQuery, load_map, load_scenario
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "tests" / "data" / "movingai"
@@ -72,7 +74,7 @@ def compile_seconds() -> float:
     """Numba compile time of every kernel, in a fresh process with an empty cache."""
     with tempfile.TemporaryDirectory() as cache:
         env = {**os.environ, "NUMBA_CACHE_DIR": cache}
-        code = "from selfrepair import _kernels; print(_kernels.warm_up())"
+        code = "from selfrepair.search.warmup import warm_up; print(warm_up())"
         out = subprocess.run(
             [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
         )
@@ -225,10 +227,10 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=OUT)
     args = parser.parse_args()
-    if not _kernels.NUMBA:
+    if not numba_available():
         sys.exit("numba is not installed: the benchmark measures the compiled backend")
     compile_s = compile_seconds()
-    cache_load_s = _kernels.warm_up() / 1e9
+    cache_load_s = warm_up() / 1e9
     print(f"numba compile (empty cache) {compile_s:.2f} s, load from cache {cache_load_s:.2f} s")
     maps = []
     for name in MAPS:

@@ -25,15 +25,18 @@ import platform
 import time
 from pathlib import Path
 
-from selfrepair import robot
-from selfrepair.bundled import bundled_routes, load_bundled, maze_names
-from selfrepair.executor import MissionSpec, run_mission
-from selfrepair.faultmodel import FaultSchedule
-from selfrepair.maze import Maze
-from selfrepair.metrics import latency_stats
-from selfrepair.movingai import load_map, load_scenario
-from selfrepair.planner import PlanningProblem, PlanStatus, plan
-from selfrepair.robot import Heading, Pose
+from selfrepair.execution.executor import run_mission
+from selfrepair.execution.faults import FaultSchedule
+from selfrepair.execution.metrics import latency_stats
+from selfrepair.execution.result import MissionSpec
+from selfrepair.geometry import Heading, Pose
+from selfrepair.robots import four_wheel
+from selfrepair.search.astar import PlanStatus
+from selfrepair.search.lattice import plan
+from selfrepair.search.problem import PlanningProblem
+from selfrepair.world.bundled import bundled_routes, load_bundled, maze_names
+from selfrepair.world.maze import Maze
+from selfrepair.world.movingai import load_map, load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 MAP_CANDIDATES = (
@@ -42,15 +45,15 @@ MAP_CANDIDATES = (
 )
 
 
-def fault_sets(quick: bool) -> list[frozenset[robot.Fault]]:
+def fault_sets(quick: bool) -> list[frozenset[four_wheel.Fault]]:
     """Every single fault, and every third double fault (every sixth with ``--quick``)."""
-    singles = [frozenset({f}) for f in robot.SINGLE_FAULTS]
-    doubles = list(robot.DOUBLE_FAULTS[:: 6 if quick else 3])
+    singles = [frozenset({f}) for f in four_wheel.SINGLE_FAULTS]
+    doubles = list(four_wheel.DOUBLE_FAULTS[:: 6 if quick else 3])
     return singles + doubles
 
 
 def collect(
-    maze: Maze, routes: list[tuple[Pose, tuple[int, int]]], faults: list[frozenset[robot.Fault]]
+    maze: Maze, routes: list[tuple[Pose, tuple[int, int]]], faults: list[frozenset[four_wheel.Fault]]
 ) -> dict[str, list[int]]:
     """Latencies of table hits and of replans over every route and fault set."""
     hits: list[int] = []

@@ -7,7 +7,7 @@ class costs and enumerations are rebuilt every time, since each call builds its 
   target under 10 s on this machine;
 * full **fault-agnostic** generation (K = 5), with priority ``cost`` and ``walls``;
 * as a peer in the same run, the **exact optimum** for every (fault set, disabled action) pair
-  (:func:`selfrepair.coverage.optimal_replacements`, Dijkstra with no length limit): the indexed
+  (:func:`selfrepair.repair.coverage.optimal_replacements`, Dijkstra with no length limit): the indexed
   generator must not be much slower than merely computing the answers it has to contain;
 * **lookup** time of ``ReplacementTable.candidates`` on the same random single-fault keys for
   tables of 81, 324 and 3402 entries (O(1): the per-lookup time must not grow with the number
@@ -30,11 +30,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-from selfrepair.bundled import load_bundled, maze_names
-from selfrepair.coverage import coverage_report, optimal_replacements
-from selfrepair.domain import FOUR_WHEEL
-from selfrepair.table import ReplacementTable, bundled_table, dump_table
-from selfrepair.tablegen import GenerateOptions, generate_table
+from selfrepair.repair.coverage import coverage_report, optimal_replacements
+from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.tables.fileformat import bundled_table, dump_table
+from selfrepair.tables.generate import generate_table
+from selfrepair.tables.model import GenerateOptions, ReplacementTable
+from selfrepair.world.bundled import load_bundled, maze_names
 
 RESULTS = Path(__file__).parent / "results" / "tablegen.json"
 

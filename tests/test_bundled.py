@@ -8,11 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from selfrepair import bundled
 from selfrepair.errors import InputError
-from selfrepair.maze import Maze, clearance_map, save_maze
-from selfrepair.mazegen import generate_maze
-from selfrepair.robot import ACTIONS, Heading, MotionKind, Pose, step
+from selfrepair.geometry import Heading, Pose
+from selfrepair.robots.four_wheel import ACTIONS, MotionKind, step
+from selfrepair.world import bundled
+from selfrepair.world.maze import Maze, clearance_map, save_maze
+from selfrepair.world.mazegen import generate_maze
 
 NAMES = bundled.maze_names()
 
@@ -157,7 +158,7 @@ def test_unknown_name_lists_the_known_ones() -> None:
 
 
 def test_bundled_data_is_package_data() -> None:
-    data = Path(bundled.__file__).parent / "data" / "mazes"
+    data = Path(bundled.__file__).parent.parent / "data" / "mazes"
     files = sorted(p.name for p in data.iterdir())
     assert files == sorted([f"{n}.maze" for n in NAMES] + [f"{n}.routes" for n in NAMES])
     assert all(np.array_equal(bundled.load_bundled(n).walls[0], np.ones(

@@ -10,7 +10,7 @@ import pytest
 
 from selfrepair.cli import main
 from selfrepair.cli.planning import check_scenarios, sample_indices
-from selfrepair.search import numba_available
+from selfrepair.search.backend import numba_available
 
 DATA = Path(__file__).parent / "data" / "movingai"
 MAPS = ["maze512-1-0", "maze512-4-0", "maze512-32-9"]

@@ -7,12 +7,13 @@ from pathlib import Path
 
 import pytest
 
-from selfrepair import bundled
 from selfrepair.cli import main
-from selfrepair.maze import format_maze, load_maze, parse_maze
-from selfrepair.mazegen import generate_maze
-from selfrepair.render import render_ascii, route_layers
-from selfrepair.robot import ACTIONS
+from selfrepair.robots.four_wheel import ACTIONS
+from selfrepair.world import bundled
+from selfrepair.world.loading import load_maze
+from selfrepair.world.maze import format_maze, parse_maze
+from selfrepair.world.mazegen import generate_maze
+from selfrepair.world.render import render_ascii, route_layers
 
 
 def run(capsys: pytest.CaptureFixture[str], *argv: str) -> tuple[int, str, str]:

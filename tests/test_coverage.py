@@ -14,9 +14,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from selfrepair import robot
 from selfrepair.cli import main
-from selfrepair.coverage import (
+from selfrepair.geometry import Heading, Pose
+from selfrepair.repair.coverage import (
     compose,
     coverage_report,
     effect,
@@ -26,11 +26,13 @@ from selfrepair.coverage import (
     reachable,
     wall_coverage,
 )
-from selfrepair.domain import FOUR_WHEEL, THREE_ACTION, Domain, run_open
-from selfrepair.maze import parse_maze
-from selfrepair.replacement import find_replacement
-from selfrepair.robot import Heading, Pose
-from selfrepair.table import bundled_table
+from selfrepair.repair.replacement import find_replacement
+from selfrepair.robots import four_wheel
+from selfrepair.robots.domain import Domain, run_open
+from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.robots.three_action import THREE_ACTION
+from selfrepair.tables.fileformat import bundled_table
+from selfrepair.world.maze import parse_maze
 
 ORIGIN = Pose(0, 0, Heading.N)
 
@@ -40,11 +42,11 @@ ORIGIN = Pose(0, 0, Heading.N)
 
 @given(
     start=st.builds(Pose, st.integers(-5, 5), st.integers(-5, 5), st.sampled_from(list(Heading))),
-    first=st.lists(st.sampled_from(robot.ACTIONS), max_size=5),
-    second=st.lists(st.sampled_from(robot.ACTIONS), max_size=5),
+    first=st.lists(st.sampled_from(four_wheel.ACTIONS), max_size=5),
+    second=st.lists(st.sampled_from(four_wheel.ACTIONS), max_size=5),
 )
 def test_compose_and_inverse_match_the_model(
-    start: Pose, first: list[robot.Action], second: list[robot.Action]
+    start: Pose, first: list[four_wheel.Action], second: list[four_wheel.Action]
 ) -> None:
     mid = run_open(FOUR_WHEEL, start, first)
     end = run_open(FOUR_WHEEL, mid, second)
@@ -58,17 +60,17 @@ def test_compose_and_inverse_match_the_model(
 # --- reachability, against breadth-first search in a box ---------------------------------------
 
 
-_STEP_CACHE: dict[tuple[Pose, robot.Action], Pose] = {}
+_STEP_CACHE: dict[tuple[Pose, four_wheel.Action], Pose] = {}
 
 
-def _step(pose: Pose, action: robot.Action) -> Pose:
+def _step(pose: Pose, action: four_wheel.Action) -> Pose:
     nxt = _STEP_CACHE.get((pose, action))
     if nxt is None:
-        nxt = _STEP_CACHE[(pose, action)] = robot.step(pose, action)[0]
+        nxt = _STEP_CACHE[(pose, action)] = four_wheel.step(pose, action)[0]
     return nxt
 
 
-def _box_reachable(moves: list[robot.Action], radius: int) -> set[Pose]:
+def _box_reachable(moves: list[four_wheel.Action], radius: int) -> set[Pose]:
     """Every pose that a non-empty sequence of ``moves`` staying within the box reaches."""
     seen: set[Pose] = set()
     queue = []
@@ -88,13 +90,13 @@ def _box_reachable(moves: list[robot.Action], radius: int) -> set[Pose]:
 
 
 def test_reachable_matches_box_search_for_every_motion_subset() -> None:
-    fastest = robot.fastest_by_motion()
-    motions = list(robot.MOTIONS)
-    targets = [robot.step(ORIGIN, fastest[m])[0] for m in motions]
+    fastest = four_wheel.fastest_by_motion()
+    motions = list(four_wheel.MOTIONS)
+    targets = [four_wheel.step(ORIGIN, fastest[m])[0] for m in motions]
     for size in range(len(motions) + 1):
         for subset in itertools.combinations(motions, size):
             moves = [fastest[m] for m in subset]
-            gens = [effect(ORIGIN, robot.step(ORIGIN, a)[0]) for a in moves]
+            gens = [effect(ORIGIN, four_wheel.step(ORIGIN, a)[0]) for a in moves]
             found = _box_reachable(moves, 4)
             for target in targets:
                 assert reachable(gens, effect(ORIGIN, target)) == (target in found), (
@@ -124,15 +126,15 @@ def test_reachable_special_cases() -> None:
 
 
 @functools.cache
-def _independent_optimum(faults: frozenset[robot.Fault], objective: str) -> dict[str, Fraction]:
+def _independent_optimum(faults: frozenset[four_wheel.Fault], objective: str) -> dict[str, Fraction]:
     """Uniform-cost search over raw actions inside a 7x7 box; costs in exact fractions."""
-    moves = [a for a in robot.ACTIONS if robot.available(a, faults)]
+    moves = [a for a in four_wheel.ACTIONS if four_wheel.available(a, faults)]
 
-    def cost(a: robot.Action) -> Fraction:
+    def cost(a: four_wheel.Action) -> Fraction:
         return a.duration if objective == "duration" else Fraction(1)
 
     best: dict[Pose, Fraction] = {}
-    heap = [(cost(a), i, robot.step(ORIGIN, a)[0]) for i, a in enumerate(moves)]
+    heap = [(cost(a), i, four_wheel.step(ORIGIN, a)[0]) for i, a in enumerate(moves)]
     heapq.heapify(heap)
     counter = itertools.count(len(heap))
     while heap:
@@ -145,9 +147,9 @@ def _independent_optimum(faults: frozenset[robot.Fault], objective: str) -> dict
             if max(abs(nxt.x), abs(nxt.y)) <= 3 and nxt not in best:
                 heapq.heappush(heap, (c + cost(a), next(counter), nxt))
     return {
-        a.code: best[robot.step(ORIGIN, a)[0]]
-        for a in robot.ACTIONS
-        if not robot.available(a, faults)
+        a.code: best[four_wheel.step(ORIGIN, a)[0]]
+        for a in four_wheel.ACTIONS
+        if not four_wheel.available(a, faults)
     }
 
 
@@ -155,7 +157,7 @@ def _independent_optimum(faults: frozenset[robot.Fault], objective: str) -> dict
     "faults", list(FOUR_WHEEL.fault_sets[:12]) + list(FOUR_WHEEL.fault_sets[12::13])
 )
 @pytest.mark.parametrize("objective", ["duration", "length"])
-def test_optimum_matches_independent_search(faults: frozenset[robot.Fault], objective: str) -> None:
+def test_optimum_matches_independent_search(faults: frozenset[four_wheel.Fault], objective: str) -> None:
     found = {a.code: c for a, c in optimal_replacements(FOUR_WHEEL, faults, objective).items()}
     assert found == _independent_optimum(faults, objective)
 
@@ -174,7 +176,7 @@ def test_three_action_optimum() -> None:
 
 
 def _independent_rows(
-    table_name: str, fault_sets: list[frozenset[robot.Fault]]
+    table_name: str, fault_sets: list[frozenset[four_wheel.Fault]]
 ) -> list[tuple[int, int, int]]:
     """(disabled, covered, optimal) per fault set: first candidate whose actions are all
     available (flat), its duration against the independent optimum."""
@@ -184,11 +186,11 @@ def _independent_rows(
         optimum = _independent_optimum(faults, "duration")
         covered = optimal = 0
         for code, best in optimum.items():
-            action = robot.parse_action(code)
+            action = four_wheel.parse_action(code)
             usable = [
                 c
                 for c in table.candidates(action, faults)
-                if action not in c and all(robot.available(b, faults) for b in c)
+                if action not in c and all(four_wheel.available(b, faults) for b in c)
             ]
             if usable:
                 covered += 1
@@ -230,7 +232,7 @@ def test_generated_indexed_meets_the_targets() -> None:
 
 def test_excess_is_relative_to_the_optimum() -> None:
     table = bundled_table("handwritten")
-    faults = frozenset({robot.parse_fault("FL:F")})
+    faults = frozenset({four_wheel.parse_fault("FL:F")})
     (row,) = free_space_rows(table, [faults])
     optimum = optimal_replacements(FOUR_WHEEL, faults)
     excess = Fraction(0)
@@ -354,9 +356,9 @@ def test_generated_agnostic_covers_every_pair_in_free_space() -> None:
 def test_unknown_objective_in_a_table_header_is_a_table_error() -> None:
     from dataclasses import replace
 
-    from selfrepair.coverage import coverage_report
     from selfrepair.errors import TableError
-    from selfrepair.table import bundled_table
+    from selfrepair.repair.coverage import coverage_report
+    from selfrepair.tables.fileformat import bundled_table
 
     table = replace(bundled_table("handwritten"), parameters={"objective": "foo"})
     with pytest.raises(TableError, match="objective"):

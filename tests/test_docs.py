@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from selfrepair import bundled
 from selfrepair.cli import basics
-from selfrepair.render import render_ascii, route_layers
+from selfrepair.world import bundled
+from selfrepair.world.render import render_ascii, route_layers
 
 DOCS = Path(__file__).parent.parent / "docs"
 

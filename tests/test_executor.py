@@ -10,19 +10,28 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from selfrepair import robot
-from selfrepair.bundled import bundled_routes, load_bundled
-from selfrepair.domain import FOUR_WHEEL
 from selfrepair.errors import ProblemError
-from selfrepair.executor import STATUSES, MissionResult, MissionSpec, run_mission
-from selfrepair.faultmodel import FaultEvent, FaultSchedule
-from selfrepair.maze import Maze
-from selfrepair.metrics import ROW_COLUMNS, latency_stats, plan_distance
-from selfrepair.planner import PlanningProblem, PlanStatus, plan
-from selfrepair.replacement import RECURSION_MODES
-from selfrepair.robot import Heading, Pose
-from selfrepair.strategies import STRATEGIES, StrategyOptions
-from selfrepair.trace import parse_trace, replay, trace_lines
+from selfrepair.execution.executor import run_mission
+from selfrepair.execution.faults import FaultEvent, FaultSchedule
+from selfrepair.execution.metrics import (
+    ROW_COLUMNS,
+    executed_cost,
+    latency_stats,
+    mission_row,
+    plan_distance,
+)
+from selfrepair.execution.result import STATUSES, MissionResult, MissionSpec
+from selfrepair.execution.trace import parse_trace, replay, trace_lines
+from selfrepair.geometry import Heading, Pose
+from selfrepair.repair.replacement import RECURSION_MODES
+from selfrepair.repair.strategies import STRATEGIES, StrategyOptions
+from selfrepair.robots import four_wheel
+from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.search.astar import PlanStatus
+from selfrepair.search.lattice import plan
+from selfrepair.search.problem import PlanningProblem
+from selfrepair.world.bundled import bundled_routes, load_bundled
+from selfrepair.world.maze import Maze
 
 FAULT_SETS = (frozenset(), *FOUR_WHEEL.fault_sets)
 PROPERTY = settings(
@@ -87,13 +96,13 @@ def _check_mission(result: MissionResult) -> None:
         if step.source == "failed-attempt":
             assert step.start == step.end
             continue
-        assert robot.available(step.action, step.known), "used a known-faulty action"
-        end, swept, duration = robot.step(step.start, step.action)
+        assert four_wheel.available(step.action, step.known), "used a known-faulty action"
+        end, swept, duration = four_wheel.step(step.start, step.action)
         assert spec.maze.all_free(swept), "swept a wall"
         assert (end, duration) == (step.end, step.duration)
     report = replay(parse_trace("\n".join(trace_lines(result))))
     assert report.ok, str(report)
-    row = result.to_row()
+    row = mission_row(result)
     assert list(row) == list(ROW_COLUMNS)
     assert all(v is None or isinstance(v, int | float | str) for v in row.values())
 
@@ -157,15 +166,15 @@ def test_without_faults_every_strategy_executes_the_initial_plan(route, strategy
     assert result.reached
     assert tuple(s.action for s in result.steps) == result.initial_plan.actions
     assert all(s.source == "plan" for s in result.steps) and not result.repairs
-    assert result.to_row()["plan_distance"] == 0
+    assert mission_row(result)["plan_distance"] == 0
     assert result.ticks == result.initial_plan.duration
 
 
 @PROPERTY
 @given(routes(), st.sampled_from(FAULT_SETS), st.sampled_from(list(RECURSION_MODES)))
 def test_replacement_never_replans_more_than_replan(route, faults, recursion) -> None:  # type: ignore[no-untyped-def]
-    by_replan = run_mission(_spec(route, faults, "replan")).to_row()
-    by_table = run_mission(_spec(route, faults, "replacement", recursion=recursion)).to_row()
+    by_replan = mission_row(run_mission(_spec(route, faults, "replan")))
+    by_table = mission_row(run_mission(_spec(route, faults, "replacement", recursion=recursion)))
     assert by_table["replans"] <= by_replan["replans"] <= 1
     assert by_table["plan_length_before"] == by_replan["plan_length_before"]
 
@@ -173,7 +182,7 @@ def test_replacement_never_replans_more_than_replan(route, faults, recursion) ->
 def test_bundled_mission_with_two_faults() -> None:
     maze = load_bundled("narrow-short")
     route = bundled_routes("narrow-short")[0]
-    faults = robot.parse_faults("FL:F,RR:B")
+    faults = four_wheel.parse_faults("FL:F,RR:B")
     results = {
         s: run_mission(
             MissionSpec(
@@ -185,17 +194,17 @@ def test_bundled_mission_with_two_faults() -> None:
     for result in results.values():
         _check_mission(result)
         assert result.reached
-    assert results["replan"].to_row()["replans"] == 1
-    table_row = results["replacement"].to_row()
+    assert mission_row(results["replan"])["replans"] == 1
+    table_row = mission_row(results["replacement"])
     assert table_row["replacements"] > 0 and table_row["replans"] == 0
     assert table_row["faulty_encounters"] == table_row["replacements"]
-    assert results["lookahead"].to_row()["lookaheads"] > 0
+    assert mission_row(results["lookahead"])["lookaheads"] > 0
     # The faults are known from step 0, so every executed action is healthy, and only the
     # initial plan's faulty actions were replaced.
     steps = results["replacement"].steps
-    assert all(robot.available(s.action, faults) for s in steps)
+    assert all(four_wheel.available(s.action, faults) for s in steps)
     faulty_in_plan = sum(
-        not robot.available(a, faults) for a in results["replacement"].initial_plan.actions
+        not four_wheel.available(a, faults) for a in results["replacement"].initial_plan.actions
     )
     assert table_row["replacements"] == faulty_in_plan
 
@@ -207,21 +216,21 @@ def test_on_use_detection_records_failed_attempts() -> None:
         maze,
         route.start,
         route.goal,
-        schedule=FaultSchedule.permanent(robot.parse_faults("FL:F"), detection="on-use"),
+        schedule=FaultSchedule.permanent(four_wheel.parse_faults("FL:F"), detection="on-use"),
         strategy="replacement",
     )
     result = run_mission(spec)
     _check_mission(result)
     failed = [s for s in result.steps if s.source == "failed-attempt"]
     assert len(failed) == 1 and failed[0].duration == 1
-    assert result.steps[failed[0].step + 1].known == robot.parse_faults("FL:F")
-    assert result.to_row()["failed_attempts"] == 1
+    assert result.steps[failed[0].step + 1].known == four_wheel.parse_faults("FL:F")
+    assert mission_row(result)["failed_attempts"] == 1
 
 
 def test_stuck_when_no_plan_exists_with_the_faults() -> None:
     # With both left wheels stuck at S the left side never drives, so the robot can only turn.
     maze = Maze(np.array([[True, False, True], [True, False, True], [True, False, True]]))
-    faults = robot.parse_faults("FL:F,RL:F,FL:B,RL:B")
+    faults = four_wheel.parse_faults("FL:F,RL:F,FL:B,RL:B")
     spec = MissionSpec(
         maze,
         Pose(1, 2, Heading.N),
@@ -266,7 +275,7 @@ def test_one_off_costs_stay_out_of_the_first_repair() -> None:
     """The first table hit of a process on a fresh maze must not be charged for building the
     maze's free-cell set (slow on a large maze): run_mission builds it before any clock starts,
     even in a mission that never repairs."""
-    from selfrepair.replacement import _FREE_SETS
+    from selfrepair.repair.replacement import _FREE_SETS
 
     maze = Maze(np.zeros((30, 30), dtype=bool))
     spec = MissionSpec(maze, Pose(5, 15, Heading.E), (25, 15), strategy="replacement")
@@ -291,13 +300,13 @@ def test_row_has_exact_and_float_twins() -> None:
         maze,
         route.start,
         route.goal,
-        schedule=FaultSchedule.permanent(robot.parse_faults("FR:F")),
+        schedule=FaultSchedule.permanent(four_wheel.parse_faults("FR:F")),
         clearance_weight=Fraction(1, 3),
     )
     result = run_mission(spec)
-    row = result.to_row()
+    row = mission_row(result)
     cost_after = Fraction(str(row["plan_cost_after"]))
-    assert cost_after == result.executed_cost()
+    assert cost_after == executed_cost(result)
     assert cost_after >= sum(s.duration for s in result.executed)  # penalties are >= 0
     assert row["plan_cost_after_float"] == pytest.approx(float(cost_after))
     assert row["plan_cost_before"] == str(result.initial_plan.cost)
@@ -317,7 +326,7 @@ def test_docs_describe_every_row_column() -> None:
 def test_planning_with_the_faults_known_needs_no_repair() -> None:
     maze = load_bundled("wide-short")
     route = bundled_routes("wide-short")[2]
-    faults = robot.parse_faults("FL:F,RR:B")
+    faults = four_wheel.parse_faults("FL:F,RR:B")
     spec = MissionSpec(
         maze,
         route.start,
@@ -328,7 +337,7 @@ def test_planning_with_the_faults_known_needs_no_repair() -> None:
     result = run_mission(spec)
     _check_mission(result)
     assert result.reached and not result.repairs
-    assert all(robot.available(a, faults) for a in result.initial_plan.actions)
+    assert all(four_wheel.available(a, faults) for a in result.initial_plan.actions)
     blind = run_mission(
         MissionSpec(maze, route.start, route.goal, schedule=FaultSchedule.permanent(faults))
     )
@@ -354,5 +363,5 @@ def test_bundled_routes_under_every_fault_set(name: str) -> None:
                 )
                 result = run_mission(spec)
                 _check_mission(result)
-                rows[strategy] = result.to_row()
+                rows[strategy] = mission_row(result)
             assert rows["replacement"]["replans"] <= rows["replan"]["replans"]

@@ -6,15 +6,15 @@ from fractions import Fraction
 
 import pytest
 
-from selfrepair import robot
 from selfrepair.errors import InputError
-from selfrepair.faultmodel import FaultEvent, FaultSchedule
-from selfrepair.maze import parse_maze
-from selfrepair.robot import Heading, Pose
-from selfrepair.simulator import Simulator
+from selfrepair.execution.faults import FaultEvent, FaultSchedule
+from selfrepair.execution.simulator import Simulator
+from selfrepair.geometry import Heading, Pose
+from selfrepair.robots import four_wheel
+from selfrepair.world.maze import parse_maze
 
-FLF = robot.parse_fault("FL:F")
-RRB = robot.parse_fault("RR:B")
+FLF = four_wheel.parse_fault("FL:F")
+RRB = four_wheel.parse_fault("RR:B")
 CORRIDOR = parse_maze("#####\n#...#\n#####")
 
 
@@ -74,7 +74,7 @@ def test_schedule_json_round_trips() -> None:
 
 def test_simulator_moves_with_the_robot_model() -> None:
     sim = Simulator(CORRIDOR, Pose(1, 1, Heading.E), FaultSchedule())
-    outcome = sim.execute(robot.parse_action("FFSS"))
+    outcome = sim.execute(four_wheel.parse_action("FFSS"))
     assert outcome.status == "moved" and outcome.end == Pose(2, 1, Heading.E)
     assert sim.pose == outcome.end and sim.steps == 1 and sim.ticks == 2
 
@@ -85,7 +85,7 @@ def test_failed_attempt_stays_put_costs_one_tick_and_names_the_fault() -> None:
     )
     assert sim.sense() == frozenset()
     assert sim.true_faults() == {FLF, RRB}
-    outcome = sim.execute(robot.parse_action("FFFF"))
+    outcome = sim.execute(four_wheel.parse_action("FFFF"))
     assert outcome.status == "failed-attempt" and outcome.blocking == {FLF}
     assert sim.pose == Pose(1, 1, Heading.E) and sim.ticks == 1 and sim.steps == 1
 
@@ -93,11 +93,11 @@ def test_failed_attempt_stays_put_costs_one_tick_and_names_the_fault() -> None:
 def test_detection_now_senses_the_active_faults() -> None:
     sim = Simulator(CORRIDOR, Pose(1, 1, Heading.E), FaultSchedule.permanent([FLF], at=1))
     assert sim.sense() == frozenset()
-    sim.execute(robot.parse_action("BFBF"))
+    sim.execute(four_wheel.parse_action("BFBF"))
     assert sim.sense() == {FLF}
 
 
 def test_collision_is_refused() -> None:
     sim = Simulator(CORRIDOR, Pose(1, 1, Heading.N), FaultSchedule())
-    outcome = sim.execute(robot.parse_action("FFFF"))
+    outcome = sim.execute(four_wheel.parse_action("FFFF"))
     assert outcome.status == "collision" and sim.pose == Pose(1, 1, Heading.N) and sim.steps == 0

@@ -12,9 +12,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from selfrepair.errors import ProblemError
-from selfrepair.grid import SQRT2, OctileCost, grid_astar
-from selfrepair.maze import Maze, parse_maze
-from selfrepair.search import PlanStatus, numba_available
+from selfrepair.search.astar import PlanStatus
+from selfrepair.search.backend import numba_available
+from selfrepair.search.grid import grid_astar
+from selfrepair.search.problem import SQRT2, OctileCost
+from selfrepair.world.maze import Maze, parse_maze
 
 BACKENDS = ["python", pytest.param("numba", marks=pytest.mark.skipif(
     not numba_available(), reason="numba not installed"))]  # fmt: skip

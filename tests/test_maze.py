@@ -11,7 +11,8 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from selfrepair.errors import InputError
-from selfrepair.maze import Maze, clearance_map, format_maze, load_maze, parse_maze, save_maze
+from selfrepair.world.loading import load_maze
+from selfrepair.world.maze import Maze, clearance_map, format_maze, parse_maze, save_maze
 
 wall_grids = hnp.arrays(
     dtype=bool,

@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from selfrepair.errors import ProblemError
-from selfrepair.maze import Maze
-from selfrepair.mazegen import generate_maze, room_grid_shape
+from selfrepair.world.maze import Maze
+from selfrepair.world.mazegen import generate_maze, room_grid_shape
 
 options = st.fixed_dictionaries(
     {

@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 from selfrepair.errors import InputError
-from selfrepair.maze import load_maze
-from selfrepair.movingai import load_map, load_scenario, parse_map, parse_scenario
+from selfrepair.world.loading import load_maze
+from selfrepair.world.movingai import load_map, load_scenario, parse_map, parse_scenario
 
 DATA = Path(__file__).parent / "data" / "movingai"
 

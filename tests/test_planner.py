@@ -6,21 +6,15 @@ from fractions import Fraction
 
 import pytest
 
-from selfrepair import robot
 from selfrepair.errors import ProblemError
-from selfrepair.maze import Maze, clearance_map, parse_maze
-from selfrepair.planner import (
-    HEURISTICS,
-    PlanningProblem,
-    PlanResult,
-    PlanStatus,
-    action_cost,
-    plan,
-    plan_cost,
-    planning_motions,
-)
-from selfrepair.robot import Heading, Pose, parse_action, parse_faults, parse_pose
-from selfrepair.search import numba_available
+from selfrepair.geometry import Heading, Pose, parse_pose
+from selfrepair.robots import four_wheel
+from selfrepair.robots.four_wheel import parse_action, parse_faults
+from selfrepair.search.astar import PlanStatus
+from selfrepair.search.backend import numba_available
+from selfrepair.search.lattice import HEURISTICS, action_cost, plan, plan_cost, planning_motions
+from selfrepair.search.problem import PlanningProblem, PlanResult
+from selfrepair.world.maze import Maze, clearance_map, parse_maze
 
 BACKENDS = ["python", pytest.param("numba", marks=pytest.mark.skipif(
     not numba_available(), reason="numba not installed"))]  # fmt: skip
@@ -96,7 +90,7 @@ def test_zoo_optimal_costs(case: tuple, radius: int, backend: str) -> None:
 
 def test_zoo_case_with_faults_uses_only_available_actions() -> None:
     result = solve(CORRIDOR, "0,0,E", "4,0", faults="FL:F")
-    assert all(robot.available(a, parse_faults("FL:F")) for a in result.actions)
+    assert all(four_wheel.available(a, parse_faults("FL:F")) for a in result.actions)
     assert [a.motion.name for a in result.actions].count("backward") == 4
     assert result.duration == 6
 
@@ -191,7 +185,7 @@ def test_action_cost_formula_by_hand() -> None:
     clearance = clearance_map(maze)  # indexed [y, x]; the outside counts as wall
     assert (clearance[1, 1], clearance[1, 2], clearance[2, 1], clearance[2, 2]) == (2, 2, 1, 1)
     pose = parse_pose("1,1,E")
-    arc = robot.fastest_by_motion()[next(m for m in robot.MOTIONS if m.name == "arc-forward-right")]
+    arc = four_wheel.fastest_by_motion()[next(m for m in four_wheel.MOTIONS if m.name == "arc-forward-right")]
     # Sweeps (1,1), (2,1), (1,2), (2,2) with clearances 2, 2, 1, 1: penalty 1 + 1 + 2 + 2 = 6.
     cost = action_cost(maze, pose, arc, clearance_weight=Fraction(1, 4), clearance_radius=3)
     assert cost == arc.duration + Fraction(6, 4) == Fraction(7, 2)
@@ -285,7 +279,7 @@ def test_heuristic_rate_under_slowing_faults() -> None:
 
 
 def test_wait_is_never_a_planning_motion() -> None:
-    assert all(m.kind is not robot.MotionKind.WAIT for m in planning_motions(frozenset()))
+    assert all(m.kind is not four_wheel.MotionKind.WAIT for m in planning_motions(frozenset()))
     assert len(planning_motions(frozenset())) == 8
 
 

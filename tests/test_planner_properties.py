@@ -1,6 +1,6 @@
 """Property tests: the lattice planner against an independent brute-force Dijkstra.
 
-The brute force knows nothing of the planner: it tries all 81 actions with ``robot.step`` at every
+The brute force knows nothing of the planner: it tries all 81 actions with ``four_wheel.step`` at every
 pose, keeps those available under the faults whose swept cells are free, and prices them with the
 cost formula written out here again. Both backends must agree with it and with each other.
 """
@@ -16,11 +16,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from selfrepair import robot
-from selfrepair.maze import Maze, clearance_map
-from selfrepair.planner import HEURISTICS, PlanningProblem, PlanStatus, plan, planning_motions
-from selfrepair.robot import Heading, Pose
-from selfrepair.search import numba_available
+from selfrepair.geometry import Heading, Pose
+from selfrepair.robots import four_wheel
+from selfrepair.search.astar import PlanStatus
+from selfrepair.search.backend import numba_available
+from selfrepair.search.lattice import HEURISTICS, plan, planning_motions
+from selfrepair.search.problem import PlanningProblem
+from selfrepair.world.maze import Maze, clearance_map
 
 
 def brute_force_cost(problem: PlanningProblem) -> Fraction | None:
@@ -28,7 +30,7 @@ def brute_force_cost(problem: PlanningProblem) -> Fraction | None:
     maze = problem.maze
     clearance = clearance_map(maze)
 
-    def cost_of(action: robot.Action, swept: tuple[tuple[int, int], ...]) -> Fraction:
+    def cost_of(action: four_wheel.Action, swept: tuple[tuple[int, int], ...]) -> Fraction:
         shortfall = sum(max(0, problem.clearance_radius - int(clearance[y, x])) for x, y in swept)
         return action.duration + problem.clearance_weight * shortfall
 
@@ -43,10 +45,10 @@ def brute_force_cost(problem: PlanningProblem) -> Fraction | None:
         done.add(pose)
         if pose.cell == problem.goal and problem.goal_heading in (None, pose.heading):
             return g
-        for action in robot.ACTIONS:
-            if not robot.available(action, problem.faults):
+        for action in four_wheel.ACTIONS:
+            if not four_wheel.available(action, problem.faults):
                 continue
-            end, swept, _ = robot.step(pose, action)
+            end, swept, _ = four_wheel.step(pose, action)
             if not all(maze.is_free(x, y) for x, y in swept):
                 continue
             new = g + cost_of(action, swept)
@@ -69,7 +71,7 @@ def problems(draw: st.DrawFn) -> PlanningProblem:
         free = [(0, 0)]
     start = draw(st.sampled_from(free))
     goal = draw(st.sampled_from(free))
-    faults = frozenset(draw(st.lists(st.sampled_from(robot.SINGLE_FAULTS), max_size=3)))
+    faults = frozenset(draw(st.lists(st.sampled_from(four_wheel.SINGLE_FAULTS), max_size=3)))
     return PlanningProblem(
         maze=Maze(walls),
         start=Pose(start[0], start[1], draw(st.sampled_from(list(Heading)))),
@@ -85,8 +87,8 @@ def assert_plan_re_simulates(problem: PlanningProblem, actions: tuple, poses: tu
     pose = problem.start
     assert poses[0] == pose
     for action, expected in zip(actions, poses[1:], strict=True):
-        assert robot.available(action, problem.faults)
-        pose, swept, _ = robot.step(pose, action)
+        assert four_wheel.available(action, problem.faults)
+        pose, swept, _ = four_wheel.step(pose, action)
         assert all(problem.maze.is_free(x, y) for x, y in swept)
         assert pose == expected
     assert pose.cell == problem.goal
@@ -142,7 +144,7 @@ def test_heuristics_are_consistent(problem: PlanningProblem) -> None:
             for heading in Heading:
                 pose = Pose(x, y, heading)
                 for action in motions.values():
-                    end, swept, duration = robot.step(pose, action)
+                    end, swept, duration = four_wheel.step(pose, action)
                     if not problem.maze.all_free(swept):
                         continue
                     penalty = sum(
@@ -162,7 +164,7 @@ def test_heuristics_are_consistent(problem: PlanningProblem) -> None:
 @settings(max_examples=40, deadline=None)
 @given(problems())
 def test_bfs_kernel_equals_python_bfs(problem: PlanningProblem) -> None:
-    from selfrepair.planner import bfs_distances
+    from selfrepair.search.lattice import bfs_distances
 
     python = bfs_distances(problem.maze, problem.goal, backend="python")
     compiled = bfs_distances(problem.maze, problem.goal, backend="numba")

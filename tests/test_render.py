@@ -8,8 +8,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from selfrepair.maze import Maze, format_maze, parse_maze
-from selfrepair.render import (
+from selfrepair.geometry import Heading, Pose
+from selfrepair.world.maze import Maze, format_maze, parse_maze
+from selfrepair.world.render import (
     HEADING_CHARS,
     legend,
     path_layer,
@@ -18,8 +19,7 @@ from selfrepair.render import (
     route_index_char,
     route_layers,
 )
-from selfrepair.robot import Heading, Pose
-from selfrepair.routes import Route
+from selfrepair.world.routes import Route
 
 MAZE = parse_maze("#####\n#...#\n#.#.#\n#####\n")
 

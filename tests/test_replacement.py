@@ -7,27 +7,29 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from selfrepair import robot
-from selfrepair.domain import FOUR_WHEEL, THREE_ACTION
 from selfrepair.errors import ProblemError
-from selfrepair.maze import Maze, parse_maze
-from selfrepair.replacement import (
+from selfrepair.geometry import Heading, Pose
+from selfrepair.repair.replacement import (
     RECURSION_MODES,
     find_replacement,
     flat_replacement_on_grid,
     free_cell_set,
     is_valid_replacement,
 )
-from selfrepair.robot import Heading, Pose
-from selfrepair.table import ReplacementTable, TableEntry, bundled_table
+from selfrepair.robots import four_wheel
+from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.robots.three_action import THREE_ACTION
+from selfrepair.tables.fileformat import bundled_table
+from selfrepair.tables.model import ReplacementTable, TableEntry
+from selfrepair.world.maze import Maze, parse_maze
 
-A = robot.parse_action
-F = robot.parse_faults
+A = four_wheel.parse_action
+F = four_wheel.parse_faults
 OPEN = parse_maze("\n".join(["." * 9] * 9))
 ORIGIN = Pose(4, 4, Heading.N)
 
 
-def _seq(text: str) -> tuple[robot.Action, ...]:
+def _seq(text: str) -> tuple[four_wheel.Action, ...]:
     return tuple(A(t) for t in text.split())
 
 
@@ -147,14 +149,14 @@ def test_bad_arguments_raise() -> None:
 
 
 @st.composite
-def situations(draw: st.DrawFn) -> tuple[Maze, Pose, robot.Action, frozenset[robot.Fault]]:
+def situations(draw: st.DrawFn) -> tuple[Maze, Pose, four_wheel.Action, frozenset[four_wheel.Fault]]:
     seed = draw(st.integers(0, 2**31))
     rng = np.random.default_rng(seed)
     walls = rng.random((7, 7)) < draw(st.sampled_from([0.0, 0.2, 0.4]))
     walls[3, 3] = False
     maze = Maze(walls)
     pose = Pose(3, 3, draw(st.sampled_from(list(Heading))))
-    action = draw(st.sampled_from(robot.ACTIONS))
+    action = draw(st.sampled_from(four_wheel.ACTIONS))
     faults = draw(st.sampled_from(FOUR_WHEEL.fault_sets))
     return maze, pose, action, faults
 

@@ -8,27 +8,24 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from selfrepair import robot
 from selfrepair.errors import InputError
-from selfrepair.robot import (
+from selfrepair.geometry import Heading, Pose, parse_cell, parse_pose
+from selfrepair.robots import four_wheel
+from selfrepair.robots.four_wheel import (
     ACTIONS,
     DOUBLE_FAULTS,
     MOTIONS,
     SINGLE_FAULTS,
     Fault,
-    Heading,
     Mode,
     MotionKind,
-    Pose,
     Wheel,
     available,
     fastest_by_motion,
     format_faults,
     parse_action,
-    parse_cell,
     parse_fault,
     parse_faults,
-    parse_pose,
     step,
 )
 
@@ -36,7 +33,7 @@ N, E, S, W = Heading.N, Heading.E, Heading.S, Heading.W
 ORIGIN = Pose(2, 2, N)
 
 
-def act(code: str) -> robot.Action:
+def act(code: str) -> four_wheel.Action:
     return parse_action(code)
 
 
@@ -160,7 +157,7 @@ def test_there_are_81_actions_and_nine_motions() -> None:
 def test_durations_are_exact_thirds() -> None:
     for a in ACTIONS:
         assert isinstance(a.duration, Fraction)
-        assert (a.duration * robot.TICKS_DENOMINATOR).denominator == 1
+        assert (a.duration * four_wheel.TICKS_DENOMINATOR).denominator == 1
 
 
 # --- properties -----------------------------------------------------------------------------------
@@ -182,7 +179,7 @@ def expected_kind(left: int, right: int) -> MotionKind:
 
 
 @given(actions)
-def test_each_action_falls_in_exactly_the_class_its_drives_say(a: robot.Action) -> None:
+def test_each_action_falls_in_exactly_the_class_its_drives_say(a: four_wheel.Action) -> None:
     assert a.left == a.wheels[0] + a.wheels[2] and a.right == a.wheels[1] + a.wheels[3]
     assert a.motion.kind is expected_kind(a.left, a.right)
 
@@ -209,7 +206,7 @@ def rotate(cell: tuple[int, int], about: tuple[int, int], quarter_turns: int) ->
 
 
 @given(actions, coords, coords, headings, st.integers(0, 3))
-def test_step_is_a_rigid_motion(a: robot.Action, x: int, y: int, h: Heading, k: int) -> None:
+def test_step_is_a_rigid_motion(a: four_wheel.Action, x: int, y: int, h: Heading, k: int) -> None:
     start = Pose(x, y, h)
     end, swept, ticks = step(start, a)
     end_r, swept_r, ticks_r = step(Pose(x, y, h.rotated(k)), a)
@@ -220,7 +217,7 @@ def test_step_is_a_rigid_motion(a: robot.Action, x: int, y: int, h: Heading, k: 
 
 @given(actions, coords, coords, headings, coords, coords)
 def test_step_commutes_with_translation(
-    a: robot.Action, x: int, y: int, h: Heading, dx: int, dy: int
+    a: four_wheel.Action, x: int, y: int, h: Heading, dx: int, dy: int
 ) -> None:
     end, swept, _ = step(Pose(x, y, h), a)
     end_t, swept_t, _ = step(Pose(x + dx, y + dy, h), a)
@@ -229,7 +226,7 @@ def test_step_commutes_with_translation(
 
 
 @given(actions, headings)
-def test_swept_cells_start_with_the_start_and_contain_the_end(a: robot.Action, h: Heading) -> None:
+def test_swept_cells_start_with_the_start_and_contain_the_end(a: four_wheel.Action, h: Heading) -> None:
     start = Pose(0, 0, h)
     end, swept, _ = step(start, a)
     assert swept[0] == start.cell
@@ -276,7 +273,7 @@ def test_fault_format_parse_round_trip(faults: set[Fault]) -> None:
 
 
 @given(actions, st.sets(st.sampled_from(SINGLE_FAULTS), max_size=3))
-def test_available_means_no_faulty_wheel_command(a: robot.Action, faults: set[Fault]) -> None:
+def test_available_means_no_faulty_wheel_command(a: four_wheel.Action, faults: set[Fault]) -> None:
     forbidden = any(a.wheels[f.wheel] is f.mode for f in faults)
     assert available(a, faults) is not forbidden
 

@@ -9,9 +9,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from selfrepair.errors import InputError
-from selfrepair.maze import parse_maze
-from selfrepair.robot import Heading, Pose
-from selfrepair.routes import (
+from selfrepair.geometry import Heading, Pose
+from selfrepair.world.maze import parse_maze
+from selfrepair.world.routes import (
     Route,
     check_route,
     format_routes,

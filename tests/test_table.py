@@ -9,25 +9,24 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from selfrepair import robot
-from selfrepair.domain import FOUR_WHEEL, run_open
 from selfrepair.errors import TableError
-from selfrepair.table import (
-    ReplacementTable,
-    TableEntry,
+from selfrepair.robots import four_wheel
+from selfrepair.robots.domain import run_open
+from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.tables.fileformat import (
     bundled_table,
     bundled_table_names,
-    check_table,
     dump_table,
     load_table,
     parse_table,
 )
+from selfrepair.tables.model import ReplacementTable, TableEntry, check_table
 
-A = robot.parse_action
-F = robot.parse_faults
+A = four_wheel.parse_action
+F = four_wheel.parse_faults
 
 
-def _seq(text: str) -> tuple[robot.Action, ...]:
+def _seq(text: str) -> tuple[four_wheel.Action, ...]:
     return tuple(A(t) for t in text.split())
 
 
@@ -44,12 +43,12 @@ def test_handwritten_table_covers_all_81_actions_by_motion_class() -> None:
         1,
     )
     assert len(table.entries) == 81
-    assert table.actions_with_entries() == frozenset(robot.ACTIONS)
-    by_class: dict[str, set[tuple[robot.Action, ...]]] = {}
+    assert table.actions_with_entries() == frozenset(four_wheel.ACTIONS)
+    by_class: dict[str, set[tuple[four_wheel.Action, ...]]] = {}
     for entry in table.entries:
         assert 4 <= len(entry.candidates) <= 5
         assert all(entry.action not in c for c in entry.candidates)
-        target = robot.step(FOUR_WHEEL.canonical, entry.action)[0]
+        target = four_wheel.step(FOUR_WHEEL.canonical, entry.action)[0]
         for candidate in entry.candidates:
             assert run_open(FOUR_WHEEL, FOUR_WHEEL.canonical, candidate) == target
         by_class.setdefault(entry.action.motion.name, set()).update(entry.candidates)
@@ -231,7 +230,7 @@ _FAULTS = [frozenset(), *FOUR_WHEEL.fault_sets[:12], *FOUR_WHEEL.fault_sets[12:3
         st.lists(st.sampled_from(_FORWARDS), max_size=3, unique=True),
         max_size=8,
     ),
-    st.sets(st.sampled_from(robot.SINGLE_FAULTS), max_size=3),
+    st.sets(st.sampled_from(four_wheel.SINGLE_FAULTS), max_size=3),
 )
 def test_fault_indexed_lookup_properties(index, known_set) -> None:  # type: ignore[no-untyped-def]
     fwd = A("FFFF")

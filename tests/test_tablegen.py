@@ -10,13 +10,14 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from selfrepair import robot
 from selfrepair.cli import main
-from selfrepair.domain import FOUR_WHEEL, THREE_ACTION, run_open
 from selfrepair.errors import ProblemError, TableError
-from selfrepair.table import dump_table, load_table, parse_table
-from selfrepair.tablegen import (
-    GenerateOptions,
+from selfrepair.robots import four_wheel
+from selfrepair.robots.domain import run_open
+from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.robots.three_action import THREE_ACTION
+from selfrepair.tables.fileformat import dump_table, load_table, parse_table
+from selfrepair.tables.generate import (
     Path,
     class_costs,
     enumerate_paths,
@@ -26,6 +27,7 @@ from selfrepair.tablegen import (
     select_diverse,
     verify_entry,
 )
+from selfrepair.tables.model import GenerateOptions
 
 
 def _shipped(name: str) -> str:
@@ -37,7 +39,7 @@ def _shipped(name: str) -> str:
 
 def test_four_wheel_classes_are_the_nine_motions() -> None:
     classes = motion_classes(FOUR_WHEEL)
-    assert len(classes) == len(robot.MOTIONS) == 9
+    assert len(classes) == len(four_wheel.MOTIONS) == 9
     for motion in classes:
         assert {a.motion for a in motion.members} == {motion.members[0].motion}
     assert sum(len(c.members) for c in classes) == 81
@@ -48,10 +50,10 @@ def test_three_action_classes() -> None:
 
 
 @pytest.mark.parametrize("faults", [frozenset(), *FOUR_WHEEL.fault_sets])
-def test_class_costs_pick_what_fastest_by_motion_picks(faults: frozenset[robot.Fault]) -> None:
-    costs = class_costs(FOUR_WHEEL, lambda a: robot.available(a, faults))
+def test_class_costs_pick_what_fastest_by_motion_picks(faults: frozenset[four_wheel.Fault]) -> None:
+    costs = class_costs(FOUR_WHEEL, lambda a: four_wheel.available(a, faults))
     picked = {action.motion: action for _, _, action in costs.values()}
-    assert picked == robot.fastest_by_motion(faults)
+    assert picked == four_wheel.fastest_by_motion(faults)
     for obj, duration, action in costs.values():
         assert obj == duration == action.duration * 3  # durations scaled to thirds of a tick
 
@@ -59,7 +61,7 @@ def test_class_costs_pick_what_fastest_by_motion_picks(faults: frozenset[robot.F
 def test_length_objective_counts_steps_but_keeps_the_fastest_member() -> None:
     costs = class_costs(FOUR_WHEEL, lambda a: True, "length")
     assert {obj for obj, _, _ in costs.values()} == {1}
-    assert {a for _, _, a in costs.values()} == set(robot.fastest_by_motion().values())
+    assert {a for _, _, a in costs.values()} == set(four_wheel.fastest_by_motion().values())
 
 
 def test_scopes() -> None:
@@ -75,8 +77,8 @@ def test_scopes() -> None:
 
 
 @pytest.mark.parametrize("faults", [frozenset(), *FOUR_WHEEL.fault_sets[:12:5]])
-def test_enumerated_paths_resimulate(faults: frozenset[robot.Fault]) -> None:
-    costs = class_costs(FOUR_WHEEL, lambda a: robot.available(a, faults))
+def test_enumerated_paths_resimulate(faults: frozenset[four_wheel.Fault]) -> None:
+    costs = class_costs(FOUR_WHEEL, lambda a: four_wheel.available(a, faults))
     targets = [c.end for c in motion_classes(FOUR_WHEEL)]
     found = enumerate_paths(FOUR_WHEEL, costs, targets, 3)
     start = FOUR_WHEEL.canonical
@@ -89,8 +91,8 @@ def test_enumerated_paths_resimulate(faults: frozenset[robot.Fault]) -> None:
             assert 1 <= len(actions) <= 3
             state, cells = start, set()
             for a in actions:
-                cells.update(robot.swept_cells(state, a))
-                state = robot.step(state, a)[0]
+                cells.update(four_wheel.swept_cells(state, a))
+                state = four_wheel.step(state, a)[0]
             assert state == target
             assert frozenset(cells) == path.footprint
             assert path.duration == sum(a.duration for a in actions) * 3
@@ -160,8 +162,8 @@ def test_fault_indexed_has_one_entry_per_disabled_action() -> None:
     expected = {
         (a, f)
         for f in scope_fault_sets(FOUR_WHEEL, "singles")
-        for a in robot.ACTIONS
-        if not robot.available(a, f)
+        for a in four_wheel.ACTIONS
+        if not four_wheel.available(a, f)
     }
     assert keys == expected
     assert len(keys) == 12 * 27
@@ -222,14 +224,14 @@ def test_three_action_fault_indexed() -> None:
 
 
 def test_verify_entry_rejects_wrong_candidates() -> None:
-    ffff, ffss = robot.parse_action("FFFF"), robot.parse_action("FFSS")
+    ffff, ffss = four_wheel.parse_action("FFFF"), four_wheel.parse_action("FFSS")
     verify_entry(FOUR_WHEEL, ffff, [(ffss,)])
     with pytest.raises(TableError, match="does not end"):
-        verify_entry(FOUR_WHEEL, ffff, [(robot.parse_action("FBFB"),)])
+        verify_entry(FOUR_WHEEL, ffff, [(four_wheel.parse_action("FBFB"),)])
     with pytest.raises(TableError, match="empty or uses"):
         verify_entry(FOUR_WHEEL, ffff, [(ffff,)])
     with pytest.raises(TableError, match="forbidden"):
-        verify_entry(FOUR_WHEEL, ffff, [(ffss,)], frozenset({robot.parse_fault("FR:F")}))
+        verify_entry(FOUR_WHEEL, ffff, [(ffss,)], frozenset({four_wheel.parse_fault("FR:F")}))
 
 
 @pytest.mark.parametrize(
@@ -292,6 +294,6 @@ def test_cli_generate_priority_is_recorded(tmp_path: pathlib.Path) -> None:
 
 def test_no_fault_scope_gives_the_cheapest_other_way_first() -> None:
     table = generate_table(GenerateOptions(faults="none", per_action=2))
-    ffff = robot.parse_action("FFFF")
+    ffff = four_wheel.parse_action("FFFF")
     first = table.candidates(ffff)[0]
     assert len(first) == 1 and first[0].motion == ffff.motion and first[0].duration == 2

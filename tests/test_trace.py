@@ -7,20 +7,27 @@ from pathlib import Path
 
 import pytest
 
-from selfrepair import robot
-from selfrepair.bundled import bundled_routes, load_bundled
 from selfrepair.errors import TraceError
-from selfrepair.executor import MissionResult, MissionSpec, run_mission
-from selfrepair.faultmodel import FaultEvent, FaultSchedule
-from selfrepair.trace import parse_trace, read_trace, replay, spec_from_header, write_trace
+from selfrepair.execution.executor import run_mission
+from selfrepair.execution.faults import FaultEvent, FaultSchedule
+from selfrepair.execution.result import MissionResult, MissionSpec
+from selfrepair.execution.trace import (
+    parse_trace,
+    read_trace,
+    replay,
+    spec_from_header,
+    write_trace,
+)
+from selfrepair.robots import four_wheel
+from selfrepair.world.bundled import bundled_routes, load_bundled
 
 
 def _mission(detection: str = "now", strategy: str = "replacement") -> MissionResult:
     maze = load_bundled("narrow-short")
     route = bundled_routes("narrow-short")[1]
     events = (
-        FaultEvent(robot.parse_fault("FL:F"), at=2),
-        FaultEvent(robot.parse_fault("RR:B"), at=1, persistence="intermittent", probability=0.4),
+        FaultEvent(four_wheel.parse_fault("FL:F"), at=2),
+        FaultEvent(four_wheel.parse_fault("RR:B"), at=1, persistence="intermittent", probability=0.4),
     )
     return run_mission(
         MissionSpec(
@@ -92,8 +99,8 @@ def test_replay_rejects_a_known_faulty_action(trace_file: Path) -> None:
     step = trace.steps[index]
     faulty = next(
         a
-        for a in robot.ACTIONS
-        if not robot.available(a, step.known) and robot.step(step.start, a)[0] == step.end
+        for a in four_wheel.ACTIONS
+        if not four_wheel.available(a, step.known) and four_wheel.step(step.start, a)[0] == step.end
     )
     _edit(trace_file, index + 1, action=faulty.code)
     report = replay(trace_file)
@@ -125,8 +132,8 @@ def test_malformed_traces_raise_with_line(tmp_path: Path, trace_file: Path) -> N
 
 
 def test_a_table_object_is_named_so_the_header_can_be_run_again(tmp_path: Path) -> None:
-    from selfrepair.strategies import StrategyOptions
-    from selfrepair.table import bundled_table
+    from selfrepair.repair.strategies import StrategyOptions
+    from selfrepair.tables.fileformat import bundled_table
 
     maze = load_bundled("narrow-short")
     route = bundled_routes("narrow-short")[0]
@@ -134,7 +141,7 @@ def test_a_table_object_is_named_so_the_header_can_be_run_again(tmp_path: Path) 
         maze,
         route.start,
         route.goal,
-        schedule=FaultSchedule.permanent(robot.parse_faults("FL:F")),
+        schedule=FaultSchedule.permanent(four_wheel.parse_faults("FL:F")),
         options=StrategyOptions(table=bundled_table("handwritten")),
     )
     path = tmp_path / "t.jsonl"

@@ -10,19 +10,20 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from selfrepair import bundled, robot
 from selfrepair.cli._app import app, console, echo, echo_json, maze_app
 from selfrepair.errors import InputError
-from selfrepair.maze import Maze, format_maze, save_maze
-from selfrepair.mazegen import generate_maze
-from selfrepair.render import (
+from selfrepair.robots import four_wheel
+from selfrepair.world import bundled
+from selfrepair.world.maze import Maze, format_maze, save_maze
+from selfrepair.world.mazegen import generate_maze
+from selfrepair.world.render import (
     GOAL_CHAR,
     HEADING_CHARS,
     render_ascii,
     route_index_char,
     route_layers,
 )
-from selfrepair.routes import Route, load_routes
+from selfrepair.world.routes import Route, load_routes
 
 
 def action_rows() -> list[dict[str, object]]:
@@ -36,7 +37,7 @@ def action_rows() -> list[dict[str, object]]:
             "kind": a.motion.kind.value,
             "duration": str(a.duration),
         }
-        for a in robot.ACTIONS
+        for a in four_wheel.ACTIONS
     ]
 
 
@@ -55,18 +56,18 @@ def markdown_action_table() -> str:
 def markdown_single_fault_table() -> str:
     """Per single fault: the motions it removes and those it slows (fastest duration before and
     after), as Markdown. ``docs/robot.md`` shows it and a test keeps the two equal."""
-    healthy = {m: a.duration for m, a in robot.fastest_by_motion().items()}
+    healthy = {m: a.duration for m, a in four_wheel.fastest_by_motion().items()}
     lines = [
         "| fault | actions left | motions lost | motions slowed (ticks) |",
         "|---|---:|---|---|",
     ]
-    for fault in robot.SINGLE_FAULTS:
-        best = robot.fastest_by_motion([fault])
-        left = sum(robot.available(a, [fault]) for a in robot.ACTIONS)
-        lost = [m.name for m in robot.MOTIONS if m not in best]
+    for fault in four_wheel.SINGLE_FAULTS:
+        best = four_wheel.fastest_by_motion([fault])
+        left = sum(four_wheel.available(a, [fault]) for a in four_wheel.ACTIONS)
+        lost = [m.name for m in four_wheel.MOTIONS if m not in best]
         slowed = [
             f"{m.name} {healthy[m]} → {best[m].duration}"
-            for m in robot.MOTIONS
+            for m in four_wheel.MOTIONS
             if m in best and best[m].duration > healthy[m]
         ]
         lines.append(
@@ -78,10 +79,10 @@ def markdown_single_fault_table() -> str:
 def markdown_double_fault_summary() -> str:
     """The 66 double faults grouped by the motions they remove, as Markdown (in the docs)."""
     groups: dict[tuple[str, ...], list[str]] = {}
-    for pair in robot.DOUBLE_FAULTS:
-        best = robot.fastest_by_motion(pair)
-        lost = tuple(m.name for m in robot.MOTIONS if m not in best)
-        groups.setdefault(lost, []).append(robot.format_faults(pair))
+    for pair in four_wheel.DOUBLE_FAULTS:
+        best = four_wheel.fastest_by_motion(pair)
+        lost = tuple(m.name for m in four_wheel.MOTIONS if m not in best)
+        groups.setdefault(lost, []).append(four_wheel.format_faults(pair))
     lines = ["| motions lost | double faults | for example |", "|---|---:|---|"]
     for lost, pairs in sorted(groups.items(), key=lambda kv: (len(kv[0]), kv[0])):
         lines.append(f"| {', '.join(lost) or '–'} | {len(pairs)} | {min(pairs)} |")

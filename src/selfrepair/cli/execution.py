@@ -15,20 +15,23 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from selfrepair import robot
-from selfrepair.bundled import resolve_maze
 from selfrepair.cli._app import app, console, echo, echo_json, table_app
-from selfrepair.domain import get_domain
 from selfrepair.errors import InputError
-from selfrepair.executor import MissionResult, MissionSpec, run_mission
-from selfrepair.faultmodel import CLOCKS, DETECTIONS, FaultEvent, FaultSchedule
-from selfrepair.render import GOAL_CHAR, HEADING_CHARS, render_ascii
-from selfrepair.replacement import RECURSION_MODES
-from selfrepair.robot import Cell
-from selfrepair.strategies import STRATEGIES, StrategyOptions
-from selfrepair.table import check_table, dump_table, resolve_table
-from selfrepair.trace import replay as replay_trace
-from selfrepair.trace import write_trace
+from selfrepair.execution.executor import run_mission
+from selfrepair.execution.faults import CLOCKS, DETECTIONS, FaultEvent, FaultSchedule
+from selfrepair.execution.metrics import mission_row
+from selfrepair.execution.result import MissionResult, MissionSpec
+from selfrepair.execution.trace import replay as replay_trace
+from selfrepair.execution.trace import write_trace
+from selfrepair.geometry import Cell, parse_cell, parse_pose
+from selfrepair.repair.replacement import RECURSION_MODES
+from selfrepair.repair.strategies import STRATEGIES, StrategyOptions
+from selfrepair.robots import four_wheel
+from selfrepair.robots.registry import get_domain
+from selfrepair.tables.fileformat import dump_table, resolve_table
+from selfrepair.tables.model import check_table
+from selfrepair.world.bundled import resolve_maze
+from selfrepair.world.render import GOAL_CHAR, HEADING_CHARS, render_ascii
 
 PLANNED_CHAR = "+"
 EXECUTED_CHAR = "*"
@@ -68,7 +71,7 @@ def build_schedule(
     faults: str, at: int, clock: str, detect: str, transient: int | None, intermittent: float | None
 ) -> FaultSchedule:
     """The fault schedule the ``run`` options describe (one persistence for every fault)."""
-    parsed = sorted(robot.parse_faults(faults, source="--faults"))
+    parsed = sorted(four_wheel.parse_faults(faults, source="--faults"))
     if transient is not None and intermittent is not None:
         raise InputError(
             "expected at most one of --transient and --intermittent", source="--transient"
@@ -100,10 +103,10 @@ def mission_picture(result: MissionResult) -> str:
     planned: dict[Cell, str] = {}
     pose = spec.start
     for action in result.initial_plan.actions:
-        end, swept, _ = robot.step(pose, action)
+        end, swept, _ = four_wheel.step(pose, action)
         planned.update(dict.fromkeys(swept, PLANNED_CHAR))
         pose = end
-    executed = {c: EXECUTED_CHAR for s in result.executed for c in robot.step(s.start, s.action)[1]}
+    executed = {c: EXECUTED_CHAR for s in result.executed for c in four_wheel.step(s.start, s.action)[1]}
     failed = {s.start.cell: FAILED_CHAR for s in result.steps if s.source == "failed-attempt"}
     sites = {r.pose.cell: SITE_CHARS.get(r.repair.source, "?") for r in result.repairs}
     ends = {spec.goal: GOAL_CHAR, spec.start.cell: HEADING_CHARS[spec.start.heading]}
@@ -191,8 +194,8 @@ def run(
         ) from None
     spec = MissionSpec(
         maze=resolve_maze(maze),
-        start=robot.parse_pose(start, source="--start"),
-        goal=robot.parse_cell(goal, source="--goal"),
+        start=parse_pose(start, source="--start"),
+        goal=parse_cell(goal, source="--goal"),
         schedule=build_schedule(faults, at, clock, detect, transient, intermittent),
         strategy=strategy,
         options=StrategyOptions(
@@ -210,7 +213,7 @@ def run(
     result = run_mission(spec)
     if trace is not None:
         write_trace(result, trace)
-    row = result.to_row()
+    row = mission_row(result)
     if as_json:
         echo_json(row)
     else:

@@ -15,17 +15,19 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 
-from selfrepair import robot
-from selfrepair.bundled import resolve_maze
 from selfrepair.cli._app import app, echo, echo_json
 from selfrepair.errors import InputError
-from selfrepair.grid import CONNECTIVITIES, GridResult, grid_astar
-from selfrepair.maze import Maze
-from selfrepair.movingai import ScenarioQuery, load_map, load_scenario
-from selfrepair.planner import HEURISTICS, PlanningProblem, PlanResult, plan
-from selfrepair.render import GOAL_CHAR, path_layer, pose_layer, render_ascii
-from selfrepair.robot import Cell, Heading
-from selfrepair.search import BACKENDS, PlanStatus
+from selfrepair.geometry import Cell, Heading, parse_cell, parse_pose
+from selfrepair.robots import four_wheel
+from selfrepair.search.astar import PlanStatus
+from selfrepair.search.backend import BACKENDS
+from selfrepair.search.grid import grid_astar
+from selfrepair.search.lattice import HEURISTICS, plan
+from selfrepair.search.problem import CONNECTIVITIES, GridResult, PlanningProblem, PlanResult
+from selfrepair.world.bundled import resolve_maze
+from selfrepair.world.maze import Maze
+from selfrepair.world.movingai import ScenarioQuery, load_map, load_scenario
+from selfrepair.world.render import GOAL_CHAR, path_layer, pose_layer, render_ascii
 
 __all__ = [
     "SCEN_TOLERANCE",
@@ -52,9 +54,9 @@ _TimeLimit = Annotated[float | None, typer.Option("--time-limit", help="Time bud
 def parse_goal(text: str) -> tuple[Cell, Heading | None]:
     """Parse ``X,Y`` (any heading) or ``X,Y,H`` into a goal cell and optional heading."""
     if text.count(",") == 2:
-        pose = robot.parse_pose(text, source="--goal")
+        pose = parse_pose(text, source="--goal")
         return pose.cell, pose.heading
-    return robot.parse_cell(text, source="--goal"), None
+    return parse_cell(text, source="--goal"), None
 
 
 def parse_weight(text: str) -> Fraction:
@@ -131,10 +133,10 @@ def plan_command(
     goal_cell, goal_heading = parse_goal(goal)
     problem = PlanningProblem(
         maze=maze,
-        start=robot.parse_pose(start, source="--start"),
+        start=parse_pose(start, source="--start"),
         goal=goal_cell,
         goal_heading=goal_heading,
-        faults=robot.parse_faults(faults, source="--faults"),
+        faults=four_wheel.parse_faults(faults, source="--faults"),
         clearance_weight=parse_weight(clearance_weight),
         clearance_radius=clearance_radius,
     )
@@ -156,7 +158,7 @@ def _print_plan(problem: PlanningProblem, result: PlanResult) -> None:
     swept = [
         cell
         for pose, action in zip(result.poses, result.actions, strict=False)
-        for cell in robot.swept_cells(pose, action)
+        for cell in four_wheel.swept_cells(pose, action)
     ]
     layers = [path_layer(swept), {problem.goal: GOAL_CHAR}, pose_layer(result.poses[:1])]
     echo(render_ascii(problem.maze, layers).rstrip("\n"))
@@ -188,8 +190,8 @@ def path_command(
     if connectivity not in CONNECTIVITIES:
         raise InputError(f"expected 4 or 8, got {connectivity}", source="--connectivity")
     maze = resolve_maze(map_spec)
-    start = robot.parse_cell(source, source="--from")
-    goal = robot.parse_cell(target, source="--to")
+    start = parse_cell(source, source="--from")
+    goal = parse_cell(target, source="--to")
     result = grid_astar(
         maze,
         start,

@@ -10,21 +10,15 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table
 
-from selfrepair.bundled import load_bundled, maze_names, resolve_maze
 from selfrepair.cli._app import console, echo, echo_json, table_app
-from selfrepair.coverage import CoverageReport, coverage_report
 from selfrepair.errors import InputError
-from selfrepair.maze import Maze
-from selfrepair.replacement import RECURSION_MODES
-from selfrepair.table import dump_table, resolve_table
-from selfrepair.tablegen import (
-    FAULT_SCOPES,
-    OBJECTIVES,
-    PRIORITIES,
-    SHAPES,
-    GenerateOptions,
-    generate_table,
-)
+from selfrepair.repair.coverage import CoverageReport, coverage_report
+from selfrepair.repair.replacement import RECURSION_MODES
+from selfrepair.tables.fileformat import dump_table, resolve_table
+from selfrepair.tables.generate import FAULT_SCOPES, OBJECTIVES, generate_table
+from selfrepair.tables.model import PRIORITIES, SHAPES, GenerateOptions
+from selfrepair.world.bundled import load_bundled, maze_names, resolve_maze
+from selfrepair.world.maze import Maze
 
 
 def _choice(value: str, allowed: tuple[str, ...] | list[str], option: str) -> str:

@@ -26,8 +26,8 @@ def animate_trace(
     trace: str | Path, out: str | Path, *, fps: int = 4, max_frames: int = MAX_FRAMES
 ) -> int:
     """Write a GIF of the mission in ``trace`` to ``out``; returns the number of frames."""
+    from selfrepair.execution.trace import read_trace, replay
     from selfrepair.experiment import plots
-    from selfrepair.trace import read_trace, replay
 
     if not str(out).lower().endswith(".gif"):
         raise TraceError("expected an output file ending in .gif", source=str(out))

@@ -47,7 +47,8 @@ from pydantic import (
 )
 
 from selfrepair.errors import ConfigError, InputError
-from selfrepair.robot import parse_cell, parse_faults, parse_pose
+from selfrepair.geometry import parse_cell, parse_pose
+from selfrepair.robots.four_wheel import parse_faults
 
 __all__ = [
     "FAULT_PROFILES",
@@ -76,7 +77,7 @@ class _Frozen(BaseModel):
 
 
 class GeneratedMaze(_Frozen):
-    """Options of :func:`selfrepair.mazegen.generate_maze`."""
+    """Options of :func:`selfrepair.world.mazegen.generate_maze`."""
 
     width: Annotated[int, Field(ge=5, le=1024)]
     height: Annotated[int, Field(ge=5, le=1024)]
@@ -161,7 +162,7 @@ class FaultsConfig(_Frozen):
             return value
         if not value:
             raise ValueError("expected at least one fault set")
-        from selfrepair.robot import format_faults
+        from selfrepair.robots.four_wheel import format_faults
 
         return tuple(format_faults(_reraise(parse_faults, text)) for text in value)
 

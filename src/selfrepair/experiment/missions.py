@@ -37,21 +37,13 @@ from selfrepair.experiment.config import (
     MazeConfig,
     ReplacementStrategy,
 )
-from selfrepair.maze import Maze
-from selfrepair.robot import (
-    DOUBLE_FAULTS,
-    SINGLE_FAULTS,
-    Heading,
-    Pose,
-    format_faults,
-    parse_cell,
-    parse_faults,
-    parse_pose,
-)
-from selfrepair.routes import Route
+from selfrepair.geometry import Heading, Pose, parse_cell, parse_pose
+from selfrepair.robots.four_wheel import DOUBLE_FAULTS, SINGLE_FAULTS, format_faults, parse_faults
+from selfrepair.world.maze import Maze
+from selfrepair.world.routes import Route
 
 if TYPE_CHECKING:
-    from selfrepair.executor import MissionSpec
+    from selfrepair.execution.result import MissionSpec
 
 __all__ = [
     "BUNDLED_TABLES",
@@ -153,7 +145,7 @@ def fault_profile(sets: str | tuple[str, ...]) -> tuple[str, ...]:
 def maze_identity(entry: MazeConfig, base_dir: Path, source: str, index: int) -> dict[str, Any]:
     """What identifies a maze in a mission key (a file is identified by path and content hash)."""
     if entry.bundled is not None:
-        from selfrepair.bundled import maze_names
+        from selfrepair.world.bundled import maze_names
 
         if entry.bundled not in maze_names():
             raise ConfigError(
@@ -196,14 +188,14 @@ def maze_of(identity_json: str) -> Maze:
 def _maze_cached(identity_json: str) -> Maze:
     identity = json.loads(identity_json)
     if "bundled" in identity:
-        from selfrepair.bundled import load_bundled
+        from selfrepair.world.bundled import load_bundled
 
         return load_bundled(identity["bundled"])
     if "file" in identity:
-        from selfrepair.maze import load_maze
+        from selfrepair.world.loading import load_maze
 
         return load_maze(identity["file"])
-    from selfrepair.mazegen import generate_maze
+    from selfrepair.world.mazegen import generate_maze
 
     g = identity["generate"]
     return generate_maze(
@@ -256,7 +248,7 @@ def routes_of(
 ) -> tuple[Route, ...]:
     """The routes of one maze entry: bundled, random (seeded) or explicit (checked free)."""
     if entry.routes == "bundled":
-        from selfrepair.bundled import bundled_routes
+        from selfrepair.world.bundled import bundled_routes
 
         assert entry.bundled is not None
         return bundled_routes(entry.bundled)
@@ -438,13 +430,13 @@ def _short_table(table: Any) -> str | None:
 
 
 def to_spec(mission: Mission) -> MissionSpec:
-    """The executor's :class:`~selfrepair.executor.MissionSpec` for ``mission``.
+    """The executor's :class:`~selfrepair.execution.result.MissionSpec` for ``mission``.
 
     Mazes and tables are loaded once per process (cached), so a worker pays for them once.
     """
-    from selfrepair.executor import MissionSpec
-    from selfrepair.faultmodel import FaultEvent, FaultSchedule
-    from selfrepair.strategies import StrategyOptions
+    from selfrepair.execution.faults import FaultEvent, FaultSchedule
+    from selfrepair.execution.result import MissionSpec
+    from selfrepair.repair.strategies import StrategyOptions
 
     s = mission.settings
     events = tuple(

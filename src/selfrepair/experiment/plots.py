@@ -21,8 +21,9 @@ import numpy as np
 
 from selfrepair.errors import ProblemError
 from selfrepair.experiment.findings import Row, group_label, median, percentile, repairs_of
-from selfrepair.maze import Maze
-from selfrepair.robot import Cell, Pose, step
+from selfrepair.geometry import Cell, Pose
+from selfrepair.robots.four_wheel import step
+from selfrepair.world.maze import Maze
 
 __all__ = [
     "SOURCE_COLOURS",
@@ -376,9 +377,9 @@ class MissionPicture:
 
 
 def picture_from_trace(trace: Any) -> MissionPicture:
-    """A :class:`MissionPicture` from a parsed :class:`selfrepair.trace.Trace`."""
-    from selfrepair.robot import format_faults, parse_action
-    from selfrepair.trace import spec_from_header
+    """A :class:`MissionPicture` from a parsed :class:`selfrepair.execution.trace.Trace`."""
+    from selfrepair.execution.trace import spec_from_header
+    from selfrepair.robots.four_wheel import format_faults, parse_action
 
     spec = spec_from_header(trace.header, trace.source)
     poses = [spec.start]

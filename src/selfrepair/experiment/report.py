@@ -108,11 +108,11 @@ def choose_mission(rows: Sequence[Row]) -> Row:
 
 def _mission_files(row: Row, out_dir: Path) -> list[Path]:
     """Run the chosen mission again, write its trace, picture and GIF."""
-    from selfrepair.executor import run_mission
+    from selfrepair.execution.executor import run_mission
+    from selfrepair.execution.trace import read_trace, write_trace
     from selfrepair.experiment import plots
     from selfrepair.experiment.animate import animate_trace
     from selfrepair.experiment.missions import to_spec
-    from selfrepair.trace import read_trace, write_trace
 
     mission = Mission(
         str(row["key"]), str(row["experiment"]), int(row["seed"] or 0), str(row["config"]), ()

@@ -23,6 +23,7 @@ import joblib
 from joblib.externals.loky.process_executor import TerminatedWorkerError
 
 from selfrepair.errors import ProblemError, SelfRepairError
+from selfrepair.execution.metrics import mission_row
 from selfrepair.experiment.missions import Mission
 from selfrepair.experiment.store import ResultStore, Value
 
@@ -83,7 +84,7 @@ def execute_mission(mission: Mission) -> Mapping[str, Value]:
     first allocation for a maze size): the first mission of each strategy, table and maze size in
     a process is run twice and only the second run is kept (results are deterministic).
     """
-    from selfrepair.executor import run_mission
+    from selfrepair.execution.executor import run_mission
     from selfrepair.experiment.missions import to_spec
 
     spec = to_spec(mission)
@@ -92,7 +93,7 @@ def execute_mission(mission: Mission) -> Mapping[str, Value]:
         run_mission(spec)  # one-off JIT compilation and table loading stay out of the timings
         _WARMED.add(warm_key)
     result = run_mission(spec)
-    row = {k: v for k, v in result.to_row().items() if k not in DUPLICATE_COLUMNS}
+    row = {k: v for k, v in mission_row(result).items() if k not in DUPLICATE_COLUMNS}
     plan_ticks = result.initial_plan.duration
     row["repair_sources"] = json.dumps(
         [r.repair.source if r.repair.status == "repaired" else "failed" for r in result.repairs]

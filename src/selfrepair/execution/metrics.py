@@ -1,0 +1,256 @@
+"""Mission metrics: plan stability and latency statistics.
+
+Plan stability follows Fox, Gerevini, Long and Serina (2006), "Plan stability: replanning versus
+plan repair" (ICAPS): the distance between plans ``a`` and ``b`` is the number of actions of ``a``
+that are not in ``b`` plus the number of actions of ``b`` that are not in ``a``, with plans taken as
+multisets of ground actions. Here a ground action is the pair (start pose, wheel code): the action
+together with its parameters, so a plan that drives the same wheels along another route counts as
+different. Lower is more stable; 0 means the same multiset of actions.
+"""
+
+from __future__ import annotations
+
+import json
+from collections import Counter
+from collections.abc import Hashable, Iterable, Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import TYPE_CHECKING
+
+from selfrepair.execution.result import MissionResult
+from selfrepair.robots.four_wheel import format_faults
+from selfrepair.search.lattice import action_cost
+
+if TYPE_CHECKING:
+    from selfrepair.execution.result import MissionResult
+
+__all__ = [
+    "ROW_COLUMNS",
+    "LatencyStats",
+    "PlanDistance",
+    "executed_cost",
+    "histogram_text",
+    "latency_stats",
+    "mission_row",
+    "plan_distance",
+]
+
+
+@dataclass(frozen=True, slots=True)
+class PlanDistance:
+    """``removed``: actions of the first plan missing from the second; ``added``: the reverse."""
+
+    removed: int
+    added: int
+
+    @property
+    def total(self) -> int:
+        """The plan distance of Fox et al. (2006): ``removed + added``."""
+        return self.removed + self.added
+
+
+def plan_distance(first: Iterable[Hashable], second: Iterable[Hashable]) -> PlanDistance:
+    """Multiset difference counts between two plans of ground actions."""
+    a, b = Counter(first), Counter(second)
+    return PlanDistance(sum((a - b).values()), sum((b - a).values()))
+
+
+@dataclass(frozen=True, slots=True)
+class LatencyStats:
+    """Summary of nanosecond latencies; every field is ``None`` when there were none."""
+
+    count: int
+    median_ns: int | None
+    p99_ns: int | None
+    max_ns: int | None
+    total_ns: int
+
+
+def _nearest_rank(ordered: Sequence[int], fraction: float) -> int:
+    """The nearest-rank percentile: the smallest value with at least ``fraction`` of the data at
+    or below it."""
+    rank = max(1, -(-round(fraction * 10_000) * len(ordered) // 10_000))
+    return ordered[min(rank, len(ordered)) - 1]
+
+
+def latency_stats(latencies_ns: Iterable[int]) -> LatencyStats:
+    """Count, median (lower median), nearest-rank 99th percentile, maximum and total."""
+    ordered = sorted(latencies_ns)
+    if not ordered:
+        return LatencyStats(0, None, None, None, 0)
+    return LatencyStats(
+        len(ordered),
+        ordered[(len(ordered) - 1) // 2],
+        _nearest_rank(ordered, 0.99),
+        ordered[-1],
+        sum(ordered),
+    )
+
+
+def histogram_text(values: Iterable[int]) -> str:
+    """A compact, sortable histogram such as ``"1:3,5:1"`` (value:count, by value)."""
+    counts = Counter(values)
+    return ",".join(f"{value}:{counts[value]}" for value in sorted(counts))
+
+
+Row = dict[str, int | float | str | None]
+
+
+def executed_cost(result: MissionResult) -> Fraction:
+    """The executed plan's cost under the mission's cost model (duration plus clearance term)."""
+    spec = result.spec
+    return sum(
+        (
+            action_cost(
+                spec.maze,
+                s.start,
+                s.action,
+                clearance_weight=Fraction(spec.clearance_weight),
+                clearance_radius=spec.clearance_radius,
+            )
+            for s in result.executed
+        ),
+        Fraction(0),
+    )
+
+
+def mission_row(result: MissionResult) -> Row:
+    """Flatten a mission result into one row; the columns are :data:`ROW_COLUMNS`, documented in
+    docs/replacement.md. Exact values are strings (``"31/3"``) with ``_float`` twins; times are
+    integer nanoseconds."""
+    spec = result.spec
+    options = spec.options
+    initial = result.initial_plan
+    executed = result.executed
+    repairs = result.repairs
+    table_hits = [
+        r.repair
+        for r in repairs
+        if r.repair.status == "repaired" and r.repair.source == "replacement"
+    ]
+    latencies = [r.latency_ns for r in repairs]
+    stats = latency_stats(latencies)
+    cost_after = executed_cost(result)
+    compute_ns = result.initial_planning_ns + stats.total_ns
+    planned = list(zip(initial.poses, initial.actions, strict=False))
+    distance = plan_distance(planned, [(s.start, s.action) for s in executed])
+    row: Row = {
+        "maze": spec.maze.name,
+        "maze_width": spec.maze.width,
+        "maze_height": spec.maze.height,
+        "start": str(spec.start),
+        "goal": f"{spec.goal[0]},{spec.goal[1]}",
+        "goal_heading": None if spec.goal_heading is None else spec.goal_heading.name,
+        "strategy": spec.strategy,
+        "table": options.table_label,
+        "recursion": options.recursion,
+        "max_depth": options.max_depth,
+        "window": options.window,
+        "faults": format_faults(spec.schedule.all_faults()),
+        "fault_schedule": json.dumps(spec.schedule.to_json(), sort_keys=True),
+        "detection": spec.schedule.detection,
+        "seed": spec.seed,
+        "clearance_weight": str(spec.clearance_weight),
+        "clearance_radius": spec.clearance_radius,
+        "heuristic": spec.heuristic,
+        "backend": spec.backend,
+        "status": result.status,
+        "reached": int(result.reached),
+        "reason": result.reason,
+        "ticks": str(result.ticks),
+        "ticks_float": float(result.ticks),
+        "steps": len(result.steps),
+        "actions_executed": len(executed),
+        "failed_attempts": len(result.steps) - len(executed),
+        "plan_length_before": len(initial.actions),
+        "plan_cost_before": None if initial.cost is None else str(initial.cost),
+        "plan_cost_before_float": None if initial.cost is None else float(initial.cost),
+        "initial_expansions": initial.expansions,
+        "plan_length_after": len(executed),
+        "plan_cost_after": str(cost_after),
+        "plan_cost_after_float": float(cost_after),
+        "faulty_encounters": len(repairs),
+        "replacements": len(table_hits),
+        "lookaheads": sum(
+            1 for r in repairs if r.repair.status == "repaired" and r.repair.source == "lookahead"
+        ),
+        "replans": sum(r.repair.replans for r in repairs),
+        "replans_failed": sum(
+            1 for r in repairs if r.repair.source == "replan" and r.repair.status != "repaired"
+        ),
+        "replacement_lengths": histogram_text(h.candidate_length or 0 for h in table_hits),
+        "replacement_depths": histogram_text(h.depth or 0 for h in table_hits),
+        "initial_planning_ns": result.initial_planning_ns,
+        "repair_count": stats.count,
+        "repair_latency_median_ns": stats.median_ns,
+        "repair_latency_p99_ns": stats.p99_ns,
+        "repair_latency_max_ns": stats.max_ns,
+        "repair_latency_total_ns": stats.total_ns,
+        "repair_latencies_ns": json.dumps(latencies),
+        "compute_ns": compute_ns,
+        "compute_per_action_ns": compute_ns / len(executed) if executed else None,
+        "plan_distance": distance.total,
+        "plan_distance_removed": distance.removed,
+        "plan_distance_added": distance.added,
+        "final_pose": str(result.final_pose),
+    }
+    return row
+
+
+ROW_COLUMNS: tuple[str, ...] = (
+    "maze",
+    "maze_width",
+    "maze_height",
+    "start",
+    "goal",
+    "goal_heading",
+    "strategy",
+    "table",
+    "recursion",
+    "max_depth",
+    "window",
+    "faults",
+    "fault_schedule",
+    "detection",
+    "seed",
+    "clearance_weight",
+    "clearance_radius",
+    "heuristic",
+    "backend",
+    "status",
+    "reached",
+    "reason",
+    "ticks",
+    "ticks_float",
+    "steps",
+    "actions_executed",
+    "failed_attempts",
+    "plan_length_before",
+    "plan_cost_before",
+    "plan_cost_before_float",
+    "initial_expansions",
+    "plan_length_after",
+    "plan_cost_after",
+    "plan_cost_after_float",
+    "faulty_encounters",
+    "replacements",
+    "lookaheads",
+    "replans",
+    "replans_failed",
+    "replacement_lengths",
+    "replacement_depths",
+    "initial_planning_ns",
+    "repair_count",
+    "repair_latency_median_ns",
+    "repair_latency_p99_ns",
+    "repair_latency_max_ns",
+    "repair_latency_total_ns",
+    "repair_latencies_ns",
+    "compute_ns",
+    "compute_per_action_ns",
+    "plan_distance",
+    "plan_distance_removed",
+    "plan_distance_added",
+    "final_pose",
+)
+"""The row's columns, in order. Stable: the experiments' SQLite schema is built from it."""

@@ -1,0 +1,101 @@
+"""Grid geometry shared by every layer: cells, headings, poses, and their text forms.
+
+Coordinates follow MovingAI maps: ``x`` is the column, ``y`` the row, origin top-left. Headings
+are N, E, S, W with N = (0, -1) and E = (+1, 0). A robot's state in a maze is a :class:`Pose`:
+the cell it stands on and the way it faces. Mazes, robots, planners and tables all speak in these
+values, so they live here, below all of them (this module imports nothing of selfrepair but
+:mod:`selfrepair.errors`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum
+
+from selfrepair.errors import InputError
+
+__all__ = ["Cell", "Heading", "Pose", "parse_cell", "parse_pose", "relative_cell"]
+
+Cell = tuple[int, int]
+"""A grid cell ``(x, y)``."""
+
+
+class Heading(IntEnum):
+    """Compass heading; the integer value counts quarter turns clockwise from north."""
+
+    N = 0
+    E = 1
+    S = 2
+    W = 3
+
+    @property
+    def vector(self) -> Cell:
+        """Unit step ``(dx, dy)`` in the direction the robot faces."""
+        return _HEADING_VECTORS[self]
+
+    @property
+    def right(self) -> Cell:
+        """Unit step ``(dx, dy)`` to the robot's right."""
+        return _HEADING_VECTORS[(self + 1) % 4]
+
+    def rotated(self, quarter_turns: int) -> Heading:
+        """The heading after ``quarter_turns`` clockwise quarter turns (negative: anticlockwise)."""
+        return Heading((self + quarter_turns) % 4)
+
+
+_HEADING_VECTORS: tuple[Cell, ...] = ((0, -1), (1, 0), (0, 1), (-1, 0))
+
+
+@dataclass(frozen=True, slots=True, order=True)
+class Pose:
+    """Where the robot is and which way it faces."""
+
+    x: int
+    y: int
+    heading: Heading
+
+    @property
+    def cell(self) -> Cell:
+        """The cell the robot occupies."""
+        return (self.x, self.y)
+
+    def __str__(self) -> str:
+        return f"{self.x},{self.y},{self.heading.name}"
+
+
+def relative_cell(pose: Pose, forward: int, lateral: int) -> Cell:
+    """The world cell ``forward`` cells ahead of and ``lateral`` cells right of ``pose``."""
+    fx, fy = _HEADING_VECTORS[pose.heading]
+    rx, ry = _HEADING_VECTORS[(pose.heading + 1) % 4]
+    return (pose.x + forward * fx + lateral * rx, pose.y + forward * fy + lateral * ry)
+
+
+# --- pose and cell text ------------------------------------------------------------------------
+
+
+def parse_cell(text: str, *, source: str = "<cell>") -> Cell:
+    """Parse ``"X,Y"`` into a cell."""
+    parts = [p.strip() for p in text.split(",")]
+    if len(parts) != 2 or not all(_is_int(p) for p in parts):
+        raise InputError(f"expected a cell X,Y with integer X and Y, got {text!r}", source=source)
+    return (int(parts[0]), int(parts[1]))
+
+
+def parse_pose(text: str, *, source: str = "<pose>") -> Pose:
+    """Parse ``"X,Y,H"`` (H one of N, E, S, W) into a pose."""
+    parts = [p.strip() for p in text.split(",")]
+    if (
+        len(parts) != 3
+        or not all(_is_int(p) for p in parts[:2])
+        or parts[2].upper() not in Heading.__members__
+    ):
+        raise InputError(
+            f"expected a pose X,Y,H with integer X, Y and H in N, E, S, W, got {text!r}",
+            source=source,
+        )
+    return Pose(int(parts[0]), int(parts[1]), Heading[parts[2].upper()])
+
+
+def _is_int(text: str) -> bool:
+    body = text[1:] if text[:1] in ("+", "-") else text
+    return body.isascii() and body.isdigit()

@@ -1,0 +1,185 @@
+"""What a robot is, to the rest of selfrepair: the :class:`Domain` value.
+
+Every layer above (planner, simulator, executor, tables, coverage, traces, experiments) works on a
+``Domain`` and never looks inside a robot model. A domain is a frozen value of plain functions (not
+a subclass tower), so a new robot is one more value, registered by name with
+:func:`selfrepair.robots.registry.register_domain`.
+
+Robots live on a square grid: a robot's state is a :class:`~selfrepair.geometry.Pose` (its cell and
+one of four headings; a robot without a heading simply keeps ``N``). A domain supplies
+
+* its ``actions`` and their text form (``parse_action``/``format_action``);
+* what an action does, on an unbounded open plane: ``apply`` (the end pose), ``footprint`` (every
+  cell that must be free for the action to be executable, the start cell first) and ``duration``
+  (exact, in ticks);
+* its fault vocabulary: ``faults`` (every single fault), ``available(action, faults)`` (whether no
+  fault in the set forbids the action), ``parse_faults``/``format_faults`` (a fault set's canonical
+  text, ``""`` for none) and ``fault_sets`` (the fault sets in scope for table generation and
+  coverage, singles first, then doubles);
+* ``motion_class`` (actions of one class have the same effect: the planner keeps only the fastest
+  available one of each) and ``level`` (0 for primitive actions, higher for complex ones; see the
+  ``layered`` and ``primitive`` recursion modes);
+* ``footprint_connected``: whether every action's footprint contains a 4-connected path between its
+  start and end cells. Only then is the grid-distance heuristic admissible for it (see
+  docs/planner.md); without it the planner refuses that heuristic.
+
+The contract, checked by :func:`check_domain` when a domain is registered: ``apply`` and
+``footprint`` commute with translation (an action does the same thing in every cell), the footprint
+starts at the start cell, durations are positive, and the text forms round-trip. Nothing else is
+assumed: actions and faults may be any hashable values.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any, Generic, TypeVar
+
+from selfrepair.errors import InputError, ProblemError
+from selfrepair.geometry import Cell, Heading, Pose
+
+__all__ = [
+    "CANONICAL",
+    "Domain",
+    "check_domain",
+    "primitive_by_motion",
+    "run_open",
+    "singles_and_doubles",
+]
+
+A = TypeVar("A")
+F = TypeVar("F")
+
+CANONICAL = Pose(0, 0, Heading.N)
+"""The state candidates of a replacement table are stored relative to (origin, facing north)."""
+
+
+def _no_level(action: Any) -> int:
+    return 0
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Domain(Generic[A, F]):
+    """Everything selfrepair needs to know about one robot (see the module docstring).
+
+    Domains compare by identity: two registrations of equal-looking functions are different robots.
+    """
+
+    name: str
+    actions: tuple[A, ...]
+    apply: Callable[[Pose, A], Pose]
+    footprint: Callable[[Pose, A], tuple[Cell, ...]]
+    duration: Callable[[A], Fraction]
+    available: Callable[[A, frozenset[F]], bool]
+    parse_action: Callable[[str], A]
+    format_action: Callable[[A], str]
+    faults: tuple[F, ...]
+    parse_faults: Callable[[str], frozenset[F]]
+    format_faults: Callable[[Iterable[F]], str]
+    motion_class: Callable[[A], str]
+    level: Callable[[A], int] = _no_level
+    fault_sets: tuple[frozenset[F], ...] = ()
+    footprint_connected: bool = False
+    description: str = ""
+    canonical: Pose = field(default=CANONICAL)
+
+    def __post_init__(self) -> None:
+        if not self.fault_sets:
+            object.__setattr__(self, "fault_sets", singles_and_doubles(self.faults))
+
+    def __repr__(self) -> str:
+        return f"Domain({self.name!r}, {len(self.actions)} actions, {len(self.faults)} faults)"
+
+    def step(self, pose: Pose, action: A) -> tuple[Pose, tuple[Cell, ...], Fraction]:
+        """End pose, footprint and duration of ``action`` at ``pose`` on an open plane."""
+        return self.apply(pose, action), self.footprint(pose, action), self.duration(action)
+
+    def blocking(self, action: A, faults: Iterable[F]) -> frozenset[F]:
+        """The faults of ``faults`` that each forbid ``action`` on their own."""
+        return frozenset(f for f in faults if not self.available(action, frozenset((f,))))
+
+
+def singles_and_doubles(faults: Iterable[F]) -> tuple[frozenset[F], ...]:
+    """Every single fault, then every unordered pair of distinct faults."""
+    singles = tuple(faults)
+    return tuple(frozenset((f,)) for f in singles) + tuple(
+        frozenset(pair) for pair in itertools.combinations(singles, 2)
+    )
+
+
+def run_open(domain: Domain[Any, Any], state: Pose, actions: Iterable[Any]) -> Pose:
+    """The state reached by applying ``actions`` in turn from ``state`` on an open plane."""
+    for action in actions:
+        state = domain.apply(state, action)
+    return state
+
+
+def primitive_by_motion(domain: Domain[A, F], faults: frozenset[F]) -> dict[str, A]:
+    """For each motion class still possible under ``faults``, its fastest available action.
+
+    Ties go to the action that comes first in ``domain.actions``, and classes keep the order in
+    which they first appear among the available actions, so the choice is deterministic. Every
+    other action of a class is dominated: same effect, no shorter.
+    """
+    best: dict[str, A] = {}
+    for action in domain.actions:
+        if not domain.available(action, faults):
+            continue
+        key = domain.motion_class(action)
+        current = best.get(key)
+        if current is None or domain.duration(action) < domain.duration(current):
+            best[key] = action
+    return best
+
+
+_PROBES = tuple(Pose(0, 0, heading) for heading in Heading)
+
+
+def check_domain(domain: Domain[Any, Any]) -> None:
+    """Raise :class:`ProblemError` naming the first way ``domain`` breaks the contract of the
+    module docstring (checked on every action from every heading and one shifted cell)."""
+
+    def fail(what: str) -> ProblemError:
+        return ProblemError(f"domain {domain.name!r}: {what}")
+
+    if not domain.name or not domain.actions:
+        raise fail("expected a name and at least one action")
+    if len(set(domain.actions)) != len(domain.actions):
+        raise fail("expected distinct actions")
+    for action in domain.actions:
+        text = domain.format_action(action)
+        try:
+            back = domain.parse_action(text)
+        except InputError as exc:
+            raise fail(f"action text {text!r} does not parse back: {exc.reason}") from None
+        if back != action:
+            raise fail(f"action text {text!r} parses to another action")
+        duration = domain.duration(action)
+        if not isinstance(duration, Fraction | int) or duration <= 0:
+            raise fail(f"action {text} has duration {duration!r}; expected a positive Fraction")
+        for probe in _PROBES:
+            _check_translation(domain, action, text, probe, fail)
+    for faults in (frozenset(), *domain.fault_sets):
+        text = domain.format_faults(faults)
+        if domain.parse_faults(text) != faults:
+            raise fail(f"fault text {text!r} does not parse back to the same set")
+
+
+def _check_translation(
+    domain: Domain[Any, Any],
+    action: Any,
+    text: str,
+    probe: Pose,
+    fail: Callable[[str], ProblemError],
+) -> None:
+    end, cells = domain.apply(probe, action), domain.footprint(probe, action)
+    if not cells or cells[0] != probe.cell:
+        raise fail(f"the footprint of {text} must start with the start cell")
+    dx, dy = 7, -5
+    shifted = Pose(probe.x + dx, probe.y + dy, probe.heading)
+    want_end = Pose(end.x + dx, end.y + dy, end.heading)
+    want_cells = tuple((x + dx, y + dy) for x, y in cells)
+    if domain.apply(shifted, action) != want_end or domain.footprint(shifted, action) != want_cells:
+        raise fail(f"action {text} does not act the same in every cell (translation)")

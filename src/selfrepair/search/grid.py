@@ -1,0 +1,139 @@
+"""Plain grid A* with MovingAI rules: 4- or 8-connected, straight 1, diagonal sqrt(2).
+
+A diagonal step needs both orthogonally adjacent cells free (no corner cutting). The heuristic is
+the Manhattan distance (4-connected) or the octile distance ``max + (sqrt2 - 1) * min``
+(8-connected): both are the exact distance on an empty grid, hence admissible and consistent.
+
+Exactness
+    The cost of a path is reported exactly as an :class:`OctileCost` ``straight + diagonal *
+    sqrt2`` (counted along the path); ``.value`` is its float for comparison with ``.scen`` files.
+    The search itself orders nodes by float ``g + h``. That is exact for every grid we meet: two
+    different values ``a + b*sqrt2`` with ``|a|, |b| <= n`` differ by at least ``1 / (2.42 n)``
+    (because ``|a^2 - 2 b^2| >= 1``), while the float error of a sum of ``n`` such steps stays
+    below ``n^2 * 2.42 * 2^-53``; for paths shorter than 70,000 steps the float order is the exact
+    order, so the path found is exactly optimal.
+
+Determinism: neighbours in the order N, E, S, W, NE, SE, SW, NW and heap keys ``(f, h, counter)``,
+in the pure-Python reference (:func:`selfrepair.search.astar`) and in the numba kernel alike.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+
+from selfrepair.errors import ProblemError
+from selfrepair.geometry import Cell
+from selfrepair.search.astar import PlanStatus, astar, deadline_from
+from selfrepair.search.backend import use_numba
+from selfrepair.search.problem import (
+    CONNECTIVITIES,
+    NEIGHBOURS,
+    SQRT2,
+    GridResult,
+    OctileCost,
+    check_search_inputs,
+    grid_heuristic,
+)
+from selfrepair.world.maze import Maze
+
+__all__ = [
+    "CONNECTIVITIES",
+    "NEIGHBOURS",
+    "SQRT2",
+    "GridResult",
+    "OctileCost",
+    "grid_astar",
+    "grid_heuristic",
+]
+
+
+def grid_astar(
+    maze: Maze,
+    start: Cell,
+    goal: Cell,
+    *,
+    connectivity: int = 8,
+    max_expansions: int | None = None,
+    time_limit: float | None = None,
+    backend: str = "auto",
+) -> GridResult:
+    """Shortest path from ``start`` to ``goal`` on ``maze`` under MovingAI rules.
+
+    Raises :class:`ProblemError` for a start or goal outside the grid or in a wall, a connectivity
+    other than 4 or 8, an unknown backend or a negative budget.
+    """
+    t0 = time.perf_counter_ns()
+    check_search_inputs(
+        maze,
+        (("start", start), ("goal", goal)),
+        backend=backend,
+        max_expansions=max_expansions,
+        time_limit=time_limit,
+    )
+    if connectivity not in CONNECTIVITIES:
+        raise ProblemError(f"connectivity must be 4 or 8, got {connectivity}")
+    if start == goal:
+        return GridResult(PlanStatus.SOLVED, (start,), OctileCost(0, 0), 0, _since(t0))
+    deadline = deadline_from(time_limit, t0)
+    found = None
+    if use_numba(backend):
+        from selfrepair.search import _kernels
+
+        try:
+            found = _kernels.grid_search(maze, start, goal, connectivity, max_expansions, deadline)
+        except OverflowError:  # a grid too large for int32 indices: Python has no such limit
+            found = None
+    if found is None:
+        found = _grid_python(maze, start, goal, connectivity, max_expansions, deadline)
+    status, path, expansions = found
+    if status is not PlanStatus.SOLVED:
+        return GridResult(status, (), None, expansions, _since(t0))
+    diagonal = sum(1 for a, b in itertools.pairwise(path) if a[0] != b[0] and a[1] != b[1])
+    cost = OctileCost(len(path) - 1 - diagonal, diagonal)
+    return GridResult(status, path, cost, expansions, _since(t0))
+
+
+def _grid_python(
+    maze: Maze,
+    start: Cell,
+    goal: Cell,
+    connectivity: int,
+    max_expansions: int | None,
+    deadline_ns: int | None,
+) -> tuple[PlanStatus, tuple[Cell, ...], int]:
+    """The reference search on :func:`selfrepair.search.astar` with cells as nodes."""
+    h, w = maze.walls.shape
+    free = (~maze.walls).tolist()
+
+    def is_free(x: int, y: int) -> bool:
+        return 0 <= x < w and 0 <= y < h and free[y][x]
+
+    def successors(cell: Cell) -> list[tuple[Cell, float, None]]:
+        x, y = cell
+        out: list[tuple[Cell, float, None]] = []
+        for dx, dy in NEIGHBOURS[:connectivity]:
+            nx, ny = x + dx, y + dy
+            if not is_free(nx, ny):
+                continue
+            if dx and dy:
+                if not (is_free(x + dx, y) and is_free(x, y + dy)):
+                    continue
+                out.append(((nx, ny), SQRT2, None))
+            else:
+                out.append(((nx, ny), 1.0, None))
+        return out
+
+    outcome = astar(
+        start,
+        successors=successors,
+        heuristic=lambda cell: grid_heuristic(cell, goal, connectivity),
+        is_goal=lambda cell: cell == goal,
+        max_expansions=max_expansions,
+        deadline_ns=deadline_ns,
+    )
+    return outcome.status, outcome.path, outcome.expansions
+
+
+def _since(t0: int) -> int:
+    return time.perf_counter_ns() - t0

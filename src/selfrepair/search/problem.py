@@ -1,0 +1,179 @@
+"""The values that planning queries and answers are made of, for both planners and the kernels.
+
+:class:`PlanningProblem` and :class:`PlanResult` are the robot-lattice planner's question and
+answer (:mod:`selfrepair.search.lattice`); :class:`GridResult` and :class:`OctileCost` those of the
+MovingAI grid planner (:mod:`selfrepair.search.grid`); :class:`CellBound` is a heuristic as data.
+They sit in a module of their own so that the compiled kernels can use them without importing the
+planners that call the kernels.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass
+from fractions import Fraction
+
+import numpy as np
+import numpy.typing as npt
+
+from selfrepair.errors import ProblemError
+from selfrepair.geometry import Cell, Heading, Pose
+from selfrepair.robots.four_wheel import Action, FaultSet
+from selfrepair.search.astar import BACKENDS, MAX_TIME_LIMIT, PlanStatus
+from selfrepair.world.maze import Maze
+
+__all__ = [
+    "CONNECTIVITIES",
+    "NEIGHBOURS",
+    "SQRT2",
+    "CellBound",
+    "GridResult",
+    "OctileCost",
+    "PlanResult",
+    "PlanningProblem",
+    "check_search_inputs",
+    "grid_heuristic",
+    "with_border",
+]
+
+
+@dataclass(frozen=True, slots=True)
+class PlanningProblem:
+    """What to plan: from ``start`` to ``goal`` (any heading unless ``goal_heading``) on ``maze``.
+
+    ``faults`` are the faults the planner knows about; actions they forbid are never used.
+    """
+
+    maze: Maze
+    start: Pose
+    goal: Cell
+    goal_heading: Heading | None = None
+    faults: FaultSet = frozenset()
+    clearance_weight: Fraction = Fraction(0)
+    clearance_radius: int = 2
+
+
+@dataclass(frozen=True, slots=True)
+class PlanResult:
+    """The outcome of :func:`plan`.
+
+    ``actions`` are concrete wheel actions (the fastest available one for each motion), ``poses``
+    the ``len(actions) + 1`` poses from start to goal; both are empty unless solved. ``cost`` is
+    duration plus clearance term (``None`` unless solved), ``duration`` the total ticks (0 unless
+    solved). ``expansions`` counts closed nodes; ``wall_time_ns`` is the wall time of the call.
+    """
+
+    status: PlanStatus
+    actions: tuple[Action, ...]
+    poses: tuple[Pose, ...]
+    cost: Fraction | None
+    duration: Fraction
+    expansions: int
+    wall_time_ns: int
+
+
+@dataclass(frozen=True, slots=True)
+class CellBound:
+    """A heuristic as data: ``h(pose) = rate * distance[y, x]`` ticks.
+
+    ``padded`` is an ``int32`` array of shape ``(height + 2, width + 2)``: the distances with a
+    negative border (the layout the numba kernels use). A negative value marks a cell from which
+    the goal cannot be reached; such nodes are pruned.
+    """
+
+    padded: npt.NDArray[np.int32]
+    rate: Fraction
+
+    @property
+    def distance(self) -> npt.NDArray[np.int32]:
+        """The distances as an ``[y, x]`` array (a view without the border)."""
+        return self.padded[1:-1, 1:-1]
+
+
+def with_border(inner: npt.NDArray[np.integer]) -> npt.NDArray[np.int32]:
+    padded = np.full((inner.shape[0] + 2, inner.shape[1] + 2), -1, dtype=np.int32)
+    padded[1:-1, 1:-1] = inner
+    return padded
+
+
+SQRT2 = math.sqrt(2.0)
+
+
+CONNECTIVITIES = (4, 8)
+
+
+NEIGHBOURS: tuple[Cell, ...] = (
+    (0, -1),
+    (1, 0),
+    (0, 1),
+    (-1, 0),
+    (1, -1),
+    (1, 1),
+    (-1, 1),
+    (-1, -1),
+)
+"""Neighbour offsets ``(dx, dy)``: the first four are straight, the last four diagonal."""
+
+
+@dataclass(frozen=True, slots=True, order=True)
+class OctileCost:
+    """An exact path cost ``straight + diagonal * sqrt(2)``."""
+
+    straight: int
+    diagonal: int
+
+    @property
+    def value(self) -> float:
+        """The cost as a float, for comparison with MovingAI ``optimal_length``."""
+        return self.straight + self.diagonal * SQRT2
+
+    def __str__(self) -> str:
+        if self.diagonal == 0:
+            return str(self.straight)
+        return f"{self.straight}+{self.diagonal}*sqrt2"
+
+
+@dataclass(frozen=True, slots=True)
+class GridResult:
+    """The outcome of :func:`grid_astar`; ``path`` (start first) is empty unless solved."""
+
+    status: PlanStatus
+    path: tuple[Cell, ...]
+    cost: OctileCost | None
+    expansions: int
+    wall_time_ns: int
+
+
+def grid_heuristic(cell: Cell, goal: Cell, connectivity: int) -> float:
+    """Manhattan (4) or octile (8) distance from ``cell`` to ``goal``, as a float."""
+    dx = abs(cell[0] - goal[0])
+    dy = abs(cell[1] - goal[1])
+    if connectivity == 4:
+        return float(dx + dy)
+    return (dx + dy) + (SQRT2 - 2.0) * min(dx, dy)
+
+
+def check_search_inputs(
+    maze: Maze,
+    endpoints: Iterable[tuple[str, tuple[int, int]]],
+    *,
+    backend: str,
+    max_expansions: int | None,
+    time_limit: float | None,
+) -> None:
+    """Raise :class:`ProblemError` for an endpoint outside ``maze`` or in a wall, an unknown
+    backend, or a negative budget: the checks the grid and lattice planners share."""
+    for label, (x, y) in endpoints:
+        if not maze.in_bounds(x, y):
+            raise ProblemError(
+                f"the {label} ({x},{y}) is outside the {maze.width}x{maze.height} maze"
+            )
+        if not maze.is_free(x, y):
+            raise ProblemError(f"the {label} ({x},{y}) is a wall")
+    if backend not in BACKENDS:
+        raise ProblemError(f"unknown backend {backend!r}; expected one of {', '.join(BACKENDS)}")
+    if max_expansions is not None and max_expansions < 0:
+        raise ProblemError(f"max_expansions must be >= 0, got {max_expansions}")
+    if time_limit is not None and not 0 <= time_limit <= MAX_TIME_LIMIT:
+        raise ProblemError(f"time_limit must be from 0 to {MAX_TIME_LIMIT:g} s, got {time_limit}")

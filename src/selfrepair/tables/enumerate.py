@@ -1,0 +1,357 @@
+"""The search half of table generation: motion classes, class costs under a fault set, and
+breadth-first enumeration of candidate sub-plans from the canonical state in free space.
+
+:mod:`selfrepair.tables.generate` explains the method and builds tables from these pieces;
+:mod:`selfrepair.repair.coverage` uses the same classes and costs for its ground truth, so the
+generator and the report that judges it agree on what an action costs.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from fractions import Fraction
+from typing import Any
+
+from selfrepair.errors import ProblemError, TableError
+from selfrepair.geometry import Cell
+from selfrepair.robots.domain import Domain, run_open
+
+__all__ = [
+    "FAULT_SCOPES",
+    "OBJECTIVES",
+    "ClassCost",
+    "DomainClasses",
+    "MotionClass",
+    "Path",
+    "Searcher",
+    "candidate_cost",
+    "class_costs",
+    "class_of",
+    "concrete_actions",
+    "cost_scale",
+    "domain_classes",
+    "enumerate_paths",
+    "motion_classes",
+    "scope_fault_sets",
+    "select_diverse",
+    "verify_entry",
+]
+
+
+FAULT_SCOPES = ("all", "singles", "doubles", "none")
+"""Which fault sets of the domain a table is made for."""
+
+OBJECTIVES = ("duration", "length")
+"""What a candidate's cost is: total duration in ticks, or number of actions."""
+
+
+# --- motion classes ---------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class MotionClass:
+    """Actions with one effect: ``end`` and ``footprint`` are taken from the canonical state."""
+
+    index: int
+    name: str
+    end: Any
+    footprint: frozenset[Cell]
+    members: tuple[Any, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class DomainClasses:
+    """The motion classes of a domain and how each action maps to one."""
+
+    domain: Domain[Any, Any]
+    classes: tuple[MotionClass, ...]
+    of_action: Mapping[Any, int]
+    identity: frozenset[int]
+    scale: int
+
+
+_CLASS_CACHE: dict[str, DomainClasses] = {}
+
+
+def motion_classes(domain: Domain[Any, Any]) -> tuple[MotionClass, ...]:
+    """The domain's motion classes, in order of their first member in ``domain.actions``."""
+    return domain_classes(domain).classes
+
+
+def class_of(domain: Domain[Any, Any], action: Any) -> MotionClass:
+    """The motion class ``action`` belongs to."""
+    info = domain_classes(domain)
+    return info.classes[info.of_action[action]]
+
+
+def cost_scale(domain: Domain[Any, Any]) -> int:
+    """The factor that turns every action cost of ``domain`` into an integer (search units)."""
+    return domain_classes(domain).scale
+
+
+def domain_classes(domain: Domain[Any, Any]) -> DomainClasses:
+    cached = _CLASS_CACHE.get(domain.name)
+    if cached is not None and cached.domain is domain:
+        return cached
+    start = domain.canonical
+    by_key: dict[tuple[Any, frozenset[Cell]], list[Any]] = {}
+    for action in domain.actions:
+        key = (domain.apply(start, action), frozenset(domain.footprint(start, action)))
+        by_key.setdefault(key, []).append(action)
+    classes = tuple(
+        MotionClass(i, domain.motion_class(members[0]), end, fp, tuple(members))
+        for i, ((end, fp), members) in enumerate(by_key.items())
+    )
+    of_action = {a: c.index for c in classes for a in c.members}
+    identity = frozenset(
+        c.index for c in classes if c.end == start and c.footprint == frozenset({start.cell})
+    )
+    scale = math.lcm(*(domain.duration(a).denominator for a in domain.actions))
+    built = DomainClasses(domain, classes, of_action, identity, scale)
+    _CLASS_CACHE[domain.name] = built
+    return built
+
+
+# --- fault scopes and class costs -------------------------------------------------------------
+
+
+def scope_fault_sets(domain: Domain[Any, Any], scope: str) -> tuple[frozenset[Any], ...]:
+    """The domain's fault sets selected by ``scope``: all, singles, doubles or none."""
+    if scope not in FAULT_SCOPES:
+        raise ProblemError(
+            f"unknown fault scope {scope!r}; expected one of {', '.join(FAULT_SCOPES)}"
+        )
+    if scope == "none":
+        return ()
+    if scope == "singles":
+        return tuple(f for f in domain.fault_sets if len(f) == 1)
+    if scope == "doubles":
+        return tuple(f for f in domain.fault_sets if len(f) == 2)
+    return tuple(domain.fault_sets)
+
+
+ClassCost = tuple[int, int, Any]
+"""(objective cost, duration, concrete action) of a class; costs scaled to integers."""
+
+
+def class_costs(
+    domain: Domain[Any, Any], allowed: Callable[[Any], bool], objective: str = "duration"
+) -> dict[int, ClassCost]:
+    """For each class with an allowed member, its cheapest allowed member and that member's cost.
+
+    Costs are integers: durations multiplied by the least common multiple of the domain's cost
+    denominators, so the search never touches fractions. With objective ``length`` every step costs
+    one, and the member is still the fastest one.
+    """
+    info = domain_classes(domain)
+    out: dict[int, ClassCost] = {}
+    for motion in info.classes:
+        best: tuple[int, Any] | None = None
+        for action in motion.members:
+            if not allowed(action):
+                continue
+            dur = int(domain.duration(action) * info.scale)
+            if best is None or dur < best[0]:
+                best = (dur, action)
+        if best is not None:
+            obj = best[0] if objective == "duration" else 1
+            out[motion.index] = (obj, best[0], best[1])
+    return out
+
+
+# --- enumeration ------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class Path:
+    """A class sequence from the canonical state; ``cost``/``duration`` are scaled integers."""
+
+    cost: int
+    duration: int
+    motions: tuple[int, ...]
+    end: Any
+    footprint: frozenset[Cell]
+
+    def rank(self) -> tuple[int, int, int, int, tuple[int, ...]]:
+        """Sort key: cheapest first, then fastest, shortest, fewest cells, class order."""
+        return (self.cost, self.duration, len(self.motions), len(self.footprint), self.motions)
+
+
+def _chebyshev(a: Cell, b: Cell) -> int:
+    return max(abs(a[0] - b[0]), abs(a[1] - b[1]))
+
+
+def enumerate_paths(
+    domain: Domain[Any, Any],
+    costs: Mapping[int, ClassCost],
+    targets: Iterable[Any],
+    max_length: int,
+) -> dict[Any, list[Path]]:
+    """Every non-dominated class sequence of at most ``max_length`` steps ending at a target.
+
+    Breadth-first over lengths; a node is (end state, swept cells) and keeps only its cheapest
+    sequence (ties: first found, i.e. shortest, then lowest class order). A wait class is used
+    only as a whole sequence of its own, since a wait inside a longer sequence changes nothing
+    but the cost. Returns, per target state, its sequences sorted by :meth:`Path.rank`.
+    """
+    info = domain_classes(domain)
+    start = domain.canonical
+    target_set = frozenset(targets)
+    target_cells = {t.cell for t in target_set}
+    reach = max((_chebyshev(c.end.cell, start.cell) for c in info.classes), default=0) or 1
+    order = sorted(costs)
+    step_cache: dict[tuple[Any, int], tuple[Any, frozenset[Cell]]] = {}
+
+    def step(state: Any, ci: int) -> tuple[Any, frozenset[Cell]]:
+        hit = step_cache.get((state, ci))
+        if hit is None:
+            action = costs[ci][2]
+            hit = (domain.apply(state, action), frozenset(domain.footprint(state, action)))
+            step_cache[(state, ci)] = hit
+        return hit
+
+    def near(cell: Cell, steps_left: int) -> bool:
+        return any(_chebyshev(cell, t) <= steps_left * reach for t in target_cells)
+
+    best: dict[tuple[Any, frozenset[Cell]], tuple[int, int]] = {}
+    found: dict[tuple[Any, frozenset[Cell]], Path] = {}
+    frontier: list[Path] = [Path(0, 0, (), start, frozenset({start.cell}))]
+    for length in range(1, max_length + 1):
+        nxt: list[Path] = []
+        for path in frontier:
+            for ci in order:
+                if ci in info.identity and path.motions:
+                    continue
+                end, cells = step(path.end, ci)
+                if not near(end.cell, max_length - length):
+                    continue
+                obj, dur, _ = costs[ci]
+                new = Path(
+                    path.cost + obj,
+                    path.duration + dur,
+                    (*path.motions, ci),
+                    end,
+                    path.footprint | cells,
+                )
+                key = (end, new.footprint)
+                old = best.get(key)
+                if old is not None and old <= (new.cost, new.duration):
+                    continue
+                best[key] = (new.cost, new.duration)
+                if ci not in info.identity:
+                    nxt.append(new)
+                if end in target_set:
+                    found[key] = new
+        frontier = nxt
+    out: dict[Any, list[Path]] = {t: [] for t in target_set}
+    for (end, _), path in found.items():
+        out[end].append(path)
+    for paths in out.values():
+        paths.sort(key=Path.rank)
+    return out
+
+
+def select_diverse(paths: Sequence[Path], base: frozenset[Cell], limit: int) -> list[Path]:
+    """Up to ``limit`` paths, cheapest first, none of whose extra cells cover a kept one's.
+
+    ``base`` is the replaced action's own footprint: those cells are free whenever the action is
+    executable, so only the cells beyond it decide whether a candidate fits next to a wall.
+    ``paths`` must be sorted by :meth:`Path.rank`.
+    """
+    kept: list[Path] = []
+    extras: list[frozenset[Cell]] = []
+    for path in paths:
+        if len(kept) >= limit:
+            break
+        extra = path.footprint - base
+        if any(e <= extra for e in extras):
+            continue
+        kept.append(path)
+        extras.append(extra)
+    return kept
+
+
+# --- per fault set search, memoised by class-cost signature -----------------------------------
+
+
+@dataclass(slots=True)
+class Searcher:
+    """Runs :func:`enumerate_paths` once per distinct class-cost signature (many fault sets leave
+    the same cheapest cost per class), and computes class costs once per fault set."""
+
+    domain: Domain[Any, Any]
+    objective: str
+    max_length: int
+    memo: dict[tuple[tuple[int, int, int], ...], dict[Any, list[Path]]]
+    costs_memo: dict[Any, dict[int, ClassCost]]
+
+    def costs(self, allowed: Callable[[Any], bool]) -> dict[int, ClassCost]:
+        """Class costs with the actions ``allowed`` says are left (not memoised)."""
+        return class_costs(self.domain, allowed, self.objective)
+
+    def costs_under(self, faults: frozenset[Any]) -> dict[int, ClassCost]:
+        """Class costs under a fault set, memoised."""
+        hit = self.costs_memo.get(faults)
+        if hit is None:
+            hit = self.costs_memo[faults] = self.costs(lambda a: self.domain.available(a, faults))
+        return hit
+
+    def paths(self, costs: Mapping[int, ClassCost]) -> dict[Any, list[Path]]:
+        """Every class's candidate sequences under ``costs`` (see :func:`enumerate_paths`)."""
+        signature = tuple((ci, c[0], c[1]) for ci, c in sorted(costs.items()))
+        hit = self.memo.get(signature)
+        if hit is None:
+            targets = [c.end for c in domain_classes(self.domain).classes]
+            hit = enumerate_paths(self.domain, costs, targets, self.max_length)
+            self.memo[signature] = hit
+        return hit
+
+
+def concrete_actions(path: Path, costs: Mapping[int, ClassCost]) -> tuple[Any, ...]:
+    return tuple(costs[ci][2] for ci in path.motions)
+
+
+# --- verification -----------------------------------------------------------------------------
+
+
+def verify_entry(
+    domain: Domain[Any, Any],
+    action: Any,
+    candidates: Iterable[tuple[Any, ...]],
+    faults: frozenset[Any] | None = None,
+) -> None:
+    """Re-simulate every candidate: it must be non-empty, avoid ``action``, end where ``action``
+    ends, and (for a fault-indexed entry) use only actions available under ``faults``.
+
+    Raises :class:`TableError` naming the entry otherwise; the generator calls this on every
+    entry before building the table, so a generator bug can never reach a file.
+    """
+    target = domain.apply(domain.canonical, action)
+    name = domain.format_action(action)
+    for k, candidate in enumerate(candidates):
+        text = " ".join(domain.format_action(a) for a in candidate)
+        where = f"generated entry {name}" + (
+            "" if faults is None else f" under {domain.format_faults(faults)!r}"
+        )
+        if not candidate or action in candidate:
+            raise TableError(
+                f"{where}: candidate {k} [{text}] is empty or uses {name}", source="<generator>"
+            )
+        if run_open(domain, domain.canonical, candidate) != target:
+            raise TableError(
+                f"{where}: candidate {k} [{text}] does not end at {target}", source="<generator>"
+            )
+        if faults is not None and not all(domain.available(a, faults) for a in candidate):
+            raise TableError(
+                f"{where}: candidate {k} [{text}] uses a forbidden action", source="<generator>"
+            )
+
+
+def candidate_cost(domain: Domain[Any, Any], candidate: Iterable[Any], objective: str) -> Fraction:
+    """A candidate's exact cost under ``objective``: total duration, or number of actions."""
+    actions = tuple(candidate)
+    if objective == "length":
+        return Fraction(len(actions))
+    return sum((domain.duration(a) for a in actions), Fraction(0))

@@ -1,0 +1,168 @@
+"""Grid mazes: the :class:`Maze` value, its plain-text format and its clearance map.
+
+Plain-text format: one line per row, ``#`` for a wall, ``.`` for a free cell; ``S`` and ``G`` marks
+are accepted as free cells (they are not kept). Row ``y`` is the ``y``-th line, column ``x`` the
+character index, as in MovingAI maps. MovingAI ``.map`` files are read by
+:mod:`selfrepair.world.movingai`; :func:`load_maze` picks the reader by file suffix.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+
+from selfrepair.errors import InputError
+from selfrepair.geometry import Cell
+
+__all__ = ["Maze", "clearance_map", "clearance_penalties", "format_maze", "parse_maze", "save_maze"]
+
+WALL_CHAR = "#"
+FREE_CHAR = "."
+_FREE_MARKS = frozenset(".SG")
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Maze:
+    """A rectangular grid of free cells and walls; outside the grid counts as wall.
+
+    ``walls`` is a read-only boolean array of shape ``(height, width)`` indexed ``[y, x]``.
+    Equality and hashing look at the walls only, not at the name.
+    """
+
+    walls: npt.NDArray[np.bool_]
+    name: str = ""
+    _key: bytes = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        walls = np.array(self.walls, dtype=bool, copy=True)
+        if walls.ndim != 2 or walls.shape[0] < 1 or walls.shape[1] < 1:
+            raise ValueError(f"maze walls must be a non-empty 2-D array, got shape {walls.shape}")
+        walls.setflags(write=False)
+        object.__setattr__(self, "walls", walls)
+        key = walls.shape[0].to_bytes(4, "little") + np.packbits(walls).tobytes()
+        object.__setattr__(self, "_key", key)
+
+    @property
+    def width(self) -> int:
+        """Number of columns."""
+        return int(self.walls.shape[1])
+
+    @property
+    def height(self) -> int:
+        """Number of rows."""
+        return int(self.walls.shape[0])
+
+    def in_bounds(self, x: int, y: int) -> bool:
+        """Whether ``(x, y)`` lies on the grid."""
+        return 0 <= x < self.walls.shape[1] and 0 <= y < self.walls.shape[0]
+
+    def is_free(self, x: int, y: int) -> bool:
+        """Whether ``(x, y)`` lies on the grid and is not a wall."""
+        return self.in_bounds(x, y) and not self.walls[y, x]
+
+    def all_free(self, cells: tuple[Cell, ...] | list[Cell]) -> bool:
+        """Whether every cell in ``cells`` is free: the executability test for swept cells."""
+        return all(self.is_free(x, y) for x, y in cells)
+
+    def free_cells(self) -> list[Cell]:
+        """Every free cell, row by row."""
+        ys, xs = np.nonzero(~self.walls)
+        return [(int(x), int(y)) for y, x in zip(ys, xs, strict=True)]
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Maze):
+            return NotImplemented
+        return self._key == other._key and self.walls.shape == other.walls.shape
+
+    def __hash__(self) -> int:
+        return hash(self._key)
+
+    def __str__(self) -> str:
+        return format_maze(self)
+
+
+def parse_maze(text: str, *, source: str = "<string>", name: str = "") -> Maze:
+    """Parse the plain-text format; errors name ``source``, the line and the column."""
+    rows = text.splitlines()
+    while rows and not rows[-1].strip():
+        rows.pop()
+    if not rows:
+        raise InputError(
+            "expected at least one row of '#' and '.', got an empty maze", source=source
+        )
+    width = len(rows[0])
+    for y, row in enumerate(rows):
+        if not row.strip():
+            raise InputError(
+                "expected a row of '#' and '.', got an empty line", source=source, line=y + 1
+            )
+        if len(row) != width:
+            raise InputError(
+                f"expected {width} cells in every row (as in row 1), got {len(row)}",
+                source=source,
+                line=y + 1,
+                column=min(len(row), width) + 1,
+            )
+    walls = np.zeros((len(rows), width), dtype=bool)
+    for y, row in enumerate(rows):
+        for x, char in enumerate(row):
+            if char == WALL_CHAR:
+                walls[y, x] = True
+            elif char not in _FREE_MARKS:
+                raise InputError(
+                    f"expected '#' (wall), '.', 'S' or 'G' (free), got {char!r}",
+                    source=source,
+                    line=y + 1,
+                    column=x + 1,
+                )
+    return Maze(walls, name=name)
+
+
+def format_maze(maze: Maze) -> str:
+    """The plain-text form of ``maze``, one line per row with a final newline."""
+    lut = np.array([FREE_CHAR, WALL_CHAR])
+    return "".join("".join(lut[row.astype(np.intp)]) + "\n" for row in maze.walls)
+
+
+def save_maze(maze: Maze, path: str | Path) -> None:
+    """Write ``maze`` in the plain-text format."""
+    Path(path).write_text(format_maze(maze), encoding="utf-8")
+
+
+@lru_cache(maxsize=64)
+def clearance_map(maze: Maze) -> npt.NDArray[np.int32]:
+    """Chebyshev distance from every cell to the nearest wall, computed once per maze.
+
+    Walls get 0, a free cell touching a wall (also diagonally) gets 1, and so on. The area outside
+    the grid counts as wall, so a free cell on the border has clearance 1. The array is read-only,
+    shaped ``(height, width)`` and indexed ``[y, x]``.
+    """
+    h, w = maze.walls.shape
+    blocked = np.ones((h + 2, w + 2), dtype=bool)
+    blocked[1:-1, 1:-1] = maze.walls
+    dist = np.zeros((h + 2, w + 2), dtype=np.int32)
+    reached = blocked.copy()
+    level = 0
+    while not reached.all():
+        level += 1
+        grown = reached.copy()
+        # A 3x3 dilation is the Chebyshev ball of radius 1: two separable 1-D passes.
+        grown[1:, :] |= reached[:-1, :]
+        grown[:-1, :] |= reached[1:, :]
+        rows = grown.copy()
+        grown[:, 1:] |= rows[:, :-1]
+        grown[:, :-1] |= rows[:, 1:]
+        dist[grown & ~reached] = level
+        reached = grown
+    result = dist[1:-1, 1:-1].copy()
+    result.setflags(write=False)
+    return result
+
+
+def clearance_penalties(maze: Maze, radius: int) -> npt.NDArray[np.int64]:
+    """``max(0, radius - clearance)`` per cell, as an ``int64`` array ``[y, x]``."""
+    return np.maximum(0, radius - clearance_map(maze).astype(np.int64))

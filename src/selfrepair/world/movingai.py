@@ -1,0 +1,243 @@
+"""MovingAI grid benchmarks: ``.map`` files and ``.map.scen`` scenario files.
+
+Format (Sturtevant 2012): a map starts with ``type octile``, ``height H``, ``width W`` and ``map``,
+then H rows of W characters; ``.``, ``G`` and ``S`` are passable, ``@``, ``O``, ``T`` and ``W``
+blocked. A scenario file starts with ``version 1``; every other line has nine tab-separated fields
+``bucket map width height start_x start_y goal_x goal_y optimal_length``. Both generations of
+scenario files are accepted: the hog2 snapshot (map column with a path, 5 decimals) and the newer
+one (bare map name, 8 decimals).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from selfrepair.errors import InputError
+from selfrepair.geometry import Cell
+from selfrepair.world.maze import Maze
+
+__all__ = ["ScenarioQuery", "load_map", "load_scenario", "parse_map", "parse_scenario"]
+
+_PASSABLE = frozenset(".GS")
+_BLOCKED = frozenset("@OTW")
+_HEADER_KEYS = ("type", "height", "width")
+
+
+@dataclass(frozen=True, slots=True)
+class ScenarioQuery:
+    """One line of a scenario file; ``line`` is its 1-based line number in the file."""
+
+    bucket: int
+    map_name: str
+    width: int
+    height: int
+    start: Cell
+    goal: Cell
+    optimal_length: float
+    line: int
+
+
+def _read_text(path: Path) -> str:
+    try:
+        return path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise InputError(f"cannot read file: {exc.strerror}", source=str(path)) from exc
+    except UnicodeDecodeError as exc:
+        raise InputError("expected a UTF-8 text file", source=str(path)) from exc
+
+
+def parse_map(text: str, *, source: str = "<string>", name: str = "") -> Maze:
+    """Parse a MovingAI ``.map`` text into a :class:`Maze`."""
+    lines = text.splitlines()
+    header: dict[str, str] = {}
+    index = 0
+    while index < len(lines) and lines[index].strip() != "map":
+        key, _, value = lines[index].strip().partition(" ")
+        if key not in _HEADER_KEYS:
+            raise InputError(
+                f"expected a header line 'type', 'height', 'width' or 'map', got {lines[index]!r}",
+                source=source,
+                line=index + 1,
+            )
+        header[key] = value.strip()
+        index += 1
+    if index == len(lines):
+        raise InputError("expected a 'map' line after the header", source=source, line=index)
+    for key in _HEADER_KEYS:
+        if key not in header:
+            raise InputError(f"expected a '{key}' header field", source=source, line=index + 1)
+    if header["type"] != "octile":
+        raise InputError(
+            f"expected 'type octile', got 'type {header['type']}'",
+            source=source,
+            line=_header_line(lines, "type"),
+        )
+    height = _header_int(header, "height", source, lines)
+    width = _header_int(header, "width", source, lines)
+    rows = lines[index + 1 : index + 1 + height]
+    if len(rows) < height:
+        raise InputError(
+            f"expected {height} map rows (from the header), got {len(rows)}",
+            source=source,
+            line=len(lines) + 1,
+        )
+    for extra, text in enumerate(lines[index + 1 + height :], start=index + 2 + height):
+        if text.strip():
+            raise InputError(
+                f"expected {height} map rows (from the header), found more",
+                source=source,
+                line=extra,
+            )
+    for y, row in enumerate(rows):  # all row lengths first: the header may claim any size
+        if len(row) != width:
+            raise InputError(
+                f"expected {width} cells in the row (from the header), got {len(row)}",
+                source=source,
+                line=index + 2 + y,
+                column=min(len(row), width) + 1,
+            )
+    walls = np.zeros((height, width), dtype=bool)
+    for y, row in enumerate(rows):
+        for x, char in enumerate(row):
+            if char in _BLOCKED:
+                walls[y, x] = True
+            elif char not in _PASSABLE:
+                raise InputError(
+                    f"expected a map character from '.GS' (passable) or '@OTW' (blocked), "
+                    f"got {char!r}",
+                    source=source,
+                    line=index + 2 + y,
+                    column=x + 1,
+                )
+    return Maze(walls, name=name)
+
+
+def _header_line(lines: list[str], key: str) -> int:
+    return next(i + 1 for i, text in enumerate(lines) if text.strip().startswith(key))
+
+
+def _header_int(header: dict[str, str], key: str, source: str, lines: list[str]) -> int:
+    value = header[key]
+    if not (value.isascii() and value.isdigit()) or int(value) < 1:
+        raise InputError(
+            f"expected a positive integer {key}, got {value!r}",
+            source=source,
+            line=_header_line(lines, key),
+        )
+    return int(value)
+
+
+def load_map(path: str | Path, *, name: str | None = None) -> Maze:
+    """Read a MovingAI ``.map`` file; the maze is named after the file unless ``name`` is given."""
+    path = Path(path)
+    return parse_map(
+        _read_text(path), source=str(path), name=name if name is not None else path.stem
+    )
+
+
+def parse_scenario(
+    text: str, *, source: str = "<string>", maze: Maze | None = None
+) -> tuple[ScenarioQuery, ...]:
+    """Parse a ``.map.scen`` text. With ``maze``, also check that starts and goals are free."""
+    lines = text.splitlines()
+    if not lines or lines[0].split() not in (["version", "1"], ["version", "1.0"]):
+        raise InputError("expected the first line 'version 1'", source=source, line=1)
+    queries = []
+    for number, raw in enumerate(lines[1:], start=2):
+        if raw.strip():
+            queries.append(_parse_scenario_line(raw, number, source, maze))
+    return tuple(queries)
+
+
+def _parse_scenario_line(raw: str, number: int, source: str, maze: Maze | None) -> ScenarioQuery:
+    fields = raw.split("\t") if "\t" in raw else raw.split()
+    if len(fields) != 9:
+        raise InputError(
+            "expected 9 fields: bucket map width height start_x start_y goal_x goal_y "
+            f"optimal_length, got {len(fields)}",
+            source=source,
+            line=number,
+        )
+    columns = _field_columns(raw, fields)
+    names = ("bucket", "width", "height", "start_x", "start_y", "goal_x", "goal_y")
+    ints: dict[str, int] = {}
+    for key, value, column in zip(
+        names, [fields[0], *fields[2:8]], [columns[0], *columns[2:8]], strict=True
+    ):
+        digits = value.strip().removeprefix("-")
+        if not (digits.isascii() and digits.isdigit()):
+            raise InputError(
+                f"expected an integer {key}, got {value!r}",
+                source=source,
+                line=number,
+                column=column,
+            )
+        ints[key] = int(value)
+    try:
+        optimal = float(fields[8])
+    except ValueError as exc:
+        raise InputError(
+            f"expected a number optimal_length, got {fields[8]!r}",
+            source=source,
+            line=number,
+            column=columns[8],
+        ) from exc
+    query = ScenarioQuery(
+        bucket=ints["bucket"],
+        map_name=fields[1],
+        width=ints["width"],
+        height=ints["height"],
+        start=(ints["start_x"], ints["start_y"]),
+        goal=(ints["goal_x"], ints["goal_y"]),
+        optimal_length=optimal,
+        line=number,
+    )
+    _check_query(query, source, maze, columns)
+    return query
+
+
+def _field_columns(raw: str, fields: list[str]) -> list[int]:
+    """The 1-based column where each field of a scenario line starts."""
+    columns, at = [], 0
+    for field in fields:
+        at = raw.index(field, at)
+        columns.append(at + 1)
+        at += len(field)
+    return columns
+
+
+def _check_query(query: ScenarioQuery, source: str, maze: Maze | None, columns: list[int]) -> None:
+    if maze is not None and (query.width, query.height) != (maze.width, maze.height):
+        raise InputError(
+            f"expected the map size {maze.width}x{maze.height}, got {query.width}x{query.height}",
+            source=source,
+            line=query.line,
+            column=columns[2],
+        )
+    for label, (x, y), column in (
+        ("start", query.start, columns[4]),
+        ("goal", query.goal, columns[6]),
+    ):
+        if not (0 <= x < query.width and 0 <= y < query.height):
+            raise InputError(
+                f"expected the {label} ({x},{y}) inside the {query.width}x{query.height} map",
+                source=source,
+                line=query.line,
+                column=column,
+            )
+        if maze is not None and not maze.is_free(x, y):
+            raise InputError(
+                f"expected the {label} ({x},{y}) on a free cell, but it is a wall",
+                source=source,
+                line=query.line,
+                column=column,
+            )
+
+
+def load_scenario(path: str | Path, *, maze: Maze | None = None) -> tuple[ScenarioQuery, ...]:
+    """Read a ``.map.scen`` file (see :func:`parse_scenario`)."""
+    path = Path(path)
+    return parse_scenario(_read_text(path), source=str(path), maze=maze)
