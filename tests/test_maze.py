@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -10,7 +11,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
-from selfrepair.errors import InputError
+from selfrepair.errors import InputError, LimitError
 from selfrepair.world.loading import load_maze
 from selfrepair.world.maze import Maze, clearance_map, format_maze, parse_maze, save_maze
 
@@ -76,6 +77,56 @@ def test_blank_line_inside_a_maze_is_named(text: str, line: int) -> None:
     with pytest.raises(InputError, match="empty line") as info:
         parse_maze(text, source="m.maze")
     assert info.value.line == line
+
+
+@pytest.mark.parametrize("separator", ["\u2028", "\x0c", "\r", "\x85", "\x1e"])
+def test_only_line_feeds_end_a_row(separator: str) -> None:
+    # str.splitlines also splits at U+2028, form feeds, lone CRs and more: "#...#<sep>#...#" was
+    # read as two good rows. It is one row of 11 characters, too long from column 6 on.
+    text = "#####\n#...#" + separator + "#...#\n#####\n"
+    with pytest.raises(InputError, match="expected 5 cells.*got 11") as info:
+        parse_maze(text, source="m.maze")
+    assert (info.value.line, info.value.column) == (2, 6)
+    with pytest.raises(InputError, match=re.escape(repr(separator))):
+        parse_maze("#....#" + separator + "#\n", source="m.maze")
+
+
+def test_crlf_line_ends_and_a_byte_order_mark_are_accepted() -> None:
+    plain = parse_maze("#####\n#...#\n#####\n")
+    assert parse_maze("\ufeff#####\r\n#...#\r\n#####\r\n") == plain
+
+
+def test_byte_order_mark_in_a_file_is_accepted(tmp_path: Path) -> None:
+    path = tmp_path / "bom.maze"
+    path.write_bytes(b"\xef\xbb\xbf#####\n#...#\n#####\n")
+    assert load_maze(path) == parse_maze("#####\n#...#\n#####\n")
+
+
+def test_a_file_that_is_not_utf8_names_line_and_column(tmp_path: Path) -> None:
+    path = tmp_path / "latin1.maze"
+    path.write_bytes(b"#####\n#.\xe9.#\n#####\n")
+    with pytest.raises(InputError, match="UTF-8.*0xe9") as info:
+        load_maze(path)
+    assert (info.value.line, info.value.column) == (2, 3)
+
+
+def test_maze_over_the_cell_limit_is_refused_before_its_cells_are_read() -> None:
+    text = "#####\n#...#\n#####\n"
+    with pytest.raises(LimitError, match=r"at most 14 cells, got 15 \(5 columns x 3 rows\)") as info:
+        parse_maze(text, source="m.maze", max_cells=14)
+    assert "--max-cells" in str(info.value) and info.value.limit == "max_cells"
+    assert parse_maze(text, max_cells=15).width == 5
+    assert parse_maze(text, max_cells=None).width == 5
+    with pytest.raises(LimitError):  # the limit comes before the bad character
+        parse_maze(text.replace(".", "x"), max_cells=14)
+
+
+def test_maze_file_too_big_for_the_cell_limit_is_refused_unread(tmp_path: Path) -> None:
+    path = tmp_path / "big.maze"
+    path.write_text("#" * 70_000 + "\n", encoding="utf-8")
+    with pytest.raises(LimitError, match="maze file of at most 65,539 bytes, got 70,001"):
+        load_maze(path, max_cells=1)
+    assert load_maze(path).width == 70_000
 
 
 def test_save_and_load(tmp_path: Path) -> None:

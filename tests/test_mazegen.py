@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from selfrepair.errors import ProblemError
+from selfrepair.errors import LimitError, ProblemError
 from selfrepair.world.maze import Maze
 from selfrepair.world.mazegen import generate_maze, room_grid_shape
 
@@ -148,3 +148,12 @@ def test_wide_corridors_fill_a_matching_size() -> None:
 def test_bad_options_raise_problem_error(kwargs: dict, message: str) -> None:
     with pytest.raises(ProblemError, match=message):
         generate_maze(**kwargs, seed=0)
+
+
+def test_a_maze_over_the_cell_limit_is_refused_before_any_work() -> None:
+    with pytest.raises(LimitError, match="max-cells"):
+        generate_maze(15, 15, seed=0, max_cells=224)
+    assert generate_maze(15, 15, seed=0, max_cells=225).width == 15
+    # `maze generate --width 1000000000 --height 15` ran 207 s into a MemoryError.
+    with pytest.raises(LimitError, match=r"15,000,000,000 \(width 1000000000 x height 15\)"):
+        generate_maze(1_000_000_000, 15, seed=0)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from selfrepair.errors import InputError
+from selfrepair.errors import InputError, LimitError
 from selfrepair.world.loading import load_maze
 from selfrepair.world.movingai import load_map, load_scenario, parse_map, parse_scenario
 
@@ -92,7 +92,13 @@ def test_small_scenario_parses() -> None:
         ("type octile\nheight 1\nwidth 4\nmap\n..x.\n", 5, "'x'"),
         ("type hex\nheight 1\nwidth 4\nmap\n....\n", 1, "type octile"),
         ("type octile\nheight 1\nwidth 4\nmap\n....\n....\n", 6, "found more"),
-        ("type octile\nheight 1\nwidth 99999999999999\nmap\n....\n", 5, "expected 99999"),
+        ("type octile\nheight 1\nwidth 99999999999999\nmap\n....\n", 3, "at most 4,194,304 cells"),
+        ("type octile\nheight 3\nheight 4\nwidth 3\nmap\n...\n...\n...\n", 3, "second one"),
+        ("type octile\nwidth 3\nheight 1\nwidth 4\nmap\n....\n", 4, "first is line 2"),
+        ("type octile\ntype octile\nheight 1\nwidth 1\nmap\n.\n", 2, "one 'type' header"),
+        ("type octile\nheight 1" + "0" * 5000 + "\nwidth 4\nmap\n", 2, "at most 18 digits"),
+        ("type octile\nheight 1\nwidth 4\nmap\n..\x0c.\n", 5, r"got '\\x0c'"),
+        ("type octile\nheight 2\nwidth 2\nmap\n..\u2028..\n", 6, "expected 2 map rows"),
     ],
 )
 def test_map_errors(text: str, line: int, message: str) -> None:
@@ -101,6 +107,36 @@ def test_map_errors(text: str, line: int, message: str) -> None:
     assert info.value.source == "bad.map"
     assert info.value.line == line
     assert str(info.value).startswith(f"bad.map:{line}")
+
+
+def test_empty_map_is_reported_without_a_line_number() -> None:
+    with pytest.raises(InputError, match="empty file") as info:
+        parse_map("", source="empty.map")
+    assert info.value.line is None
+    assert str(info.value) == (
+        "empty.map: expected a MovingAI map starting with 'type octile', got an empty file"
+    )
+
+
+def test_map_with_byte_order_mark_and_crlf_line_ends_parses() -> None:
+    assert parse_map("\ufeff" + SMALL_MAP.replace("\n", "\r\n")) == parse_map(SMALL_MAP)
+
+
+def test_map_declaring_more_cells_than_the_limit_is_refused_before_its_rows() -> None:
+    text = "type octile\nheight 3\nwidth 4\nmap\n"  # no rows at all: the limit comes first
+    with pytest.raises(LimitError, match=r"got 12 \(height 3 x width 4\)") as info:
+        parse_map(text, source="big.map", max_cells=11)
+    assert info.value.limit == "max_cells" and info.value.line == 3
+    assert "--max-cells" in str(info.value)
+    assert parse_map(SMALL_MAP, max_cells=12).width == 4
+
+
+def test_map_file_too_big_for_the_cell_limit_is_refused_unread(tmp_path: Path) -> None:
+    path = tmp_path / "big.map"
+    path.write_text(SMALL_MAP + "\n" * 70_000, encoding="utf-8")
+    with pytest.raises(LimitError, match="bytes"):
+        load_map(path, max_cells=1)
+    assert load_map(path).width == 4  # blank lines after the rows are fine within the limit
 
 
 def test_map_error_names_column_of_bad_character() -> None:
@@ -130,6 +166,12 @@ def test_map_error_names_column_where_a_ragged_row_goes_wrong(row: str, column: 
         ("0\tsmall.map\t4\t3\t1\t--1\t2\t2\t1.0\n", "integer start_y"),
         ("0\tsmall.map\t4\t3\t1\t1\t²\t2\t1.0\n", "integer goal_x"),
         ("0\tsmall.map\t4\t3\t1\t1\t2\t2\tfar\n", "number optimal_length"),
+        ("0\tsmall.map\t4\t3\t1\t1\t2\t2\tnan\n", "finite non-negative number"),
+        ("0\tsmall.map\t4\t3\t1\t1\t2\t2\tinf\n", "finite non-negative number"),
+        ("0\tsmall.map\t4\t3\t1\t1\t2\t2\t-1.5\n", "finite non-negative number"),
+        ("0\tsmall.map\t4\t3\t1\t1\t2\t2\t1e400\n", "finite non-negative number"),
+        ("0\tsmall.map\t4\t3\t1\t1\t2\t2\t1_0\n", "finite non-negative number"),
+        ("0\tsmall.map\t4\t3\t1" + "0" * 5000 + "\t1\t2\t2\t1\n", "at most 18 digits"),
     ],
 )
 def test_scenario_errors(body: str, message: str) -> None:
@@ -140,6 +182,16 @@ def test_scenario_errors(body: str, message: str) -> None:
     assert (info.value.source, info.value.line) == ("bad.scen", 3)
     if "9 fields" not in message:
         assert info.value.column is not None and info.value.column > 1
+
+
+def test_scenario_lines_end_only_at_line_feeds() -> None:
+    # A form feed inside a line used to split it in two, and later errors named the wrong line.
+    text = SCEN_HEADER + scen_line(1, 1, 2, 2).replace("\t2\t2", "\t2\x0c\t2") + "bad\n"
+    with pytest.raises(InputError, match="9 fields") as info:
+        parse_scenario(text, source="bad.scen")
+    assert info.value.line == 3
+    crlf = "\ufeff" + (SCEN_HEADER + scen_line(1, 1, 2, 2)).replace("\n", "\r\n")
+    assert parse_scenario(crlf)[0].goal == (2, 2)
 
 
 def test_scenario_error_column_points_at_the_field() -> None:

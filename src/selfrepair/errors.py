@@ -11,6 +11,7 @@ from __future__ import annotations
 __all__ = [
     "ConfigError",
     "InputError",
+    "LimitError",
     "ProblemError",
     "SelfRepairError",
     "TableError",
@@ -50,6 +51,33 @@ class InputError(SelfRepairError, ValueError):
             if self.column is not None:
                 where += f":{self.column}"
         return f"{where}: {self.reason}"
+
+
+class LimitError(InputError):
+    """Input that would take more than a documented size limit (:mod:`selfrepair.limits`).
+
+    Raised before the work the limit guards starts. ``limit`` is the limit's name, which is also
+    the keyword argument that sets it (``max_cells``); the message names it and the command-line
+    flag that raises it (``--max-cells``).
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        limit: str,
+        source: str = "<input>",
+        line: int | None = None,
+        column: int | None = None,
+    ) -> None:
+        self.limit = limit
+        flag = "--" + limit.replace("_", "-")
+        super().__init__(
+            f"{message} (limit {limit}; raise it with {flag})",
+            source=source,
+            line=line,
+            column=column,
+        )
 
 
 class TableError(InputError):

@@ -2,8 +2,13 @@
 
 Plain-text format: one line per row, ``#`` for a wall, ``.`` for a free cell; ``S`` and ``G`` marks
 are accepted as free cells (they are not kept). Row ``y`` is the ``y``-th line, column ``x`` the
-character index, as in MovingAI maps. MovingAI ``.map`` files are read by
-:mod:`selfrepair.world.movingai`; :func:`load_maze` picks the reader by file suffix.
+character index, as in MovingAI maps. Only ``\\n`` and ``\\r\\n`` end a row (a form feed or U+2028
+is a bad character of its row); blank lines may only come at the end; a leading UTF-8 byte-order
+mark is ignored. A maze of more than ``max_cells`` cells (default
+:data:`selfrepair.limits.MAX_CELLS`) is refused before its cells are read.
+
+MovingAI ``.map`` files are read by :mod:`selfrepair.world.movingai`; :func:`load_maze` picks the
+reader by file suffix.
 """
 
 from __future__ import annotations
@@ -17,6 +22,8 @@ import numpy.typing as npt
 
 from selfrepair.errors import InputError
 from selfrepair.geometry import Cell
+from selfrepair.limits import MAX_CELLS, check_limit
+from selfrepair.textio import strip_bom, text_lines
 
 __all__ = ["Maze", "clearance_map", "clearance_penalties", "format_maze", "parse_maze", "save_maze"]
 
@@ -85,9 +92,15 @@ class Maze:
         return format_maze(self)
 
 
-def parse_maze(text: str, *, source: str = "<string>", name: str = "") -> Maze:
-    """Parse the plain-text format; errors name ``source``, the line and the column."""
-    rows = text.splitlines()
+def parse_maze(
+    text: str, *, source: str = "<string>", name: str = "", max_cells: int | None = MAX_CELLS
+) -> Maze:
+    """Parse the plain-text format; errors name ``source``, the line and the column.
+
+    A maze of more than ``max_cells`` cells raises :class:`~selfrepair.errors.LimitError` before
+    any cell is read (``None``: no limit).
+    """
+    rows = text_lines(strip_bom(text))
     while rows and not rows[-1].strip():
         rows.pop()
     if not rows:
@@ -95,6 +108,14 @@ def parse_maze(text: str, *, source: str = "<string>", name: str = "") -> Maze:
             "expected at least one row of '#' and '.', got an empty maze", source=source
         )
     width = len(rows[0])
+    check_limit(
+        len(rows) * width,
+        max_cells,
+        name="max_cells",
+        what="cells",
+        detail=f"{width} columns x {len(rows)} rows",
+        source=source,
+    )
     for y, row in enumerate(rows):
         if not row.strip():
             raise InputError(

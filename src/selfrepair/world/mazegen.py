@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from selfrepair.errors import ProblemError
+from selfrepair.limits import MAX_CELLS, check_limit
 from selfrepair.world.maze import Maze
 
 __all__ = ["generate_maze", "room_grid_shape"]
@@ -43,14 +44,24 @@ def generate_maze(
     braid: float = 0.0,
     seed: int | np.random.Generator,
     name: str = "",
+    max_cells: int | None = MAX_CELLS,
 ) -> Maze:
     """A ``width x height`` maze with ``corridor``-wide passages; see the module docstring.
 
     ``seed`` is an integer or a :class:`numpy.random.Generator` (which is advanced). ``braid`` in
     ``[0, 1]`` is the share of dead ends that get an extra passage. Raises
     :class:`~selfrepair.errors.ProblemError` when the options cannot give a maze with at least
-    two rooms.
+    two rooms, and :class:`~selfrepair.errors.LimitError` before any work when
+    ``width * height`` exceeds ``max_cells`` (``None``: no limit).
     """
+    check_limit(
+        width * height,
+        max_cells,
+        name="max_cells",
+        what="cells",
+        detail=f"width {width} x height {height}",
+        source="maze generator",
+    )
     _check_options(width, height, corridor, braid)
     rng = np.random.default_rng(seed)
     nx, ny = room_grid_shape(width, height, corridor)

@@ -3,13 +3,19 @@
 Format (Sturtevant 2012): a map starts with ``type octile``, ``height H``, ``width W`` and ``map``,
 then H rows of W characters; ``.``, ``G`` and ``S`` are passable, ``@``, ``O``, ``T`` and ``W``
 blocked. A scenario file starts with ``version 1``; every other line has nine tab-separated fields
-``bucket map width height start_x start_y goal_x goal_y optimal_length``. Both generations of
+``bucket map width height start_x start_y goal_x goal_y optimal_length``; the optimal length is a
+finite non-negative decimal number. Both generations of
 scenario files are accepted: the hog2 snapshot (map column with a path, 5 decimals) and the newer
-one (bare map name, 8 decimals).
+one (bare map name, 8 decimals). Lines end at ``\\n`` or ``\\r\\n`` only, a header key may appear
+once, a leading UTF-8 byte-order mark is ignored, and a map whose header declares more than
+``max_cells`` cells (default :data:`selfrepair.limits.MAX_CELLS`) is refused before its rows are
+read.
 """
 
 from __future__ import annotations
 
+import math
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -17,6 +23,8 @@ import numpy as np
 
 from selfrepair.errors import InputError
 from selfrepair.geometry import Cell
+from selfrepair.limits import MAX_CELLS, check_limit, maze_file_bytes
+from selfrepair.textio import read_text, strip_bom, text_lines
 from selfrepair.world.maze import Maze
 
 __all__ = ["ScenarioQuery", "load_map", "load_scenario", "parse_map", "parse_scenario"]
@@ -24,6 +32,9 @@ __all__ = ["ScenarioQuery", "load_map", "load_scenario", "parse_map", "parse_sce
 _PASSABLE = frozenset(".GS")
 _BLOCKED = frozenset("@OTW")
 _HEADER_KEYS = ("type", "height", "width")
+_MAX_DIGITS = 18
+"""Longest integer field accepted (any real map or scenario needs at most 5 digits)."""
+_DECIMAL = re.compile(r"([0-9]+(\.[0-9]*)?|\.[0-9]+)([eE][+-]?[0-9]+)?")
 
 
 @dataclass(frozen=True, slots=True)
@@ -40,43 +51,31 @@ class ScenarioQuery:
     line: int
 
 
-def _read_text(path: Path) -> str:
-    try:
-        return path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"cannot read file: {exc.strerror}", source=str(path)) from exc
-    except UnicodeDecodeError as exc:
-        raise InputError("expected a UTF-8 text file", source=str(path)) from exc
+def parse_map(
+    text: str, *, source: str = "<string>", name: str = "", max_cells: int | None = MAX_CELLS
+) -> Maze:
+    """Parse a MovingAI ``.map`` text into a :class:`Maze`.
 
-
-def parse_map(text: str, *, source: str = "<string>", name: str = "") -> Maze:
-    """Parse a MovingAI ``.map`` text into a :class:`Maze`."""
-    lines = text.splitlines()
-    header: dict[str, str] = {}
-    index = 0
-    while index < len(lines) and lines[index].strip() != "map":
-        key, _, value = lines[index].strip().partition(" ")
-        if key not in _HEADER_KEYS:
-            raise InputError(
-                f"expected a header line 'type', 'height', 'width' or 'map', got {lines[index]!r}",
-                source=source,
-                line=index + 1,
-            )
-        header[key] = value.strip()
-        index += 1
-    if index == len(lines):
-        raise InputError("expected a 'map' line after the header", source=source, line=index)
-    for key in _HEADER_KEYS:
-        if key not in header:
-            raise InputError(f"expected a '{key}' header field", source=source, line=index + 1)
-    if header["type"] != "octile":
+    A map whose header declares more than ``max_cells`` cells raises
+    :class:`~selfrepair.errors.LimitError` before its rows are read (``None``: no limit).
+    """
+    lines = text_lines(strip_bom(text))
+    if not lines:
         raise InputError(
-            f"expected 'type octile', got 'type {header['type']}'",
-            source=source,
-            line=_header_line(lines, "type"),
+            "expected a MovingAI map starting with 'type octile', got an empty file", source=source
         )
-    height = _header_int(header, "height", source, lines)
-    width = _header_int(header, "width", source, lines)
+    header, where, index = _parse_header(lines, source)
+    height = _header_int(header, where, "height", source)
+    width = _header_int(header, where, "width", source)
+    check_limit(
+        height * width,
+        max_cells,
+        name="max_cells",
+        what="cells",
+        detail=f"height {height} x width {width}",
+        source=source,
+        line=max(where["height"], where["width"]),
+    )
     rows = lines[index + 1 : index + 1 + height]
     if len(rows) < height:
         raise InputError(
@@ -115,26 +114,86 @@ def parse_map(text: str, *, source: str = "<string>", name: str = "") -> Maze:
     return Maze(walls, name=name)
 
 
-def _header_line(lines: list[str], key: str) -> int:
-    return next(i + 1 for i, text in enumerate(lines) if text.strip().startswith(key))
-
-
-def _header_int(header: dict[str, str], key: str, source: str, lines: list[str]) -> int:
-    value = header[key]
-    if not (value.isascii() and value.isdigit()) or int(value) < 1:
+def _parse_header(lines: list[str], source: str) -> tuple[dict[str, str], dict[str, int], int]:
+    """The header fields, the 1-based line of each, and the index of the ``map`` line."""
+    header: dict[str, str] = {}
+    where: dict[str, int] = {}
+    index = 0
+    while index < len(lines) and lines[index].strip() != "map":
+        key, _, value = lines[index].strip().partition(" ")
+        if key not in _HEADER_KEYS:
+            raise InputError(
+                f"expected a header line 'type', 'height', 'width' or 'map', got {lines[index]!r}",
+                source=source,
+                line=index + 1,
+            )
+        if key in header:
+            raise InputError(
+                f"expected one '{key}' header line, got a second one (the first is line "
+                f"{where[key]})",
+                source=source,
+                line=index + 1,
+            )
+        header[key] = value.strip()
+        where[key] = index + 1
+        index += 1
+    if index == len(lines):
         raise InputError(
-            f"expected a positive integer {key}, got {value!r}",
+            "expected a 'map' line after the header, got the end of the file",
             source=source,
-            line=_header_line(lines, key),
+            line=len(lines),
         )
-    return int(value)
+    for key in _HEADER_KEYS:
+        if key not in header:
+            raise InputError(f"expected a '{key}' header field", source=source, line=index + 1)
+    if header["type"] != "octile":
+        raise InputError(
+            f"expected 'type octile', got 'type {header['type']}'",
+            source=source,
+            line=where["type"],
+        )
+    return header, where, index
 
 
-def load_map(path: str | Path, *, name: str | None = None) -> Maze:
-    """Read a MovingAI ``.map`` file; the maze is named after the file unless ``name`` is given."""
+def _header_int(header: dict[str, str], where: dict[str, int], key: str, source: str) -> int:
+    value = header[key]
+    number = _small_int(value)
+    if number is None or number < 1:
+        raise InputError(
+            f"expected a positive integer {key} of at most {_MAX_DIGITS} digits, got {value!r}",
+            source=source,
+            line=where[key],
+        )
+    return number
+
+
+def _small_int(text: str) -> int | None:
+    """``text`` as an integer when it is an optional ``-`` and 1 to 18 ASCII digits, else None.
+
+    The digit bound keeps ``int()`` far from Python's 4300-digit conversion limit."""
+    digits = text.removeprefix("-")
+    if not (digits.isascii() and digits.isdigit() and len(digits) <= _MAX_DIGITS):
+        return None
+    return int(text)
+
+
+def _read_text(path: Path, what: str, max_cells: int | None = None) -> str:
+    max_bytes = maze_file_bytes(max_cells)
+    return read_text(path, what=what, max_bytes=max_bytes, limit="max_cells")
+
+
+def load_map(
+    path: str | Path, *, name: str | None = None, max_cells: int | None = MAX_CELLS
+) -> Maze:
+    """Read a MovingAI ``.map`` file; the maze is named after the file unless ``name`` is given.
+
+    A file too big to hold ``max_cells`` cells is refused before it is read."""
     path = Path(path)
     return parse_map(
-        _read_text(path), source=str(path), name=name if name is not None else path.stem
+        _read_text(path, "MovingAI map file", max_cells),
+        source=str(path),
+        name=name if name is not None else path.stem,
+        max_cells=max_cells,
     )
 
 
@@ -142,7 +201,7 @@ def parse_scenario(
     text: str, *, source: str = "<string>", maze: Maze | None = None
 ) -> tuple[ScenarioQuery, ...]:
     """Parse a ``.map.scen`` text. With ``maze``, also check that starts and goals are free."""
-    lines = text.splitlines()
+    lines = text_lines(strip_bom(text))
     if not lines or lines[0].split() not in (["version", "1"], ["version", "1.0"]):
         raise InputError("expected the first line 'version 1'", source=source, line=1)
     queries = []
@@ -167,24 +226,23 @@ def _parse_scenario_line(raw: str, number: int, source: str, maze: Maze | None) 
     for key, value, column in zip(
         names, [fields[0], *fields[2:8]], [columns[0], *columns[2:8]], strict=True
     ):
-        digits = value.strip().removeprefix("-")
-        if not (digits.isascii() and digits.isdigit()):
+        parsed = _small_int(value.strip())
+        if parsed is None:
             raise InputError(
-                f"expected an integer {key}, got {value!r}",
+                f"expected an integer {key} of at most {_MAX_DIGITS} digits, got {value!r}",
                 source=source,
                 line=number,
                 column=column,
             )
-        ints[key] = int(value)
-    try:
-        optimal = float(fields[8])
-    except ValueError as exc:
+        ints[key] = parsed
+    optimal = _optimal_length(fields[8])
+    if optimal is None:
         raise InputError(
-            f"expected a number optimal_length, got {fields[8]!r}",
+            f"expected a finite non-negative number optimal_length, got {fields[8]!r}",
             source=source,
             line=number,
             column=columns[8],
-        ) from exc
+        )
     query = ScenarioQuery(
         bucket=ints["bucket"],
         map_name=fields[1],
@@ -197,6 +255,16 @@ def _parse_scenario_line(raw: str, number: int, source: str, maze: Maze | None) 
     )
     _check_query(query, source, maze, columns)
     return query
+
+
+def _optimal_length(text: str) -> float | None:
+    """A decimal number such as ``1.41421`` or ``2e3`` as a finite float, else None (no sign, no
+    ``nan`` or ``inf``: a length is never negative, and a non-number is bad input, not a
+    mismatch)."""
+    if _DECIMAL.fullmatch(text.strip()) is None:
+        return None
+    value = float(text)
+    return value if math.isfinite(value) else None
 
 
 def _field_columns(raw: str, fields: list[str]) -> list[int]:
@@ -240,4 +308,4 @@ def _check_query(query: ScenarioQuery, source: str, maze: Maze | None, columns: 
 def load_scenario(path: str | Path, *, maze: Maze | None = None) -> tuple[ScenarioQuery, ...]:
     """Read a ``.map.scen`` file (see :func:`parse_scenario`)."""
     path = Path(path)
-    return parse_scenario(_read_text(path), source=str(path), maze=maze)
+    return parse_scenario(_read_text(path, "MovingAI scenario file"), source=str(path), maze=maze)

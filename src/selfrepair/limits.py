@@ -1,0 +1,101 @@
+"""The default limits on every input a user can make huge, and the bounds of numeric options.
+
+A *limit* guards a resource (memory, time). It is checked before the work it guards starts, and a
+breach raises :class:`~selfrepair.errors.LimitError`, which names the limit and the flag that
+raises it. Every reader and generator takes the limit as a keyword argument of the same name
+(``max_cells=...``; ``None`` turns the check off), and every command that reads or makes such an
+input has a flag of the same name (``--max-cells N``). ``docs/reliability.md`` lists them with
+the tests that prove each one.
+
+A *bound* is a range a numeric option must lie in for its arithmetic to stay exact and finite; a
+value outside it is bad input (there is no flag: no useful value lies beyond it).
+
+This module sits at the bottom of the package beside :mod:`selfrepair.errors`, so that every layer
+can use it.
+"""
+
+from __future__ import annotations
+
+from selfrepair.errors import LimitError
+
+__all__ = [
+    "MAX_CELLS",
+    "MAX_CLEARANCE_WEIGHT",
+    "MAX_MISSIONS",
+    "MAX_TABLE_BYTES",
+    "MAX_TABLE_CANDIDATES",
+    "check_limit",
+    "maze_file_bytes",
+]
+
+# --- limits (each with a flag of the same name) ------------------------------------------------
+
+MAX_CELLS = 2048 * 2048
+"""Cells of a maze (width x height) read from a file or generated: 4,194,304.
+
+Four times the largest MovingAI maps (1024 x 1024). A maze this size takes about 15 s and 0.5 GB
+to generate and under a second to read; the planners' arrays scale with it."""
+
+MAX_MISSIONS = 1_000_000
+"""Missions of one experiment, counted from the configuration before any is built.
+
+Six times the bundled ``full`` experiment (159,744 missions); each mission costs about 1 kB of
+memory before it runs and one row in the results database after."""
+
+MAX_TABLE_BYTES = 64 * 1024 * 1024
+"""Size of a replacement-table file (64 MiB), checked before the file is read.
+
+The bundled generated-indexed table is 240 kB; parsing takes about ten times the file size in
+memory."""
+
+MAX_TABLE_CANDIDATES = 1_000_000
+"""Candidates in one replacement table, counted before any is re-simulated.
+
+Re-simulation takes about 40 µs per candidate, so the limit is about 40 s of loading; the bundled
+generated-indexed table has 3,402."""
+
+# --- bounds (no flag) --------------------------------------------------------------------------
+
+MAX_CLEARANCE_WEIGHT = 1_000_000
+"""Largest clearance weight a planning problem accepts.
+
+The experiments use 0 to 2; at this weight one cell of missing clearance already outweighs any
+difference in duration between two routes of a maze within :data:`MAX_CELLS`, while plan costs
+stay far inside the range of a float (a weight of 1e308 made them overflow)."""
+
+
+def check_limit(
+    value: int,
+    limit: int | None,
+    *,
+    name: str,
+    what: str,
+    source: str,
+    detail: str = "",
+    line: int | None = None,
+    column: int | None = None,
+) -> None:
+    """Raise :class:`LimitError` when ``value`` exceeds ``limit`` (``None``: no limit).
+
+    ``what`` says what was counted, e.g. ``"cells"``; ``name`` is the limit's name (``max_cells``);
+    ``detail`` (optional) says how ``value`` came about, e.g. ``"1000000000 x 15"``.
+    """
+    if limit is not None and value > limit:
+        raise LimitError(
+            f"expected at most {limit:,} {what}, got {value:,}"
+            + (f" ({detail})" if detail else ""),
+            limit=name,
+            source=source,
+            line=line,
+            column=column,
+        )
+
+
+def maze_file_bytes(max_cells: int | None) -> int | None:
+    """The largest maze file that can hold ``max_cells`` cells, for a check before reading.
+
+    A text maze or MovingAI map takes one byte per cell plus a line end per row (two with CRLF),
+    so no file of more than three bytes per cell (1-cell rows with CRLF) plus a 64 kB allowance for
+    a header, a byte-order mark and trailing blank lines can be within the cell limit.
+    """
+    return None if max_cells is None else 3 * max_cells + 65536
