@@ -84,7 +84,7 @@ def test_only_line_feeds_end_a_row(separator: str) -> None:
     # str.splitlines also splits at U+2028, form feeds, lone CRs and more: "#...#<sep>#...#" was
     # read as two good rows. It is one row of 11 characters, too long from column 6 on.
     text = "#####\n#...#" + separator + "#...#\n#####\n"
-    with pytest.raises(InputError, match="expected 5 cells.*got 11") as info:
+    with pytest.raises(InputError, match=r"expected 5 cells.*got 11") as info:
         parse_maze(text, source="m.maze")
     assert (info.value.line, info.value.column) == (2, 6)
     with pytest.raises(InputError, match=re.escape(repr(separator))):
@@ -105,14 +105,15 @@ def test_byte_order_mark_in_a_file_is_accepted(tmp_path: Path) -> None:
 def test_a_file_that_is_not_utf8_names_line_and_column(tmp_path: Path) -> None:
     path = tmp_path / "latin1.maze"
     path.write_bytes(b"#####\n#.\xe9.#\n#####\n")
-    with pytest.raises(InputError, match="UTF-8.*0xe9") as info:
+    with pytest.raises(InputError, match=r"UTF-8.*0xe9") as info:
         load_maze(path)
     assert (info.value.line, info.value.column) == (2, 3)
 
 
 def test_maze_over_the_cell_limit_is_refused_before_its_cells_are_read() -> None:
     text = "#####\n#...#\n#####\n"
-    with pytest.raises(LimitError, match=r"at most 14 cells, got 15 \(5 columns x 3 rows\)") as info:
+    message = r"at most 14 cells, got 15 \(5 columns x 3 rows\)"
+    with pytest.raises(LimitError, match=message) as info:
         parse_maze(text, source="m.maze", max_cells=14)
     assert "--max-cells" in str(info.value) and info.value.limit == "max_cells"
     assert parse_maze(text, max_cells=15).width == 5

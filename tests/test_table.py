@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from selfrepair.errors import TableError
+from selfrepair.errors import LimitError, TableError
 from selfrepair.robots import four_wheel
 from selfrepair.robots.domain import run_open
 from selfrepair.robots.four_wheel import FOUR_WHEEL
@@ -129,6 +129,15 @@ def test_candidate_containing_the_replaced_action_is_rejected() -> None:
         ({"entries": [{"action": "QQQQ", "candidates": []}]}, "entry 0"),
         ({"entries": [{"action": "FFFF", "candidates": [[]]}]}, "empty"),
         ({"entries": [{"action": "FFFF", "faults": "FL:F", "candidates": []}]}, 'no "faults"'),
+        ({"version": True}, '"version" to be an integer, got true'),
+        ({"version": 1.0}, '"version" to be an integer, got 1.0'),
+        ({"version": "1"}, '"version" to be an integer'),
+        ({"domain": ["four-wheel"]}, "'domain' to be a string"),
+        ({"shape": 1}, "'shape' to be a string"),
+        ({"made_by": None}, "'made_by' to be a string"),
+        ({"parameters": []}, '"parameters" to be an object'),
+        ({"parameters": {"k": {"deep": 1}}}, '"parameters" values'),
+        ({"parameters": {"k": [[1]]}}, '"parameters" values'),
     ],
 )
 def test_malformed_tables_are_rejected(mutation: dict[str, object], expected: str) -> None:
@@ -136,6 +145,62 @@ def test_malformed_tables_are_rejected(mutation: dict[str, object], expected: st
     data.update(mutation)
     with pytest.raises(TableError, match=expected):
         parse_table(json.dumps(data), source="x.json")
+
+
+@pytest.mark.parametrize(
+    ("text", "message", "line", "column"),
+    [
+        ("[" * 100_000, "nested at most 8 deep", 1, 9),  # was a RecursionError
+        ('{"a": "[[[[[[[[[[\\"[[[[[[[[[", "b":\n [[[[[[[[]]]]]]]]}', "nested", 2, 9),
+        ('{"format": "selfrepair-table", "version": 1' + "0" * 5000 + "}", "18 digits", 1, 43),
+        ('{"format": "selfrepair-table",\n "version": NaN}', "got NaN", 2, 13),
+        ('{"format": "selfrepair-table", "version": -Infinity}', "got -Infinity", 1, 43),
+        ('{"format": "selfrepair-table", "version": 1e400}', "finite number", 1, 43),
+    ],
+)
+def test_hostile_json_is_a_table_error_with_its_place(
+    text: str, message: str, line: int, column: int
+) -> None:
+    with pytest.raises(TableError, match=message) as err:
+        parse_table(text, source="x.json")
+    assert (err.value.source, err.value.line, err.value.column) == ("x.json", line, column)
+
+
+def test_nesting_the_format_needs_and_escaped_quotes_are_accepted() -> None:
+    entry = {"action": "FFFF", "candidates": [["SFFS"]]}
+    data = json.loads(_table_text([entry]))
+    data["parameters"] = {"note": 'a "quoted" [[[[[[[[[[ \\', "list": [1, 2.5, None, True]}
+    table = parse_table(json.dumps(data))
+    assert table.parameters["note"].endswith("\\")
+    assert parse_table("\ufeff" + json.dumps(data)) == table  # a byte-order mark is ignored
+
+
+def test_candidate_count_over_the_limit_is_refused_before_re_simulation() -> None:
+    entry = {"action": "FFFF", "candidates": [["QQQQ"], ["SFFS"]]}  # QQQQ would fail re-simulation
+    with pytest.raises(LimitError, match="at most 1 candidates, got 2") as err:
+        parse_table(_table_text([entry]), source="x.json", max_table_candidates=1)
+    assert err.value.limit == "max_table_candidates" and "--max-table-candidates" in str(err.value)
+    with pytest.raises(TableError, match="QQQQ"):
+        parse_table(_table_text([entry]), source="x.json", max_table_candidates=2)
+
+
+def test_table_file_over_the_byte_limit_is_refused_unread(tmp_path: Path) -> None:
+    path = tmp_path / "big.json"
+    path.write_text(_table_text([]) + " " * 1000, encoding="utf-8")
+    size = path.stat().st_size
+    with pytest.raises(LimitError, match=f"table file of at most 1,000 bytes, got {size:,}"):
+        load_table(path, max_table_bytes=1000)
+    assert load_table(path, max_table_bytes=size).entries == ()
+    with pytest.raises(LimitError, match="max-table-bytes"):
+        parse_table(_table_text([]), max_table_bytes=10)
+
+
+def test_table_file_that_is_not_utf8_names_line_and_column(tmp_path: Path) -> None:
+    path = tmp_path / "latin1.json"
+    path.write_bytes(_table_text([]).encode() + b"\n\xe9")
+    with pytest.raises(TableError, match="UTF-8") as err:
+        load_table(path)
+    assert err.value.column == 1 and err.value.line == _table_text([]).count("\n") + 2
 
 
 def test_bad_json_names_line() -> None:

@@ -11,22 +11,35 @@ The ``domain`` key names a domain known to :func:`selfrepair.robots.registry.get
 table is re-simulated when it is built (:class:`~selfrepair.tables.model.ReplacementTable`); a wrong
 entry raises :class:`~selfrepair.errors.TableError` naming the file, the entry's line (when known),
 its index and action, and what was expected.
+
+What is refused before the work it would cost: a file larger than ``max_table_bytes`` (before it is
+read), JSON nested deeper than :data:`MAX_JSON_DEPTH` (before it is parsed; the format needs 5
+levels), integers of more than 18 digits, ``NaN`` and infinite numbers, and more than
+``max_table_candidates`` candidates (before any is re-simulated). The header's ``version`` is an
+integer (``true`` is not), ``domain``, ``shape`` and ``made_by`` are strings, and ``parameters``
+maps names to JSON scalars or lists of scalars. A leading UTF-8 byte-order mark is ignored.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import re
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from selfrepair.errors import InputError, TableError
+from selfrepair.limits import MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES, check_limit
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import domain_names, get_domain
 from selfrepair.tables.model import FORMAT_NAME, Candidate, ReplacementTable, TableEntry
+from selfrepair.textio import read_text, strip_bom
 
 __all__ = [
+    "MAX_JSON_DEPTH",
     "bundled_table",
     "bundled_table_names",
     "dump_table",
@@ -36,36 +49,84 @@ __all__ = [
 ]
 
 
-def parse_table(text: str, source: str = "<string>") -> ReplacementTable:
-    """Parse and validate a table in the JSON format of the module docstring."""
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise TableError(
-            f"expected JSON: {exc.msg}", source=source, line=exc.lineno, column=exc.colno
-        ) from None
+MAX_JSON_DEPTH = 8
+"""Deepest JSON nesting a table file may have: the format needs 5 (object, ``entries`` list,
+entry object, ``candidates`` list, candidate list); the rest leaves room for a telling message
+about a near miss. Deeper input is refused before it is parsed (100,000 ``[`` used to crash the
+JSON parser with a RecursionError)."""
+
+_MAX_INT_DIGITS = 18
+_SCALARS = (str, int, float, bool, type(None))
+
+
+class _BadNumber(ValueError):
+    """A JSON number the format does not take: NaN, infinite, or an integer of too many digits."""
+
+    def __init__(self, text: str, reason: str) -> None:
+        super().__init__(reason)
+        self.text = text
+        self.reason = reason
+
+
+def _json_int(text: str) -> int:
+    if len(text.removeprefix("-")) > _MAX_INT_DIGITS:
+        raise _BadNumber(text, f"expected an integer of at most {_MAX_INT_DIGITS} digits")
+    return int(text)
+
+
+def _json_float(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise _BadNumber(text, f"expected a finite number, got {text[:40]}")
+    return value
+
+
+def _json_constant(text: str) -> float:
+    raise _BadNumber(text, f"expected a JSON number, got {text}")
+
+
+def parse_table(
+    text: str,
+    source: str = "<string>",
+    *,
+    max_table_bytes: int | None = MAX_TABLE_BYTES,
+    max_table_candidates: int | None = MAX_TABLE_CANDIDATES,
+) -> ReplacementTable:
+    """Parse and validate a table in the JSON format of the module docstring.
+
+    ``max_table_bytes`` bounds the text's length in characters (a lower bound of its size in
+    bytes) and ``max_table_candidates`` the candidates counted before any is re-simulated;
+    either raises :class:`~selfrepair.errors.LimitError` (``None``: no limit).
+    """
+    check_limit(
+        len(text), max_table_bytes, name="max_table_bytes", what="characters", source=source
+    )
+    text = strip_bom(text)
+    _check_nesting(text, source)
+    data = _load_json(text, source)
     if not isinstance(data, dict):
         raise TableError("expected a JSON object at the top level", source=source)
     if data.get("format") != FORMAT_NAME:
         raise TableError(
-            f'expected "format": "{FORMAT_NAME}", got {data.get("format")!r}', source=source
+            f'expected "format": "{FORMAT_NAME}", got {_short(data.get("format"))}', source=source
         )
     for key in ("version", "domain", "shape", "made_by", "entries"):
         if key not in data:
             raise TableError(f"expected a {key!r} key in the header", source=source)
-    if data["domain"] not in _domain_names():
-        raise TableError(
-            f"expected a domain in {', '.join(_domain_names())}, got {data['domain']!r}",
-            source=source,
-        )
+    _check_header(data, source)
     dom = get_domain(data["domain"])
     raw_entries = data["entries"]
     if not isinstance(raw_entries, list):
         raise TableError('expected "entries" to be a list', source=source)
+    check_limit(
+        _count_candidates(raw_entries),
+        max_table_candidates,
+        name="max_table_candidates",
+        what="candidates",
+        source=source,
+    )
     lines = _entry_lines(text, len(raw_entries))
     parameters = data.get("parameters", {})
-    if not isinstance(parameters, dict):
-        raise TableError('expected "parameters" to be an object', source=source)
     entries = tuple(
         _parse_entry(dom, raw, number, lines[number], source)
         for number, raw in enumerate(raw_entries)
@@ -78,6 +139,100 @@ def parse_table(text: str, source: str = "<string>") -> ReplacementTable:
         parameters=parameters,
         version=data["version"],
         source=source,
+    )
+
+
+def _load_json(text: str, source: str) -> Any:
+    try:
+        return json.loads(
+            text, parse_int=_json_int, parse_float=_json_float, parse_constant=_json_constant
+        )
+    except json.JSONDecodeError as exc:
+        raise TableError(
+            f"expected JSON: {exc.msg}", source=source, line=exc.lineno, column=exc.colno
+        ) from None
+    except _BadNumber as exc:
+        line, column = _position(text, max(text.find(exc.text), 0))
+        raise TableError(exc.reason, source=source, line=line, column=column) from None
+    except RecursionError:  # not reached after _check_nesting; kept as a safety net
+        raise TableError(
+            f"expected JSON nested at most {MAX_JSON_DEPTH} deep", source=source
+        ) from None
+
+
+def _check_nesting(text: str, source: str) -> None:
+    """Refuse JSON nested deeper than :data:`MAX_JSON_DEPTH`, before the parser recurses.
+
+    Works on the UTF-8 bytes with numpy: escaped backslashes and quotes are blanked (keeping
+    offsets), quotes toggle "inside a string", and the running count of ``[{`` minus ``]}``
+    outside strings is the depth.
+    """
+    data = text.encode("utf-8", "surrogatepass").replace(b"\\\\", b"  ").replace(b'\\"', b"  ")
+    raw = np.frombuffer(data, dtype=np.uint8)
+    outside = ~np.logical_xor.accumulate(raw == ord('"')) if raw.size else raw.astype(bool)
+    opens = ((raw == ord("[")) | (raw == ord("{"))) & outside
+    brackets = np.flatnonzero(opens | (((raw == ord("]")) | (raw == ord("}"))) & outside))
+    depth = np.cumsum(np.where(opens[brackets], 1, -1))
+    too_deep = np.flatnonzero(depth > MAX_JSON_DEPTH)
+    if too_deep.size:
+        offset = int(brackets[too_deep[0]])
+        line = data.count(b"\n", 0, offset) + 1
+        start = data.rfind(b"\n", 0, offset) + 1
+        column = len(data[start:offset].decode("utf-8", "replace")) + 1
+        raise TableError(
+            f"expected JSON nested at most {MAX_JSON_DEPTH} deep (a table needs 5)",
+            source=source,
+            line=line,
+            column=column,
+        )
+
+
+def _position(text: str, index: int) -> tuple[int, int]:
+    """The 1-based line and column of ``text[index]``."""
+    line = text.count("\n", 0, index) + 1
+    return line, index - (text.rfind("\n", 0, index) + 1) + 1
+
+
+def _short(value: Any) -> str:
+    """``value`` as JSON, cut to 60 characters, for messages."""
+    text = json.dumps(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _check_header(data: dict[str, Any], source: str) -> None:
+    """Types of the header fields; their values are checked by :class:`ReplacementTable`."""
+    if type(data["version"]) is not int:  # bool is an int in Python: refuse it explicitly
+        raise TableError(
+            f'expected "version" to be an integer, got {_short(data["version"])}', source=source
+        )
+    for key in ("domain", "shape", "made_by"):
+        if not isinstance(data[key], str):
+            raise TableError(
+                f"expected {key!r} to be a string, got {_short(data[key])}", source=source
+            )
+    if data["domain"] not in _domain_names():
+        raise TableError(
+            f"expected a domain in {', '.join(_domain_names())}, got {data['domain']!r}",
+            source=source,
+        )
+    parameters = data.get("parameters", {})
+    if not isinstance(parameters, dict):
+        raise TableError('expected "parameters" to be an object', source=source)
+    for key, value in parameters.items():
+        items = value if isinstance(value, list) else [value]
+        if not all(isinstance(item, _SCALARS) for item in items):
+            raise TableError(
+                f'expected "parameters" values to be strings, numbers, booleans, null or lists '
+                f"of those, got {key!r}: {_short(value)}",
+                source=source,
+            )
+
+
+def _count_candidates(raw_entries: list[Any]) -> int:
+    return sum(
+        len(raw["candidates"])
+        for raw in raw_entries
+        if isinstance(raw, dict) and isinstance(raw.get("candidates"), list)
     )
 
 
@@ -133,16 +288,30 @@ def _string(value: Any) -> str:
     return value
 
 
-def load_table(path: str | Path) -> ReplacementTable:
-    """Read and validate a table file; errors name the file."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise TableError(f"cannot read table file: {exc.strerror}", source=str(path)) from None
-    except UnicodeDecodeError:
-        raise TableError("expected a UTF-8 JSON table file", source=str(path)) from None
-    return parse_table(text, source=str(path))
+def load_table(
+    path: str | Path,
+    *,
+    max_table_bytes: int | None = MAX_TABLE_BYTES,
+    max_table_candidates: int | None = MAX_TABLE_CANDIDATES,
+) -> ReplacementTable:
+    """Read and validate a table file; errors name the file.
+
+    A file larger than ``max_table_bytes`` is refused before it is read (a 2.9 GB file used to
+    take 18 GB of memory); see :func:`parse_table` for ``max_table_candidates``.
+    """
+    text = read_text(
+        path,
+        what="table file",
+        error=TableError,
+        max_bytes=max_table_bytes,
+        limit="max_table_bytes",
+    )
+    return parse_table(
+        text,
+        source=str(path),
+        max_table_bytes=None,
+        max_table_candidates=max_table_candidates,
+    )
 
 
 def _entry_sort_key(dom: Domain[Any, Any], entry: TableEntry) -> tuple[int, int, str]:
@@ -174,7 +343,7 @@ def dump_table(table: ReplacementTable) -> str:
     lines.append(",\n".join(rows))
     lines.append(" ],")
     rest = [
-        f" {json.dumps(k)}: {json.dumps(header[k], sort_keys=True)}"
+        f" {json.dumps(k)}: {json.dumps(header[k], sort_keys=True, allow_nan=False)}"
         for k in ("format", "made_by", "parameters", "shape", "version")
     ]
     lines.append(",\n".join(rest))
@@ -200,9 +369,16 @@ def bundled_table(name: str = "handwritten") -> ReplacementTable:
     return parse_table(resource.read_text(encoding="utf-8"), source=f"<bundled:{name}>")
 
 
-def resolve_table(spec: str | Path) -> ReplacementTable:
-    """A bundled table by name, else a table file by path."""
+def resolve_table(
+    spec: str | Path,
+    *,
+    max_table_bytes: int | None = MAX_TABLE_BYTES,
+    max_table_candidates: int | None = MAX_TABLE_CANDIDATES,
+) -> ReplacementTable:
+    """A bundled table by name, else a table file by path (checked against the limits)."""
     text = str(spec)
     if text in bundled_table_names():
         return bundled_table(text)
-    return load_table(text)
+    return load_table(
+        text, max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
+    )
