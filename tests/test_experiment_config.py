@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from fractions import Fraction
 from pathlib import Path
 
@@ -10,9 +11,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from selfrepair.cli import main
-from selfrepair.errors import ConfigError
+from selfrepair.errors import ConfigError, LimitError, TableError
 from selfrepair.experiment.config import load_config, parse_config
-from selfrepair.experiment.missions import PAPER_FAULT_SETS, expand, fault_profile
+from selfrepair.experiment.missions import (
+    PAPER_FAULT_SETS,
+    count_missions,
+    expand,
+    fault_profile,
+)
 
 GOOD = """\
 name = "tiny"
@@ -208,3 +214,134 @@ def test_file_keys_follow_content_not_location(tmp_path: Path) -> None:
     table.write_text(table.read_text(encoding="utf-8").replace("by hand", "by hand!"))
     edited = expand(load_config(tmp_path / "a" / "files.toml"))
     assert not {m.key for m in edited} & {m.key for m in first}
+
+
+# --- hostile input and limits ------------------------------------------------------------------
+
+
+def test_a_file_that_is_not_utf8_is_a_config_error_with_its_line(tmp_path: Path) -> None:
+    path = tmp_path / "latin1.toml"
+    path.write_bytes(GOOD.encode() + b'description = "caf\xe9"\n')
+    with pytest.raises(ConfigError, match="UTF-8 text experiment file, got the byte 0xe9") as info:
+        load_config(path)
+    assert (info.value.line, info.value.column) == (GOOD.count("\n") + 1, 19)
+
+
+def test_a_byte_order_mark_is_ignored() -> None:
+    assert parse_config("\ufeff" + GOOD) == parse_config(GOOD)
+
+
+@pytest.mark.parametrize(
+    ("line", "expected"),
+    [
+        ("description = " + "[" * 5000 + "]" * 5000, "nested too deep"),  # was a RecursionError
+        ("seed = " + "1" * 5000, "at most 4300 digits"),  # was a ValueError
+    ],
+)
+def test_hostile_toml_is_a_config_error(line: str, expected: str) -> None:
+    with pytest.raises(ConfigError, match=expected):
+        parse_config(line + "\n" + GOOD.replace("seed = 7\n", ""), source="x.toml")
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "key"),
+    [
+        ("seed = 7", "seed = 7\nrepeats = true", "repeats"),  # was read as 1
+        ("seed = 7", "seed = true", "seed"),
+        ("routes = 2", "routes = true", "mazes[1].routes"),
+        ("corridor = 1", "corridor = true", "mazes[1].generate.corridor"),
+        ("seed = 3 }", "seed = 3, braid = true }", "mazes[1].generate.braid"),
+        ('["FL:F", "FL:F,RR:B"]', '["FL:F"]\nat = [false]', "faults.at[0]"),
+        ("clearance_weights = [0, 0.5]", "clearance_radius = true", "planner.clearance_radius"),
+        ("[0, 0.5]", "[true]", "planner.clearance_weights"),
+    ],
+)
+def test_booleans_are_not_numbers(old: str, new: str, key: str) -> None:
+    assert old in GOOD
+    with pytest.raises(ConfigError, match=rf"key '{re.escape(key)}'.*(True|False)"):
+        parse_config(GOOD.replace(old, new))
+
+
+def test_integers_are_strict() -> None:
+    with pytest.raises(ConfigError, match=r"key 'seed': expected a valid integer \(got 7.0\)"):
+        parse_config(GOOD.replace("seed = 7", "seed = 7.0"))
+
+
+def test_an_empty_route_list_is_refused() -> None:
+    # It used to give "0 missions" and exit code 0.
+    with pytest.raises(ConfigError, match=r"'mazes\[1\]\.routes': expected a list of at least 1"):
+        parse_config(GOOD.replace("routes = 2", "routes = []"))
+
+
+def test_an_experiment_without_missions_is_an_error() -> None:
+    config = parse_config(GOOD)
+    no_routes = config.mazes[1].model_copy(update={"routes": ()})  # past validation
+    empty = config.model_copy(update={"mazes": (no_routes,)})
+    with pytest.raises(ConfigError, match="at least one mission, got none"):
+        expand(empty)
+
+
+@pytest.mark.parametrize("weight", ["1e308", "1000001", '"1000000001/1000"'])
+def test_clearance_weight_above_the_bound_is_refused(weight: str) -> None:
+    # 1e308 used to overflow in the metrics and stop the whole sweep.
+    with pytest.raises(ConfigError, match="weight of at most 1,000,000"):
+        parse_config(GOOD.replace("[0, 0.5]", f"[{weight}]"))
+    assert parse_config(GOOD.replace("[0, 0.5]", "[1000000]")).planner.clearance_weights == (
+        "1000000",
+    )
+
+
+def test_missions_are_counted_before_they_are_built() -> None:
+    config = parse_config(GOOD)
+    assert count_missions(config) == len(expand(config)) == 48
+    message = r"at most 47 missions, got 48 \(6 routes x 2 fault sets"
+    with pytest.raises(LimitError, match=message):
+        expand(config, max_missions=47)
+    # About 312 million missions: refused at once instead of running out of memory.
+    huge = parse_config(
+        GOOD.replace("seed = 7", "seed = 7\nrepeats = 1000")
+        .replace("width = 15, height = 15", "width = 1024, height = 1024")
+        .replace("routes = 2", "routes = 10000")
+        .replace('["FL:F", "FL:F,RR:B"]', '"all"')
+    )
+    assert count_missions(huge) == 10004 * 78 * 1000 * 4
+    with pytest.raises(LimitError, match="--max-missions") as info:
+        expand(huge)
+    assert info.value.limit == "max_missions"
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    repeats=st.integers(1, 3),
+    routes=st.integers(1, 3),
+    at=st.lists(st.integers(0, 2), min_size=1, max_size=2),
+    weights=st.lists(st.sampled_from(["0", "1", "2"]), min_size=1, max_size=2),
+)
+def test_mission_count_bounds_the_expansion(
+    repeats: int, routes: int, at: list[int], weights: list[str]
+) -> None:
+    text = (
+        GOOD.replace("seed = 7", f"seed = 7\nrepeats = {repeats}")
+        .replace("routes = 2", f"routes = {routes}")
+        .replace('["FL:F", "FL:F,RR:B"]', f'["FL:F", "FL:F,RR:B"]\nat = {at}')
+        .replace("[0, 0.5]", "[" + ", ".join(weights) + "]")
+    )
+    config = parse_config(text)
+    missions = expand(config)
+    assert len(missions) <= count_missions(config)
+    if len(set(at)) == len(at) and len(set(weights)) == len(weights):
+        assert len(missions) == count_missions(config)
+
+
+def test_maze_file_over_the_cell_limit_stops_the_experiment(tmp_path: Path) -> None:
+    config = load_config(_write_files_experiment(tmp_path))
+    with pytest.raises(LimitError, match="at most 224 cells, got 225"):
+        expand(config, max_cells=224)
+    assert len(expand(config, max_cells=225)) == 1
+
+
+def test_a_bad_table_file_stops_the_experiment_before_the_sweep(tmp_path: Path) -> None:
+    path = _write_files_experiment(tmp_path)
+    (tmp_path / "data" / "t.json").write_text('{"format": "selfrepair-table"}')
+    with pytest.raises(TableError, match="expected a 'version' key"):
+        expand(load_config(path))

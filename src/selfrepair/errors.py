@@ -58,7 +58,7 @@ class LimitError(InputError):
 
     Raised before the work the limit guards starts. ``limit`` is the limit's name, which is also
     the keyword argument that sets it (``max_cells``); the message names it and the command-line
-    flag that raises it (``--max-cells``).
+    flag that raises it (``--max-cells``), unless ``note`` says something else.
     """
 
     def __init__(
@@ -66,14 +66,18 @@ class LimitError(InputError):
         message: str,
         *,
         limit: str,
+        note: str | None = None,
         source: str = "<input>",
         line: int | None = None,
         column: int | None = None,
     ) -> None:
         self.limit = limit
+        self.message = message
+        """The message without the note on the limit."""
         flag = "--" + limit.replace("_", "-")
+        note = f"raise it with {flag}" if note is None else note
         super().__init__(
-            f"{message} (limit {limit}; raise it with {flag})",
+            f"{message} (limit {limit}; {note})",
             source=source,
             line=line,
             column=column,

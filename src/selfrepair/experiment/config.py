@@ -26,7 +26,11 @@ The file format is described in ``docs/experiments.md``; in short::
 
 Validation uses pydantic; every problem becomes a :class:`~selfrepair.errors.ConfigError` that
 names the file, the key (as a dotted path such as ``strategies[1].tables``), its line when it can
-be found in the text, and what was expected.
+be found in the text, and what was expected. Integers are strict (``repeats = true`` or
+``seed = 1.0`` is refused, not read as 1), numbers refuse booleans, lists of routes are not empty,
+clearance weights lie in ``[0, MAX_CLEARANCE_WEIGHT]`` (:mod:`selfrepair.limits`), and a file that
+is not UTF-8, nests too deep or has an integer of thousands of digits is a ``ConfigError`` with its
+line. A leading UTF-8 byte-order mark is ignored.
 """
 
 from __future__ import annotations
@@ -48,7 +52,9 @@ from pydantic import (
 
 from selfrepair.errors import ConfigError, InputError
 from selfrepair.geometry import parse_cell, parse_pose
+from selfrepair.limits import MAX_CLEARANCE_WEIGHT
 from selfrepair.robots.four_wheel import parse_faults
+from selfrepair.textio import read_text, strip_bom, text_lines
 
 __all__ = [
     "FAULT_PROFILES",
@@ -71,6 +77,11 @@ FAULT_PROFILES = ("paper", "singles", "doubles", "all")
 
 RECURSION_MODES = ("flat", "guarded", "layered")
 
+# Strict numbers: TOML has real booleans and floats, and ``true`` or ``1.0`` where an integer is
+# expected is a mistake to report, not a 1 to guess (pydantic's lax mode would take both).
+Int = Annotated[int, Field(strict=True)]
+Float = Annotated[float, Field(strict=True)]  # strict floats still take integers, not booleans
+
 
 class _Frozen(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid", strict=False)
@@ -79,11 +90,11 @@ class _Frozen(BaseModel):
 class GeneratedMaze(_Frozen):
     """Options of :func:`selfrepair.world.mazegen.generate_maze`."""
 
-    width: Annotated[int, Field(ge=5, le=1024)]
-    height: Annotated[int, Field(ge=5, le=1024)]
-    corridor: Annotated[int, Field(ge=1, le=64)] = 1
-    braid: Annotated[float, Field(ge=0.0, le=1.0)] = 0.0
-    seed: int = 0
+    width: Annotated[Int, Field(ge=5, le=1024)]
+    height: Annotated[Int, Field(ge=5, le=1024)]
+    corridor: Annotated[Int, Field(ge=1, le=64)] = 1
+    braid: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.0
+    seed: Int = 0
 
 
 class RouteConfig(_Frozen):
@@ -116,7 +127,9 @@ class MazeConfig(_Frozen):
     file: str | None = None
     generate: GeneratedMaze | None = None
     routes: (
-        Literal["bundled"] | Annotated[int, Field(ge=1, le=10_000)] | tuple[RouteConfig, ...]
+        Literal["bundled"]
+        | Annotated[Int, Field(ge=1, le=10_000)]
+        | Annotated[tuple[RouteConfig, ...], Field(min_length=1)]
     ) = "bundled"
 
     @model_validator(mode="after")
@@ -140,12 +153,12 @@ class FaultsConfig(_Frozen):
     last (``persistence`` with ``duration`` or ``probability``) and how they are detected."""
 
     sets: Literal["paper", "singles", "doubles", "all"] | tuple[str, ...] = "paper"
-    at: tuple[Annotated[int, Field(ge=0)], ...] = (0,)
+    at: tuple[Annotated[Int, Field(ge=0)], ...] = (0,)
     clock: Literal["step", "tick"] = "step"
     detection: tuple[Literal["now", "on-use"], ...] = ("now",)
     persistence: Literal["permanent", "transient", "intermittent"] = "permanent"
-    duration: Annotated[int, Field(ge=1)] | None = None
-    probability: Annotated[float, Field(ge=0.0, le=1.0)] | None = None
+    duration: Annotated[Int, Field(ge=1)] | None = None
+    probability: Annotated[Float, Field(ge=0.0, le=1.0)] | None = None
 
     @model_validator(mode="after")
     def _persistence_options(self) -> FaultsConfig:
@@ -178,7 +191,7 @@ class PlannerConfig(_Frozen):
     """Planner options shared by every strategy unless a strategy overrides the weights."""
 
     clearance_weights: tuple[str, ...] = ("0",)
-    clearance_radius: Annotated[int, Field(ge=0, le=64)] = 2
+    clearance_radius: Annotated[Int, Field(ge=0, le=64)] = 2
 
     @field_validator("clearance_weights", mode="before")
     @classmethod
@@ -223,7 +236,7 @@ class LookaheadStrategy(ReplacementStrategy):
     """Replace a window of ``window`` actions after the faulty one; one variant per window."""
 
     name: Literal["lookahead"]  # type: ignore[assignment]
-    window: tuple[Annotated[int, Field(ge=0, le=64)], ...] = (3,)
+    window: tuple[Annotated[Int, Field(ge=0, le=64)], ...] = (3,)
 
 
 StrategyConfig = Annotated[
@@ -238,8 +251,8 @@ class ExperimentConfig(_Frozen):
 
     name: Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")]
     description: str = ""
-    seed: int = 0
-    repeats: Annotated[int, Field(ge=1, le=1000)] = 1
+    seed: Int = 0
+    repeats: Annotated[Int, Field(ge=1, le=1000)] = 1
     mazes: Annotated[tuple[MazeConfig, ...], Field(min_length=1)]
     faults: FaultsConfig = FaultsConfig()
     planner: PlannerConfig = PlannerConfig()
@@ -253,7 +266,8 @@ class ExperimentConfig(_Frozen):
 
 
 def _weights(value: Any) -> Any:
-    """Clearance weights as canonical exact strings (``0.5`` -> ``"1/2"``)."""
+    """Clearance weights as canonical exact strings (``0.5`` -> ``"1/2"``), each from 0 to
+    :data:`~selfrepair.limits.MAX_CLEARANCE_WEIGHT`."""
     if value is None:
         return None
     if not isinstance(value, list | tuple):
@@ -270,6 +284,10 @@ def _weights(value: Any) -> Any:
             raise ValueError(f"expected a non-negative number, got {item!r}") from None
         if weight < 0:
             raise ValueError(f"expected a non-negative number, got {item!r}")
+        if weight > MAX_CLEARANCE_WEIGHT:
+            raise ValueError(
+                f"expected a weight of at most {MAX_CLEARANCE_WEIGHT:,}, got {item!r}"
+            )
         out.append(str(weight))
     return tuple(out)
 
@@ -288,25 +306,32 @@ def _reraise(parser: Any, text: str) -> Any:
 def load_config(path: str | Path) -> ExperimentConfig:
     """Read and validate an experiment TOML file."""
     file = Path(path)
-    try:
-        text = file.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(
-            f"cannot read experiment file: {exc.strerror}", source=str(file)
-        ) from None
+    text = read_text(file, what="experiment file", error=ConfigError)
     return parse_config(text, source=str(file.resolve()))
 
 
 def parse_config(text: str, *, source: str = "<string>") -> ExperimentConfig:
     """Parse and validate experiment TOML text; ``source`` names it in errors."""
+    text = strip_bom(text)
     try:
         data = tomllib.loads(text)
+    except RecursionError:
+        raise ConfigError(
+            "invalid TOML: arrays or inline tables nested too deep (an experiment needs 3 levels)",
+            source=source,
+        ) from None
     except tomllib.TOMLDecodeError as exc:
         where = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
         reason = re.sub(r"\s*\(at (line \d+, column \d+|end of document)\)", "", str(exc))
         line, column = (int(where.group(1)), int(where.group(2))) if where else (None, None)
         raise ConfigError(
             f"invalid TOML: {reason}", source=source, line=line, column=column
+        ) from None
+    except ValueError:  # an integer beyond Python's 4300-digit conversion limit
+        long = re.search(r"[0-9_]{4300,}", text)
+        line = None if long is None else text.count("\n", 0, long.start()) + 1
+        raise ConfigError(
+            "invalid TOML: expected an integer of at most 4300 digits", source=source, line=line
         ) from None
     if "source" in data:
         raise ConfigError("unknown key 'source' (it is set by the loader)", source=source)
@@ -352,6 +377,8 @@ def _config_error(exc: ValidationError, text: str, source: str) -> ConfigError:
         )
     elif error["type"] in ("tuple_type", "list_type"):
         message = "expected a list"
+    elif error["type"] == "too_short":
+        message = f"expected a list of at least {error['ctx']['min_length']} item(s), got none"
     else:
         message = message.replace("Input should be", "expected")
     got = error.get("input")
@@ -394,7 +421,7 @@ def find_line(text: str, loc: tuple[str | int, ...]) -> int | None:
     Follows ``[[array]]`` headers by index and ``[table]`` headers by name, then looks for
     ``key =`` inside the section found so far.
     """
-    lines = text.splitlines()
+    lines = text_lines(text)
     start, end = 0, len(lines)
     found: int | None = None
     section = ""

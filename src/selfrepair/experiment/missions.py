@@ -14,6 +14,11 @@ The seed of a mission derives from the experiment's base seed and the mission's 
 meets the same random events (e.g. intermittent faults), so comparisons are paired.
 
 The paper's 12 fault sets (:data:`PAPER_FAULT_SETS`) are explained in ``docs/experiments.md``.
+
+Limits (:mod:`selfrepair.limits`) are checked by :func:`expand` before the work they guard: the
+number of missions is counted from the configuration (:func:`count_missions`) before any mission
+is built, maze files against ``max_cells`` before they are hashed and read, and table files are
+loaded once with the default table limits, so a bad table stops the experiment before its sweep.
 """
 
 from __future__ import annotations
@@ -30,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from selfrepair.errors import ConfigError, InputError
+from selfrepair.errors import ConfigError, InputError, LimitError
 from selfrepair.experiment.config import (
     ExperimentConfig,
     LookaheadStrategy,
@@ -38,6 +43,7 @@ from selfrepair.experiment.config import (
     ReplacementStrategy,
 )
 from selfrepair.geometry import Heading, Pose, parse_cell, parse_pose
+from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, check_limit, maze_file_bytes
 from selfrepair.robots.four_wheel import DOUBLE_FAULTS, SINGLE_FAULTS, format_faults, parse_faults
 from selfrepair.world.maze import Maze
 from selfrepair.world.routes import Route
@@ -50,6 +56,7 @@ __all__ = [
     "PAPER_FAULT_SETS",
     "SCHEMA",
     "Mission",
+    "count_missions",
     "expand",
     "fault_profile",
     "maze_label",
@@ -142,8 +149,12 @@ def fault_profile(sets: str | tuple[str, ...]) -> tuple[str, ...]:
 # --- mazes and routes --------------------------------------------------------------------------
 
 
-def maze_identity(entry: MazeConfig, base_dir: Path, source: str, index: int) -> dict[str, Any]:
-    """What identifies a maze in a mission key (a file is identified by path and content hash)."""
+def maze_identity(
+    entry: MazeConfig, base_dir: Path, source: str, index: int, max_cells: int | None = MAX_CELLS
+) -> dict[str, Any]:
+    """What identifies a maze in a mission key (a file is identified by path and content hash).
+
+    A maze file too big to hold ``max_cells`` cells is refused before it is hashed."""
     if entry.bundled is not None:
         from selfrepair.world.bundled import maze_names
 
@@ -157,6 +168,14 @@ def maze_identity(entry: MazeConfig, base_dir: Path, source: str, index: int) ->
     if entry.file is not None:
         path = (base_dir / entry.file).resolve()
         try:
+            size = path.stat().st_size
+            check_limit(
+                size,
+                maze_file_bytes(max_cells),
+                name="max_cells",
+                what="bytes in a maze file",
+                source=str(path),
+            )
             digest = hashlib.sha256(path.read_bytes()).hexdigest()
         except OSError as exc:
             raise ConfigError(
@@ -179,13 +198,17 @@ def maze_label(identity: dict[str, Any]) -> str:
     return f"gen{g['width']}x{g['height']}-c{g['corridor']}{braid}-s{g['seed']}"
 
 
-def maze_of(identity_json: str) -> Maze:
-    """The maze of an identity (as canonical JSON, so results can be cached per process)."""
-    return _maze_cached(identity_json)
+def maze_of(identity_json: str, *, max_cells: int | None = None) -> Maze:
+    """The maze of an identity (as canonical JSON, so results can be cached per process).
+
+    ``max_cells`` is checked by :func:`expand`; it is off by default because the missions that
+    workers load mazes for come from :func:`expand`, which has checked their mazes already.
+    """
+    return _maze_cached(identity_json, max_cells)
 
 
 @lru_cache(maxsize=64)
-def _maze_cached(identity_json: str) -> Maze:
+def _maze_cached(identity_json: str, max_cells: int | None) -> Maze:
     identity = json.loads(identity_json)
     if "bundled" in identity:
         from selfrepair.world.bundled import load_bundled
@@ -194,7 +217,7 @@ def _maze_cached(identity_json: str) -> Maze:
     if "file" in identity:
         from selfrepair.world.loading import load_maze
 
-        return load_maze(identity["file"])
+        return load_maze(identity["file"], max_cells=max_cells)
     from selfrepair.world.mazegen import generate_maze
 
     g = identity["generate"]
@@ -205,6 +228,7 @@ def _maze_cached(identity_json: str) -> Maze:
         braid=g["braid"],
         seed=g["seed"],
         name=maze_label(identity),
+        max_cells=max_cells,
     )
 
 
@@ -244,7 +268,12 @@ def _bfs(maze: Maze, start: tuple[int, int]) -> dict[tuple[int, int], int]:
 
 
 def routes_of(
-    entry: MazeConfig, identity: dict[str, Any], base_seed: int, source: str, index: int
+    entry: MazeConfig,
+    identity: dict[str, Any],
+    base_seed: int,
+    source: str,
+    index: int,
+    max_cells: int | None = MAX_CELLS,
 ) -> tuple[Route, ...]:
     """The routes of one maze entry: bundled, random (seeded) or explicit (checked free)."""
     if entry.routes == "bundled":
@@ -252,7 +281,7 @@ def routes_of(
 
         assert entry.bundled is not None
         return bundled_routes(entry.bundled)
-    maze = maze_of(canonical_json(identity))
+    maze = maze_of(canonical_json(identity), max_cells=max_cells)
     if isinstance(entry.routes, int):
         where = portable({"maze": identity})["maze"]  # seeded by content, not location
         return random_routes(maze, entry.routes, derive_seed(base_seed, {"routes": where}))
@@ -301,15 +330,38 @@ def _table_identity(table: str, config: ExperimentConfig) -> dict[str, str]:
     if table in BUNDLED_TABLES:
         return {"table": table}
     path = (config.base_dir / table).resolve()
-    try:
-        digest = hashlib.sha256(path.read_bytes()).hexdigest()
-    except OSError:
+    if not path.is_file():
         raise ConfigError(
             f"key 'strategies[].tables': expected one of {', '.join(BUNDLED_TABLES)} or a "
             f"readable table file, got {table!r}",
             source=config.source,
+        )
+    _check_table(path)
+    try:
+        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError as exc:
+        raise ConfigError(
+            f"key 'strategies[].tables': cannot read table file {table!r}: {exc.strerror}",
+            source=config.source,
         ) from None
     return {"table": str(path), "table_sha256": digest}
+
+
+def _check_table(path: Path) -> None:
+    """Load a table file once, with the default limits, so that a bad or oversized table stops
+    the experiment before its sweep (the workers load it again, with the same limits)."""
+    from selfrepair.tables.fileformat import load_table
+
+    try:
+        load_table(path)
+    except LimitError as exc:
+        raise LimitError(
+            exc.message,
+            limit=exc.limit,
+            note="experiment workers load tables with the default limits, not raised by flags",
+            source=exc.source,
+            line=exc.line,
+        ) from None
 
 
 def portable(settings: dict[str, Any]) -> dict[str, Any]:
@@ -343,18 +395,84 @@ def variant_label(strategy: str, options: dict[str, Any]) -> str:
 # --- expansion ---------------------------------------------------------------------------------
 
 
-def expand(config: ExperimentConfig) -> tuple[Mission, ...]:
+def count_missions(config: ExperimentConfig) -> int:
+    """How many missions ``config`` asks for, by arithmetic, before any is built.
+
+    The product of routes (summed over the mazes), fault sets, fault times, detections, repeats
+    and strategy variants (tables x recursion modes x windows, each times its clearance weights).
+    Duplicates are not subtracted, so :func:`expand` may give fewer. Bundled maze names must be
+    valid (:func:`expand` checks them first).
+    """
+    return _mission_factors(config)[0]
+
+
+def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
+    """The mission count and how it came about, as text for a message."""
+    routes = 0
+    for entry in config.mazes:
+        if entry.routes == "bundled":
+            from selfrepair.world.bundled import bundled_routes
+
+            assert entry.bundled is not None
+            routes += len(bundled_routes(entry.bundled))
+        else:
+            routes += entry.routes if isinstance(entry.routes, int) else len(entry.routes)
+    variants = 0
+    for strategy in config.strategies:
+        weights = len(strategy.clearance_weights or config.planner.clearance_weights)
+        if isinstance(strategy, ReplacementStrategy):
+            windows = len(strategy.window) if isinstance(strategy, LookaheadStrategy) else 1
+            variants += len(strategy.tables) * len(strategy.recursion) * windows * weights
+        else:
+            variants += weights
+    faults = config.faults
+    factors = (
+        (routes, "routes"),
+        (len(fault_profile(faults.sets)), "fault sets"),
+        (len(faults.at), "fault times"),
+        (len(faults.detection), "detections"),
+        (config.repeats, "repeats"),
+        (variants, "strategy variants and weights"),
+    )
+    total = 1
+    for count, _ in factors:
+        total *= count
+    return total, " x ".join(f"{count:,} {what}" for count, what in factors)
+
+
+def expand(
+    config: ExperimentConfig,
+    *,
+    max_missions: int | None = MAX_MISSIONS,
+    max_cells: int | None = MAX_CELLS,
+) -> tuple[Mission, ...]:
     """Every mission of ``config``, in a deterministic order, with keys and seeds.
 
-    Duplicate missions (the same canonical configuration reached twice) appear once.
+    Duplicate missions (the same canonical configuration reached twice) appear once. Raises
+    :class:`~selfrepair.errors.LimitError` before building any mission when
+    :func:`count_missions` exceeds ``max_missions``, or when a maze has more than ``max_cells``
+    cells, and :class:`~selfrepair.errors.ConfigError` when the experiment has no mission.
     """
+    identities = [
+        maze_identity(entry, config.base_dir, config.source, index, max_cells)
+        for index, entry in enumerate(config.mazes)
+    ]
+    total, factors = _mission_factors(config)
+    check_limit(
+        total,
+        max_missions,
+        name="max_missions",
+        what="missions",
+        detail=factors,
+        source=config.source,
+    )
     variants = list(strategy_variants(config))
     fault_sets = fault_profile(config.faults.sets)
     missions: dict[str, Mission] = {}
-    for index, entry in enumerate(config.mazes):
-        identity = maze_identity(entry, config.base_dir, config.source, index)
+    for index, (entry, identity) in enumerate(zip(config.mazes, identities, strict=True)):
         label = maze_label(identity)
-        for route in routes_of(entry, identity, config.seed, config.source, index):
+        routes = routes_of(entry, identity, config.seed, config.source, index, max_cells)
+        for route in routes:
             for faults in fault_sets:
                 for at in config.faults.at:
                     for detection in config.faults.detection:
@@ -381,6 +499,10 @@ def expand(config: ExperimentConfig) -> tuple[Mission, ...]:
                                         config, situation, seed, variant, weight, label
                                     )
                                     missions.setdefault(mission.key, mission)
+    if not missions:
+        raise ConfigError(
+            "expected an experiment with at least one mission, got none", source=config.source
+        )
     return tuple(missions.values())
 
 
