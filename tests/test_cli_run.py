@@ -90,6 +90,8 @@ def test_run_reports_a_stuck_mission(capsys: pytest.CaptureFixture[str]) -> None
         (["--faults", "FL:X"], "--faults"),
         (["--detect", "later"], "--detect"),
         (["--table", "nosuch.json"], "nosuch.json"),
+        (["--clearance-weight", "1e308"], "--clearance-weight"),  # was an OverflowError
+        (["--clearance-weight", "x"], "--clearance-weight"),
     ],
 )
 def test_run_bad_input_is_exit_2(
@@ -98,6 +100,12 @@ def test_run_bad_input_is_exit_2(
     assert main(["run", *ROUTE, *args]) == 2
     err = capsys.readouterr().err
     assert err.startswith("selfrepair: error:") and expected in err and err.count("\n") == 1
+
+
+def test_run_at_the_weight_bound_has_finite_metrics(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["run", *ROUTE, "--clearance-weight", "1000000", "--json"]) == 0
+    row = json.loads(capsys.readouterr().out)
+    assert row["plan_cost_before_float"] > 1_000_000 and row["status"] == "reached"
 
 
 def test_table_show(capsys: pytest.CaptureFixture[str]) -> None:

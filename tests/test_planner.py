@@ -225,6 +225,8 @@ def test_plan_reports_the_fastest_wheel_action_per_motion() -> None:
         ({"max_expansions": -1}, "max_expansions"),
         ({"time_limit": -1.0}, "time_limit"),
         ({"weight": Fraction(-1)}, "clearance_weight"),
+        ({"weight": Fraction(10**6) + Fraction(1, 3)}, "clearance_weight must be from 0 to 1,000"),
+        ({"weight": Fraction(10**308)}, "got a number of 309 digits"),  # overflowed in metrics
         ({"radius": -1}, "clearance_radius"),
         ({"radius": 10**20}, "clearance_radius"),
         ({"time_limit": float("nan")}, "time_limit"),
@@ -251,9 +253,11 @@ def test_misuse_raises_problem_error(kwargs: dict, message: str) -> None:
 
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_huge_budget_and_weight_fall_back_instead_of_crashing(backend: str) -> None:
-    """A budget beyond int64 is capped; a weight too big for the kernel uses the Python search."""
+    """A budget beyond int64 is capped; a weight too fine for the kernel's integer costs (scaled
+    by its denominator) uses the Python search."""
+    weight = Fraction(1, 10**40)
     problem = PlanningProblem(
-        U_TURN, parse_pose("0,0,E"), (4, 2), clearance_weight=Fraction(10**40), clearance_radius=0
+        U_TURN, parse_pose("0,0,E"), (4, 2), clearance_weight=weight, clearance_radius=0
     )
     result = plan(problem, backend=backend, max_expansions=10**23)
     assert result.status is PlanStatus.SOLVED and result.cost == 7
@@ -291,9 +295,10 @@ def test_result_headings_are_poses() -> None:
 
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_costs_beyond_int64_fall_back_to_exact_python(backend: str) -> None:
-    # Each swept cell costs 10**18 here: the numba kernel's int64 would overflow, so the
-    # planner must still answer exactly (via the pure-Python search).
-    weight = Fraction(10**18)
+    # A weight just under the bound with a denominator of 10**18: the kernel scales costs by
+    # 3 * 10**18, so its int64 would overflow, and the planner must still answer exactly (via the
+    # pure-Python search).
+    weight = Fraction(10**24 - 1, 10**18)
     result = solve(CORRIDOR, "0,0,E", "4,0", weight=weight, radius=2, backend=backend)
     assert result.status is PlanStatus.SOLVED
     assert result.cost == 4 + weight * 8

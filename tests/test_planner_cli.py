@@ -99,6 +99,8 @@ def test_plan_budget_exit_one(maze_file: Path, capsys: pytest.CaptureFixture[str
         (["--start", "0,0,E", "--goal", "4,2", "--faults", "XX:F"], "--faults"),
         (["--start", "0,0,E", "--goal", "4,2", "--clearance-weight", "abc"], "--clearance-weight"),
         (["--start", "0,0,E", "--goal", "4,2", "--clearance-weight", "-1"], "--clearance-weight"),
+        # 1e308 was accepted and printed a 310-digit cost
+        (["--start", "0,0,E", "--goal", "4,2", "--clearance-weight", "1e308"], "1,000,000"),
         (["--start", "0,0,E", "--goal", "4,2", "--heuristic", "nope"], "heuristic"),
     ],
 )

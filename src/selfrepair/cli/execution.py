@@ -8,7 +8,6 @@ bad input is exit 2 (see :func:`selfrepair.cli.main`).
 
 from __future__ import annotations
 
-from fractions import Fraction
 from pathlib import Path
 from typing import Annotated
 
@@ -16,6 +15,7 @@ import typer
 from rich.table import Table
 
 from selfrepair.cli._app import app, console, echo, echo_json, table_app
+from selfrepair.cli.planning import parse_weight
 from selfrepair.errors import InputError
 from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import CLOCKS, DETECTIONS, FaultEvent, FaultSchedule
@@ -185,13 +185,7 @@ def run(
     _check_choice(recursion, tuple(RECURSION_MODES), "--recursion")
     _check_choice(detect, DETECTIONS, "--detect")
     _check_choice(clock, CLOCKS, "--clock")
-    try:
-        weight = Fraction(clearance_weight)
-    except (ValueError, ZeroDivisionError):
-        raise InputError(
-            f"expected an exact number such as 1/2, got {clearance_weight!r}",
-            source="--clearance-weight",
-        ) from None
+    weight = parse_weight(clearance_weight)
     spec = MissionSpec(
         maze=resolve_maze(maze),
         start=parse_pose(start, source="--start"),

@@ -18,6 +18,7 @@ import typer
 from selfrepair.cli._app import app, echo, echo_json
 from selfrepair.errors import InputError
 from selfrepair.geometry import Cell, Heading, parse_cell, parse_pose
+from selfrepair.limits import MAX_CLEARANCE_WEIGHT
 from selfrepair.robots import four_wheel
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.backend import BACKENDS
@@ -60,15 +61,20 @@ def parse_goal(text: str) -> tuple[Cell, Heading | None]:
 
 
 def parse_weight(text: str) -> Fraction:
-    """Parse a non-negative exact weight such as ``2``, ``1/3`` or ``0.25``."""
+    """Parse an exact weight such as ``2``, ``1/3`` or ``0.25``, from 0 to
+    :data:`~selfrepair.limits.MAX_CLEARANCE_WEIGHT`."""
     try:
         weight = Fraction(text.strip())
     except (ValueError, ZeroDivisionError) as exc:
         raise InputError(
-            f"expected a number such as 2, 1/3 or 0.25, got {text!r}", source="--clearance-weight"
+            f"expected a number such as 2, 1/3 or 0.25, got {text[:40]!r}",
+            source="--clearance-weight",
         ) from exc
-    if weight < 0:
-        raise InputError(f"expected a weight >= 0, got {text!r}", source="--clearance-weight")
+    if not 0 <= weight <= MAX_CLEARANCE_WEIGHT:
+        raise InputError(
+            f"expected a weight from 0 to {MAX_CLEARANCE_WEIGHT:,}, got {text[:40]!r}",
+            source="--clearance-weight",
+        )
     return weight
 
 

@@ -53,6 +53,7 @@ import numpy.typing as npt
 
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Pose
+from selfrepair.limits import MAX_CLEARANCE_WEIGHT
 from selfrepair.robots import four_wheel
 from selfrepair.robots.four_wheel import Action, FaultSet, Motion, MotionKind
 from selfrepair.search.astar import PlanStatus, astar, deadline_from
@@ -226,7 +227,9 @@ def plan(
 
     ``max_expansions`` and ``time_limit`` (seconds) bound the search; hitting either gives
     :attr:`PlanStatus.BUDGET_EXHAUSTED`. Raises :class:`ProblemError` for a start or goal outside
-    the grid or in a wall, an unknown heuristic or backend, or a negative budget, weight or radius.
+    the grid or in a wall, an unknown heuristic or backend, a negative budget, a weight outside
+    ``[0, MAX_CLEARANCE_WEIGHT]`` (:mod:`selfrepair.limits`) or a radius outside
+    ``[0, MAX_CLEARANCE_RADIUS]``.
     """
     t0 = time.perf_counter_ns()
     _validate(problem, heuristic, max_expansions, time_limit, backend)
@@ -322,6 +325,8 @@ def _at_goal(problem: PlanningProblem, pose: Pose) -> bool:
 MAX_CLEARANCE_RADIUS = 1_000_000
 """Far beyond any maze's clearance; keeps the penalties inside ``int64``."""
 
+# MAX_CLEARANCE_WEIGHT lives in selfrepair.limits (the experiment schema and the CLI use it too).
+
 
 def _validate(
     problem: PlanningProblem,
@@ -341,13 +346,25 @@ def _validate(
         raise ProblemError(
             f"unknown heuristic {heuristic!r}; expected one of {', '.join(HEURISTICS)}"
         )
-    if problem.clearance_weight < 0:
-        raise ProblemError(f"clearance_weight must be >= 0, got {problem.clearance_weight}")
+    if not 0 <= problem.clearance_weight <= MAX_CLEARANCE_WEIGHT:
+        raise ProblemError(
+            f"clearance_weight must be from 0 to {MAX_CLEARANCE_WEIGHT:,}, "
+            f"got {_short_number(problem.clearance_weight)}"
+        )
     if not 0 <= problem.clearance_radius <= MAX_CLEARANCE_RADIUS:
         raise ProblemError(
             f"clearance_radius must be from 0 to {MAX_CLEARANCE_RADIUS}, "
             f"got {problem.clearance_radius}"
         )
+
+
+def _short_number(value: Fraction | int | float) -> str:
+    """``value`` as text, or its order of magnitude when that text would be long."""
+    text = str(value)
+    if len(text) <= 24:
+        return text
+    digits = len(str(abs(int(value))))
+    return f"{'-' if value < 0 else ''}a number of {digits} digits"
 
 
 def _since(t0: int) -> int:
