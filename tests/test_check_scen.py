@@ -93,3 +93,43 @@ def test_sample_indices_are_spread_evenly_and_seeded() -> None:
 def test_full_scenario_file_matches(name: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["check-scen", str(DATA / f"{name}.map.scen")]) == 0
     assert " 0 mismatches" in capsys.readouterr().out
+
+
+def _strict_json(text: str) -> dict:
+    def refuse(constant: str) -> float:
+        raise AssertionError(f"invalid JSON constant {constant}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
+@pytest.mark.parametrize("length", ["nan", "inf", "-inf", "-3.41421356", "1e400"])
+def test_non_finite_or_negative_optimal_length_is_bad_input_not_a_mismatch(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], length: str
+) -> None:
+    # These used to count as mismatches (exit 1), and --json printed NaN, which is not JSON.
+    scen = write_scen(tmp_path, [GOOD, GOOD.replace("3.41421356", length)])
+    assert main(["check-scen", str(scen), "--json"]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    column = GOOD.rindex("\t") + 2
+    assert captured.err == (
+        f"selfrepair: error: {scen}:3:{column}: expected a finite non-negative number "
+        f"optimal_length, got {length!r}\n"
+    )
+
+
+def test_json_output_is_strict_json(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    scen = write_scen(tmp_path, [GOOD, BAD])
+    assert main(["check-scen", str(scen), "--json"]) == 1
+    data = _strict_json(capsys.readouterr().out)
+    assert data["checked"] == 2 and len(data["mismatches"]) == 1
+
+
+def test_map_over_the_cell_limit_is_bad_input(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    scen = write_scen(tmp_path, [GOOD])
+    assert main(["check-scen", str(scen), "--max-cells", "100000"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--max-cells" in err and "262,144" in err
+    assert main(["check-scen", str(scen), "--max-cells", "262144"]) == 0

@@ -10,8 +10,9 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from selfrepair.cli._app import app, console, echo, echo_json, maze_app
+from selfrepair.cli._app import MaxCells, app, console, echo, echo_json, maze_app
 from selfrepair.errors import InputError
+from selfrepair.limits import MAX_CELLS
 from selfrepair.robots import four_wheel
 from selfrepair.world import bundled
 from selfrepair.world.maze import Maze, format_maze, save_maze
@@ -162,9 +163,10 @@ def maze_show(
     route: Annotated[
         str | None, typer.Option("--route", help="Overlay only the route with this name.")
     ] = None,
+    max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Print a maze as ASCII ('#' wall, '.' free), optionally with its routes drawn on it."""
-    maze = bundled.resolve_maze(spec)
+    maze = bundled.resolve_maze(spec, max_cells=max_cells)
     if not (routes or routes_file is not None or route is not None):
         sys.stdout.write(render_ascii(maze))
         return 0
@@ -190,6 +192,7 @@ def maze_generate(
         Path | None,
         typer.Option("-o", "--output", help="Write the maze here (default: print it)."),
     ] = None,
+    max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Generate a seeded maze in the plain-text format; the same options give the same maze.
 
@@ -204,7 +207,9 @@ def maze_generate(
             "a MovingAI map",
             source=str(output),
         )
-    maze = generate_maze(width, height, corridor=corridor, braid=braid, seed=seed)
+    maze = generate_maze(
+        width, height, corridor=corridor, braid=braid, seed=seed, max_cells=max_cells
+    )
     if output is None:
         sys.stdout.write(format_maze(maze))
         return 0

@@ -14,7 +14,16 @@ from typing import Annotated
 import typer
 from rich.table import Table
 
-from selfrepair.cli._app import app, console, echo, echo_json, table_app
+from selfrepair.cli._app import (
+    MaxCells,
+    MaxTableBytes,
+    MaxTableCandidates,
+    app,
+    console,
+    echo,
+    echo_json,
+    table_app,
+)
 from selfrepair.cli.planning import parse_weight
 from selfrepair.errors import InputError
 from selfrepair.execution.executor import run_mission
@@ -24,12 +33,13 @@ from selfrepair.execution.result import MissionResult, MissionSpec
 from selfrepair.execution.trace import replay as replay_trace
 from selfrepair.execution.trace import write_trace
 from selfrepair.geometry import Cell, parse_cell, parse_pose
+from selfrepair.limits import MAX_CELLS, MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES
 from selfrepair.repair.replacement import RECURSION_MODES
 from selfrepair.repair.strategies import STRATEGIES, StrategyOptions
 from selfrepair.robots import four_wheel
 from selfrepair.robots.registry import get_domain
 from selfrepair.tables.fileformat import dump_table, resolve_table
-from selfrepair.tables.model import check_table
+from selfrepair.tables.model import ReplacementTable, check_table
 from selfrepair.world.bundled import resolve_maze
 from selfrepair.world.render import GOAL_CHAR, HEADING_CHARS, render_ascii
 
@@ -179,6 +189,9 @@ def run(
     ] = None,
     seed: Annotated[int, typer.Option("--seed", help="Seed of intermittent faults.")] = 0,
     as_json: Annotated[bool, typer.Option("--json", help="Print the metrics row as JSON.")] = False,
+    max_cells: MaxCells = MAX_CELLS,
+    max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
+    max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
     """Run one mission: plan, execute with faults, repair; show the paths and the metrics."""
     _check_choice(strategy, tuple(STRATEGIES), "--strategy")
@@ -187,13 +200,13 @@ def run(
     _check_choice(clock, CLOCKS, "--clock")
     weight = parse_weight(clearance_weight)
     spec = MissionSpec(
-        maze=resolve_maze(maze),
+        maze=resolve_maze(maze, max_cells=max_cells),
         start=parse_pose(start, source="--start"),
         goal=parse_cell(goal, source="--goal"),
         schedule=build_schedule(faults, at, clock, detect, transient, intermittent),
         strategy=strategy,
         options=StrategyOptions(
-            table=_table_spec(table, strategy),
+            table=_table_spec(table, strategy, max_table_bytes, max_table_candidates),
             recursion=recursion,
             max_depth=max_depth,
             window=window,
@@ -221,11 +234,16 @@ def run(
     return 0 if result.reached else 1
 
 
-def _table_spec(table: str, strategy: str) -> str:
-    """Validate the table up front (a bad file is exit 2 even when no repair needs it)."""
-    if strategy != "replan":
-        resolve_table(table)
-    return table
+def _table_spec(
+    table: str, strategy: str, max_table_bytes: int, max_table_candidates: int
+) -> str | ReplacementTable:
+    """Load the table up front, within the limits (a bad file is exit 2 even when no repair
+    needs it); the mission gets the loaded table, so the limits given are the ones that hold."""
+    if strategy == "replan":
+        return table
+    return resolve_table(
+        table, max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
+    )
 
 
 def _check_choice(value: str, choices: tuple[str, ...], option: str) -> None:
@@ -247,9 +265,13 @@ def replay(
 def table_show(
     spec: Annotated[str, typer.Argument(help="Table file or bundled table name (handwritten).")],
     as_json: Annotated[bool, typer.Option("--json", help="Print the table file text.")] = False,
+    max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
+    max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
     """Print a replacement table: header, then each action's candidates in order."""
-    table = resolve_table(spec)
+    table = resolve_table(
+        spec, max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
+    )
     if as_json:
         echo(dump_table(table).rstrip("\n"))
         return 0
@@ -276,9 +298,13 @@ def table_show(
 @table_app.command("check")
 def table_check(
     spec: Annotated[str, typer.Argument(help="Table file or bundled table name.")],
+    max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
+    max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
     """Load a table (re-simulating every candidate) and list gaps and dead candidates."""
-    table = resolve_table(spec)
+    table = resolve_table(
+        spec, max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
+    )
     problems = check_table(table)
     for problem in problems:
         echo(f"{spec}: {problem}")

@@ -24,12 +24,13 @@ from rich.progress import (
 from rich.table import Table
 from rich.text import Text
 
-from selfrepair.cli._app import app, console, echo
+from selfrepair.cli._app import MaxCells, MaxMissions, app, console, echo
 from selfrepair.experiment.config import load_config
 from selfrepair.experiment.findings import Finding, StrategySummary, check_findings, summarize
 from selfrepair.experiment.missions import expand
 from selfrepair.experiment.runner import check_backend, run_missions
 from selfrepair.experiment.store import ResultStore, require_pyarrow
+from selfrepair.limits import MAX_CELLS, MAX_MISSIONS
 
 __all__ = ["animate", "experiment", "print_findings", "print_summary", "report"]
 
@@ -67,6 +68,8 @@ def experiment(
     export_parquet: Annotated[
         Path | None, typer.Option("--export-parquet", help="Also write a Parquet file (pyarrow).")
     ] = None,
+    max_missions: MaxMissions = MAX_MISSIONS,
+    max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Run an experiment (resumable: missions already in the database are skipped), then print the
     per-strategy summary and the original study's findings checked on all stored rows."""
@@ -74,7 +77,7 @@ def experiment(
     if export_parquet is not None:
         require_pyarrow()  # before the sweep, not after it
     cfg = load_config(resolve_experiment(config))
-    missions = expand(cfg)
+    missions = expand(cfg, max_missions=max_missions, max_cells=max_cells)
     db_path = db if db is not None else Path("results") / f"{cfg.name}.sqlite"
     n_jobs = joblib.cpu_count() if jobs == -1 else jobs
     with ResultStore(db_path) as store:

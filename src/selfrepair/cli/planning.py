@@ -15,10 +15,10 @@ from typing import Annotated, Any
 import numpy as np
 import typer
 
-from selfrepair.cli._app import app, echo, echo_json
+from selfrepair.cli._app import MaxCells, app, echo, echo_json
 from selfrepair.errors import InputError
 from selfrepair.geometry import Cell, Heading, parse_cell, parse_pose
-from selfrepair.limits import MAX_CLEARANCE_WEIGHT
+from selfrepair.limits import MAX_CELLS, MAX_CLEARANCE_WEIGHT
 from selfrepair.robots import four_wheel
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.backend import BACKENDS
@@ -133,9 +133,10 @@ def plan_command(
     time_limit: _TimeLimit = None,
     backend: _Backend = "auto",
     as_json: _Json = False,
+    max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Plan the robot's actions from START to GOAL with exact A* (exit 1 if no plan)."""
-    maze = resolve_maze(maze_spec)
+    maze = resolve_maze(maze_spec, max_cells=max_cells)
     goal_cell, goal_heading = parse_goal(goal)
     problem = PlanningProblem(
         maze=maze,
@@ -191,11 +192,12 @@ def path_command(
     time_limit: _TimeLimit = None,
     backend: _Backend = "auto",
     as_json: _Json = False,
+    max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Shortest grid path under MovingAI rules (exit 1 if none)."""
     if connectivity not in CONNECTIVITIES:
         raise InputError(f"expected 4 or 8, got {connectivity}", source="--connectivity")
-    maze = resolve_maze(map_spec)
+    maze = resolve_maze(map_spec, max_cells=max_cells)
     start = parse_cell(source, source="--from")
     goal = parse_cell(target, source="--to")
     result = grid_astar(
@@ -229,19 +231,26 @@ def sample_indices(total: int, sample: int | None, seed: int) -> list[int]:
 
 
 def check_scenarios(
-    scen_path: Path, *, sample: int | None = None, seed: int = 0, backend: str = "auto"
+    scen_path: Path,
+    *,
+    sample: int | None = None,
+    seed: int = 0,
+    backend: str = "auto",
+    max_cells: int | None = MAX_CELLS,
 ) -> tuple[int, list[dict[str, Any]]]:
     """Run the scenario lines (all, or ``sample`` spread evenly) with 8-connected grid A*.
 
-    The map is the file next to ``scen_path`` named by the basename of the map column. Returns the
-    number of lines in the file and one record per checked line (``ok`` false on a mismatch).
+    The map is the file next to ``scen_path`` named by the basename of the map column (checked
+    against ``max_cells``). Returns the number of lines in the file and one record per checked
+    line (``ok`` false on a mismatch). Every number in a record is finite: the reader refuses a
+    non-finite ``optimal_length`` and a path cost is a sum of finite steps.
     """
     queries = load_scenario(scen_path)
     chosen = [queries[i] for i in sample_indices(len(queries), sample, seed)]
     maps: dict[str, Maze] = {}
     records = []
     for query in chosen:
-        maze = _scenario_map(scen_path, query, maps)
+        maze = _scenario_map(scen_path, query, maps, max_cells)
         result = grid_astar(maze, query.start, query.goal, connectivity=8, backend=backend)
         got = None if result.cost is None else result.cost.value
         ok = got is not None and abs(got - query.optimal_length) <= SCEN_TOLERANCE
@@ -258,7 +267,9 @@ def check_scenarios(
     return len(queries), records
 
 
-def _scenario_map(scen_path: Path, query: ScenarioQuery, maps: dict[str, Maze]) -> Maze:
+def _scenario_map(
+    scen_path: Path, query: ScenarioQuery, maps: dict[str, Maze], max_cells: int | None
+) -> Maze:
     name = query.map_name.replace("\\", "/").rsplit("/", 1)[-1]
     if name not in maps:
         map_path = scen_path.parent / name
@@ -268,7 +279,7 @@ def _scenario_map(scen_path: Path, query: ScenarioQuery, maps: dict[str, Maze]) 
                 source=str(scen_path),
                 line=query.line,
             )
-        maze = load_map(map_path)
+        maze = load_map(map_path, max_cells=max_cells)
         if (maze.width, maze.height) != (query.width, query.height):
             raise InputError(
                 f"expected the map size {maze.width}x{maze.height}, "
@@ -299,6 +310,7 @@ def check_scen_command(
     ] = 0,
     backend: _Backend = "auto",
     as_json: _Json = False,
+    max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Check grid A* against a scenario file's optimal lengths (abs tolerance 0.01; exit 1 on any
     mismatch)."""
@@ -307,7 +319,9 @@ def check_scen_command(
             f"expected one of {', '.join(BACKENDS)}, got {backend!r}", source="--backend"
         )
     t0 = time.perf_counter()
-    total, records = check_scenarios(scen_path, sample=sample, seed=seed, backend=backend)
+    total, records = check_scenarios(
+        scen_path, sample=sample, seed=seed, backend=backend, max_cells=max_cells
+    )
     seconds = time.perf_counter() - t0
     bad = [r for r in records if not r["ok"]]
     if as_json:

@@ -10,8 +10,17 @@ from typing import Annotated, Any
 import typer
 from rich.table import Table
 
-from selfrepair.cli._app import console, echo, echo_json, table_app
+from selfrepair.cli._app import (
+    MaxCells,
+    MaxTableBytes,
+    MaxTableCandidates,
+    console,
+    echo,
+    echo_json,
+    table_app,
+)
 from selfrepair.errors import InputError
+from selfrepair.limits import MAX_CELLS, MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES
 from selfrepair.repair.coverage import CoverageReport, coverage_report
 from selfrepair.repair.replacement import RECURSION_MODES
 from selfrepair.tables.fileformat import dump_table, resolve_table
@@ -71,12 +80,12 @@ def table_generate(
     return 0
 
 
-def _mazes(names: list[str] | None, no_walls: bool) -> list[tuple[str, Maze]]:
+def _mazes(names: list[str] | None, no_walls: bool, max_cells: int) -> list[tuple[str, Maze]]:
     if no_walls:
         return []
     if not names:
         return [(name, load_bundled(name)) for name in maze_names()]
-    return [(name, resolve_maze(name)) for name in names]
+    return [(name, resolve_maze(name, max_cells=max_cells)) for name in names]
 
 
 @table_app.command("coverage")
@@ -104,10 +113,15 @@ def table_coverage(
     ] = False,
     json_out: Annotated[Path | None, typer.Option(help="Write the full report as JSON.")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of tables.")] = False,
+    max_cells: MaxCells = MAX_CELLS,
+    max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
+    max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
     """Coverage and optimality of a table against the exact optimum, in free space and next to
     the walls of mazes."""
-    table = resolve_table(spec)
+    table = resolve_table(
+        spec, max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
+    )
     _choice(faults, FAULT_SCOPES, "--faults")
     _choice(recursion, list(RECURSION_MODES), "--recursion")
     if objective is not None:
@@ -117,12 +131,12 @@ def table_coverage(
         faults=faults,
         objective=objective,
         mode=recursion,
-        mazes=_mazes(maze, no_walls),
+        mazes=_mazes(maze, no_walls, max_cells),
         label=spec,
     )
     data = report.to_json()
     if json_out is not None:
-        json_out.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
+        json_out.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n", encoding="utf-8")
     if as_json:
         echo_json(data)
         return 0

@@ -16,6 +16,7 @@ from importlib import resources
 from pathlib import Path
 
 from selfrepair.errors import InputError
+from selfrepair.limits import MAX_CELLS
 from selfrepair.world.loading import load_maze
 from selfrepair.world.maze import Maze, parse_maze
 from selfrepair.world.routes import Route, parse_routes
@@ -100,17 +101,17 @@ def bundled_routes(name: str) -> tuple[Route, ...]:
     return parse_routes(_data_text(f"{name}.routes"), source=f"<bundled {name}.routes>", maze=maze)
 
 
-def resolve_maze(spec: str) -> Maze:
+def resolve_maze(spec: str, *, max_cells: int | None = MAX_CELLS) -> Maze:
     """A maze from a bundled name, a plain-text maze file or a MovingAI ``.map`` file.
 
     A bundled name wins over a file of the same name in the working directory. An unknown name
     that is not an existing file raises :class:`~selfrepair.errors.InputError` listing the
-    bundled names.
+    bundled names. A file is checked against ``max_cells`` (see :func:`load_maze`).
     """
     if spec in _CATALOGUE:
         return load_bundled(spec)
     path = Path(spec)
     if path.is_file():
-        return load_maze(path)
+        return load_maze(path, max_cells=max_cells)
     _check_name(spec)
     raise AssertionError("unreachable")  # pragma: no cover
