@@ -316,7 +316,8 @@ def test_parse_action_pose_cell() -> None:
     assert parse_cell("-1,7") == (-1, 7)
     for bad, parser in (("FFF", parse_action), ("1,2", parse_pose), ("1,2,X", parse_pose),
                         ("1", parse_cell), ("a,b", parse_cell), ("1,--2,N", parse_pose),
-                        ("²,1", parse_cell), ("+-1,1", parse_cell)):
+                        ("²,1", parse_cell), ("+-1,1", parse_cell),
+                        ("1" * 5000 + ",1", parse_cell), ("1," + "2" * 19 + ",N", parse_pose)):
         with pytest.raises(InputError, match="expected"):
             parser(bad)
 

@@ -81,6 +81,19 @@ def test_syntax_errors_name_file_line_column(line: str, column: int, message: st
     assert str(err).startswith(f"x.routes:3:{column}: ")
 
 
+def test_lines_end_only_at_line_feeds_and_a_byte_order_mark_is_ignored(tmp_path: Path) -> None:
+    # A form feed or U+2028 used to split a line, so later errors named the wrong line.
+    text = "\ufeffr0 1,1,E 3,3\r\nr1 1,1,E\x0c3,3\nr2 1,1,E\u20283,3\nbad\n"
+    with pytest.raises(InputError, match="expected 3 fields") as info:
+        parse_routes(text, source="x.routes")
+    assert info.value.line == 4
+    path = tmp_path / "bom.routes"
+    path.write_bytes(b"\xef\xbb\xbfr0 1,1,E 3,3\n\xe9\n")
+    with pytest.raises(InputError, match="UTF-8") as info:
+        load_routes(path)
+    assert (info.value.line, info.value.column) == (2, 1)
+
+
 def test_duplicate_name_is_an_error() -> None:
     with pytest.raises(InputError, match=r"unique route name.*line 1") as info:
         parse_routes("a 1,1,E 3,3\na 1,1,E 3,1\n", source="x.routes")

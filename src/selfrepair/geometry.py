@@ -96,6 +96,10 @@ def parse_pose(text: str, *, source: str = "<pose>") -> Pose:
     return Pose(int(parts[0]), int(parts[1]), Heading[parts[2].upper()])
 
 
+_MAX_DIGITS = 18
+"""Longest coordinate accepted; keeps ``int()`` far from Python's 4300-digit conversion limit."""
+
+
 def _is_int(text: str) -> bool:
     body = text[1:] if text[:1] in ("+", "-") else text
-    return body.isascii() and body.isdigit()
+    return body.isascii() and body.isdigit() and len(body) <= _MAX_DIGITS

@@ -15,6 +15,7 @@ follow the maze: ``x`` is the column, ``y`` the row, origin top-left. Example::
 
 A route only asks for the robot's cell to reach the goal; the heading at the goal is free.
 Parse errors name the file, the line and the column of the offending field, and what was expected.
+Lines end at ``\\n`` or ``\\r\\n`` only, and a leading UTF-8 byte-order mark is ignored.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from pathlib import Path
 
 from selfrepair.errors import InputError
 from selfrepair.geometry import Cell, Pose, parse_cell, parse_pose
+from selfrepair.textio import read_text, strip_bom, text_lines
 from selfrepair.world.maze import Maze
 
 __all__ = [
@@ -58,7 +60,7 @@ def parse_routes(
     """Parse a route file's text; with ``maze``, also check every start and goal is free."""
     routes: list[Route] = []
     seen: dict[str, int] = {}
-    for number, raw in enumerate(text.splitlines(), start=1):
+    for number, raw in enumerate(text_lines(strip_bom(text)), start=1):
         content = raw.split("#", 1)[0]
         fields = list(_FIELD.finditer(content))
         if not fields:
@@ -148,13 +150,7 @@ def format_routes(routes: Iterable[Route], *, comments: Sequence[str] = ()) -> s
 def load_routes(path: str | Path, *, maze: Maze | None = None) -> tuple[Route, ...]:
     """Read a route file (see the module docstring); with ``maze``, check starts and goals."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"cannot read route file: {exc.strerror}", source=str(path)) from exc
-    except UnicodeDecodeError as exc:
-        raise InputError("expected a UTF-8 text route file", source=str(path)) from exc
-    return parse_routes(text, source=str(path), maze=maze)
+    return parse_routes(read_text(path, what="route file"), source=str(path), maze=maze)
 
 
 def save_routes(
