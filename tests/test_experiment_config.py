@@ -294,7 +294,7 @@ def test_clearance_weight_above_the_bound_is_refused(weight: str) -> None:
 def test_missions_are_counted_before_they_are_built() -> None:
     config = parse_config(GOOD)
     assert count_missions(config) == len(expand(config)) == 48
-    message = r"at most 47 missions, got 48 \(6 routes x 2 fault sets"
+    message = r"at most 47 missions, got 48 \(routes 6 x fault sets 2 x"
     with pytest.raises(LimitError, match=message):
         expand(config, max_missions=47)
     # About 312 million missions: refused at once instead of running out of memory.

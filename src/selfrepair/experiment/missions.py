@@ -437,7 +437,7 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
     total = 1
     for count, _ in factors:
         total *= count
-    return total, " x ".join(f"{count:,} {what}" for count, what in factors)
+    return total, " x ".join(f"{what} {count:,}" for count, what in factors)
 
 
 def expand(
