@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from selfrepair.cli import main
@@ -168,14 +168,22 @@ def cli_is_one_line_or_success(args: list[str], library_error: InputError | None
         assert code in (0, 1), (code, message)
 
 
-def fuzz(strategy: st.SearchStrategy[Any], check: Callable[[Any], None], examples: int) -> None:
-    """Run ``check`` on ``examples`` inputs drawn from ``strategy``."""
-    run = settings(
+def fuzz(
+    strategy: st.SearchStrategy[Any],
+    check: Callable[[Any], None],
+    examples: int,
+    known: tuple[Any, ...] = (),
+) -> None:
+    """Run ``check`` on the ``known`` inputs (the reliability audit's findings, so a regression
+    fails at once) and on ``examples`` inputs drawn from ``strategy``."""
+    test = given(strategy)(check)
+    for case in known:
+        test = example(case)(test)
+    settings(
         max_examples=examples,
         deadline=None,
         suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
-    )(given(strategy)(check))
-    run()
+    )(test)()
 
 
 _counter = itertools.count()
@@ -201,7 +209,8 @@ def folder() -> Any:
 
 @EXAMPLES
 def test_maze_text(examples: int) -> None:
-    fuzz(texts(SMALL_MAZE, "maze"), text_check(parse_maze), examples)
+    known = ("\ufeff" + SMALL_MAZE, SMALL_MAZE.replace("\n", "\u2028", 2), "#" * 5000 + "1")
+    fuzz(texts(SMALL_MAZE, "maze"), text_check(parse_maze), examples, known)
 
 
 @EXAMPLES
@@ -211,7 +220,7 @@ def test_maze_file_and_cli(folder: Path, examples: int) -> None:
         error = parses_or_input_error(lambda: load_maze(path))
         cli_is_one_line_or_success(["maze", "show", str(path)], error)
 
-    fuzz(files(SMALL_MAZE, "maze"), check, examples)
+    fuzz(files(SMALL_MAZE, "maze"), check, examples, (b"\xef\xbb\xbf#.#\n", b"#\xe9#\n"))
 
 
 # --- MovingAI maps and scenarios ---------------------------------------------------------------
@@ -219,7 +228,8 @@ def test_maze_file_and_cli(folder: Path, examples: int) -> None:
 
 @EXAMPLES
 def test_movingai_map_text(examples: int) -> None:
-    fuzz(texts(SMALL_MAP, "map"), text_check(parse_map), examples)
+    known = ("", SMALL_MAP.replace("height 3", "height 3\nheight 4"), "height 1" + "0" * 5000)
+    fuzz(texts(SMALL_MAP, "map"), text_check(parse_map), examples, known)
 
 
 @EXAMPLES
@@ -229,7 +239,7 @@ def test_movingai_map_file_and_cli(folder: Path, examples: int) -> None:
         error = parses_or_input_error(lambda: load_map(path))
         cli_is_one_line_or_success(["maze", "show", str(path)], error)
 
-    fuzz(files(SMALL_MAP, "map"), check, examples)
+    fuzz(files(SMALL_MAP, "map"), check, examples, (b"", b"type octile\n\xff"))
 
 
 @EXAMPLES
@@ -240,7 +250,8 @@ def test_movingai_scenario_text(examples: int) -> None:
         parses_or_input_error(lambda: parse_scenario(text))
         parses_or_input_error(lambda: parse_scenario(text, maze=maze))
 
-    fuzz(texts(SMALL_SCEN, "scen"), check, examples)
+    known = (SMALL_SCEN.replace("1.00000000", "nan"), SMALL_SCEN.replace("\t1\t1", "\t1" * 5000))
+    fuzz(texts(SMALL_SCEN, "scen"), check, examples, known)
 
 
 @EXAMPLES
@@ -251,7 +262,8 @@ def test_movingai_scenario_file_and_cli(folder: Path, examples: int) -> None:
         error = parses_or_input_error(lambda: load_scenario(path))
         cli_is_one_line_or_success(["check-scen", str(path), "--json"], error)
 
-    fuzz(files(SMALL_SCEN, "scen"), check, examples)
+    known = tuple(SMALL_SCEN.replace("1.00000000", n).encode() for n in ("nan", "inf", "-1"))
+    fuzz(files(SMALL_SCEN, "scen"), check, examples, known)
 
 
 # --- route files -------------------------------------------------------------------------------
@@ -265,7 +277,7 @@ def test_route_text(examples: int) -> None:
         parses_or_input_error(lambda: parse_routes(text))
         parses_or_input_error(lambda: parse_routes(text, maze=maze))
 
-    fuzz(texts(SMALL_ROUTES, "routes"), check, examples)
+    fuzz(texts(SMALL_ROUTES, "routes"), check, examples, ("r1 1" + "0" * 5000 + ",1,E 5,3",))
 
 
 @EXAMPLES
@@ -285,7 +297,8 @@ def test_route_file_and_cli(folder: Path, examples: int) -> None:
 
 @EXAMPLES
 def test_table_json_text(examples: int) -> None:
-    fuzz(texts(TABLE, "table"), text_check(parse_table), examples)
+    known = ("[" * 100_000, TABLE.replace('"version": 1', '"version": 1' + "0" * 5000))
+    fuzz(texts(TABLE, "table"), text_check(parse_table), examples, known)
 
 
 @EXAMPLES
@@ -295,7 +308,7 @@ def test_table_file_and_cli(folder: Path, examples: int) -> None:
         error = parses_or_input_error(lambda: load_table(path))
         cli_is_one_line_or_success(["table", "show", str(path)], error)
 
-    fuzz(files(TABLE, "table"), check, examples)
+    fuzz(files(TABLE, "table"), check, examples, (b"[" * 100_000, b"\xef\xbb\xbf" + b"{}"))
 
 
 # --- experiment TOML ---------------------------------------------------------------------------
@@ -310,7 +323,8 @@ def test_experiment_toml_text(examples: int) -> None:
             return
         parses_or_input_error(lambda: count_missions(config))
 
-    fuzz(texts(TOML, "toml"), check, examples)
+    known = ("a = " + "[" * 5000 + "]" * 5000, "seed = " + "1" * 5000)
+    fuzz(texts(TOML, "toml"), check, examples, known)
 
 
 @EXAMPLES
@@ -322,4 +336,4 @@ def test_experiment_file_and_cli(folder: Path, examples: int) -> None:
             db = str(path.parent / "r.sqlite")
             cli_is_one_line_or_success(["experiment", str(path), "--jobs", "1", "--db", db], error)
 
-    fuzz(files(TOML, "toml"), check, examples)
+    fuzz(files(TOML, "toml"), check, examples, (TOML.encode() + b"# caf\xe9\n",))
