@@ -17,10 +17,12 @@ from __future__ import annotations
 
 import json
 import re
+from functools import cache
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from selfrepair.caching import BoundedCache
 from selfrepair.errors import InputError, TableError
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import domain_names, get_domain
@@ -53,7 +55,7 @@ def parse_table(text: str, source: str = "<string>") -> ReplacementTable:
     for key in ("version", "domain", "shape", "made_by", "entries"):
         if key not in data:
             raise TableError(f"expected a {key!r} key in the header", source=source)
-    if data["domain"] not in _domain_names():
+    if not isinstance(data["domain"], str) or data["domain"] not in _domain_names():
         raise TableError(
             f"expected a domain in {', '.join(_domain_names())}, got {data['domain']!r}",
             source=source,
@@ -71,7 +73,7 @@ def parse_table(text: str, source: str = "<string>") -> ReplacementTable:
         for number, raw in enumerate(raw_entries)
     )
     return ReplacementTable(
-        domain=dom.name,
+        domain=dom,
         shape=data["shape"],
         made_by=data["made_by"],
         entries=entries,
@@ -152,7 +154,7 @@ def _entry_sort_key(dom: Domain[Any, Any], entry: TableEntry) -> tuple[int, int,
 
 def dump_table(table: ReplacementTable) -> str:
     """The table as deterministic JSON: sorted keys, entries in domain action order, one a line."""
-    dom = get_domain(table.domain)
+    dom = table.domain
     rows = []
     for entry in sorted(table.entries, key=lambda e: _entry_sort_key(dom, e)):
         row: dict[str, Any] = {
@@ -163,11 +165,11 @@ def dump_table(table: ReplacementTable) -> str:
             row["faults"] = dom.format_faults(entry.faults)
         rows.append("  " + json.dumps(row, sort_keys=True))
     header = {
-        "domain": table.domain,
+        "domain": dom.name,
         "format": FORMAT_NAME,
-        "made_by": table.made_by,
+        "made_by": table.made_by.value,
         "parameters": dict(table.parameters),
-        "shape": table.shape,
+        "shape": table.shape.value,
         "version": table.version,
     }
     lines = ["{", ' "domain": ' + json.dumps(header["domain"]) + ",", ' "entries": [']
@@ -182,6 +184,7 @@ def dump_table(table: ReplacementTable) -> str:
     return "\n".join(line for line in lines if line) + "\n"
 
 
+@cache
 def bundled_table_names() -> tuple[str, ...]:
     """Names of the tables shipped as package data."""
     folder = resources.files("selfrepair").joinpath("data", "tables")
@@ -191,18 +194,34 @@ def bundled_table_names() -> tuple[str, ...]:
 
 
 def bundled_table(name: str = "handwritten") -> ReplacementTable:
-    """Load a table shipped with the package, e.g. ``"handwritten"`` or ``"three-action"``."""
+    """A table shipped with the package, e.g. ``"handwritten"`` or ``"three-action"`` (parsed
+    once per process; a few are kept)."""
     if name not in bundled_table_names():
         raise TableError(
             f"expected a bundled table name ({', '.join(bundled_table_names())})", source=name
         )
+    return _BUNDLED.get(name, lambda: _read_bundled(name))
+
+
+def _read_bundled(name: str) -> ReplacementTable:
     resource = resources.files("selfrepair").joinpath("data", "tables", f"{name}.json")
     return parse_table(resource.read_text(encoding="utf-8"), source=f"<bundled:{name}>")
 
 
+_BUNDLED: BoundedCache[str, ReplacementTable] = BoundedCache("bundled tables", 8)
+_FILES: BoundedCache[tuple[str, int, int], ReplacementTable] = BoundedCache("table files", 8)
+
+
 def resolve_table(spec: str | Path) -> ReplacementTable:
-    """A bundled table by name, else a table file by path."""
+    """A bundled table by name, else a table file by path. A file is read again when its size or
+    modification time changed since it was last read in this process."""
     text = str(spec)
     if text in bundled_table_names():
         return bundled_table(text)
-    return load_table(text)
+    path = Path(text)
+    try:
+        info = path.stat()
+    except OSError:
+        return load_table(path)  # raises the TableError that names the problem
+    key = (str(path.resolve()), info.st_mtime_ns, info.st_size)
+    return _FILES.get(key, lambda: load_table(path))
