@@ -1,6 +1,6 @@
 # Two commands do all set-up on a fresh machine:
 #   make demo   runs the main job on the bundled data
-#   make test   runs lint and the test suite
+#   make test   runs the linters (ruff, import-linter, mypy) and the test suite
 # Each creates the virtual environment in .venv when it is missing.
 
 PYTHON ?= python3
@@ -22,8 +22,12 @@ demo: $(STAMP)
 	$(VENV)/bin/selfrepair experiment paper --db results/paper.sqlite
 	$(VENV)/bin/selfrepair report results/paper.sqlite -o results/report
 
+# Lint: style (ruff), the architecture's import rules (import-linter contracts in
+# pyproject.toml) and types (mypy --strict on the library).
 lint: $(STAMP)
 	$(VENV)/bin/ruff check src tests benchmarks
+	$(VENV)/bin/lint-imports
+	$(VENV)/bin/mypy
 
 # pytest exits 5 when it collected no test: that must fail, not pass silently.
 test: lint

@@ -7,8 +7,8 @@ spread evenly over the file are solved by
 * ``nano_astar.astar`` (C++; its defaults are MovingAI's rules), on the same queries,
 * ``networkx.astar_path`` with the octile heuristic on a prebuilt graph, on every
   ``len/--networkx-queries``-th of those queries (it is slow; the ratio uses the same queries),
-* ``selfrepair.search.lattice.plan`` for the healthy robot from the same start cell (facing east) to the
-  same goal cell, with clearance weight 0 and with weight ``--weight``.
+* ``selfrepair.search.lattice.plan`` for the healthy robot from the same start cell (facing east)
+  to the same goal cell, with clearance weight 0 and with weight ``--weight``.
 
 Each timing (ours and the peers' alike) is the best of ``--repeats`` runs of one query; the tables
 report the median over the queries. Costs must agree (grid: |ours - peer| < 1e-6, and within 0.01

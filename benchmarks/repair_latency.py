@@ -53,7 +53,9 @@ def fault_sets(quick: bool) -> list[frozenset[four_wheel.Fault]]:
 
 
 def collect(
-    maze: Maze, routes: list[tuple[Pose, tuple[int, int]]], faults: list[frozenset[four_wheel.Fault]]
+    maze: Maze,
+    routes: list[tuple[Pose, tuple[int, int]]],
+    faults: list[frozenset[four_wheel.Fault]],
 ) -> dict[str, list[int]]:
     """Latencies of table hits and of replans over every route and fault set."""
     hits: list[int] = []

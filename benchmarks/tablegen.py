@@ -7,8 +7,8 @@ class costs and enumerations are rebuilt every time, since each call builds its 
   target under 10 s on this machine;
 * full **fault-agnostic** generation (K = 5), with priority ``cost`` and ``walls``;
 * as a peer in the same run, the **exact optimum** for every (fault set, disabled action) pair
-  (:func:`selfrepair.repair.coverage.optimal_replacements`, Dijkstra with no length limit): the indexed
-  generator must not be much slower than merely computing the answers it has to contain;
+  (:func:`selfrepair.repair.coverage.optimal_replacements`, Dijkstra with no length limit): the
+  indexed generator must not be much slower than merely computing the answers it has to contain;
 * **lookup** time of ``ReplacementTable.candidates`` on the same random single-fault keys for
   tables of 81, 324 and 3402 entries (O(1): the per-lookup time must not grow with the number
   of entries);
@@ -76,14 +76,19 @@ def main() -> None:
     repeats = 1 if args.quick else args.repeats
 
     indexed_options = GenerateOptions(shape="fault-indexed")
-    t_indexed, indexed = best_time(lambda: generate_table(indexed_options), repeats)
-    t_agnostic, agnostic = best_time(lambda: generate_table(GenerateOptions()), repeats)
-    t_walls, walls = best_time(lambda: generate_table(GenerateOptions(priority="walls")), repeats)
+    t_indexed, indexed = best_time(lambda: generate_table(FOUR_WHEEL, indexed_options), repeats)
+    t_agnostic, agnostic = best_time(lambda: generate_table(FOUR_WHEEL, GenerateOptions()), repeats)
+    t_walls, walls = best_time(
+        lambda: generate_table(FOUR_WHEEL, GenerateOptions(priority="walls")), repeats
+    )
     t_optimum, _ = best_time(
         lambda: [optimal_replacements(FOUR_WHEEL, f) for f in FOUR_WHEEL.fault_sets], repeats
     )
     _, singles = best_time(
-        lambda: generate_table(GenerateOptions(shape="fault-indexed", faults="singles")), 1
+        lambda: generate_table(
+            FOUR_WHEEL, GenerateOptions(shape="fault-indexed", faults="singles")
+        ),
+        1,
     )
 
     print("generation (best of", repeats, "runs)")

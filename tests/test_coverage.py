@@ -126,7 +126,9 @@ def test_reachable_special_cases() -> None:
 
 
 @functools.cache
-def _independent_optimum(faults: frozenset[four_wheel.Fault], objective: str) -> dict[str, Fraction]:
+def _independent_optimum(
+    faults: frozenset[four_wheel.Fault], objective: str
+) -> dict[str, Fraction]:
     """Uniform-cost search over raw actions inside a 7x7 box; costs in exact fractions."""
     moves = [a for a in four_wheel.ACTIONS if four_wheel.available(a, faults)]
 
@@ -157,7 +159,9 @@ def _independent_optimum(faults: frozenset[four_wheel.Fault], objective: str) ->
     "faults", list(FOUR_WHEEL.fault_sets[:12]) + list(FOUR_WHEEL.fault_sets[12::13])
 )
 @pytest.mark.parametrize("objective", ["duration", "length"])
-def test_optimum_matches_independent_search(faults: frozenset[four_wheel.Fault], objective: str) -> None:
+def test_optimum_matches_independent_search(
+    faults: frozenset[four_wheel.Fault], objective: str
+) -> None:
     found = {a.code: c for a, c in optimal_replacements(FOUR_WHEEL, faults, objective).items()}
     assert found == _independent_optimum(faults, objective)
 
@@ -237,7 +241,7 @@ def test_excess_is_relative_to_the_optimum() -> None:
     optimum = optimal_replacements(FOUR_WHEEL, faults)
     excess = Fraction(0)
     for action, best in optimum.items():
-        found = find_replacement(FOUR_WHEEL, table, action, ORIGIN, faults, lambda c: True)
+        found = find_replacement(table, action, ORIGIN, faults, lambda c: True)
         if found is not None and best is not None:
             excess += sum((b.duration for b in found.actions), Fraction(0)) / best - 1
     assert row.excess_sum == excess
@@ -283,7 +287,7 @@ def test_wall_coverage_matches_pose_by_pose(
                         continue
                     pairs += 1
                     found = find_replacement(
-                        domain, table, action, pose, faults, maze.all_free, mode="flat"
+                        table, action, pose, faults, maze.all_free, mode="flat"
                     )
                     uncovered += found is None
     row = wall_coverage(table, maze, fault_sets)

@@ -20,10 +20,10 @@ from selfrepair.execution.metrics import (
     mission_row,
     plan_distance,
 )
-from selfrepair.execution.result import STATUSES, MissionResult, MissionSpec
+from selfrepair.execution.result import MissionResult, MissionSpec, MissionStatus
 from selfrepair.execution.trace import parse_trace, replay, trace_lines
 from selfrepair.geometry import Heading, Pose
-from selfrepair.repair.replacement import RECURSION_MODES
+from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import STRATEGIES, StrategyOptions
 from selfrepair.robots import four_wheel
 from selfrepair.robots.four_wheel import FOUR_WHEEL
@@ -87,7 +87,7 @@ def _spec(
 def _check_mission(result: MissionResult) -> None:
     """The invariants every mission must keep, whatever happened."""
     spec = result.spec
-    assert result.status in STATUSES and result.status != "collision"
+    assert result.status in set(MissionStatus) and result.status != "collision"
     if result.reached:
         assert result.final_pose.cell == spec.goal
     else:
@@ -112,7 +112,7 @@ def _check_mission(result: MissionResult) -> None:
     routes(),
     st.sampled_from(FAULT_SETS),
     st.sampled_from(list(STRATEGIES)),
-    st.sampled_from(list(RECURSION_MODES)),
+    st.sampled_from(list(RecursionMode)),
     st.sampled_from(["now", "on-use"]),
 )
 def test_every_mission_reaches_the_goal_or_says_why(
@@ -171,7 +171,7 @@ def test_without_faults_every_strategy_executes_the_initial_plan(route, strategy
 
 
 @PROPERTY
-@given(routes(), st.sampled_from(FAULT_SETS), st.sampled_from(list(RECURSION_MODES)))
+@given(routes(), st.sampled_from(FAULT_SETS), st.sampled_from(list(RecursionMode)))
 def test_replacement_never_replans_more_than_replan(route, faults, recursion) -> None:  # type: ignore[no-untyped-def]
     by_replan = mission_row(run_mission(_spec(route, faults, "replan")))
     by_table = mission_row(run_mission(_spec(route, faults, "replacement", recursion=recursion)))
@@ -273,16 +273,18 @@ def test_negative_seed_is_a_problem_error() -> None:
 
 def test_one_off_costs_stay_out_of_the_first_repair() -> None:
     """The first table hit of a process on a fresh maze must not be charged for building the
-    maze's free-cell set (slow on a large maze): run_mission builds it before any clock starts,
+    maze's free grid (slow on a large maze): run_mission builds it before any clock starts,
     even in a mission that never repairs."""
-    from selfrepair.repair.replacement import _FREE_SETS
+    from selfrepair.caching import clear_caches
+    from selfrepair.repair.replacement import table_reach
+    from selfrepair.world.maze import _FREE_GRIDS
 
     maze = Maze(np.zeros((30, 30), dtype=bool))
     spec = MissionSpec(maze, Pose(5, 15, Heading.E), (25, 15), strategy="replacement")
-    _FREE_SETS.clear()
+    clear_caches()
     result = run_mission(spec)
     assert result.reached and not result.repairs
-    assert id(maze) in _FREE_SETS
+    assert (maze, max(2, table_reach(spec.options.resolved_table()))) in _FREE_GRIDS
 
 
 def test_metrics_helpers() -> None:

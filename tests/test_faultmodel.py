@@ -11,6 +11,7 @@ from selfrepair.execution.faults import FaultEvent, FaultSchedule
 from selfrepair.execution.simulator import Simulator
 from selfrepair.geometry import Heading, Pose
 from selfrepair.robots import four_wheel
+from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.world.maze import parse_maze
 
 FLF = four_wheel.parse_fault("FL:F")
@@ -66,14 +67,14 @@ def test_schedule_json_round_trips() -> None:
         ),
         detection="on-use",
     )
-    assert FaultSchedule.from_json(schedule.to_json()) == schedule
+    assert FaultSchedule.from_json(schedule.to_json(FOUR_WHEEL), FOUR_WHEEL) == schedule
     assert "detected on-use" in schedule.describe()
     with pytest.raises(InputError):
         FaultSchedule(detection="psychic")
 
 
 def test_simulator_moves_with_the_robot_model() -> None:
-    sim = Simulator(CORRIDOR, Pose(1, 1, Heading.E), FaultSchedule())
+    sim = Simulator(FOUR_WHEEL, CORRIDOR, Pose(1, 1, Heading.E), FaultSchedule())
     outcome = sim.execute(four_wheel.parse_action("FFSS"))
     assert outcome.status == "moved" and outcome.end == Pose(2, 1, Heading.E)
     assert sim.pose == outcome.end and sim.steps == 1 and sim.ticks == 2
@@ -81,7 +82,10 @@ def test_simulator_moves_with_the_robot_model() -> None:
 
 def test_failed_attempt_stays_put_costs_one_tick_and_names_the_fault() -> None:
     sim = Simulator(
-        CORRIDOR, Pose(1, 1, Heading.E), FaultSchedule.permanent([FLF, RRB], detection="on-use")
+        FOUR_WHEEL,
+        CORRIDOR,
+        Pose(1, 1, Heading.E),
+        FaultSchedule.permanent([FLF, RRB], detection="on-use"),
     )
     assert sim.sense() == frozenset()
     assert sim.true_faults() == {FLF, RRB}
@@ -91,13 +95,15 @@ def test_failed_attempt_stays_put_costs_one_tick_and_names_the_fault() -> None:
 
 
 def test_detection_now_senses_the_active_faults() -> None:
-    sim = Simulator(CORRIDOR, Pose(1, 1, Heading.E), FaultSchedule.permanent([FLF], at=1))
+    sim = Simulator(
+        FOUR_WHEEL, CORRIDOR, Pose(1, 1, Heading.E), FaultSchedule.permanent([FLF], at=1)
+    )
     assert sim.sense() == frozenset()
     sim.execute(four_wheel.parse_action("BFBF"))
     assert sim.sense() == {FLF}
 
 
 def test_collision_is_refused() -> None:
-    sim = Simulator(CORRIDOR, Pose(1, 1, Heading.N), FaultSchedule())
+    sim = Simulator(FOUR_WHEEL, CORRIDOR, Pose(1, 1, Heading.N), FaultSchedule())
     outcome = sim.execute(four_wheel.parse_action("FFFF"))
     assert outcome.status == "collision" and sim.pose == Pose(1, 1, Heading.N) and sim.steps == 0

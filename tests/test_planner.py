@@ -9,11 +9,11 @@ import pytest
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Heading, Pose, parse_pose
 from selfrepair.robots import four_wheel
-from selfrepair.robots.four_wheel import parse_action, parse_faults
-from selfrepair.search.astar import PlanStatus
+from selfrepair.robots.four_wheel import FOUR_WHEEL, parse_action, parse_faults
+from selfrepair.search.astar import PlanResult, PlanStatus
 from selfrepair.search.backend import numba_available
-from selfrepair.search.lattice import HEURISTICS, action_cost, plan, plan_cost, planning_motions
-from selfrepair.search.problem import PlanningProblem, PlanResult
+from selfrepair.search.lattice import HEURISTICS, action_cost, plan, plan_cost, planning_actions
+from selfrepair.search.problem import PlanningProblem
 from selfrepair.world.maze import Maze, clearance_map, parse_maze
 
 BACKENDS = ["python", pytest.param("numba", marks=pytest.mark.skipif(
@@ -185,7 +185,9 @@ def test_action_cost_formula_by_hand() -> None:
     clearance = clearance_map(maze)  # indexed [y, x]; the outside counts as wall
     assert (clearance[1, 1], clearance[1, 2], clearance[2, 1], clearance[2, 2]) == (2, 2, 1, 1)
     pose = parse_pose("1,1,E")
-    arc = four_wheel.fastest_by_motion()[next(m for m in four_wheel.MOTIONS if m.name == "arc-forward-right")]
+    arc = four_wheel.fastest_by_motion()[
+        next(m for m in four_wheel.MOTIONS if m.name == "arc-forward-right")
+    ]
     # Sweeps (1,1), (2,1), (1,2), (2,2) with clearances 2, 2, 1, 1: penalty 1 + 1 + 2 + 2 = 6.
     cost = action_cost(maze, pose, arc, clearance_weight=Fraction(1, 4), clearance_radius=3)
     assert cost == arc.duration + Fraction(6, 4) == Fraction(7, 2)
@@ -208,7 +210,10 @@ def test_plan_cost_re_simulates_and_rejects_bad_plans() -> None:
 def test_plan_reports_the_fastest_wheel_action_per_motion() -> None:
     faults = parse_faults("FR:F")
     result = solve(OPEN_5X5, "0,0,E", "4,0", faults="FR:F")
-    fastest = planning_motions(faults)
+    fastest = {a.motion: a for a in planning_actions(FOUR_WHEEL, faults)}
+    assert fastest == {
+        m: a for m, a in four_wheel.fastest_by_motion(faults).items() if m.name != "wait"
+    }
     for action in result.actions:
         assert fastest[action.motion] == action
 
@@ -269,7 +274,8 @@ def test_integer_weight_is_accepted_and_exact() -> None:
 
 
 def test_healthy_heuristic_rate_is_one_tick_per_cell() -> None:
-    bound = HEURISTICS["grid-distance"](U_TURN, (4, 2), planning_motions(frozenset()))
+    actions = planning_actions(FOUR_WHEEL, frozenset())
+    bound = HEURISTICS["grid-distance"](U_TURN, (4, 2), FOUR_WHEEL, actions)
     assert bound.rate == 1
     assert bound.distance[0, 0] == 6 and bound.distance[1, 1] < 0
 
@@ -277,14 +283,15 @@ def test_healthy_heuristic_rate_is_one_tick_per_cell() -> None:
 def test_heuristic_rate_under_slowing_faults() -> None:
     # FL and FR can only stop: each side drive is -1..1, so straights take 2 ticks and no arc
     # exists (an arc needs two different drives of the same sign).
-    motions = planning_motions(parse_faults("FL:F,FL:B,FR:F,FR:B"))
-    assert HEURISTICS["manhattan"](OPEN_5X5, (0, 0), motions).rate == 2
+    actions = planning_actions(FOUR_WHEEL, parse_faults("FL:F,FL:B,FR:F,FR:B"))
+    assert HEURISTICS["manhattan"](OPEN_5X5, (0, 0), FOUR_WHEEL, actions).rate == 2
     assert solve(CORRIDOR, "0,0,E", "4,0", faults="FL:F,FL:B,FR:F,FR:B").cost == 8
 
 
 def test_wait_is_never_a_planning_motion() -> None:
-    assert all(m.kind is not four_wheel.MotionKind.WAIT for m in planning_motions(frozenset()))
-    assert len(planning_motions(frozenset())) == 8
+    actions = planning_actions(FOUR_WHEEL, frozenset())
+    assert all(a.motion.kind is not four_wheel.MotionKind.WAIT for a in actions)
+    assert len(actions) == 8
 
 
 def test_result_headings_are_poses() -> None:

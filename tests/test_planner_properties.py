@@ -1,8 +1,8 @@
 """Property tests: the lattice planner against an independent brute-force Dijkstra.
 
-The brute force knows nothing of the planner: it tries all 81 actions with ``four_wheel.step`` at every
-pose, keeps those available under the faults whose swept cells are free, and prices them with the
-cost formula written out here again. Both backends must agree with it and with each other.
+The brute force knows nothing of the planner: it tries all 81 actions with ``four_wheel.step`` at
+every pose, keeps those available under the faults whose swept cells are free, and prices them with
+the cost formula written out here again. Both backends must agree with it and with each other.
 """
 
 from __future__ import annotations
@@ -18,9 +18,10 @@ from hypothesis import strategies as st
 
 from selfrepair.geometry import Heading, Pose
 from selfrepair.robots import four_wheel
+from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.backend import numba_available
-from selfrepair.search.lattice import HEURISTICS, plan, planning_motions
+from selfrepair.search.lattice import HEURISTICS, plan, planning_actions
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.world.maze import Maze, clearance_map
 
@@ -130,10 +131,10 @@ def test_numba_backend_agrees_with_the_reference(problem: PlanningProblem, heuri
 @given(problems())
 def test_heuristics_are_consistent(problem: PlanningProblem) -> None:
     """h(a) <= cost(a -> b) + h(b) for every executable pruned action, and h(goal) = 0."""
-    motions = planning_motions(problem.faults)
+    actions = planning_actions(FOUR_WHEEL, problem.faults)
     clearance = clearance_map(problem.maze)
     for name, fn in HEURISTICS.items():
-        bound = fn(problem.maze, problem.goal, motions)
+        bound = fn(problem.maze, problem.goal, FOUR_WHEEL, actions)
         assert bound.distance[problem.goal[1], problem.goal[0]] == 0, name
 
         def h(cell: tuple[int, int], bound=bound) -> Fraction | None:
@@ -143,7 +144,7 @@ def test_heuristics_are_consistent(problem: PlanningProblem) -> None:
         for x, y in problem.maze.free_cells():
             for heading in Heading:
                 pose = Pose(x, y, heading)
-                for action in motions.values():
+                for action in actions:
                     end, swept, duration = four_wheel.step(pose, action)
                     if not problem.maze.all_free(swept):
                         continue

@@ -10,15 +10,14 @@ from hypothesis import strategies as st
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Heading, Pose
 from selfrepair.repair.replacement import (
-    RECURSION_MODES,
+    RecursionMode,
     find_replacement,
-    flat_replacement_on_grid,
-    free_cell_set,
+    flat_replacement,
     is_valid_replacement,
+    table_reach,
 )
 from selfrepair.robots import four_wheel
 from selfrepair.robots.four_wheel import FOUR_WHEEL
-from selfrepair.robots.three_action import THREE_ACTION
 from selfrepair.tables.fileformat import bundled_table
 from selfrepair.tables.model import ReplacementTable, TableEntry
 from selfrepair.world.maze import Maze, parse_maze
@@ -42,26 +41,22 @@ def test_table_one_rows() -> None:
     assert rows == {"F": [], "L": ["R R R"], "R": ["L L L"]}
 
 
-@pytest.mark.parametrize("mode", list(RECURSION_MODES))
+@pytest.mark.parametrize("mode", list(RecursionMode))
 def test_table_one_replacements_and_the_no_replacement_row(mode: str) -> None:
     table = bundled_table("three-action")
     found = {}
     for action in "FLR":
-        hit = find_replacement(
-            THREE_ACTION, table, action, ORIGIN, {action}, OPEN.all_free, mode=mode
-        )
+        hit = find_replacement(table, action, ORIGIN, {action}, OPEN.all_free, mode=mode)
         found[action] = None if hit is None else "".join(hit.actions)
     assert found == {"F": None, "L": "RRR", "R": "LLL"}
 
 
-@pytest.mark.parametrize("mode", list(RECURSION_MODES))
+@pytest.mark.parametrize("mode", list(RecursionMode))
 def test_guard_stops_mutual_recursion(mode: str) -> None:
     # With L and R both faulty, R -> L L L needs L -> R R R, which uses R (being replaced).
     table = bundled_table("three-action")
     assert (
-        find_replacement(
-            THREE_ACTION, table, "R", ORIGIN, {"L", "R"}, OPEN.all_free, mode=mode, max_depth=10
-        )
+        find_replacement(table, "R", ORIGIN, {"L", "R"}, OPEN.all_free, mode=mode, max_depth=10)
         is None
     )
 
@@ -72,7 +67,7 @@ def test_guard_stops_mutual_recursion(mode: str) -> None:
 def test_forward_without_left_forward_needs_recursion_into_a_turn_round() -> None:
     table = bundled_table()
     faults = F("FL:F,RL:F")
-    args = (FOUR_WHEEL, table, A("FFFF"), ORIGIN, faults, OPEN.all_free)
+    args = (table, A("FFFF"), ORIGIN, faults, OPEN.all_free)
     assert find_replacement(*args, mode="flat") is None
     assert find_replacement(*args, mode="layered") is None  # straight moves are primitive
     assert find_replacement(*args, mode="guarded", max_depth=0) is None
@@ -84,7 +79,7 @@ def test_forward_without_left_forward_needs_recursion_into_a_turn_round() -> Non
 def test_layered_replaces_an_arc_by_recursively_replaced_primitives() -> None:
     table = bundled_table()
     faults = F("FR:F")
-    args = (FOUR_WHEEL, table, A("SFFF"), ORIGIN, faults, OPEN.all_free)
+    args = (table, A("SFFF"), ORIGIN, faults, OPEN.all_free)
     assert find_replacement(*args, mode="flat") is None
     layered = find_replacement(*args, mode="layered")
     assert layered is not None and layered.depth == 1
@@ -100,14 +95,11 @@ def test_walls_make_a_candidate_invalid() -> None:
     pose = Pose(1, 3, Heading.N)
     table = bundled_table()
     faults = F("FL:F,RL:F")
-    hit = find_replacement(
-        FOUR_WHEEL, table, A("FFFF"), pose, faults, corridor.all_free, mode="guarded"
-    )
+    hit = find_replacement(table, A("FFFF"), pose, faults, corridor.all_free, mode="guarded")
     assert hit is not None
     walled = parse_maze("###\n#.#\n###")
     assert (
         find_replacement(
-            FOUR_WHEEL,
             table,
             A("FFFF"),
             Pose(1, 1, Heading.N),
@@ -122,7 +114,7 @@ def test_walls_make_a_candidate_invalid() -> None:
 def test_candidate_using_an_action_being_replaced_is_skipped() -> None:
     fwd, back = A("FFFF"), A("BBBB")
     table = ReplacementTable(
-        "four-wheel",
+        FOUR_WHEEL,
         "fault-agnostic",
         "hand",
         (
@@ -133,9 +125,7 @@ def test_candidate_using_an_action_being_replaced_is_skipped() -> None:
     # BBBB is faulty too: replacing it would need FFFF, which is being replaced.
     faults = F("FL:F,RR:B")
     assert (
-        find_replacement(
-            FOUR_WHEEL, table, fwd, ORIGIN, faults, OPEN.all_free, mode="guarded", max_depth=5
-        )
+        find_replacement(table, fwd, ORIGIN, faults, OPEN.all_free, mode="guarded", max_depth=5)
         is None
     )
 
@@ -143,13 +133,15 @@ def test_candidate_using_an_action_being_replaced_is_skipped() -> None:
 def test_bad_arguments_raise() -> None:
     table = bundled_table()
     with pytest.raises(ProblemError, match="recursion mode"):
-        find_replacement(FOUR_WHEEL, table, A("FFFF"), ORIGIN, (), OPEN.all_free, mode="deep")
+        find_replacement(table, A("FFFF"), ORIGIN, (), OPEN.all_free, mode="deep")
     with pytest.raises(ProblemError, match="domain"):
-        find_replacement(THREE_ACTION, table, "F", ORIGIN, (), OPEN.all_free)
+        find_replacement(table, "F", ORIGIN, (), OPEN.all_free)
 
 
 @st.composite
-def situations(draw: st.DrawFn) -> tuple[Maze, Pose, four_wheel.Action, frozenset[four_wheel.Fault]]:
+def situations(
+    draw: st.DrawFn,
+) -> tuple[Maze, Pose, four_wheel.Action, frozenset[four_wheel.Fault]]:
     seed = draw(st.integers(0, 2**31))
     rng = np.random.default_rng(seed)
     walls = rng.random((7, 7)) < draw(st.sampled_from([0.0, 0.2, 0.4]))
@@ -162,12 +154,10 @@ def situations(draw: st.DrawFn) -> tuple[Maze, Pose, four_wheel.Action, frozense
 
 
 @settings(max_examples=150, deadline=None)
-@given(situations(), st.sampled_from(list(RECURSION_MODES)))
+@given(situations(), st.sampled_from(list(RecursionMode)))
 def test_every_replacement_found_is_valid(situation, mode: str) -> None:  # type: ignore[no-untyped-def]
     maze, pose, action, faults = situation
-    hit = find_replacement(
-        FOUR_WHEEL, bundled_table(), action, pose, faults, maze.all_free, mode=mode
-    )
+    hit = find_replacement(bundled_table(), action, pose, faults, maze.all_free, mode=mode)
     if hit is None:
         return
     assert is_valid_replacement(FOUR_WHEEL, action, pose, hit.actions, faults, maze.all_free)
@@ -182,8 +172,8 @@ def test_modes_are_nested(situation) -> None:  # type: ignore[no-untyped-def]
     maze, pose, action, faults = situation
     table = bundled_table()
     found = {
-        m: find_replacement(FOUR_WHEEL, table, action, pose, faults, maze.all_free, mode=m)
-        for m in RECURSION_MODES
+        m: find_replacement(table, action, pose, faults, maze.all_free, mode=m)
+        for m in RecursionMode
     }
     if found["flat"] is not None:
         assert found["layered"] is not None and found["guarded"] is not None
@@ -196,19 +186,17 @@ def test_modes_are_nested(situation) -> None:  # type: ignore[no-untyped-def]
 def test_grid_fast_path_equals_the_general_flat_search(situation) -> None:  # type: ignore[no-untyped-def]
     maze, pose, action, faults = situation
     table = bundled_table()
-    general = find_replacement(FOUR_WHEEL, table, action, pose, faults, maze.all_free, mode="flat")
-    fast = flat_replacement_on_grid(FOUR_WHEEL, table, action, pose, faults, free_cell_set(maze))
+    general = find_replacement(table, action, pose, faults, maze.all_free, mode="flat")
+    fast = flat_replacement(table, action, pose, faults, maze.free_grid(table_reach(table)))
     assert fast == general
 
 
 def test_grid_fast_path_on_table_one() -> None:
     table = bundled_table("three-action")
-    free = free_cell_set(OPEN)
-    hit = flat_replacement_on_grid(THREE_ACTION, table, "R", ORIGIN, frozenset({"R"}), free)
+    free = OPEN.free_grid(table_reach(table))
+    hit = flat_replacement(table, "R", ORIGIN, frozenset({"R"}), free)
     assert hit is not None and hit.actions == ("L", "L", "L") and hit.end == Pose(4, 4, Heading.E)
-    assert (
-        flat_replacement_on_grid(THREE_ACTION, table, "F", ORIGIN, frozenset({"F"}), free) is None
-    )
+    assert flat_replacement(table, "F", ORIGIN, frozenset({"F"}), free) is None
 
 
 def test_docs_show_table_one_as_bundled() -> None:
@@ -228,7 +216,7 @@ def test_guard_skips_a_candidate_that_reuses_an_action_being_replaced() -> None:
     different, deeper replacement."""
     ffff, fbfb = A("FFFF"), A("FBFB")
     table = ReplacementTable(
-        "four-wheel",
+        FOUR_WHEEL,
         "fault-agnostic",
         "hand",
         (
@@ -237,7 +225,7 @@ def test_guard_skips_a_candidate_that_reuses_an_action_being_replaced() -> None:
         ),
     )
     hit = find_replacement(
-        FOUR_WHEEL, table, ffff, ORIGIN, F("FL:F"), OPEN.all_free, mode="guarded", max_depth=5
+        table, ffff, ORIGIN, F("FL:F"), OPEN.all_free, mode="guarded", max_depth=5
     )
     assert hit is not None
     assert hit.actions == _seq("SBSB SBSB BBBB SBSB SBSB") and hit.depth == 1

@@ -72,8 +72,17 @@ def test_example_fsss_pivots_clockwise_in_four_ticks() -> None:
 
 def test_wait_row() -> None:
     waits = [a for a in ACTIONS if a.motion.kind is MotionKind.WAIT]
-    assert {a.code for a in waits} == {"SSSS", "FSBS", "BSFS", "SFSB", "SBSF", "FFBB", "BBFF",
-                                       "FBBF", "BFFB"}
+    assert {a.code for a in waits} == {
+        "SSSS",
+        "FSBS",
+        "BSFS",
+        "SFSB",
+        "SBSF",
+        "FFBB",
+        "BBFF",
+        "FBBF",
+        "BFFB",
+    }
     for a in waits:
         assert (a.left, a.right) == (0, 0)
         assert step(ORIGIN, a) == (ORIGIN, ((2, 2),), Fraction(1))
@@ -149,8 +158,15 @@ def test_there_are_81_actions_and_nine_motions() -> None:
     assert len(ACTIONS) == 81 == len({a.code for a in ACTIONS})
     assert len(MOTIONS) == 9
     assert {m.name for m in MOTIONS} == {
-        "wait", "forward", "backward", "turn-left", "turn-right",
-        "arc-forward-left", "arc-forward-right", "arc-backward-left", "arc-backward-right",
+        "wait",
+        "forward",
+        "backward",
+        "turn-left",
+        "turn-right",
+        "arc-forward-left",
+        "arc-forward-right",
+        "arc-backward-left",
+        "arc-backward-right",
     }
 
 
@@ -226,7 +242,9 @@ def test_step_commutes_with_translation(
 
 
 @given(actions, headings)
-def test_swept_cells_start_with_the_start_and_contain_the_end(a: four_wheel.Action, h: Heading) -> None:
+def test_swept_cells_start_with_the_start_and_contain_the_end(
+    a: four_wheel.Action, h: Heading
+) -> None:
     start = Pose(0, 0, h)
     end, swept, _ = step(start, a)
     assert swept[0] == start.cell
@@ -314,10 +332,18 @@ def test_parse_action_pose_cell() -> None:
     assert parse_pose("3, 4, w") == Pose(3, 4, W)
     assert str(Pose(3, 4, W)) == "3,4,W"
     assert parse_cell("-1,7") == (-1, 7)
-    for bad, parser in (("FFF", parse_action), ("1,2", parse_pose), ("1,2,X", parse_pose),
-                        ("1", parse_cell), ("a,b", parse_cell), ("1,--2,N", parse_pose),
-                        ("²,1", parse_cell), ("+-1,1", parse_cell),
-                        ("1" * 5000 + ",1", parse_cell), ("1," + "2" * 19 + ",N", parse_pose)):
+    for bad, parser in (
+        ("FFF", parse_action),
+        ("1,2", parse_pose),
+        ("1,2,X", parse_pose),
+        ("1", parse_cell),
+        ("a,b", parse_cell),
+        ("1,--2,N", parse_pose),
+        ("²,1", parse_cell),
+        ("+-1,1", parse_cell),
+        ("1" * 5000 + ",1", parse_cell),
+        ("1," + "2" * 19 + ",N", parse_pose),
+    ):
         with pytest.raises(InputError, match="expected"):
             parser(bad)
 

@@ -37,7 +37,7 @@ def test_bundled_tables_are_listed() -> None:
 def test_handwritten_table_covers_all_81_actions_by_motion_class() -> None:
     table = bundled_table()
     assert (table.domain, table.shape, table.made_by, table.version) == (
-        "four-wheel",
+        FOUR_WHEEL,
         "fault-agnostic",
         "hand",
         1,
@@ -212,7 +212,7 @@ def test_bad_json_names_line() -> None:
 def _indexed() -> ReplacementTable:
     fwd = A("FFFF")
     return ReplacementTable(
-        "four-wheel",
+        FOUR_WHEEL,
         "fault-indexed",
         "generator",
         (
@@ -245,7 +245,7 @@ def test_fault_indexed_lookup_exact_then_subsets_largest_first() -> None:
 
 def test_check_table_flags_dead_candidates_in_indexed_tables() -> None:
     table = ReplacementTable(
-        "four-wheel",
+        FOUR_WHEEL,
         "fault-indexed",
         "generator",
         (TableEntry(A("FFFF"), (_seq("FFSS"),), F("FL:F")),),
@@ -259,7 +259,7 @@ def test_check_table_flags_dead_candidates_in_indexed_tables() -> None:
 def test_duplicate_keys_are_rejected() -> None:
     entry = TableEntry(A("FFFF"), (_seq("FFSS"),))
     with pytest.raises(TableError, match="second one"):
-        ReplacementTable("four-wheel", "fault-agnostic", "hand", (entry, entry))
+        ReplacementTable(FOUR_WHEEL, "fault-agnostic", "hand", (entry, entry))
 
 
 def test_docs_list_the_hand_written_candidates_of_each_class() -> None:
@@ -303,7 +303,7 @@ def test_fault_indexed_lookup_properties(index, known_set) -> None:  # type: ign
     entries = tuple(
         TableEntry(fwd, tuple(_seq(c) for c in cands), faults) for faults, cands in index.items()
     )
-    table = ReplacementTable("four-wheel", "fault-indexed", "generator", entries)
+    table = ReplacementTable(FOUR_WHEEL, "fault-indexed", "generator", entries)
     got = table.candidates(fwd, known)
     if known in index:
         assert got == tuple(_seq(c) for c in index[known])

@@ -116,7 +116,7 @@ def test_select_diverse_drops_supersets_of_kept_extras() -> None:
 
 def _check_entries(table_text: str) -> None:
     table = parse_table(table_text)
-    dom = FOUR_WHEEL if table.domain == "four-wheel" else THREE_ACTION
+    dom = table.domain
     for entry in table.entries:
         target = dom.apply(dom.canonical, entry.action)
         for candidate in entry.candidates:
@@ -145,7 +145,7 @@ def test_every_generated_entry_resimulates(
         faults=faults,
         objective=objective,
     )
-    table = generate_table(options)
+    table = generate_table(FOUR_WHEEL, options)
     assert table.made_by == "generator"
     assert dict(table.parameters) == options.parameters()
     for entry in table.entries:
@@ -157,7 +157,7 @@ def test_every_generated_entry_resimulates(
 
 
 def test_fault_indexed_has_one_entry_per_disabled_action() -> None:
-    table = generate_table(GenerateOptions(shape="fault-indexed", faults="singles"))
+    table = generate_table(FOUR_WHEEL, GenerateOptions(shape="fault-indexed", faults="singles"))
     keys = {(e.action, e.faults) for e in table.entries}
     expected = {
         (a, f)
@@ -170,7 +170,7 @@ def test_fault_indexed_has_one_entry_per_disabled_action() -> None:
 
 
 def test_fault_agnostic_candidates_are_cheapest_first() -> None:
-    table = generate_table(GenerateOptions(faults="singles", per_action=3))
+    table = generate_table(FOUR_WHEEL, GenerateOptions(faults="singles", per_action=3))
     for entry in table.entries:
         costs = [sum(a.duration for a in c) for c in entry.candidates]
         assert costs == sorted(costs)
@@ -190,30 +190,35 @@ def test_generation_is_deterministic_and_reproduces_the_shipped_indexed_table() 
     shipped = _shipped("generated-indexed")
     params = json.loads(shipped)["parameters"]
     options = GenerateOptions(shape="fault-indexed", **params)
-    assert dump_table(generate_table(options)) == shipped
+    assert dump_table(generate_table(FOUR_WHEEL, options)) == shipped
     again = GenerateOptions(shape="fault-agnostic", faults="singles", per_action=3)
-    assert dump_table(generate_table(again)) == dump_table(generate_table(again))
+    assert dump_table(generate_table(FOUR_WHEEL, again)) == dump_table(
+        generate_table(FOUR_WHEEL, again)
+    )
 
 
 @pytest.mark.slow
 def test_generation_reproduces_the_shipped_agnostic_table() -> None:
     shipped = _shipped("generated-agnostic")
     params = json.loads(shipped)["parameters"]
-    assert dump_table(generate_table(GenerateOptions(shape="fault-agnostic", **params))) == shipped
+    assert (
+        dump_table(generate_table(FOUR_WHEEL, GenerateOptions(shape="fault-agnostic", **params)))
+        == shipped
+    )
 
 
 # --- the Table 1 robot ----------------------------------------------------------------------
 
 
 def test_three_action_table_is_the_papers() -> None:
-    table = generate_table(GenerateOptions(domain="three-action"))
+    table = generate_table(THREE_ACTION, GenerateOptions())
     assert table.candidates("R") == (("L", "L", "L"),)
     assert table.candidates("L") == (("R", "R", "R"),)
     assert "F" not in table.actions_with_entries()
 
 
 def test_three_action_fault_indexed() -> None:
-    table = generate_table(GenerateOptions(domain="three-action", shape="fault-indexed"))
+    table = generate_table(THREE_ACTION, GenerateOptions(shape="fault-indexed"))
     assert table.candidates("R", frozenset({"R"})) == (("L", "L", "L"),)
     assert table.candidates("R", frozenset({"R", "F"})) == (("L", "L", "L"),)
     assert table.candidates("R", frozenset({"R", "L"})) == ()
@@ -293,7 +298,7 @@ def test_cli_generate_priority_is_recorded(tmp_path: pathlib.Path) -> None:
 
 
 def test_no_fault_scope_gives_the_cheapest_other_way_first() -> None:
-    table = generate_table(GenerateOptions(faults="none", per_action=2))
+    table = generate_table(FOUR_WHEEL, GenerateOptions(faults="none", per_action=2))
     ffff = four_wheel.parse_action("FFFF")
     first = table.candidates(ffff)[0]
     assert len(first) == 1 and first[0].motion == ffff.motion and first[0].duration == 2

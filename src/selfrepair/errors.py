@@ -8,6 +8,9 @@ column where known, and what was expected.
 
 from __future__ import annotations
 
+from enum import StrEnum
+from typing import TypeVar
+
 __all__ = [
     "ConfigError",
     "InputError",
@@ -16,7 +19,10 @@ __all__ = [
     "SelfRepairError",
     "TableError",
     "TraceError",
+    "choice",
 ]
+
+_E = TypeVar("_E", bound=StrEnum)
 
 
 class SelfRepairError(Exception):
@@ -99,3 +105,13 @@ class ConfigError(InputError):
 class ProblemError(SelfRepairError, ValueError):
     """A request that cannot be posed: a start inside a wall, a goal outside the grid, an unknown
     strategy or heuristic name, a negative budget."""
+
+
+def choice(kind: type[_E], value: object, what: str) -> _E:
+    """``value`` as a member of the string enum ``kind``; anything else raises
+    :class:`ProblemError` naming ``what`` and the allowed values."""
+    try:
+        return kind(value)  # type: ignore[arg-type]  # any value may be tried
+    except ValueError:
+        allowed = ", ".join(member.value for member in kind)
+        raise ProblemError(f"unknown {what} {value!r}; expected one of {allowed}") from None

@@ -9,12 +9,13 @@ values, so they live here, below all of them (this module imports nothing of sel
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from enum import IntEnum
 
 from selfrepair.errors import InputError
 
-__all__ = ["Cell", "Heading", "Pose", "parse_cell", "parse_pose", "relative_cell"]
+__all__ = ["Cell", "FreeGrid", "Heading", "Pose", "parse_cell", "parse_pose", "relative_cell"]
 
 Cell = tuple[int, int]
 """A grid cell ``(x, y)``."""
@@ -103,3 +104,37 @@ _MAX_DIGITS = 18
 def _is_int(text: str) -> bool:
     body = text[1:] if text[:1] in ("+", "-") else text
     return body.isascii() and body.isdigit() and len(body) <= _MAX_DIGITS
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class FreeGrid:
+    """Which cells of a ``width`` x ``height`` grid are free: one byte per cell (1 free, 0 wall) in
+    a flat row-major buffer, padded with ``margin`` never-free cells on every side.
+
+    This is what the layers that must not know mazes (tables, repair) test footprints against:
+    ``all_free`` is the executability test for an action's cells, and a cell at most ``margin``
+    cells outside the grid can be looked up with no bounds check (:meth:`index`). Build one with
+    :meth:`selfrepair.world.maze.Maze.free_grid`.
+    """
+
+    width: int
+    height: int
+    margin: int
+    data: bytes
+
+    @property
+    def stride(self) -> int:
+        """Bytes per padded row."""
+        return self.width + 2 * self.margin
+
+    def index(self, x: int, y: int) -> int:
+        """The buffer index of cell ``(x, y)``; valid for cells at most ``margin`` outside."""
+        return (y + self.margin) * self.stride + x + self.margin
+
+    def is_free(self, x: int, y: int) -> bool:
+        """Whether ``(x, y)`` lies on the grid and is free."""
+        return 0 <= x < self.width and 0 <= y < self.height and self.data[self.index(x, y)] == 1
+
+    def all_free(self, cells: Iterable[Cell]) -> bool:
+        """Whether every cell of ``cells`` lies on the grid and is free."""
+        return all(self.is_free(x, y) for x, y in cells)

@@ -8,8 +8,9 @@ bad input is exit 2 (see :func:`selfrepair.cli.main`).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.table import Table
@@ -27,16 +28,23 @@ from selfrepair.cli._app import (
 from selfrepair.cli.planning import parse_weight
 from selfrepair.errors import InputError
 from selfrepair.execution.executor import run_mission
-from selfrepair.execution.faults import CLOCKS, DETECTIONS, FaultEvent, FaultSchedule
+from selfrepair.execution.faults import (
+    Clock,
+    Detection,
+    FaultEvent,
+    FaultSchedule,
+    Persistence,
+    canonical_order,
+)
 from selfrepair.execution.metrics import mission_row
-from selfrepair.execution.result import MissionResult, MissionSpec
+from selfrepair.execution.result import MissionResult, MissionSpec, StepSource
 from selfrepair.execution.trace import replay as replay_trace
 from selfrepair.execution.trace import write_trace
 from selfrepair.geometry import Cell, parse_cell, parse_pose
 from selfrepair.limits import MAX_CELLS, MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES
-from selfrepair.repair.replacement import RECURSION_MODES
-from selfrepair.repair.strategies import STRATEGIES, StrategyOptions
-from selfrepair.robots import four_wheel
+from selfrepair.repair.replacement import RecursionMode
+from selfrepair.repair.strategies import StrategyOptions, strategy_names, uses_table
+from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import get_domain
 from selfrepair.tables.fileformat import dump_table, resolve_table
 from selfrepair.tables.model import ReplacementTable, check_table
@@ -78,46 +86,59 @@ _SHOWN = (
 
 
 def build_schedule(
-    faults: str, at: int, clock: str, detect: str, transient: int | None, intermittent: float | None
+    domain: Domain[Any, Any],
+    faults: str,
+    at: int,
+    clock: str,
+    detect: str,
+    transient: int | None,
+    intermittent: float | None,
 ) -> FaultSchedule:
     """The fault schedule the ``run`` options describe (one persistence for every fault)."""
-    parsed = sorted(four_wheel.parse_faults(faults, source="--faults"))
+    try:
+        parsed = canonical_order(domain.parse_faults(faults))
+    except InputError as exc:
+        raise InputError(exc.reason, source="--faults") from None
     if transient is not None and intermittent is not None:
         raise InputError(
             "expected at most one of --transient and --intermittent", source="--transient"
         )
     persistence = (
-        "transient"
+        Persistence.TRANSIENT
         if transient is not None
-        else "intermittent"
+        else Persistence.INTERMITTENT
         if intermittent is not None
-        else "permanent"
+        else Persistence.PERMANENT
     )
     events = tuple(
         FaultEvent(
             f,
             at=at,
-            clock=clock,
+            clock=Clock(clock),
             persistence=persistence,
             duration=transient,
             probability=intermittent,
         )
         for f in parsed
     )
-    return FaultSchedule(events, detect)
+    return FaultSchedule(events, detect)  # type: ignore[arg-type]
 
 
 def mission_picture(result: MissionResult) -> str:
     """The maze with the planned path, the executed path, the repair sites, start and goal."""
     spec = result.spec
+    domain = spec.domain
     planned: dict[Cell, str] = {}
     pose = spec.start
     for action in result.initial_plan.actions:
-        end, swept, _ = four_wheel.step(pose, action)
-        planned.update(dict.fromkeys(swept, PLANNED_CHAR))
-        pose = end
-    executed = {c: EXECUTED_CHAR for s in result.executed for c in four_wheel.step(s.start, s.action)[1]}
-    failed = {s.start.cell: FAILED_CHAR for s in result.steps if s.source == "failed-attempt"}
+        planned.update(dict.fromkeys(domain.footprint(pose, action), PLANNED_CHAR))
+        pose = domain.apply(pose, action)
+    executed = {
+        c: EXECUTED_CHAR for s in result.executed for c in domain.footprint(s.start, s.action)
+    }
+    failed = {
+        s.start.cell: FAILED_CHAR for s in result.steps if s.source is StepSource.FAILED_ATTEMPT
+    }
     sites = {r.pose.cell: SITE_CHARS.get(r.repair.source, "?") for r in result.repairs}
     ends = {spec.goal: GOAL_CHAR, spec.start.cell: HEADING_CHARS[spec.start.heading]}
     return render_ascii(spec.maze, [planned, executed, failed, sites, ends])
@@ -189,25 +210,29 @@ def run(
     ] = None,
     seed: Annotated[int, typer.Option("--seed", help="Seed of intermittent faults.")] = 0,
     as_json: Annotated[bool, typer.Option("--json", help="Print the metrics row as JSON.")] = False,
+    domain_name: Annotated[
+        str, typer.Option("--domain", help="The robot: a registered domain name.")
+    ] = "four-wheel",
     max_cells: MaxCells = MAX_CELLS,
     max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
     max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
     """Run one mission: plan, execute with faults, repair; show the paths and the metrics."""
-    _check_choice(strategy, tuple(STRATEGIES), "--strategy")
-    _check_choice(recursion, tuple(RECURSION_MODES), "--recursion")
-    _check_choice(detect, DETECTIONS, "--detect")
-    _check_choice(clock, CLOCKS, "--clock")
+    domain = _domain(domain_name)
+    _check_choice(strategy, strategy_names(), "--strategy")
+    _check_choice(recursion, tuple(RecursionMode), "--recursion")
+    _check_choice(detect, tuple(Detection), "--detect")
+    _check_choice(clock, tuple(Clock), "--clock")
     weight = parse_weight(clearance_weight)
     spec = MissionSpec(
         maze=resolve_maze(maze, max_cells=max_cells),
         start=parse_pose(start, source="--start"),
         goal=parse_cell(goal, source="--goal"),
-        schedule=build_schedule(faults, at, clock, detect, transient, intermittent),
+        schedule=build_schedule(domain, faults, at, clock, detect, transient, intermittent),
         strategy=strategy,
         options=StrategyOptions(
             table=_table_spec(table, strategy, max_table_bytes, max_table_candidates),
-            recursion=recursion,
+            recursion=recursion,  # type: ignore[arg-type]
             max_depth=max_depth,
             window=window,
         ),
@@ -216,6 +241,7 @@ def run(
         heuristic=heuristic,
         backend=backend,
         initial_faults_known=plan_with_faults,
+        domain=domain,
     )
     result = run_mission(spec)
     if trace is not None:
@@ -239,14 +265,21 @@ def _table_spec(
 ) -> str | ReplacementTable:
     """Load the table up front, within the limits (a bad file is exit 2 even when no repair
     needs it); the mission gets the loaded table, so the limits given are the ones that hold."""
-    if strategy == "replan":
+    if not uses_table(strategy):
         return table
     return resolve_table(
         table, max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
     )
 
 
-def _check_choice(value: str, choices: tuple[str, ...], option: str) -> None:
+def _domain(name: str) -> Domain[Any, Any]:
+    try:
+        return get_domain(name)
+    except InputError as exc:
+        raise InputError(exc.reason, source="--domain") from None
+
+
+def _check_choice(value: str, choices: Sequence[str], option: str) -> None:
     if value not in choices:
         raise InputError(f"expected one of {', '.join(choices)}, got {value!r}", source=option)
 
@@ -275,9 +308,9 @@ def table_show(
     if as_json:
         echo(dump_table(table).rstrip("\n"))
         return 0
-    dom = get_domain(table.domain)
+    dom = table.domain
     title = (
-        f"{spec}: {table.domain}, {table.shape}, made by {table.made_by}, version {table.version}"
+        f"{spec}: {dom.name}, {table.shape}, made by {table.made_by}, version {table.version}"
     )
     view = Table(title=title)
     for column in ("action", "class", "faults", "candidates"):

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated
@@ -107,7 +107,7 @@ def experiment(
 
 
 @contextmanager
-def _progress(label: str) -> Iterator[object]:
+def _progress(label: str) -> Iterator[Callable[[int, int], None] | None]:
     """A rich progress bar (done/total, rate, ETA) on a terminal; nothing when piped."""
     if not sys.stdout.isatty():
         yield None

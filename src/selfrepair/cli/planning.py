@@ -20,11 +20,11 @@ from selfrepair.errors import InputError
 from selfrepair.geometry import Cell, Heading, parse_cell, parse_pose
 from selfrepair.limits import MAX_CELLS, MAX_CLEARANCE_WEIGHT
 from selfrepair.robots import four_wheel
-from selfrepair.search.astar import PlanStatus
+from selfrepair.search.astar import PlanResult, PlanStatus
 from selfrepair.search.backend import BACKENDS
 from selfrepair.search.grid import grid_astar
 from selfrepair.search.lattice import HEURISTICS, plan
-from selfrepair.search.problem import CONNECTIVITIES, GridResult, PlanningProblem, PlanResult
+from selfrepair.search.problem import CONNECTIVITIES, GridResult, PlanningProblem
 from selfrepair.world.bundled import resolve_maze
 from selfrepair.world.maze import Maze
 from selfrepair.world.movingai import ScenarioQuery, load_map, load_scenario

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -22,26 +23,37 @@ from selfrepair.cli._app import (
 from selfrepair.errors import InputError
 from selfrepair.limits import MAX_CELLS, MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES
 from selfrepair.repair.coverage import CoverageReport, coverage_report
-from selfrepair.repair.replacement import RECURSION_MODES
+from selfrepair.repair.replacement import RecursionMode
+from selfrepair.robots.domain import Domain
+from selfrepair.robots.registry import get_domain
+from selfrepair.tables.enumerate import FaultScope, Objective
 from selfrepair.tables.fileformat import dump_table, resolve_table
-from selfrepair.tables.generate import FAULT_SCOPES, OBJECTIVES, generate_table
-from selfrepair.tables.model import PRIORITIES, SHAPES, GenerateOptions
+from selfrepair.tables.generate import generate_table
+from selfrepair.tables.model import GenerateOptions, Priority, TableShape
 from selfrepair.world.bundled import load_bundled, maze_names, resolve_maze
 from selfrepair.world.maze import Maze
 
 
-def _choice(value: str, allowed: tuple[str, ...] | list[str], option: str) -> str:
-    if value not in allowed:
-        raise InputError(f"expected one of {', '.join(allowed)}, got {value!r}", source=option)
+def _choice(value: str, allowed: Iterable[str], option: str) -> str:
+    names = [str(a) for a in allowed]
+    if value not in names:
+        raise InputError(f"expected one of {', '.join(names)}, got {value!r}", source=option)
     return value
+
+
+def _domain(name: str) -> Domain[Any, Any]:
+    try:
+        return get_domain(name)
+    except InputError as exc:
+        raise InputError(exc.reason, source="--domain") from None
 
 
 @table_app.command("generate")
 def table_generate(
     output: Annotated[Path, typer.Option("-o", "--output", help="Where to write the table.")],
-    domain: Annotated[str, typer.Option(help="Domain: four-wheel or three-action.")] = (
-        "four-wheel"
-    ),
+    domain: Annotated[
+        str, typer.Option(help="The robot: a registered domain name (four-wheel, three-action).")
+    ] = "four-wheel",
     max_length: Annotated[int, typer.Option(help="Longest candidate, in actions.")] = 5,
     per_action: Annotated[int, typer.Option(help="Candidates per entry (K).")] = 5,
     faults: Annotated[str, typer.Option(help="Fault sets: all, singles, doubles or none.")] = (
@@ -58,23 +70,23 @@ def table_generate(
     ] = "cost",
 ) -> int:
     """Generate a replacement table from the robot model and write it as JSON."""
+    robot = _domain(domain)
     options = GenerateOptions(
-        domain=domain,
-        shape=_choice(shape, SHAPES, "--shape"),
+        shape=TableShape(_choice(shape, TableShape, "--shape")),
         max_length=max_length,
         per_action=per_action,
-        faults=_choice(faults, FAULT_SCOPES, "--faults"),
-        objective=_choice(objective, OBJECTIVES, "--objective"),
-        priority=_choice(priority, PRIORITIES, "--priority"),
+        faults=FaultScope(_choice(faults, FaultScope, "--faults")),
+        objective=Objective(_choice(objective, Objective, "--objective")),
+        priority=Priority(_choice(priority, Priority, "--priority")),
     )
     started = time.perf_counter()
-    table = generate_table(options)
+    table = generate_table(robot, options)
     elapsed = time.perf_counter() - started
     text = dump_table(table)
     output.write_text(text, encoding="utf-8")
     candidates = sum(len(e.candidates) for e in table.entries)
     echo(
-        f"{output}: {table.domain} {table.shape} table, {len(table.entries)} entries, "
+        f"{output}: {robot.name} {table.shape} table, {len(table.entries)} entries, "
         f"{candidates} candidates, {len(text.encode())} bytes, generated in {elapsed:.2f} s"
     )
     return 0
@@ -122,10 +134,10 @@ def table_coverage(
     table = resolve_table(
         spec, max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
     )
-    _choice(faults, FAULT_SCOPES, "--faults")
-    _choice(recursion, list(RECURSION_MODES), "--recursion")
+    _choice(faults, FaultScope, "--faults")
+    _choice(recursion, RecursionMode, "--recursion")
     if objective is not None:
-        _choice(objective, OBJECTIVES, "--objective")
+        _choice(objective, Objective, "--objective")
     report = coverage_report(
         table,
         faults=faults,

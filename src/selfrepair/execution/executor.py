@@ -5,6 +5,10 @@ returns a :class:`MissionResult` (status, every executed step, every repair, and
 
 The loop, per step:
 
+The strategy is started once per mission (its factory gets a
+:class:`~selfrepair.repair.strategies.MissionContext` built here: the planner, the free-cell test
+and the step cost on this mission's map) and then asked for each repair.
+
 1. Update the known faults: with detection ``now`` the simulator's sensors report the active
    faults; with ``on-use`` the known faults are those revealed by failed attempts so far.
 2. If the next queued action is unavailable under the known faults, ask the strategy for a repair
@@ -19,7 +23,7 @@ as in the original experiment. The executor holds only detected faults; the true
 
 Why ``replacement`` never replans more than ``replan`` when every fault is permanent, present from
 step 0 and detected at once: both start from the same (deterministic) initial plan and follow it
-through the same poses until its first action that uses a faulty wheel command. ``replan`` replans
+through the same poses until its first action that a fault forbids. ``replan`` replans
 there (1 replan) or never meets one (0). ``replacement`` meets that same action first; every action
 it inserts is healthy, and after a replan the plan is made with all faults known, so nothing needs
 repair afterwards. Hence it makes at most one replan, and only when the initial plan contains a
@@ -32,63 +36,105 @@ import time
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import overload
+from fractions import Fraction
+from typing import Any, overload
 
 from selfrepair.errors import ProblemError
-from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
-from selfrepair.execution.simulator import Simulator
-from selfrepair.geometry import Pose
-from selfrepair.repair.replacement import free_cell_set, prepare_grid_geometry
-from selfrepair.repair.strategies import (
-    PlannerSettings,
-    Repair,
-    RepairRequest,
-    get_strategy,
+from selfrepair.execution.faults import Detection
+from selfrepair.execution.result import (
+    MissionResult,
+    MissionSpec,
+    MissionStatus,
+    RepairRecord,
+    StepSource,
+    TraceStep,
 )
-from selfrepair.robots import four_wheel
-from selfrepair.robots.four_wheel import FOUR_WHEEL, Action, FaultSet
-from selfrepair.search.astar import PlanStatus
+from selfrepair.execution.simulator import Outcome, Simulator
+from selfrepair.geometry import Cell, Heading, Pose
+from selfrepair.repair.replacement import table_reach
+from selfrepair.repair.strategies import (
+    MissionContext,
+    Repair,
+    Repairer,
+    RepairRequest,
+    RepairStatus,
+    get_strategy,
+    replan,
+    uses_table,
+)
+from selfrepair.search.astar import PlanResult, PlanStatus
 from selfrepair.search.backend import use_numba
-from selfrepair.search.lattice import plan
-from selfrepair.search.problem import PlanningProblem, PlanResult
+from selfrepair.search.lattice import action_cost, plan
+from selfrepair.search.problem import PlanningProblem
 from selfrepair.tables.model import ReplacementTable
 
-__all__ = [
-    "MissionResult",
-    "MissionSpec",
-    "RepairRecord",
-    "TraceStep",
-    "run_mission",
-]
+__all__ = ["mission_context", "run_mission"]
 
 
-class _ActionView(Sequence[Action]):
+class _ActionView(Sequence[Any]):
     """A read-only view of the queue's actions, so a repair request costs O(1) to build."""
 
     __slots__ = ("_queue",)
 
-    def __init__(self, queue: deque[tuple[Action, str]]) -> None:
+    def __init__(self, queue: deque[tuple[Any, StepSource]]) -> None:
         self._queue = queue
 
     def __len__(self) -> int:
         return len(self._queue)
 
     @overload
-    def __getitem__(self, index: int) -> Action: ...
+    def __getitem__(self, index: int) -> Any: ...
 
     @overload
-    def __getitem__(self, index: slice) -> tuple[Action, ...]: ...
+    def __getitem__(self, index: slice) -> tuple[Any, ...]: ...
 
-    def __getitem__(self, index: int | slice) -> Action | tuple[Action, ...]:
+    def __getitem__(self, index: int | slice) -> Any:
         if isinstance(index, slice):
             start, stop, stride = index.indices(len(self._queue))
             return tuple(self._queue[i][0] for i in range(start, stop, stride))
         return self._queue[index][0]
 
 
-def _at_goal(spec: MissionSpec, pose: Pose) -> bool:
-    return pose.cell == spec.goal and (
-        spec.goal_heading is None or pose.heading == spec.goal_heading
+def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> MissionContext:
+    """The :class:`~selfrepair.repair.strategies.MissionContext` of ``spec``: its planner, free
+    test and step cost on its map, with ``table`` (``None`` for strategies without one)."""
+    settings = spec.planner
+    weight = Fraction(settings.clearance_weight)
+
+    def plan_to(
+        start: Pose, goal: Cell, heading: Heading | None, known: frozenset[Any], budget: int | None
+    ) -> PlanResult:
+        problem = PlanningProblem(
+            spec.maze, start, goal, heading, known, weight, settings.clearance_radius, spec.domain
+        )
+        return plan(
+            problem, heuristic=settings.heuristic, max_expansions=budget, backend=settings.backend
+        )
+
+    def cost(pose: Pose, action: Any) -> Fraction:
+        return action_cost(
+            spec.maze,
+            pose,
+            action,
+            clearance_weight=weight,
+            clearance_radius=settings.clearance_radius,
+            domain=spec.domain,
+        )
+
+    margin = max(2, table_reach(table)) if table is not None else 2
+    grid = spec.maze.free_grid(margin)
+    return MissionContext(
+        domain=spec.domain,
+        goal=spec.goal,
+        goal_heading=spec.goal_heading,
+        options=spec.options,
+        table=table,
+        plan=plan_to,
+        replan_budget=settings.max_expansions,
+        free=grid.all_free,
+        grid=grid,
+        cost=cost,
+        world=spec.maze,
     )
 
 
@@ -98,49 +144,42 @@ class _Run:
 
     spec: MissionSpec
     sim: Simulator
-    queue: deque[tuple[Action, str]]
-    known: FaultSet = frozenset()
-    table: ReplacementTable | None = None
-    planner: PlannerSettings = field(default_factory=PlannerSettings)
+    context: MissionContext
+    repairer: Repairer
+    queue: deque[tuple[Any, StepSource]]
+    known: frozenset[Any] = frozenset()
     steps: list[TraceStep] = field(default_factory=list)
     repairs: list[RepairRecord] = field(default_factory=list)
 
     def sense(self) -> None:
-        if self.spec.schedule.detection == "now":
+        if self.spec.schedule.detection is Detection.NOW:
             self.known = self.sim.sense()
 
-    def repair(self, action: Action) -> Repair:
-        spec = self.spec
+    def repair(self, action: Any | None) -> Repair:
+        """Ask the strategy (or, with an empty queue off the goal, a plain replan) for a repair
+        and splice it into the queue; the latency covers both."""
         t0 = time.perf_counter_ns()
-        request = RepairRequest(
-            spec.maze,
-            self.sim.pose,
-            _ActionView(self.queue),
-            self.known,
-            spec.goal,
-            spec.goal_heading,
-            spec.options,
-            self.planner,
-            self.table,
-        )
-        repair = get_strategy(spec.strategy)(request)
-        if repair.status == "repaired":
+        request = RepairRequest(self.sim.pose, _ActionView(self.queue), self.known, self.sim.steps)
+        fallback = action is None  # the queue ran out away from the goal: plain replan
+        repair = replan(self.context, request) if fallback else self.repairer.repair(request)
+        if repair.status is RepairStatus.REPAIRED:
             for _ in range(repair.consumed):
                 self.queue.popleft()
-            self.queue.extendleft((a, repair.source) for a in reversed(repair.actions))
+            source = StepSource(repair.source)
+            self.queue.extendleft((a, source) for a in reversed(repair.actions))
         latency = time.perf_counter_ns() - t0
         self.repairs.append(RepairRecord(self.sim.steps, self.sim.pose, action, repair, latency))
         return repair
 
-    def execute(self, action: Action, source: str) -> str | None:
+    def execute(self, action: Any, source: StepSource) -> MissionStatus | None:
         """Run one command; returns a terminal status or ``None`` to go on."""
         outcome = self.sim.execute(action)
-        if outcome.status == "collision":
-            return "collision"
+        if outcome.status is Outcome.COLLISION:
+            return MissionStatus.COLLISION
         known = self.known  # what was known when the command was given
-        if outcome.status == "failed-attempt":
+        if outcome.status is Outcome.FAILED_ATTEMPT:
             self.known = known | outcome.blocking
-            source = "failed-attempt"
+            source = StepSource.FAILED_ATTEMPT
         else:
             self.queue.popleft()
         self.steps.append(
@@ -153,118 +192,73 @@ class _Run:
 
 def run_mission(spec: MissionSpec) -> MissionResult:
     """Plan, execute and repair one mission (see the module docstring)."""
-    get_strategy(spec.strategy)  # fail fast on a bad name
-    sim = Simulator(spec.maze, spec.start, spec.schedule, spec.seed)
+    factory = get_strategy(spec.strategy)  # fails fast on a bad name
+    sim = Simulator(spec.domain, spec.maze, spec.start, spec.schedule, spec.seed)
     initial_known = sim.sense() if spec.initial_faults_known else frozenset()
-    settings = spec.planner
-    problem = PlanningProblem(
-        spec.maze,
-        spec.start,
-        spec.goal,
-        spec.goal_heading,
-        initial_known,
-        settings.clearance_weight,
-        settings.clearance_radius,
-    )
-    table = spec.options.resolved_table() if spec.strategy != "replan" else None
+    table = spec.options.resolved_table() if uses_table(spec.strategy) else None
     _prepare(spec, table)
+    context = mission_context(spec, table)
     t0 = time.perf_counter_ns()
-    initial = plan(
-        problem,
-        heuristic=spec.heuristic,
-        max_expansions=spec.replan_max_expansions,
-        backend=spec.backend,
+    initial = context.plan(
+        spec.start, spec.goal, spec.goal_heading, initial_known, context.replan_budget
     )
     planning_ns = time.perf_counter_ns() - t0
-    run = _Run(
-        spec, sim, deque((a, "plan") for a in initial.actions), initial_known, table, settings
-    )
+    queue = deque((a, StepSource.PLAN) for a in initial.actions)
+    run = _Run(spec, sim, context, factory(context), queue, initial_known)
     if initial.status is not PlanStatus.SOLVED:
-        return _result(
-            run, initial, planning_ns, "no_initial_plan", f"initial plan: {initial.status.value}"
-        )
+        reason = f"initial plan: {initial.status.value}"
+        return _result(run, initial, planning_ns, MissionStatus.NO_INITIAL_PLAN, reason)
     status, reason = _loop(run)
     return _result(run, initial, planning_ns, status, reason)
 
 
 def _prepare(spec: MissionSpec, table: ReplacementTable | None) -> None:
-    """Check the table's domain and pay the one-off costs (loading the compiled planner, the
-    table's grid geometry, the maze's free-cell set) before anything is timed, so the first
-    planning time and the first repair latency of a process are not inflated by them."""
-    if table is not None and table.domain != FOUR_WHEEL.name:
+    """Check the table's robot and load the compiled planner before anything is timed (the
+    table's geometry and the maze's free grid are made by :func:`mission_context`, also before),
+    so the first planning time and the first repair latency of a process are not inflated by
+    one-off costs."""
+    if table is not None and table.domain is not spec.domain:
         raise ProblemError(
-            f"table {spec.options.table_label!r} is for the {table.domain!r} domain; "
-            f"missions need a {FOUR_WHEEL.name!r} table"
+            f"table {spec.options.table_label!r} is for the {table.domain.name!r} domain; "
+            f"this mission's robot is {spec.domain.name!r}"
         )
     if use_numba(spec.backend):
         from selfrepair.search.warmup import ensure_warm
 
         ensure_warm()
-    if table is not None:
-        if spec.options.recursion == "flat":
-            prepare_grid_geometry(FOUR_WHEEL, table)  # once per table object, like loading it
-        free_cell_set(spec.maze)
 
 
-def _loop(run: _Run) -> tuple[str, str]:
+def _loop(run: _Run) -> tuple[MissionStatus, str]:
     spec = run.spec
+    domain = spec.domain
     limit = spec.step_limit()
     while True:
-        if _at_goal(spec, run.sim.pose):
-            return "reached", "goal reached"
+        if spec.at_goal(run.sim.pose):
+            return MissionStatus.REACHED, "goal reached"
         if run.sim.steps >= limit:
-            return "step_limit", f"{limit} steps without reaching the goal"
+            return MissionStatus.STEP_LIMIT, f"{limit} steps without reaching the goal"
         run.sense()
-        if not run.queue or not four_wheel.available(run.queue[0][0], run.known):
-            faulty = run.queue[0][0] if run.queue else None
-            repair = _repair_or_replan(run, faulty)
-            if repair.status != "repaired":
-                return repair.status, _why(repair, run)
+        if not run.queue or not domain.available(run.queue[0][0], run.known):
+            repair = run.repair(run.queue[0][0] if run.queue else None)
+            if repair.status is not RepairStatus.REPAIRED:
+                return MissionStatus(repair.status), _why(repair, run)
             continue
         action, source = run.queue[0]
         terminal = run.execute(action, source)
         if terminal is not None:
-            return terminal, f"{action} at {run.sim.pose} would sweep a wall"
-
-
-def _repair_or_replan(run: _Run, faulty: Action | None) -> Repair:
-    """A repair for the faulty next action; with an empty queue off the goal, a plain replan."""
-    if faulty is not None:
-        return run.repair(faulty)
-    from selfrepair.repair.strategies import replan
-
-    spec = run.spec
-    t0 = time.perf_counter_ns()
-    request = RepairRequest(
-        spec.maze,
-        run.sim.pose,
-        (),
-        run.known,
-        spec.goal,
-        spec.goal_heading,
-        spec.options,
-        spec.planner,
-    )
-    repair = replan(request)
-    if repair.status == "repaired":
-        run.queue.extend((a, "replan") for a in repair.actions)
-    run.repairs.append(
-        RepairRecord(run.sim.steps, run.sim.pose, None, repair, time.perf_counter_ns() - t0)
-    )
-    return repair
+            name = domain.format_action(action)
+            return terminal, f"{name} at {run.sim.pose} would sweep a wall"
 
 
 def _why(repair: Repair, run: _Run) -> str:
     tried = " then ".join(repair.attempts)
-    what = "no plan exists" if repair.status == "stuck" else "the planner budget ran out"
-    return (
-        f"at {run.sim.pose} with known faults "
-        f"{four_wheel.format_faults(run.known) or 'none'}: tried {tried}; {what}"
-    )
+    what = "no plan exists" if repair.status is RepairStatus.STUCK else "the planner budget ran out"
+    known = run.spec.domain.format_faults(run.known) or "none"
+    return f"at {run.sim.pose} with known faults {known}: tried {tried}; {what}"
 
 
 def _result(
-    run: _Run, initial: PlanResult, planning_ns: int, status: str, reason: str
+    run: _Run, initial: PlanResult, planning_ns: int, status: MissionStatus, reason: str
 ) -> MissionResult:
     return MissionResult(
         run.spec,

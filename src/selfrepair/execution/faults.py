@@ -1,7 +1,8 @@
-"""Fault schedules: which wheel faults occur, when, for how long, and how the robot learns of them.
+"""Fault schedules: which faults occur, when, for how long, and how the robot learns of them.
 
 A :class:`FaultSchedule` is a list of :class:`FaultEvent` plus a detection mode. Each
-event names one fault (wheel, mode), when it starts (``at``, counted in executed steps or in ticks
+event names one fault of the robot's domain (for the four-wheel robot a wheel and a mode such as
+``FL:F``), when it starts (``at``, counted in executed steps or in ticks
 per ``clock``) and how it persists:
 
 ``permanent``
@@ -12,8 +13,8 @@ per ``clock``) and how it persists:
     From ``at`` on, active at each step with probability ``probability``. The draw for event ``i``
     at step ``k`` comes from ``numpy.random.default_rng([seed, i, k])`` with the mission's seed,
     so whether a fault is active is a pure function of (schedule, seed, step, tick): the simulator
-    and :func:`selfrepair.execution.trace.replay` compute the same true faults without sharing a generator's
-    state.
+    and :func:`selfrepair.execution.trace.replay` compute the same true faults without sharing a
+    generator's state.
 
 Steps count every executed command, failed attempts included; ticks are the exact elapsed time at
 the start of the step. Detection:
@@ -33,56 +34,85 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from enum import StrEnum
 from fractions import Fraction
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
 from selfrepair.errors import InputError
-from selfrepair.robots.four_wheel import Fault, FaultSet, format_faults, parse_fault
+from selfrepair.robots.domain import Domain
 
 __all__ = [
-    "CLOCKS",
-    "DETECTIONS",
-    "PERSISTENCES",
+    "Clock",
+    "Detection",
     "FaultEvent",
     "FaultSchedule",
+    "Persistence",
 ]
 
-PERSISTENCES = ("permanent", "transient", "intermittent")
-CLOCKS = ("step", "tick")
-DETECTIONS = ("now", "on-use")
+
+class Persistence(StrEnum):
+    """How long a fault lasts once it starts."""
+
+    PERMANENT = "permanent"
+    TRANSIENT = "transient"
+    INTERMITTENT = "intermittent"
+
+
+class Clock(StrEnum):
+    """What a fault event's ``at`` and ``duration`` count: executed steps or elapsed ticks."""
+
+    STEP = "step"
+    TICK = "tick"
+
+
+class Detection(StrEnum):
+    """How the robot learns of its faults (see the module docstring)."""
+
+    NOW = "now"
+    ON_USE = "on-use"
+
+
+def _member(kind: type[_E], value: object, what: str) -> _E:
+    try:
+        return kind(value)  # type: ignore[arg-type]  # any value may be tried
+    except ValueError:
+        allowed = ", ".join(m.value for m in kind)
+        raise InputError(
+            f"expected {what} in {allowed}, got {value!r}", source="<fault schedule>"
+        ) from None
+
+
+_E = TypeVar("_E", bound=StrEnum)
 
 
 @dataclass(frozen=True, slots=True)
 class FaultEvent:
     """One fault and when it is active (see the module docstring)."""
 
-    fault: Fault
+    fault: Any
     at: int = 0
-    clock: str = "step"
-    persistence: str = "permanent"
+    clock: Clock = Clock.STEP
+    persistence: Persistence = Persistence.PERMANENT
     duration: int | None = None
     probability: float | None = None
 
     def __post_init__(self) -> None:
         where = "<fault schedule>"
-        if self.persistence not in PERSISTENCES:
-            raise InputError(
-                f"expected persistence in {', '.join(PERSISTENCES)}, got {self.persistence!r}",
-                source=where,
-            )
-        if self.clock not in CLOCKS:
-            raise InputError(
-                f"expected clock in {', '.join(CLOCKS)}, got {self.clock!r}", source=where
-            )
+        object.__setattr__(
+            self, "persistence", _member(Persistence, self.persistence, "persistence")
+        )
+        object.__setattr__(self, "clock", _member(Clock, self.clock, "clock"))
         if self.at < 0:
             raise InputError(f"expected a start 'at' >= 0, got {self.at}", source=where)
-        if self.persistence == "transient" and (self.duration is None or self.duration < 1):
+        if self.persistence is Persistence.TRANSIENT and (
+            self.duration is None or self.duration < 1
+        ):
             raise InputError(
                 f"expected a transient fault duration >= 1, got {self.duration}", source=where
             )
-        if self.persistence == "intermittent" and (
+        if self.persistence is Persistence.INTERMITTENT and (
             self.probability is None or not 0.0 <= self.probability <= 1.0
         ):
             raise InputError(
@@ -92,38 +122,43 @@ class FaultEvent:
 
     def active(self, index: int, step: int, tick: Fraction, seed: int) -> bool:
         """Whether this event (number ``index`` in its schedule) is active at ``step``/``tick``."""
-        now = step if self.clock == "step" else tick
+        now = step if self.clock is Clock.STEP else tick
         if now < self.at:
             return False
-        if self.persistence == "permanent":
+        if self.persistence is Persistence.PERMANENT:
             return True
-        if self.persistence == "transient":
+        if self.persistence is Persistence.TRANSIENT:
             assert self.duration is not None
             return now < self.at + self.duration
         assert self.probability is not None
         draw = float(np.random.default_rng([seed, index, step]).random())
         return draw < self.probability
 
-    def to_json(self) -> dict[str, Any]:
-        """A JSON-able dict; keys with default values are still written, for readable traces."""
+    def to_json(self, domain: Domain[Any, Any]) -> dict[str, Any]:
+        """A JSON-able dict (the fault in ``domain``'s text); keys with default values are still
+        written, for readable traces."""
         return {
-            "fault": str(self.fault),
+            "fault": domain.format_faults([self.fault]),
             "at": self.at,
-            "clock": self.clock,
-            "persistence": self.persistence,
+            "clock": self.clock.value,
+            "persistence": self.persistence.value,
             "duration": self.duration,
             "probability": self.probability,
         }
 
     @classmethod
-    def from_json(cls, data: Mapping[str, Any], source: str = "<fault schedule>") -> FaultEvent:
+    def from_json(
+        cls, data: Mapping[str, Any], domain: Domain[Any, Any], source: str = "<fault schedule>"
+    ) -> FaultEvent:
         """Read what :meth:`to_json` wrote."""
         try:
             return cls(
-                fault=parse_fault(str(data["fault"]), source=source),
+                fault=_one_fault(domain, str(data["fault"]), source),
                 at=int(data.get("at", 0)),
-                clock=str(data.get("clock", "step")),
-                persistence=str(data.get("persistence", "permanent")),
+                clock=_member(Clock, data.get("clock", "step"), "clock"),
+                persistence=_member(
+                    Persistence, data.get("persistence", "permanent"), "persistence"
+                ),
                 duration=None if data.get("duration") is None else int(data["duration"]),
                 probability=None if data.get("probability") is None else float(data["probability"]),
             )
@@ -140,31 +175,32 @@ class FaultSchedule:
     """Every fault event of a mission and how faults are detected."""
 
     events: tuple[FaultEvent, ...] = ()
-    detection: str = "now"
+    detection: Detection = Detection.NOW
 
     def __post_init__(self) -> None:
-        if self.detection not in DETECTIONS:
-            raise InputError(
-                f"expected detection in {', '.join(DETECTIONS)}, got {self.detection!r}",
-                source="<fault schedule>",
-            )
+        object.__setattr__(self, "detection", _member(Detection, self.detection, "detection"))
 
     @classmethod
     def permanent(
-        cls, faults: Iterable[Fault], *, at: int = 0, clock: str = "step", detection: str = "now"
+        cls,
+        faults: Iterable[Any],
+        *,
+        at: int = 0,
+        clock: Clock = Clock.STEP,
+        detection: Detection = Detection.NOW,
     ) -> FaultSchedule:
         """Every fault in ``faults`` permanent from ``at`` on (sorted: the value is canonical)."""
-        events = tuple(FaultEvent(f, at=at, clock=clock) for f in sorted(set(faults)))
+        events = tuple(FaultEvent(f, at=at, clock=clock) for f in canonical_order(faults))
         return cls(events, detection)
 
-    def active_faults(self, step: int, tick: Fraction, seed: int = 0) -> FaultSet:
+    def active_faults(self, step: int, tick: Fraction, seed: int = 0) -> frozenset[Any]:
         """The true faults at the start of step ``step`` (elapsed time ``tick``); ``seed`` drives
         intermittent faults."""
         return frozenset(
             e.fault for i, e in enumerate(self.events) if e.active(i, step, tick, seed)
         )
 
-    def all_faults(self) -> FaultSet:
+    def all_faults(self) -> frozenset[Any]:
         """Every fault that may ever be active."""
         return frozenset(e.fault for e in self.events)
 
@@ -175,28 +211,50 @@ class FaultSchedule:
         parts = []
         for e in self.events:
             extra = ""
-            if e.persistence == "transient":
+            if e.persistence is Persistence.TRANSIENT:
                 extra = f" for {e.duration} {e.clock}s"
-            elif e.persistence == "intermittent":
+            elif e.persistence is Persistence.INTERMITTENT:
                 extra = f" p={e.probability}"
             parts.append(f"{e.fault} {e.persistence}{extra} from {e.clock} {e.at}")
         return "; ".join(parts) + f"; detected {self.detection}"
 
-    def to_json(self) -> dict[str, Any]:
-        """A JSON-able dict."""
+    def to_json(self, domain: Domain[Any, Any]) -> dict[str, Any]:
+        """A JSON-able dict, faults in ``domain``'s text."""
         return {
-            "events": [e.to_json() for e in self.events],
-            "detection": self.detection,
-            "faults": format_faults(self.all_faults()),
+            "events": [e.to_json(domain) for e in self.events],
+            "detection": self.detection.value,
+            "faults": domain.format_faults(self.all_faults()),
         }
 
     @classmethod
-    def from_json(cls, data: Mapping[str, Any], source: str = "<fault schedule>") -> FaultSchedule:
+    def from_json(
+        cls, data: Mapping[str, Any], domain: Domain[Any, Any], source: str = "<fault schedule>"
+    ) -> FaultSchedule:
         """Read what :meth:`to_json` wrote."""
         events = data.get("events", [])
         if not isinstance(events, list):
             raise InputError("expected 'events' to be a list", source=source)
         return cls(
-            events=tuple(FaultEvent.from_json(e, source) for e in events),
-            detection=str(data.get("detection", "now")),
+            events=tuple(FaultEvent.from_json(e, domain, source) for e in events),
+            detection=str(data.get("detection", "now")),  # type: ignore[arg-type]
         )
+
+
+def canonical_order(faults: Iterable[Any]) -> list[Any]:
+    """Distinct faults in a canonical order: sorted when the domain's faults are ordered (the
+    four-wheel robot's are), else by their text."""
+    distinct = set(faults)
+    try:
+        return sorted(distinct)
+    except TypeError:
+        return sorted(distinct, key=str)
+
+
+def _one_fault(domain: Domain[Any, Any], text: str, source: str) -> Any:
+    try:
+        faults = domain.parse_faults(text)
+    except InputError as exc:
+        raise InputError(exc.reason, source=source) from None
+    if len(faults) != 1:
+        raise InputError(f"expected exactly one fault, got {text!r}", source=source)
+    return next(iter(faults))

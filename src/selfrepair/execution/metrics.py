@@ -18,7 +18,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from selfrepair.execution.result import MissionResult
-from selfrepair.robots.four_wheel import format_faults
+from selfrepair.repair.strategies import RepairSource, RepairStatus
 from selfrepair.search.lattice import action_cost
 
 if TYPE_CHECKING:
@@ -107,6 +107,7 @@ def executed_cost(result: MissionResult) -> Fraction:
                 s.action,
                 clearance_weight=Fraction(spec.clearance_weight),
                 clearance_radius=spec.clearance_radius,
+                domain=spec.domain,
             )
             for s in result.executed
         ),
@@ -126,7 +127,7 @@ def mission_row(result: MissionResult) -> Row:
     table_hits = [
         r.repair
         for r in repairs
-        if r.repair.status == "repaired" and r.repair.source == "replacement"
+        if r.repair.status is RepairStatus.REPAIRED and r.repair.source is RepairSource.REPLACEMENT
     ]
     latencies = [r.latency_ns for r in repairs]
     stats = latency_stats(latencies)
@@ -141,20 +142,21 @@ def mission_row(result: MissionResult) -> Row:
         "start": str(spec.start),
         "goal": f"{spec.goal[0]},{spec.goal[1]}",
         "goal_heading": None if spec.goal_heading is None else spec.goal_heading.name,
-        "strategy": spec.strategy,
+        "domain": spec.domain.name,
+        "strategy": str(spec.strategy),
         "table": options.table_label,
-        "recursion": options.recursion,
+        "recursion": options.recursion.value,
         "max_depth": options.max_depth,
         "window": options.window,
-        "faults": format_faults(spec.schedule.all_faults()),
-        "fault_schedule": json.dumps(spec.schedule.to_json(), sort_keys=True),
-        "detection": spec.schedule.detection,
+        "faults": spec.domain.format_faults(spec.schedule.all_faults()),
+        "fault_schedule": json.dumps(spec.schedule.to_json(spec.domain), sort_keys=True),
+        "detection": spec.schedule.detection.value,
         "seed": spec.seed,
         "clearance_weight": str(spec.clearance_weight),
         "clearance_radius": spec.clearance_radius,
         "heuristic": spec.heuristic,
         "backend": spec.backend,
-        "status": result.status,
+        "status": result.status.value,
         "reached": int(result.reached),
         "reason": result.reason,
         "ticks": str(result.ticks),
@@ -172,11 +174,17 @@ def mission_row(result: MissionResult) -> Row:
         "faulty_encounters": len(repairs),
         "replacements": len(table_hits),
         "lookaheads": sum(
-            1 for r in repairs if r.repair.status == "repaired" and r.repair.source == "lookahead"
+            1
+            for r in repairs
+            if r.repair.status is RepairStatus.REPAIRED
+            and r.repair.source is RepairSource.LOOKAHEAD
         ),
         "replans": sum(r.repair.replans for r in repairs),
         "replans_failed": sum(
-            1 for r in repairs if r.repair.source == "replan" and r.repair.status != "repaired"
+            1
+            for r in repairs
+            if r.repair.source is RepairSource.REPLAN
+            and r.repair.status is not RepairStatus.REPAIRED
         ),
         "replacement_lengths": histogram_text(h.candidate_length or 0 for h in table_hits),
         "replacement_depths": histogram_text(h.depth or 0 for h in table_hits),
@@ -204,6 +212,7 @@ ROW_COLUMNS: tuple[str, ...] = (
     "start",
     "goal",
     "goal_heading",
+    "domain",
     "strategy",
     "table",
     "recursion",

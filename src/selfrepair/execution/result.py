@@ -9,36 +9,63 @@ the others.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
 from fractions import Fraction
+from typing import Any
 
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.geometry import Cell, Heading, Pose
-from selfrepair.repair.strategies import PlannerSettings, Repair, StrategyOptions
-from selfrepair.robots.four_wheel import Action, FaultSet
-from selfrepair.search.problem import PlanResult
+from selfrepair.repair.strategies import Repair, StrategyName, StrategyOptions
+from selfrepair.robots.domain import Domain
+from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.search.astar import PlanResult
+from selfrepair.search.problem import PlannerSettings
 from selfrepair.world.maze import Maze
 
-__all__ = ["SOURCES", "STATUSES", "MissionResult", "MissionSpec", "RepairRecord", "TraceStep"]
+__all__ = [
+    "MissionResult",
+    "MissionSpec",
+    "MissionStatus",
+    "RepairRecord",
+    "StepSource",
+    "TraceStep",
+]
 
 
-STATUSES = ("reached", "stuck", "budget_exhausted", "no_initial_plan", "step_limit", "collision")
-"""Mission outcomes: goal reached; a repair replan found no plan (``stuck``); a replan hit its
-planner budget (``budget_exhausted``); the initial plan failed (``no_initial_plan``, see
-``MissionResult.reason``); ``max_steps`` steps without reaching the goal (``step_limit``); the
-simulator refused a move into a wall (``collision``, never expected)."""
+class MissionStatus(StrEnum):
+    """How a mission ended: goal reached; a repair replan found no plan (``stuck``); a replan hit
+    its planner budget (``budget_exhausted``); the initial plan failed (``no_initial_plan``, see
+    ``MissionResult.reason``); ``max_steps`` steps without reaching the goal (``step_limit``); the
+    simulator refused a move into a wall (``collision``, never expected)."""
+
+    REACHED = "reached"
+    STUCK = "stuck"
+    BUDGET_EXHAUSTED = "budget_exhausted"
+    NO_INITIAL_PLAN = "no_initial_plan"
+    STEP_LIMIT = "step_limit"
+    COLLISION = "collision"
 
 
-SOURCES = ("plan", "replacement", "lookahead", "replan", "failed-attempt")
-"""Where an executed step's action came from."""
+class StepSource(StrEnum):
+    """Where an executed step's action came from: the initial plan, a repair (by its source), or
+    a command that a fault the executor did not know yet made fail."""
+
+    PLAN = "plan"
+    REPLACEMENT = "replacement"
+    LOOKAHEAD = "lookahead"
+    REPLAN = "replan"
+    FAILED_ATTEMPT = "failed-attempt"
 
 
 @dataclass(frozen=True, slots=True)
 class MissionSpec:
     """Everything needed to run (and so replay) one mission.
 
-    ``seed`` drives intermittent faults (see :mod:`selfrepair.execution.faults`). ``max_steps`` bounds
-    the executed steps (failed attempts included); ``None`` means ``20 * cells + 100``.
+    ``domain`` is the robot (the four-wheel robot unless given); ``strategy`` a name in the
+    strategy registry (:func:`selfrepair.repair.strategies.get_strategy`). ``seed`` drives
+    intermittent faults (see :mod:`selfrepair.execution.faults`). ``max_steps`` bounds the
+    executed steps (failed attempts included); ``None`` means ``20 * cells + 100``.
     """
 
     maze: Maze
@@ -46,7 +73,7 @@ class MissionSpec:
     goal: Cell
     goal_heading: Heading | None = None
     schedule: FaultSchedule = field(default_factory=FaultSchedule)
-    strategy: str = "replacement"
+    strategy: str = StrategyName.REPLACEMENT
     options: StrategyOptions = field(default_factory=StrategyOptions)
     clearance_weight: Fraction = Fraction(0)
     clearance_radius: int = 2
@@ -56,6 +83,7 @@ class MissionSpec:
     replan_max_expansions: int | None = None
     initial_faults_known: bool = False
     max_steps: int | None = None
+    domain: Domain[Any, Any] = FOUR_WHEEL
 
     def __post_init__(self) -> None:
         if self.seed < 0:
@@ -78,18 +106,24 @@ class MissionSpec:
             return self.max_steps
         return 20 * self.maze.width * self.maze.height + 100
 
+    def at_goal(self, pose: Pose) -> bool:
+        """Whether ``pose`` satisfies the mission's goal."""
+        return pose.cell == self.goal and (
+            self.goal_heading is None or pose.heading == self.goal_heading
+        )
+
 
 @dataclass(frozen=True, slots=True)
 class TraceStep:
     """One executed command: what, from where to where, how long, why, and what was known."""
 
     step: int
-    action: Action
+    action: Any
     start: Pose
     end: Pose
     duration: Fraction
-    source: str
-    known: FaultSet
+    source: StepSource
+    known: frozenset[Any]
 
 
 @dataclass(frozen=True, slots=True)
@@ -99,17 +133,18 @@ class RepairRecord:
 
     step: int
     pose: Pose
-    action: Action | None
+    action: Any | None
     repair: Repair
     latency_ns: int
 
 
 @dataclass(frozen=True, slots=True)
 class MissionResult:
-    """The outcome of one mission; :meth:`to_row` flattens it (columns in docs/replacement.md)."""
+    """The outcome of one mission; :func:`selfrepair.execution.metrics.mission_row` flattens it
+    (columns in docs/replacement.md)."""
 
     spec: MissionSpec
-    status: str
+    status: MissionStatus
     reason: str
     steps: tuple[TraceStep, ...]
     repairs: tuple[RepairRecord, ...]
@@ -121,9 +156,9 @@ class MissionResult:
     @property
     def reached(self) -> bool:
         """Whether the goal was reached."""
-        return self.status == "reached"
+        return self.status is MissionStatus.REACHED
 
     @property
     def executed(self) -> tuple[TraceStep, ...]:
         """The steps that moved the robot (failed attempts left out): the executed plan."""
-        return tuple(s for s in self.steps if s.source != "failed-attempt")
+        return tuple(s for s in self.steps if s.source is not StepSource.FAILED_ATTEMPT)

@@ -1,9 +1,9 @@
 """The simulated world: the robot's true pose, the true faults, and what each command does.
 
 The :class:`Simulator` is the only place that knows the true fault state; the executor
-(:mod:`selfrepair.execution.executor`) knows only what the simulator lets it sense (:meth:`Simulator.sense`)
-or what a failed attempt reveals. Motion comes from :func:`selfrepair.robots.four_wheel.step`; nothing is
-re-derived here.
+(:mod:`selfrepair.execution.executor`) knows only what the simulator lets it sense
+(:meth:`Simulator.sense`) or what a failed attempt reveals. Motion comes from the robot's
+:class:`~selfrepair.robots.domain.Domain`; nothing is re-derived here.
 
 A command whose action a true fault forbids is a *failed attempt*: the robot does not move, one
 tick passes, and the outcome names the faults that blocked it. A command that would sweep a wall
@@ -14,84 +14,104 @@ tests check that).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
 from fractions import Fraction
+from typing import Any
 
-from selfrepair.execution.faults import FaultSchedule
+from selfrepair.execution.faults import Detection, FaultSchedule
 from selfrepair.geometry import Cell, Pose
-from selfrepair.robots import four_wheel
-from selfrepair.robots.four_wheel import Action, FaultSet
+from selfrepair.robots.domain import Domain
 from selfrepair.world.maze import Maze
 
-__all__ = ["FAILED_ATTEMPT_TICKS", "Simulator", "StepOutcome"]
+__all__ = ["FAILED_ATTEMPT_TICKS", "Outcome", "Simulator", "StepOutcome"]
 
 FAILED_ATTEMPT_TICKS = Fraction(1)
 """What a failed attempt costs."""
 
 
+class Outcome(StrEnum):
+    """What one command did."""
+
+    MOVED = "moved"
+    FAILED_ATTEMPT = "failed-attempt"
+    COLLISION = "collision"
+
+
 @dataclass(frozen=True, slots=True)
 class StepOutcome:
-    """What one command did. ``status`` is ``"moved"``, ``"failed-attempt"`` or ``"collision"``."""
+    """What one command did, where from and to, how long it took and which faults blocked it."""
 
-    status: str
+    status: Outcome
     step: int
-    action: Action
+    action: Any
     start: Pose
     end: Pose
     swept: tuple[Cell, ...]
     duration: Fraction
-    blocking: FaultSet
+    blocking: frozenset[Any]
 
 
 class Simulator:
     """The true world for one mission (mutable: the pose, step count and clock advance)."""
 
-    def __init__(self, maze: Maze, start: Pose, schedule: FaultSchedule, seed: int = 0) -> None:
+    def __init__(
+        self,
+        domain: Domain[Any, Any],
+        maze: Maze,
+        start: Pose,
+        schedule: FaultSchedule,
+        seed: int = 0,
+    ) -> None:
+        self.domain = domain
         self.maze = maze
+        self.grid = maze.free_grid()
         self.schedule = schedule
         self.seed = seed
         self.pose = start
         self.steps = 0
         self.ticks = Fraction(0)
 
-    def true_faults(self) -> FaultSet:
+    def true_faults(self) -> frozenset[Any]:
         """The faults active now (at the start of the next step)."""
         return self.schedule.active_faults(self.steps, self.ticks, self.seed)
 
-    def sense(self) -> FaultSet:
+    def sense(self) -> frozenset[Any]:
         """What the robot's sensors report before the next step.
 
         Detection ``now``: the active faults. Detection ``on-use``: nothing (faults are learned only
         from failed attempts).
         """
-        if self.schedule.detection == "now":
+        if self.schedule.detection is Detection.NOW:
             return self.true_faults()
         return frozenset()
 
-    def execute(self, action: Action) -> StepOutcome:
+    def execute(self, action: Any) -> StepOutcome:
         """Command ``action`` from the current pose and advance the world."""
+        domain = self.domain
         faults = self.true_faults()
         start = self.pose
-        if not four_wheel.available(action, faults):
-            blocking = frozenset(f for f in faults if not four_wheel.available(action, (f,)))
+        if not domain.available(action, faults):
             outcome = StepOutcome(
-                "failed-attempt",
+                Outcome.FAILED_ATTEMPT,
                 self.steps,
                 action,
                 start,
                 start,
                 (start.cell,),
                 FAILED_ATTEMPT_TICKS,
-                blocking,
+                domain.blocking(action, faults),
             )
         else:
-            end, swept, duration = four_wheel.step(start, action)
-            if not self.maze.all_free(swept):
+            end, swept, duration = domain.step(start, action)
+            if not self.grid.all_free(swept):
                 return StepOutcome(
-                    "collision", self.steps, action, start, start, swept, Fraction(0), frozenset()
-                )
+                    Outcome.COLLISION, self.steps, action, start, start, swept, Fraction(0),
+                    frozenset(),
+                )  # fmt: skip
             outcome = StepOutcome(
-                "moved", self.steps, action, start, end, swept, duration, frozenset()
-            )
+                Outcome.MOVED, self.steps, action, start, end, swept, Fraction(duration),
+                frozenset(),
+            )  # fmt: skip
         self.pose = outcome.end
         self.steps += 1
         self.ticks += outcome.duration

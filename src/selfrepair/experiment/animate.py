@@ -71,7 +71,7 @@ def animate_trace(
             zorder=8,
         )
         title = ax.set_title(f"{headline}\nstart", fontsize=8)
-        FigureCanvasAgg(fig).draw()  # lay out once, then keep the layout fixed for speed
+        FigureCanvasAgg(fig).draw()  # type: ignore[no-untyped-call]  # lay out once, then keep the layout fixed for speed
         fig.set_layout_engine("none")
         drawn = [0]
 
@@ -81,7 +81,7 @@ def animate_trace(
             if upto > 0:
                 pose = picture.steps[upto - 1][1]
                 robot.set_data([pose.x], [pose.y])
-                robot.set_marker(plots.robot_marker(pose))
+                robot.set_marker(plots.robot_marker(pose))  # type: ignore[arg-type]
                 source = picture.steps[upto - 1][2]
                 title.set_text(
                     f"{headline}\nstep {upto}/{total}: {source}; known faults {known[upto - 1]}"

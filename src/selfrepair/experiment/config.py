@@ -6,6 +6,8 @@ The file format is described in ``docs/experiments.md``; in short::
     seed = 2024                  # base seed; every mission's seed derives from it
     repeats = 1                  # seeds per mission
 
+    domain = "four-wheel"        # the robot: a name in the domain registry (default four-wheel)
+
     [[mazes]]
     bundled = "narrow-short"     # or file = "x.maze" / generate = {width=.., height=.., ...}
     routes = "bundled"           # or a count of random routes, or [{start="1,1,E", goal="9,9"}]
@@ -46,14 +48,18 @@ from pydantic import (
     ConfigDict,
     Field,
     ValidationError,
+    ValidationInfo,
     field_validator,
     model_validator,
 )
 
 from selfrepair.errors import ConfigError, InputError
+from selfrepair.execution.faults import Clock, Detection, Persistence
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CLEARANCE_WEIGHT
-from selfrepair.robots.four_wheel import parse_faults
+from selfrepair.repair.replacement import RecursionMode
+from selfrepair.robots.domain import Domain
+from selfrepair.robots.registry import get_domain
 from selfrepair.textio import read_text, strip_bom, text_lines
 
 __all__ = [
@@ -75,7 +81,11 @@ __all__ = [
 FAULT_PROFILES = ("paper", "singles", "doubles", "all")
 """Named fault-set profiles; see :func:`selfrepair.experiment.missions.fault_profile`."""
 
-RECURSION_MODES = ("flat", "guarded", "layered")
+PAPER_ONLY = frozenset({"paper"})
+"""Profiles defined for the four-wheel robot only."""
+
+DEFAULT_DOMAIN = "four-wheel"
+"""The robot of an experiment file that names none."""
 
 # Strict numbers: TOML has real booleans and floats, and ``true`` or ``1.0`` where an integer is
 # expected is a mistake to report, not a 1 to guess (pydantic's lax mode would take both).
@@ -154,30 +164,34 @@ class FaultsConfig(_Frozen):
 
     sets: Literal["paper", "singles", "doubles", "all"] | tuple[str, ...] = "paper"
     at: tuple[Annotated[Int, Field(ge=0)], ...] = (0,)
-    clock: Literal["step", "tick"] = "step"
-    detection: tuple[Literal["now", "on-use"], ...] = ("now",)
-    persistence: Literal["permanent", "transient", "intermittent"] = "permanent"
+    clock: Clock = Clock.STEP
+    detection: tuple[Detection, ...] = (Detection.NOW,)
+    persistence: Persistence = Persistence.PERMANENT
     duration: Annotated[Int, Field(ge=1)] | None = None
     probability: Annotated[Float, Field(ge=0.0, le=1.0)] | None = None
 
     @model_validator(mode="after")
     def _persistence_options(self) -> FaultsConfig:
-        if self.persistence == "transient" and self.duration is None:
+        if self.persistence is Persistence.TRANSIENT and self.duration is None:
             raise ValueError("persistence = \"transient\" needs a 'duration' (>= 1)")
-        if self.persistence == "intermittent" and self.probability is None:
+        if self.persistence is Persistence.INTERMITTENT and self.probability is None:
             raise ValueError("persistence = \"intermittent\" needs a 'probability' in [0, 1]")
         return self
 
     @field_validator("sets")
     @classmethod
-    def _sets(cls, value: str | tuple[str, ...]) -> str | tuple[str, ...]:
+    def _sets(cls, value: str | tuple[str, ...], info: ValidationInfo) -> str | tuple[str, ...]:
+        domain = _domain(info)
         if isinstance(value, str):
+            if value in PAPER_ONLY and domain.name != "four-wheel":
+                raise ValueError(
+                    f'the "{value}" profile is defined for the four-wheel robot; for '
+                    f"{domain.name!r} use singles, doubles, all or a list of fault sets"
+                )
             return value
         if not value:
             raise ValueError("expected at least one fault set")
-        from selfrepair.robots.four_wheel import format_faults
-
-        return tuple(format_faults(_reraise(parse_faults, text)) for text in value)
+        return tuple(domain.format_faults(_reraise(domain.parse_faults, text)) for text in value)
 
     @field_validator("at", "detection")
     @classmethod
@@ -216,7 +230,7 @@ class ReplacementStrategy(_Frozen):
 
     name: Literal["replacement"]
     tables: tuple[str, ...] = ("handwritten",)
-    recursion: tuple[Literal["flat", "guarded", "layered"], ...] = ("guarded",)
+    recursion: tuple[RecursionMode, ...] = (RecursionMode.GUARDED,)
     clearance_weights: tuple[str, ...] | None = None
 
     @field_validator("clearance_weights", mode="before")
@@ -246,11 +260,13 @@ StrategyConfig = Annotated[
 
 class ExperimentConfig(_Frozen):
     """A whole experiment: the cross product of mazes x routes x fault settings x strategies x
-    clearance weights x repeats. ``source`` is the file it was read from (for error messages and
-    for resolving relative paths)."""
+    clearance weights x repeats, for the robot ``domain`` (a name in the domain registry).
+    ``source`` is the file it was read from (for error messages and for resolving relative
+    paths)."""
 
     name: Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")]
     description: str = ""
+    domain: str = DEFAULT_DOMAIN
     seed: Int = 0
     repeats: Annotated[Int, Field(ge=1, le=1000)] = 1
     mazes: Annotated[tuple[MazeConfig, ...], Field(min_length=1)]
@@ -290,6 +306,12 @@ def _weights(value: Any) -> Any:
             )
         out.append(str(weight))
     return tuple(out)
+
+
+def _domain(info: ValidationInfo) -> Domain[Any, Any]:
+    context = info.context or {}
+    domain = context.get("domain")
+    return domain if isinstance(domain, Domain) else get_domain(DEFAULT_DOMAIN)
 
 
 def _reraise(parser: Any, text: str) -> Any:
@@ -335,10 +357,27 @@ def parse_config(text: str, *, source: str = "<string>") -> ExperimentConfig:
         ) from None
     if "source" in data:
         raise ConfigError("unknown key 'source' (it is set by the loader)", source=source)
+    domain = _config_domain(data, text, source)
     try:
-        return ExperimentConfig.model_validate({**data, "source": source})
+        return ExperimentConfig.model_validate(
+            {**data, "source": source}, context={"domain": domain}
+        )
     except ValidationError as exc:
         raise _config_error(exc, text, source) from None
+
+
+def _config_domain(data: dict[str, Any], text: str, source: str) -> Domain[Any, Any]:
+    """The robot the file names (key ``domain``, default four-wheel), looked up in the registry."""
+    name = data.get("domain", DEFAULT_DOMAIN)
+    line = find_line(text, ("domain",))
+    if not isinstance(name, str):
+        raise ConfigError(
+            f"key 'domain': expected a domain name, got {name!r}", source=source, line=line
+        )
+    try:
+        return get_domain(name)
+    except InputError as exc:
+        raise ConfigError(f"key 'domain': {exc.reason}", source=source, line=line) from None
 
 
 _TYPE_MISMATCH = ("literal_error", "int_type", "int_parsing", "string_type", "float_type")

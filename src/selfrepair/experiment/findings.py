@@ -314,7 +314,8 @@ def _finding_2(rows: Sequence[Row]) -> Finding:
     tested = {v: w for v, w in by_variant.items() if 0 in w and any(x > 0 for x in w)}
     if not tested:
         return Finding(2, CLAIMS[1], "not tested", "needs replacement missions at weight 0 and > 0")
-    parts, ok = [], []
+    parts: list[str] = []
+    ok: list[bool] = []
     for variant, weights in sorted(tested.items()):
         shares = {w: _replacement_share(rs) for w, rs in sorted(weights.items())}
         base = shares[Fraction(0)]
@@ -354,7 +355,8 @@ def _finding_3(rows: Sequence[Row]) -> Finding:
     tested = {m: t for m, t in groups.items() if "handwritten" in t and len(t) > 1}
     if not tested:
         return Finding(3, CLAIMS[2], "not tested", "needs the hand-written and another table")
-    parts, ok = [], []
+    parts: list[str] = []
+    ok: list[bool] = []
     for mode, tables in sorted(tested.items()):
         shares = {t: _replacement_share(rs) for t, rs in sorted(tables.items())}
         listed = ", ".join(f"{t}: {_pct(s)}" for t, s in shares.items())

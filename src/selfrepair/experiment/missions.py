@@ -31,11 +31,13 @@ from dataclasses import dataclass
 from fractions import Fraction
 from functools import lru_cache
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from selfrepair.errors import ConfigError, InputError, LimitError
+from selfrepair.execution.faults import FaultEvent, FaultSchedule, canonical_order
+from selfrepair.execution.result import MissionSpec
 from selfrepair.experiment.config import (
     ExperimentConfig,
     LookaheadStrategy,
@@ -44,12 +46,13 @@ from selfrepair.experiment.config import (
 )
 from selfrepair.geometry import Heading, Pose, parse_cell, parse_pose
 from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, check_limit, maze_file_bytes
-from selfrepair.robots.four_wheel import DOUBLE_FAULTS, SINGLE_FAULTS, format_faults, parse_faults
+from selfrepair.repair.replacement import RecursionMode
+from selfrepair.repair.strategies import StrategyOptions
+from selfrepair.robots.domain import Domain
+from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.robots.registry import get_domain
 from selfrepair.world.maze import Maze
 from selfrepair.world.routes import Route
-
-if TYPE_CHECKING:
-    from selfrepair.execution.result import MissionSpec
 
 __all__ = [
     "BUNDLED_TABLES",
@@ -131,18 +134,24 @@ def derive_seed(base_seed: int, situation: dict[str, Any]) -> int:
 # --- faults ------------------------------------------------------------------------------------
 
 
-def fault_profile(sets: str | tuple[str, ...]) -> tuple[str, ...]:
-    """The fault sets of a profile name or an explicit list, each in canonical text form."""
+def fault_profile(
+    sets: str | tuple[str, ...], domain: Domain[Any, Any] = FOUR_WHEEL
+) -> tuple[str, ...]:
+    """The fault sets of a profile name or an explicit list, each in ``domain``'s canonical text.
+
+    ``singles``, ``doubles`` and ``all`` come from ``domain.fault_sets``; ``paper`` is the
+    four-wheel robot's 12 (:data:`PAPER_FAULT_SETS`)."""
     if isinstance(sets, tuple):
         return sets
-    singles = tuple(format_faults([f]) for f in SINGLE_FAULTS)
-    doubles = tuple(format_faults(pair) for pair in DOUBLE_FAULTS)
-    profiles = {
-        "paper": tuple(format_faults(parse_faults(s)) for s in PAPER_FAULT_SETS),
-        "singles": singles,
-        "doubles": doubles,
-        "all": singles + doubles,
-    }
+    singles = tuple(domain.format_faults(f) for f in domain.fault_sets if len(f) == 1)
+    doubles = tuple(domain.format_faults(f) for f in domain.fault_sets if len(f) == 2)
+    if sets == "paper":
+        if domain is not FOUR_WHEEL:
+            raise ConfigError(
+                f'the "paper" fault profile is for the four-wheel robot, not {domain.name!r}'
+            )
+        return tuple(domain.format_faults(domain.parse_faults(s)) for s in PAPER_FAULT_SETS)
+    profiles = {"singles": singles, "doubles": doubles, "all": singles + doubles}
     return profiles[sets]
 
 
@@ -428,7 +437,7 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
     faults = config.faults
     factors = (
         (routes, "routes"),
-        (len(fault_profile(faults.sets)), "fault sets"),
+        (len(fault_profile(faults.sets, get_domain(config.domain))), "fault sets"),
         (len(faults.at), "fault times"),
         (len(faults.detection), "detections"),
         (config.repeats, "repeats"),
@@ -467,7 +476,8 @@ def expand(
         source=config.source,
     )
     variants = list(strategy_variants(config))
-    fault_sets = fault_profile(config.faults.sets)
+    domain = get_domain(config.domain)
+    fault_sets = fault_profile(config.faults.sets, domain)
     missions: dict[str, Mission] = {}
     for index, (entry, identity) in enumerate(zip(config.mazes, identities, strict=True)):
         label = maze_label(identity)
@@ -477,7 +487,7 @@ def expand(
                 for at in config.faults.at:
                     for detection in config.faults.detection:
                         for replicate in range(config.repeats):
-                            situation = {
+                            situation: dict[str, Any] = {
                                 "schema": SCHEMA,
                                 "maze": identity,
                                 "route": route.name,
@@ -492,6 +502,8 @@ def expand(
                                 "detection": detection,
                                 "replicate": replicate,
                             }
+                            if domain is not FOUR_WHEEL:  # absent for the four-wheel robot,
+                                situation["domain"] = domain.name  # so older keys stay valid
                             seed = derive_seed(config.seed, portable(situation))
                             for variant, weights in variants:
                                 for weight in weights:
@@ -556,11 +568,8 @@ def to_spec(mission: Mission) -> MissionSpec:
 
     Mazes and tables are loaded once per process (cached), so a worker pays for them once.
     """
-    from selfrepair.execution.faults import FaultEvent, FaultSchedule
-    from selfrepair.execution.result import MissionSpec
-    from selfrepair.repair.strategies import StrategyOptions
-
     s = mission.settings
+    domain = get_domain(s.get("domain", FOUR_WHEEL.name))
     events = tuple(
         FaultEvent(
             fault,
@@ -570,7 +579,7 @@ def to_spec(mission: Mission) -> MissionSpec:
             duration=s["fault_duration"],
             probability=s["fault_probability"],
         )
-        for fault in sorted(parse_faults(s["faults"]))
+        for fault in canonical_order(domain.parse_faults(s["faults"]))
     )
     options = s["options"]
     return MissionSpec(
@@ -581,10 +590,11 @@ def to_spec(mission: Mission) -> MissionSpec:
         strategy=s["strategy"],
         options=StrategyOptions(
             table=options.get("table", "handwritten"),
-            recursion=options.get("recursion", "flat"),
+            recursion=options.get("recursion", RecursionMode.FLAT),
             window=options.get("window", 3),
         ),
         clearance_weight=Fraction(s["clearance_weight"]),
         clearance_radius=s["clearance_radius"],
         seed=mission.seed,
+        domain=domain,
     )

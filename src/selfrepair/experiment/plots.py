@@ -22,7 +22,6 @@ import numpy as np
 from selfrepair.errors import ProblemError
 from selfrepair.experiment.findings import Row, group_label, median, percentile, repairs_of
 from selfrepair.geometry import Cell, Pose
-from selfrepair.robots.four_wheel import step
 from selfrepair.world.maze import Maze
 
 __all__ = [
@@ -256,7 +255,8 @@ def heatmap_variant(rows: Sequence[Row]) -> str | None:
         if wanted in variants:
             return wanted
     replacing = [v for v in variants if v.startswith("replacement")]
-    return (replacing or variants or [None])[0]
+    chosen = replacing or variants
+    return chosen[0] if chosen else None
 
 
 def figure_heatmap(rows: Sequence[Row], path: Path, variant: str | None = None) -> Path:
@@ -379,16 +379,16 @@ class MissionPicture:
 def picture_from_trace(trace: Any) -> MissionPicture:
     """A :class:`MissionPicture` from a parsed :class:`selfrepair.execution.trace.Trace`."""
     from selfrepair.execution.trace import spec_from_header
-    from selfrepair.robots.four_wheel import format_faults, parse_action
 
     spec = spec_from_header(trace.header, trace.source)
+    domain = spec.domain
     poses = [spec.start]
     for code in trace.header.get("initial_plan", []):
-        poses.append(step(poses[-1], parse_action(code))[0])
-    faults = format_faults(spec.schedule.all_faults()) or "none"
-    strategy = spec.strategy
+        poses.append(domain.apply(poses[-1], domain.parse_action(code)))
+    faults = domain.format_faults(spec.schedule.all_faults()) or "none"
+    strategy = str(spec.strategy)
     if strategy != "replan":
-        strategy += f" [{spec.options.table_label}, {spec.options.recursion}]"
+        strategy += f" [{spec.options.table_label}, {spec.options.recursion.value}]"
     summary = trace.summary or {}
     status = summary.get("status", "?")
     title = (

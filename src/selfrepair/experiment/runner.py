@@ -227,13 +227,13 @@ def _dask_client(scheduler: str | None) -> Iterator[object]:
             "--backend dask needs dask[distributed]: pip install 'selfrepair[dask]'"
         ) from None
     try:
-        client = Client(scheduler, set_as_default=False, timeout="20s")
+        client = Client(scheduler, set_as_default=False, timeout="20s")  # type: ignore[no-untyped-call]
     except OSError as exc:
         raise ProblemError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
     try:
         yield client
     finally:
-        client.close()
+        client.close()  # type: ignore[no-untyped-call]
 
 
 def _start_ray(address: str | None) -> int:

@@ -150,8 +150,8 @@ class ResultStore:
             "finished_at": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "worker_seconds": float(worker_seconds),
         }
-        for name, value in mission.labels:
-            row[name] = value
+        for name, label in mission.labels:
+            row[name] = label
         for name, value in metrics.items():
             column = name if name not in row else f"result_{name}"
             row[column] = _check_value(name, value)
@@ -222,7 +222,7 @@ def _quote(name: str) -> str:
 
 def _check_value(name: str, value: object) -> Value:
     if value is None or isinstance(value, int | float | str):
-        return value  # type: ignore[return-value]
+        return value
     raise ProblemError(
         f"metric {name!r} must be int, float, str or None, got {type(value).__name__}"
     )

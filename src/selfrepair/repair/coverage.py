@@ -37,18 +37,18 @@ import itertools
 from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass
 from fractions import Fraction
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
 
+from selfrepair.caching import BoundedCache
 from selfrepair.errors import TableError
-from selfrepair.geometry import Heading, Pose, relative_cell
+from selfrepair.geometry import Cell, Heading, Pose, relative_cell
 from selfrepair.repair.replacement import find_replacement
 from selfrepair.robots.domain import Domain
-from selfrepair.robots.registry import get_domain
 from selfrepair.tables.enumerate import (
-    OBJECTIVES,
+    Objective,
     candidate_cost,
     class_costs,
     class_of,
@@ -57,7 +57,17 @@ from selfrepair.tables.enumerate import (
     scope_fault_sets,
 )
 from selfrepair.tables.model import ReplacementTable
-from selfrepair.world.maze import Maze
+
+
+class WallGrid(Protocol):
+    """What wall coverage needs of a map: its walls as a boolean ``[y, x]`` array and a name
+    (a :class:`selfrepair.world.maze.Maze` is one)."""
+
+    @property
+    def walls(self) -> npt.NDArray[np.bool_]: ...
+
+    @property
+    def name(self) -> str: ...
 
 __all__ = [
     "CoverageReport",
@@ -124,7 +134,7 @@ def _lattice_basis(vectors: Iterable[tuple[int, int]]) -> list[tuple[int, int]]:
         while len(pivots) > 1:
             pivots.sort(key=lambda r: abs(r[col]))
             p = pivots[0]
-            reduced = []
+            reduced: list[tuple[int, int]] = []
             for r in pivots[1:]:
                 q = r[col] // p[col]
                 r2 = (r[0] - q * p[0], r[1] - q * p[1])
@@ -453,7 +463,7 @@ def free_space(
 ) -> tuple[tuple[FaultRow, ...], tuple[PairResult, ...]]:
     """Per fault set a :class:`FaultRow`, and per (fault set, disabled action) a
     :class:`PairResult`."""
-    dom = get_domain(table.domain)
+    dom = table.domain
     rows = []
     pairs = []
     for faults in fault_sets:
@@ -465,7 +475,7 @@ def free_space(
             if best is not None:
                 replaceable += 1
             found = find_replacement(
-                dom, table, action, dom.canonical, faults, lambda cells: True, mode=mode
+                table, action, dom.canonical, faults, lambda cells: True, mode=mode
             )
             name = dom.format_action(action)
             if found is None:
@@ -483,7 +493,7 @@ def free_space(
                     name,
                     best,
                     cost,
-                    found.index,
+                    found.position,
                     found.depth,
                     tuple(dom.format_action(a) for a in found.actions),
                 )
@@ -513,7 +523,7 @@ def free_space(
 def _offsets(domain: Domain[Any, Any], candidate: Sequence[Any]) -> frozenset[tuple[int, int]]:
     """The cells a sequence sweeps from the canonical state, as (forward, right) offsets."""
     start: Pose = domain.canonical
-    state, cells = start, set()
+    state, cells = start, set[Cell]()
     for action in candidate:
         cells.update(domain.footprint(state, action))
         state = domain.apply(state, action)
@@ -550,19 +560,17 @@ class _MaskCache:
 _HEADINGS = tuple(Heading)
 
 
-_OPTIMUM_CACHE: dict[tuple[str, frozenset[Any]], dict[Any, Fraction | None]] = {}
+_OPTIMA: BoundedCache[tuple[Domain[Any, Any], frozenset[Any]], dict[Any, Fraction | None]] = (
+    BoundedCache("exact optimal replacements", 256)
+)
 
 
 def _optimum_cached(domain: Domain[Any, Any], faults: frozenset[Any]) -> dict[Any, Fraction | None]:
-    key = (domain.name, faults)
-    hit = _OPTIMUM_CACHE.get(key)
-    if hit is None:
-        hit = _OPTIMUM_CACHE[key] = optimal_replacements(domain, faults)
-    return hit
+    return _OPTIMA.get((domain, faults), lambda: optimal_replacements(domain, faults))
 
 
 def wall_coverage(
-    table: ReplacementTable, maze: Maze, fault_sets: Sequence[frozenset[Any]], name: str = ""
+    table: ReplacementTable, maze: WallGrid, fault_sets: Sequence[frozenset[Any]], name: str = ""
 ) -> WallRow:
     """Coverage next to walls (flat mode) over every free cell and heading of ``maze``.
 
@@ -571,7 +579,7 @@ def wall_coverage(
     actions are all available fits. Whether some replacement exists at that very pose (say, one
     that leaves the corridor and comes back) is not asked: that would need a search per pose.
     """
-    dom = get_domain(table.domain)
+    dom = table.domain
     fp_cache: dict[tuple[Any, ...], frozenset[tuple[int, int]]] = {}
 
     def offsets(seq: tuple[Any, ...]) -> frozenset[tuple[int, int]]:
@@ -617,7 +625,7 @@ def wall_coverage(
     return WallRow(name or maze_name(maze), pairs, uncovered)
 
 
-def maze_name(maze: Maze) -> str:
+def maze_name(maze: WallGrid) -> str:
     """A maze's name, or ``"<maze>"``."""
     return str(getattr(maze, "name", "") or "<maze>")
 
@@ -628,17 +636,17 @@ def coverage_report(
     faults: str = "all",
     objective: str | None = None,
     mode: str = "flat",
-    mazes: Iterable[tuple[str, Maze]] = (),
+    mazes: Iterable[tuple[str, WallGrid]] = (),
     label: str = "",
 ) -> CoverageReport:
     """Free-space coverage and optimality for every fault set in scope ``faults``, and wall
     coverage on each of ``mazes``. ``objective`` defaults to the table's own (its header
     ``parameters``), else ``duration``."""
-    dom = get_domain(table.domain)
+    dom = table.domain
     objective = objective or str(table.parameters.get("objective", "duration"))
-    if objective not in OBJECTIVES:
+    if objective not in set(Objective):
         raise TableError(
-            f"expected an objective from {', '.join(OBJECTIVES)}, got {objective!r}",
+            f"expected an objective from {', '.join(Objective)}, got {objective!r}",
             source=table.source,
         )
     fault_sets = scope_fault_sets(dom, faults)

@@ -11,7 +11,7 @@ is **valid** when
 3. it uses no action that is currently being replaced (the guard that stops recursion from
    deadlocking, e.g. ``R -> L L L`` and ``L -> R R R`` calling each other for ever).
 
-Recursion modes (registry :data:`RECURSION_MODES`, selected by name):
+Recursion modes (:class:`RecursionMode`; registry :data:`RECURSION_MODES` of their rules):
 
 ``flat``
     Only candidates whose actions are all healthy. Never recurses, cheapest, always terminates.
@@ -40,30 +40,40 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import Any, NamedTuple
 
-from selfrepair.errors import ProblemError
-from selfrepair.geometry import Cell, Heading, Pose
+from selfrepair.caching import BoundedCache
+from selfrepair.errors import ProblemError, choice
+from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.robots.domain import Domain
 from selfrepair.tables.model import ReplacementTable
-from selfrepair.world.maze import Maze
 
 __all__ = [
     "DEFAULT_MAX_DEPTH",
     "RECURSION_MODES",
+    "FreeTest",
+    "RecursionMode",
     "Replacement",
     "find_replacement",
-    "flat_replacement_on_grid",
-    "free_cell_set",
+    "flat_replacement",
     "is_valid_replacement",
-    "prepare_grid_geometry",
+    "table_reach",
 ]
 
 DEFAULT_MAX_DEPTH = 2
 """Nested replacement levels allowed in ``guarded`` mode by default."""
 
 FreeTest = Callable[[tuple[Cell, ...]], bool]
-"""Whether every cell of a footprint is free (e.g. ``maze.all_free``)."""
+"""Whether every cell of a footprint is free (e.g. ``FreeGrid.all_free``)."""
+
+
+class RecursionMode(StrEnum):
+    """How a faulty action inside a candidate may itself be replaced (see the module docstring)."""
+
+    FLAT = "flat"
+    GUARDED = "guarded"
+    LAYERED = "layered"
 
 
 class Replacement(NamedTuple):
@@ -79,26 +89,58 @@ class Replacement(NamedTuple):
     action: Any
     candidate: tuple[Any, ...]
     actions: tuple[Any, ...]
-    index: int
+    position: int
     depth: int
     examined: int
-    end: Any
+    end: Pose
+
+
+RecurseRule = Callable[[Any, Any, int], bool]
+"""Whether faulty action ``b`` inside a candidate for ``a`` may be replaced at depth ``d``."""
+
+ModeRule = Callable[[Domain[Any, Any], int], RecurseRule]
+"""A recursion mode: given the domain and the depth bound, its recursion rule."""
+
+
+def _flat(domain: Domain[Any, Any], max_depth: int) -> RecurseRule:
+    """Never recurse: only candidates whose actions are all healthy."""
+    return lambda b, a, d: False
+
+
+def _guarded(domain: Domain[Any, Any], max_depth: int) -> RecurseRule:
+    """Recurse while shallower than ``max_depth`` (the guard set is carried by the search)."""
+    return lambda b, a, d: d < max_depth
+
+
+def _layered(domain: Domain[Any, Any], max_depth: int) -> RecurseRule:
+    """Recurse only into strictly lower-level actions, so recursion always terminates."""
+    level = domain.level
+    return lambda b, a, d: level(b) < level(a)
+
+
+RECURSION_MODES: dict[RecursionMode, ModeRule] = {
+    RecursionMode.FLAT: _flat,
+    RecursionMode.GUARDED: _guarded,
+    RecursionMode.LAYERED: _layered,
+}
+"""The rule of each recursion mode (see the module docstring for what each gives up)."""
 
 
 @dataclass(slots=True)
 class _Search:
-    domain: Domain[Any, Any]
+    """One look-up in progress (mutable: counts candidates and memoises sub-problems)."""
+
     table: ReplacementTable
     known: frozenset[Any]
     free: FreeTest
-    may_recurse: Callable[[Any, Any, int], bool]
+    may_recurse: RecurseRule
     examined: int = 0
-    memo: dict[tuple[Any, Any, frozenset[Any], int], Replacement | None] = field(
+    memo: dict[tuple[Any, Pose, frozenset[Any], int], Replacement | None] = field(
         default_factory=dict
     )
 
     def replace(
-        self, action: Any, state: Any, replacing: frozenset[Any], depth: int
+        self, action: Any, state: Pose, replacing: frozenset[Any], depth: int
     ) -> Replacement | None:
         """The first valid replacement; nested results are memoised per (action, state, guard set,
         depth), so a sub-problem met again in another candidate is not searched twice."""
@@ -110,25 +152,25 @@ class _Search:
         return found
 
     def _first(
-        self, action: Any, state: Any, replacing: frozenset[Any], depth: int
+        self, action: Any, state: Pose, replacing: frozenset[Any], depth: int
     ) -> Replacement | None:
-        for index, candidate in enumerate(self.table.candidates(action, self.known)):
+        for position, candidate in enumerate(self.table.candidates(action, self.known)):
             self.examined += 1
             found = self._expand(action, candidate, state, replacing, depth)
             if found is not None:
                 actions, end, nested = found
-                return Replacement(action, candidate, actions, index, nested, self.examined, end)
+                return Replacement(action, candidate, actions, position, nested, self.examined, end)
         return None
 
     def _expand(
         self,
         action: Any,
         candidate: tuple[Any, ...],
-        state: Any,
+        state: Pose,
         replacing: frozenset[Any],
         depth: int,
-    ) -> tuple[tuple[Any, ...], Any, int] | None:
-        dom = self.domain
+    ) -> tuple[tuple[Any, ...], Pose, int] | None:
+        dom = self.table.domain
         out: list[Any] = []
         nested = 0
         for b in candidate:
@@ -151,67 +193,35 @@ class _Search:
         return tuple(out), state, nested
 
 
-RecurseRule = Callable[[Any, Any, int], bool]
-"""Whether faulty action ``b`` inside a candidate for ``a`` may be replaced at depth ``d``."""
-
-ModeFn = Callable[[Domain[Any, Any], int], RecurseRule]
-"""A recursion mode: given the domain and the depth bound, its recursion rule."""
-
-
-def _flat(domain: Domain[Any, Any], max_depth: int) -> RecurseRule:
-    """Never recurse: only candidates whose actions are all healthy."""
-    return lambda b, a, d: False
-
-
-def _guarded(domain: Domain[Any, Any], max_depth: int) -> RecurseRule:
-    """Recurse while shallower than ``max_depth`` (the guard set is carried by the search)."""
-    return lambda b, a, d: d < max_depth
-
-
-def _layered(domain: Domain[Any, Any], max_depth: int) -> RecurseRule:
-    """Recurse only into strictly lower-level actions, so recursion always terminates."""
-    level = domain.level
-    return lambda b, a, d: level(b) < level(a)
-
-
-RECURSION_MODES: dict[str, ModeFn] = {"flat": _flat, "guarded": _guarded, "layered": _layered}
-"""Recursion modes by name (see the module docstring for what each gives up)."""
-
-
 def find_replacement(
-    domain: Domain[Any, Any],
     table: ReplacementTable,
     action: Any,
-    state: Any,
+    state: Pose,
     known_faults: Iterable[Any],
     free: FreeTest,
     *,
-    mode: str = "flat",
+    mode: RecursionMode | str = RecursionMode.FLAT,
     max_depth: int = DEFAULT_MAX_DEPTH,
 ) -> Replacement | None:
     """The first valid replacement for ``action`` at ``state``, or ``None`` when there is none.
 
-    ``free`` tells whether a footprint is executable (all cells free), e.g. ``maze.all_free``.
+    ``free`` tells whether a footprint is executable (all cells free), e.g. ``FreeGrid.all_free``.
     Every action of the returned ``actions`` is available under ``known_faults`` and executable in
     turn from ``state``; none of them is ``action``.
     """
-    fn = RECURSION_MODES.get(mode)
-    if fn is None:
-        raise ProblemError(
-            f"unknown recursion mode {mode!r}; expected one of {', '.join(RECURSION_MODES)}"
-        )
-    if table.domain != domain.name:
-        raise ProblemError(f"table is for domain {table.domain!r}, not {domain.name!r}")
+    rule = RECURSION_MODES[choice(RecursionMode, mode, "recursion mode")]
+    if action not in table.domain.action_set:
+        raise ProblemError(f"{action!r} is not an action of domain {table.domain.name!r}")
     if max_depth < 0:
         raise ProblemError(f"max_depth must be at least 0, got {max_depth}")
-    search = _Search(domain, table, frozenset(known_faults), free, fn(domain, max_depth))
+    search = _Search(table, frozenset(known_faults), free, rule(table.domain, max_depth))
     return search.replace(action, state, frozenset({action}), 0)
 
 
 def is_valid_replacement(
     domain: Domain[Any, Any],
     action: Any,
-    state: Any,
+    state: Pose,
     actions: Iterable[Any],
     known_faults: Iterable[Any],
     free: FreeTest,
@@ -230,24 +240,20 @@ def is_valid_replacement(
     return bool(state == target)
 
 
-# --- fast path: flat mode on a grid with pose states -------------------------------------------
+# --- fast path: flat mode on a free grid --------------------------------------------------------
 
 
 @dataclass(frozen=True, slots=True)
-class _Compiled:
-    """A healthy candidate with its geometry precomputed for each start heading: the cells it
-    sweeps as offsets from the start cell, and its end pose as an offset."""
+class _Geometry:
+    """A candidate's cells relative to its start cell, and its end pose relative to the start,
+    for each start heading."""
 
-    index: int
-    candidate: tuple[Any, ...]
     cells: tuple[tuple[Cell, ...], ...]
     ends: tuple[Pose, ...]
+    reach: int
 
 
-def _geometry(
-    domain: Domain[Any, Any], candidate: tuple[Any, ...]
-) -> tuple[tuple[tuple[Cell, ...], ...], tuple[Pose, ...]]:
-    """Swept-cell offsets and end pose of ``candidate`` for each start heading at the origin."""
+def _geometry(domain: Domain[Any, Any], candidate: tuple[Any, ...]) -> _Geometry:
     cells_by_heading = []
     ends = []
     for heading in Heading:
@@ -258,69 +264,96 @@ def _geometry(
             state = domain.apply(state, b)
         cells_by_heading.append(tuple(cells))
         ends.append(state)
-    return tuple(cells_by_heading), tuple(ends)
+    reach = max(max(abs(x), abs(y)) for per in cells_by_heading for x, y in per)
+    return _Geometry(tuple(cells_by_heading), tuple(ends), reach)
 
 
-def _candidate_geometry(
-    domain: Domain[Any, Any], table: ReplacementTable, candidate: tuple[Any, ...]
-) -> tuple[tuple[tuple[Cell, ...], ...], tuple[Pose, ...]]:
-    key = ("geometry", domain.name, candidate)
-    geometry = table.derived.get(key)
-    if geometry is None:
-        geometry = _geometry(domain, candidate)
-        table.derived[key] = geometry
-    return geometry
+_GEOMETRY: BoundedCache[tuple[Domain[Any, Any], tuple[Any, ...]], _Geometry] = BoundedCache(
+    "candidate geometry", 1 << 16
+)
 
 
-def prepare_grid_geometry(domain: Domain[Any, Any], table: ReplacementTable) -> None:
-    """Precompute (once per table object) the fault-independent geometry of every candidate, so
-    that a first look-up under new faults only filters candidates by availability."""
-    marker = ("geometry-ready", domain.name)
-    if marker in table.derived:
-        return
-    for entry in table.entries:
-        for candidate in entry.candidates:
-            _candidate_geometry(domain, table, candidate)
-    table.derived[marker] = True
+def _candidate_geometry(domain: Domain[Any, Any], candidate: tuple[Any, ...]) -> _Geometry:
+    return _GEOMETRY.get((domain, candidate), lambda: _geometry(domain, candidate))
+
+
+def table_reach(table: ReplacementTable) -> int:
+    """How many cells (Chebyshev) from its start cell any candidate of ``table`` reaches: the
+    margin a :class:`~selfrepair.geometry.FreeGrid` needs for :func:`flat_replacement`.
+
+    The first call for a table also computes the fault-independent geometry of every candidate,
+    so that a first look-up under new faults only filters candidates by availability.
+    """
+    return _REACH.get(table, lambda: _reach(table))
+
+
+def _reach(table: ReplacementTable) -> int:
+    return max(
+        (
+            _candidate_geometry(table.domain, c).reach
+            for entry in table.entries
+            for c in entry.candidates
+        ),
+        default=0,
+    )
+
+
+_REACH: BoundedCache[ReplacementTable, int] = BoundedCache("table reach", 64)
+
+
+@dataclass(frozen=True, slots=True)
+class _Compiled:
+    """A healthy candidate, ready to test: its cells as buffer offsets per heading."""
+
+    position: int
+    candidate: tuple[Any, ...]
+    offsets: tuple[tuple[int, ...], ...]
+    ends: tuple[Pose, ...]
 
 
 def _compile_flat(
-    domain: Domain[Any, Any], table: ReplacementTable, action: Any, known: frozenset[Any]
+    table: ReplacementTable, action: Any, known: frozenset[Any], stride: int
 ) -> tuple[_Compiled, ...]:
+    domain = table.domain
     compiled = []
-    for index, candidate in enumerate(table.candidates(action, known)):
+    for position, candidate in enumerate(table.candidates(action, known)):
         if action in candidate or not all(domain.available(b, known) for b in candidate):
             continue
-        cells, ends = _candidate_geometry(domain, table, candidate)
-        compiled.append(_Compiled(index, candidate, cells, ends))
+        geometry = _candidate_geometry(domain, candidate)
+        offsets = tuple(tuple(y * stride + x for x, y in cells) for cells in geometry.cells)
+        compiled.append(_Compiled(position, candidate, offsets, geometry.ends))
     return tuple(compiled)
 
 
-def flat_replacement_on_grid(
-    domain: Domain[Any, Any],
+_COMPILED: BoundedCache[
+    tuple[ReplacementTable, Any, frozenset[Any], int], tuple[_Compiled, ...]
+] = BoundedCache("compiled flat look-ups", 1 << 14)
+
+
+def flat_replacement(
     table: ReplacementTable,
     action: Any,
     pose: Pose,
     known_faults: frozenset[Any],
-    free_cells: frozenset[Cell],
+    grid: FreeGrid,
 ) -> Replacement | None:
-    """``find_replacement(..., mode="flat")`` for domains whose states are translation-invariant
-    :class:`~selfrepair.geometry.Pose` values (both shipped domains), at a fraction of the cost.
+    """``find_replacement(..., mode="flat")`` on a :class:`~selfrepair.geometry.FreeGrid`, at a
+    fraction of the cost.
 
-    Per (action, known faults) the healthy candidates are compiled once (memoised on the table)
-    into swept-cell offsets per heading; a look-up is then one dictionary access plus a set
-    membership test per swept cell. ``free_cells`` is :func:`free_cell_set` of the maze. Returns
-    the same replacement as the general flat search (a property test checks this).
+    Per (table, action, known faults, grid stride) the healthy candidates are compiled once into
+    buffer offsets per heading; a look-up is then a few byte reads per candidate. ``grid`` must
+    have a margin of at least :func:`table_reach` cells. Returns the same replacement as the
+    general flat search (a property test checks this).
     """
-    key = ("flat-grid", domain.name, action, known_faults)
-    compiled = table.derived.get(key)
-    if compiled is None:
-        compiled = _compile_flat(domain, table, action, known_faults)
-        table.derived[key] = compiled
-    x, y, heading = pose.x, pose.y, pose.heading
+    stride = grid.stride
+    key = (table, action, known_faults, stride)
+    compiled = _COMPILED.get(key, lambda: _compile_flat(table, action, known_faults, stride))
+    data = grid.data
+    base = grid.index(pose.x, pose.y)
+    heading = pose.heading
     for item in compiled:
-        for dx, dy in item.cells[heading]:
-            if (x + dx, y + dy) not in free_cells:
+        for offset in item.offsets[heading]:
+            if not data[base + offset]:
                 break
         else:
             end = item.ends[heading]
@@ -328,24 +361,9 @@ def flat_replacement_on_grid(
                 action,
                 item.candidate,
                 item.candidate,
-                item.index,
+                item.position,
                 0,
-                item.index + 1,
-                Pose(x + end.x, y + end.y, end.heading),
+                item.position + 1,
+                Pose(pose.x + end.x, pose.y + end.y, end.heading),
             )
     return None
-
-
-_FREE_SETS: dict[int, tuple[Maze, frozenset[Cell]]] = {}
-
-
-def free_cell_set(maze: Maze) -> frozenset[Cell]:
-    """The free cells of ``maze`` as a set, computed once per maze object (a few are kept)."""
-    hit = _FREE_SETS.get(id(maze))
-    if hit is not None and hit[0] is maze:
-        return hit[1]
-    cells = frozenset(maze.free_cells())
-    if len(_FREE_SETS) >= 8:
-        _FREE_SETS.pop(next(iter(_FREE_SETS)))
-    _FREE_SETS[id(maze)] = (maze, cells)
-    return cells

@@ -1,6 +1,14 @@
 """Repair strategies: what the executor does when the next action is unavailable.
 
-Each strategy is a plain function ``(RepairRequest) -> Repair`` in the registry :data:`STRATEGIES`:
+A strategy has a lifecycle. At the start of a mission the executor calls its factory with a
+:class:`MissionContext` (the robot, the goal, the table, and the world as functions: a planner, a
+free-cell test, an edge cost), and gets a :class:`Repairer`; then, each time the next action is
+faulty, it calls ``repairer.repair(request)`` with a :class:`RepairRequest` (the pose, the queued
+actions and the known faults) and splices the :class:`Repair` into its queue. A repairer may keep
+state between repairs (an incremental planner keeps its search); the built-in ones do not.
+
+Factories live in the registry :data:`STRATEGIES` (:func:`register_strategy` adds one,
+:func:`get_strategy` looks one up). The built-in strategies (:class:`StrategyName`):
 
 ``replan``
     The original baseline: plan from scratch from the current pose with the known faults.
@@ -13,59 +21,87 @@ Each strategy is a plain function ``(RepairRequest) -> Repair`` in the registry 
     faults and at most ``lookahead_expansions`` expansions; fall back to ``replacement``, then
     ``replan``. This is the original work's proposed extension ("replanning windows").
 
+This module is domain-generic and knows no maze: everything about the world comes in through the
+context as values and functions, so the same strategies run any robot on any map.
+
 :class:`RepairRequest` and :class:`Repair` are immutable ``NamedTuple`` values rather than frozen
 dataclasses: they are built on every repair, inside the measured latency, and a frozen dataclass
-costs several times more to construct.
-
-A :class:`Repair` says which queued actions to drop (``consumed``, counted from the faulty one) and
-what to run instead (``actions``); every action in it is available under the known faults, so the
-repaired queue starts with an executable action.
+costs several times more to construct. A :class:`Repair` says which queued actions to drop
+(``consumed``, counted from the faulty one) and what to run instead (``actions``); every action in
+it is available under the known faults, so the repaired queue starts with an executable action.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from enum import StrEnum
 from fractions import Fraction
-from typing import NamedTuple
+from typing import Any, NamedTuple, Protocol
 
-from selfrepair.errors import ProblemError
-from selfrepair.geometry import Cell, Heading, Pose
+from selfrepair.errors import ProblemError, choice
+from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.repair.replacement import (
     DEFAULT_MAX_DEPTH,
-    RECURSION_MODES,
+    FreeTest,
+    RecursionMode,
     find_replacement,
-    flat_replacement_on_grid,
-    free_cell_set,
+    flat_replacement,
 )
-from selfrepair.robots import four_wheel
-from selfrepair.robots.four_wheel import FOUR_WHEEL, Action, FaultSet
-from selfrepair.search.astar import PlanStatus
-from selfrepair.search.lattice import plan
-from selfrepair.search.problem import PlanningProblem, PlanResult
+from selfrepair.robots.domain import Domain, run_open
+from selfrepair.search.astar import PlanResult, PlanStatus
 from selfrepair.tables.fileformat import resolve_table
 from selfrepair.tables.model import ReplacementTable
-from selfrepair.world.maze import Maze
 
 __all__ = [
     "STRATEGIES",
-    "PlannerSettings",
+    "FunctionRepairer",
+    "MissionContext",
+    "PlanFn",
     "Repair",
     "RepairRequest",
+    "RepairSource",
+    "RepairStatus",
+    "Repairer",
+    "StrategyFactory",
+    "StrategyName",
     "StrategyOptions",
     "get_strategy",
+    "register_strategy",
+    "strategy_names",
+    "uses_table",
 ]
 
 
-@dataclass(frozen=True, slots=True)
-class PlannerSettings:
-    """How every planner call of a mission is made (initial plan, replans, lookahead windows)."""
+class StrategyName(StrEnum):
+    """The built-in strategies (the registry may hold more)."""
 
-    heuristic: str = "grid-distance"
-    backend: str = "auto"
-    clearance_weight: Fraction = Fraction(0)
-    clearance_radius: int = 2
-    max_expansions: int | None = None
+    REPLAN = "replan"
+    REPLACEMENT = "replacement"
+    LOOKAHEAD = "lookahead"
+
+
+class RepairStatus(StrEnum):
+    """How a repair ended: a repaired queue, no plan exists, or the planner's budget ran out."""
+
+    REPAIRED = "repaired"
+    STUCK = "stuck"
+    BUDGET_EXHAUSTED = "budget_exhausted"
+
+
+class RepairSource(StrEnum):
+    """Where the actions of a repair came from."""
+
+    REPLACEMENT = "replacement"
+    LOOKAHEAD = "lookahead"
+    REPLAN = "replan"
+
+
+_FROM_PLAN = {
+    PlanStatus.SOLVED: RepairStatus.REPAIRED,
+    PlanStatus.UNSOLVABLE: RepairStatus.STUCK,
+    PlanStatus.BUDGET_EXHAUSTED: RepairStatus.BUDGET_EXHAUSTED,
+}
 
 
 @dataclass(frozen=True, slots=True)
@@ -73,23 +109,21 @@ class StrategyOptions:
     """Options of the strategies.
 
     ``table`` is a bundled table name, a table file path or a :class:`ReplacementTable`;
-    ``recursion`` a name in :data:`selfrepair.repair.replacement.RECURSION_MODES`; ``max_depth`` the depth
-    bound of ``guarded`` mode; ``window`` the lookahead window (actions after the faulty one);
-    ``lookahead_expansions`` the budget of one window search.
+    ``recursion`` a :class:`~selfrepair.repair.replacement.RecursionMode` (or its name);
+    ``max_depth`` the depth bound of ``guarded`` mode; ``window`` the lookahead window (actions
+    after the faulty one); ``lookahead_expansions`` the budget of one window search.
     """
 
     table: str | ReplacementTable = "handwritten"
-    recursion: str = "flat"
+    recursion: RecursionMode = RecursionMode.FLAT
     max_depth: int = DEFAULT_MAX_DEPTH
     window: int = 3
     lookahead_expansions: int = 20_000
 
     def __post_init__(self) -> None:
-        if self.recursion not in RECURSION_MODES:
-            raise ProblemError(
-                f"unknown recursion mode {self.recursion!r}; expected one of "
-                f"{', '.join(RECURSION_MODES)}"
-            )
+        object.__setattr__(
+            self, "recursion", choice(RecursionMode, self.recursion, "recursion mode")
+        )
         if self.window < 0 or self.max_depth < 0 or self.lookahead_expansions < 1:
             raise ProblemError("window and max_depth must be >= 0 and lookahead_expansions >= 1")
 
@@ -104,55 +138,77 @@ class StrategyOptions:
         return str(self.table)
 
     def resolved_table(self) -> ReplacementTable:
-        """The table itself (loaded once per process for names and paths)."""
+        """The table itself (bundled tables and files are read once per process)."""
         if isinstance(self.table, ReplacementTable):
             return self.table
-        return _cached_table(str(self.table))
+        return resolve_table(str(self.table))
 
 
-_TABLES: dict[str, ReplacementTable] = {}
+PlanFn = Callable[[Pose, Cell, Heading | None, frozenset[Any], int | None], PlanResult]
+"""``plan(start, goal, goal_heading, known_faults, max_expansions)``: an exact plan on the
+mission's map with the mission's planner settings."""
 
 
-def _cached_table(spec: str) -> ReplacementTable:
-    table = _TABLES.get(spec)
-    if table is None:
-        table = resolve_table(spec)
-        _TABLES[spec] = table
-    return table
+@dataclass(frozen=True, slots=True)
+class MissionContext:
+    """What a strategy knows about its mission from the start.
 
-
-class RepairRequest(NamedTuple):
-    """Everything a strategy may look at: the world as the executor believes it to be.
-
-    ``queue`` holds the remaining actions, the faulty one first (a read-only sequence; the
-    executor passes a view, not a copy, so that building a request costs O(1)).
+    ``plan`` plans on the mission's map; ``replan_budget`` is the node budget of a full replan
+    (``None``: unbounded). ``free`` tests a footprint, ``grid`` is the same map as a
+    :class:`~selfrepair.geometry.FreeGrid` with a margin of at least the table's reach, and
+    ``cost(pose, action)`` is the exact cost of one step (duration plus clearance term). ``world``
+    is the map itself (a :class:`selfrepair.world.maze.Maze`), typed loosely so that this layer does
+    not depend on the world layer; only strategies that must read the map (e.g. to export it)
+    use it.
     """
 
-    maze: Maze
-    pose: Pose
-    queue: Sequence[Action]
-    known: FaultSet
+    domain: Domain[Any, Any]
     goal: Cell
     goal_heading: Heading | None
     options: StrategyOptions
-    planner: PlannerSettings
-    table: ReplacementTable | None = None
+    table: ReplacementTable | None
+    plan: PlanFn
+    replan_budget: int | None
+    free: FreeTest
+    grid: FreeGrid
+    cost: Callable[[Pose, Any], Fraction]
+    world: object = None
+
+    def at_goal(self, pose: Pose) -> bool:
+        """Whether ``pose`` satisfies the mission's goal."""
+        return pose.cell == self.goal and (
+            self.goal_heading is None or pose.heading == self.goal_heading
+        )
+
+
+class RepairRequest(NamedTuple):
+    """What a repairer looks at: the world as the executor believes it to be.
+
+    ``queue`` holds the remaining actions, the faulty one first (a read-only sequence; the
+    executor passes a view, not a copy, so that building a request costs O(1)). It is empty for
+    the defensive replan made when the queue runs out away from the goal. ``step`` is the number
+    of steps executed so far.
+    """
+
+    pose: Pose
+    queue: Sequence[Any]
+    known: frozenset[Any]
+    step: int = 0
 
 
 class Repair(NamedTuple):
     """A strategy's answer.
 
-    ``status``: ``"repaired"``, ``"stuck"`` (replan found no plan) or ``"budget_exhausted"``
-    (replan hit its budget). ``source`` is the step source of the new actions (``"replacement"``,
-    ``"lookahead"`` or ``"replan"``). ``attempts`` lists the strategies tried, in order.
-    ``replans`` counts full replans (0 or 1); ``candidate_length``/``depth`` describe a table
-    replacement; ``examined`` counts table candidates looked at; ``expansions`` the search nodes
-    expanded by lookahead and replan.
+    ``status`` says whether the queue was repaired; ``source`` is the step source of the new
+    actions. ``attempts`` lists the strategies tried, in order. ``replans`` counts full replans;
+    ``candidate_length``/``depth``/``candidate_index`` describe a table replacement (the index in
+    the looked-up candidate list); ``examined`` counts table candidates looked at;
+    ``expansions`` the search nodes expanded by planning.
     """
 
-    status: str
-    source: str
-    actions: tuple[Action, ...] = ()
+    status: RepairStatus
+    source: RepairSource
+    actions: tuple[Any, ...] = ()
     consumed: int = 0
     replans: int = 0
     candidate_length: int | None = None
@@ -160,146 +216,167 @@ class Repair(NamedTuple):
     examined: int = 0
     expansions: int = 0
     attempts: tuple[str, ...] = ()
+    candidate_index: int | None = None
 
 
-Strategy = Callable[[RepairRequest], Repair]
+class Repairer(Protocol):
+    """A strategy started for one mission: answers repair requests, possibly keeping state."""
+
+    def repair(self, request: RepairRequest) -> Repair:
+        """A repair for ``request`` (its first queued action is faulty)."""
+        ...
 
 
-def _plan_to(
-    request: RepairRequest, goal: Cell, heading: Heading | None, max_expansions: int | None
-) -> PlanResult:
-    """Plan from the robot's pose with the known faults and the mission's planner settings."""
-    settings = request.planner
-    problem = PlanningProblem(
-        request.maze,
-        request.pose,
-        goal,
-        heading,
-        request.known,
-        settings.clearance_weight,
-        settings.clearance_radius,
-    )
-    return plan(
-        problem,
-        heuristic=settings.heuristic,
-        max_expansions=max_expansions,
-        backend=settings.backend,
-    )
+StrategyFactory = Callable[[MissionContext], Repairer]
+"""Starts a strategy for one mission."""
 
 
-def replan(request: RepairRequest) -> Repair:
+@dataclass(frozen=True, slots=True)
+class FunctionRepairer:
+    """A stateless strategy: a plain function of (context, request)."""
+
+    context: MissionContext
+    fn: Callable[[MissionContext, RepairRequest], Repair]
+
+    def repair(self, request: RepairRequest) -> Repair:
+        """``fn(context, request)``."""
+        return self.fn(self.context, request)
+
+
+def stateless(fn: Callable[[MissionContext, RepairRequest], Repair]) -> StrategyFactory:
+    """The factory of a strategy that keeps no state between repairs."""
+
+    def start(context: MissionContext) -> Repairer:
+        return FunctionRepairer(context, fn)
+
+    start.__doc__ = fn.__doc__
+    return start
+
+
+# --- the built-in strategies ----------------------------------------------------------------------
+
+
+def replan(context: MissionContext, request: RepairRequest) -> Repair:
     """Plan from scratch from the current pose with the known faults."""
-    result = _plan_to(request, request.goal, request.goal_heading, request.planner.max_expansions)
-    status = {
-        PlanStatus.SOLVED: "repaired",
-        PlanStatus.UNSOLVABLE: "stuck",
-        PlanStatus.BUDGET_EXHAUSTED: "budget_exhausted",
-    }[result.status]
+    result = context.plan(
+        request.pose, context.goal, context.goal_heading, request.known, context.replan_budget
+    )
     return Repair(
-        status,
-        "replan",
+        _FROM_PLAN[result.status],
+        RepairSource.REPLAN,
         result.actions,
         len(request.queue),
         replans=1,
         expansions=result.expansions,
-        attempts=("replan",),
+        attempts=(StrategyName.REPLAN,),
     )
 
 
-def replacement(request: RepairRequest) -> Repair:
+def replacement(context: MissionContext, request: RepairRequest) -> Repair:
     """The first valid table candidate for the faulty action, else :func:`replan`."""
-    table = request.table if request.table is not None else request.options.resolved_table()
-    if request.options.recursion == "flat":
-        found = flat_replacement_on_grid(
-            FOUR_WHEEL,
-            table,
-            request.queue[0],
-            request.pose,
-            request.known,
-            free_cell_set(request.maze),
-        )
+    table = context.table
+    if table is None:
+        raise ProblemError("the replacement strategy needs a table")
+    action = request.queue[0]
+    options = context.options
+    if options.recursion is RecursionMode.FLAT:
+        found = flat_replacement(table, action, request.pose, request.known, context.grid)
     else:
         found = find_replacement(
-            FOUR_WHEEL,
             table,
-            request.queue[0],
+            action,
             request.pose,
             request.known,
-            request.maze.all_free,
-            mode=request.options.recursion,
-            max_depth=request.options.max_depth,
+            context.free,
+            mode=options.recursion,
+            max_depth=options.max_depth,
         )
     if found is not None:
         return Repair(
-            "repaired",
-            "replacement",
+            RepairStatus.REPAIRED,
+            RepairSource.REPLACEMENT,
             found.actions,
             1,
             candidate_length=len(found.actions),
             depth=found.depth,
             examined=found.examined,
-            attempts=("replacement",),
+            attempts=(StrategyName.REPLACEMENT,),
+            candidate_index=found.position,
         )
-    fallback = replan(request)
-    return _chain(fallback, ("replacement",), examined=_examined_all(table, request))
+    examined = len(table.candidates(action, request.known))
+    return _chain(replan(context, request), (StrategyName.REPLACEMENT,), examined=examined)
 
 
-def _examined_all(table: ReplacementTable, request: RepairRequest) -> int:
-    return len(table.candidates(request.queue[0], request.known))
-
-
-def lookahead(request: RepairRequest) -> Repair:
+def lookahead(context: MissionContext, request: RepairRequest) -> Repair:
     """Replace the window (faulty action + up to ``window`` more) by the cheapest sub-plan to the
     window's end pose; else :func:`replacement` (which falls back to :func:`replan`)."""
-    window = request.queue[: request.options.window + 1]
-    end = request.pose
-    for action in window:
-        end = four_wheel.step(end, action)[0]
-    result = _plan_to(request, end.cell, end.heading, request.options.lookahead_expansions)
+    window = request.queue[: context.options.window + 1]
+    end = run_open(context.domain, request.pose, window)
+    budget = context.options.lookahead_expansions
+    result = context.plan(request.pose, end.cell, end.heading, request.known, budget)
     if result.status is PlanStatus.SOLVED:
         return Repair(
-            "repaired",
-            "lookahead",
+            RepairStatus.REPAIRED,
+            RepairSource.LOOKAHEAD,
             result.actions,
             len(window),
             expansions=result.expansions,
-            attempts=("lookahead",),
+            attempts=(StrategyName.LOOKAHEAD,),
         )
-    fallback = replacement(request)
-    return _chain(fallback, ("lookahead",), expansions=result.expansions)
+    fallback = replacement(context, request)
+    return _chain(fallback, (StrategyName.LOOKAHEAD,), expansions=result.expansions)
 
 
 def _chain(
     repair: Repair, before: tuple[str, ...], *, examined: int = 0, expansions: int = 0
 ) -> Repair:
     """``repair`` with the strategies tried before it prepended and their work added."""
-    return Repair(
-        repair.status,
-        repair.source,
-        repair.actions,
-        repair.consumed,
-        repair.replans,
-        repair.candidate_length,
-        repair.depth,
-        repair.examined + examined,
-        repair.expansions + expansions,
-        before + repair.attempts,
+    return repair._replace(
+        examined=repair.examined + examined,
+        expansions=repair.expansions + expansions,
+        attempts=before + repair.attempts,
     )
 
 
-STRATEGIES: dict[str, Strategy] = {
-    "replan": replan,
-    "replacement": replacement,
-    "lookahead": lookahead,
+# --- the registry ---------------------------------------------------------------------------
+
+STRATEGIES: dict[str, StrategyFactory] = {
+    StrategyName.REPLAN: stateless(replan),
+    StrategyName.REPLACEMENT: stateless(replacement),
+    StrategyName.LOOKAHEAD: stateless(lookahead),
 }
-"""Repair strategies by name."""
+"""Strategy factories by name (built-ins and those registered so far)."""
+
+_TABLE_USERS: set[str] = {StrategyName.REPLACEMENT, StrategyName.LOOKAHEAD}
+"""Strategies that use a replacement table (the executor loads one only for these)."""
 
 
-def get_strategy(name: str) -> Strategy:
-    """The strategy called ``name``; unknown names raise :class:`ProblemError`."""
-    try:
-        return STRATEGIES[name]
-    except KeyError:
-        raise ProblemError(
-            f"unknown strategy {name!r}; expected one of {', '.join(STRATEGIES)}"
-        ) from None
+def register_strategy(
+    name: str, factory: StrategyFactory, *, replace: bool = False, uses_table: bool = False
+) -> None:
+    """Make ``factory`` available as strategy ``name`` (``uses_table``: the executor loads the
+    mission's table for it). A name in use raises :class:`ProblemError` unless ``replace``."""
+    if name in STRATEGIES and STRATEGIES[name] is not factory and not replace:
+        raise ProblemError(f"a strategy named {name!r} is already registered")
+    STRATEGIES[name] = factory
+    if uses_table:
+        _TABLE_USERS.add(name)
+
+
+def uses_table(name: str) -> bool:
+    """Whether strategy ``name`` needs the mission's replacement table."""
+    get_strategy(name)
+    return name in _TABLE_USERS
+
+
+def get_strategy(name: str) -> StrategyFactory:
+    """The factory of strategy ``name``; unknown names raise :class:`ProblemError`."""
+    factory = STRATEGIES.get(name)
+    if factory is not None:
+        return factory
+    raise ProblemError(f"unknown strategy {name!r}; expected one of {', '.join(strategy_names())}")
+
+
+def strategy_names() -> tuple[str, ...]:
+    """Every strategy name :func:`get_strategy` accepts, built-ins first."""
+    return tuple(STRATEGIES)

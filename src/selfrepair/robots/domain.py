@@ -84,10 +84,12 @@ class Domain(Generic[A, F]):
     footprint_connected: bool = False
     description: str = ""
     canonical: Pose = field(default=CANONICAL)
+    action_set: frozenset[A] = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         if not self.fault_sets:
             object.__setattr__(self, "fault_sets", singles_and_doubles(self.faults))
+        object.__setattr__(self, "action_set", frozenset(self.actions))
 
     def __repr__(self) -> str:
         return f"Domain({self.name!r}, {len(self.actions)} actions, {len(self.faults)} faults)"

@@ -2,9 +2,10 @@
 
 Planner, simulator, table generator and checkers all call this module; nobody re-derives motion.
 
-Coordinates and headings are those of :mod:`selfrepair.geometry`. An action is one command per wheel in the order
-front-left, front-right, rear-left, rear-right; each command is F (+1), S (0) or B (-1), written as
-a four-letter code such as ``"SFFF"``. With ``l = FL + RL`` and ``r = FR + RR``:
+Coordinates and headings are those of :mod:`selfrepair.geometry`. An action is one command per
+wheel in the order front-left, front-right, rear-left, rear-right; each command is F (+1), S (0)
+or B (-1), written as a four-letter code such as ``"SFFF"``. With ``l = FL + RL`` and
+``r = FR + RR``:
 
 =================  ==========  ==========================================  ==================
 condition          motion      pose change                                 duration (ticks)
@@ -326,8 +327,6 @@ def fastest_by_motion(faults: Iterable[Fault] = ()) -> dict[Motion, Action]:
         if current is None or _DURATION[action.code] < _DURATION[current.code]:
             best[m] = action
     return best
-
-
 
 
 # --- the domain value ---------------------------------------------------------------------------

@@ -1,15 +1,16 @@
-"""Numba kernels for the planners: the same A* as :mod:`selfrepair.search.astar`, compiled.
+"""Numba kernels for the planners: the same A* as :func:`selfrepair.search.astar.astar`, compiled.
 
 Optional: without numba, :data:`NUMBA` is false and the ``"auto"`` backend uses pure Python.
 Everything that defines the problem (motion geometry, durations, heuristic bounds) is computed in
-Python from :mod:`selfrepair.robots.four_wheel` and passed in as integer tables; the kernels only search.
+Python from the robot's :class:`~selfrepair.robots.domain.Domain` and passed in as integer tables;
+the kernels only search.
 
 Layout: the grid is padded by one wall cell on every side and flattened, so a cell is one integer
 ``p = (y + 1) * (width + 2) + (x + 1)`` and every motion is a fixed integer offset; a lattice
 state is ``4 * p + heading``. The open list is an indexed 4-ary heap keyed ``(f, h, counter)``
 per state (decrease-key instead of lazy deletion). It pops exactly the entries that the
-lazy-deletion heap of :func:`selfrepair.search.astar` pops, in the same order, so both backends
-return the same plan.
+lazy-deletion heap of :func:`selfrepair.search.astar.astar` pops, in the same order, so both
+backends return the same plan.
 
 Kernels are resumable: all search state lives in arrays, and a call stops after a given number of
 expansions so that the Python wrapper can look at the clock between calls.
@@ -19,22 +20,18 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Mapping
 from fractions import Fraction
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from selfrepair.geometry import Cell, Heading, Pose
-from selfrepair.robots import four_wheel
-from selfrepair.robots.four_wheel import Action, Motion
+from selfrepair.robots.domain import Domain
 from selfrepair.search.astar import PlanStatus
+from selfrepair.search.problem import CellBound, PlanningProblem
 from selfrepair.world.maze import Maze
-
-if TYPE_CHECKING:
-    from selfrepair.search.problem import CellBound, PlanningProblem
 
 try:
     from numba import njit
@@ -43,7 +40,7 @@ try:
 except ImportError:  # pragma: no cover - depends on the environment
     NUMBA = False
 
-    def njit(*args: Any, **kwargs: Any) -> Any:
+    def njit(*args: Any, **kwargs: Any) -> Any:  # type: ignore[no-redef]
         """Stand-in so the module imports without numba (its kernels are then never called)."""
         if args and callable(args[0]):
             return args[0]
@@ -67,9 +64,9 @@ _SIZE, _COUNTER, _EXPANSIONS, _FOUND = 0, 1, 2, 3
 @njit(cache=True, inline="always")
 def _less(f1: Any, h1: Any, c1: int, f2: Any, h2: Any, c2: int) -> bool:
     if f1 != f2:
-        return f1 < f2
+        return bool(f1 < f2)
     if h1 != h2:
-        return h1 < h2
+        return bool(h1 < h2)
     return c1 < c2
 
 
@@ -91,8 +88,17 @@ def _sift_up(
 
 @njit(cache=True, inline="always")
 def _push(
-    flag: Any, hn: Any, hf: Any, hh: Any, hc: Any, pos: Any, size: int,
-    node: int, f: Any, h: Any, c: int,
+    flag: Any,
+    hn: Any,
+    hf: Any,
+    hh: Any,
+    hc: Any,
+    pos: Any,
+    size: int,
+    node: int,
+    f: Any,
+    h: Any,
+    c: int,
 ) -> int:
     """Insert ``node`` (flag 0 to 1, open) or lower its key if open; returns the new size."""
     if flag[node] == 0:
@@ -127,7 +133,7 @@ def _pop(hn: Any, hf: Any, hh: Any, hc: Any, pos: Any, size: int) -> int:
             i = child
         hn[i], hf[i], hh[i], hc[i] = node, f, h, c
         pos[node] = i
-    return top
+    return int(top)
 
 
 # --- breadth-first distances ---------------------------------------------------------------
@@ -310,12 +316,13 @@ def _walk_back(parent: Any, start: int, goal: int) -> Any:
 
 @lru_cache(maxsize=64)
 def _motion_tables(
-    moves: tuple[Action, ...], pw: int, scale: int
+    domain: Domain[Any, Any], moves: tuple[Any, ...], pw: int, scale: int
 ) -> tuple[npt.NDArray[np.int64], ...]:
-    """Integer tables for every heading and motion, derived with :func:`four_wheel.step`.
+    """Integer tables for every heading and action, derived with ``domain.step``.
 
     ``dcell``/``nhead``: end-cell offset and end heading; ``dur``: scaled duration; ``need``: the
-    neighbourhood bits of the swept cells; ``nsw``/``sw``: the swept cells as offsets.
+    neighbourhood bits of the footprint cells; ``nsw``/``sw``: the footprint cells as offsets.
+    Raises :class:`OverflowError` for an action that reaches beyond the 3x3 neighbourhood.
     """
     n = len(moves)
     dcell = np.zeros((4, n), dtype=np.int64)
@@ -323,21 +330,23 @@ def _motion_tables(
     dur = np.zeros((4, n), dtype=np.int64)
     need = np.zeros((4, n), dtype=np.int64)
     nsw = np.zeros((4, n), dtype=np.int64)
-    width = max([len(four_wheel.swept_cells(Pose(0, 0, Heading.N), a)) for a in moves] or [1])
+    width = max([len(domain.footprint(Pose(0, 0, h), a)) for a in moves for h in Heading] or [1])
     sw = np.zeros((4, n, width), dtype=np.int64)
     for heading in Heading:
         for k, action in enumerate(moves):
-            end, swept, duration = four_wheel.step(Pose(0, 0, heading), action)
+            end, swept, duration = domain.step(Pose(0, 0, heading), action)
+            if max(abs(end.x), abs(end.y)) > 1:
+                raise OverflowError("an action moves beyond the 3x3 neighbourhood")
             dcell[heading, k] = end.y * pw + end.x
             nhead[heading, k] = int(end.heading)
-            scaled = duration * scale
+            scaled = Fraction(duration) * scale
             if scaled.denominator != 1:
                 raise OverflowError(f"duration {duration} is not a multiple of 1/{scale}")
             dur[heading, k] = scaled.numerator
             nsw[heading, k] = len(swept)
             for j, (x, y) in enumerate(swept):
                 if max(abs(x), abs(y)) > 1:
-                    raise OverflowError("a motion sweeps beyond the 3x3 neighbourhood")
+                    raise OverflowError("an action sweeps beyond the 3x3 neighbourhood")
                 sw[heading, k, j] = y * pw + x
                 need[heading, k] |= 1 << (3 * (y + 1) + x + 1)
     tables = (dcell, nhead, dur, need, nsw, sw)
@@ -368,13 +377,14 @@ _LATTICE_BUFFERS = (
 
 def plan_lattice(
     problem: PlanningProblem,
-    motions: Mapping[Motion, Action],
+    moves: tuple[Any, ...],
     bound: CellBound,
     scale: int,
     max_expansions: int | None,
     deadline_ns: int | None,
-) -> tuple[PlanStatus, tuple[Action, ...], tuple[Pose, ...], int, int]:
-    """Run the lattice search; the arguments mean what they mean in :mod:`selfrepair.search.lattice`.
+) -> tuple[PlanStatus, tuple[Any, ...], tuple[Pose, ...], int, int]:
+    """Run the lattice search over ``moves``; the arguments mean what they mean in
+    :mod:`selfrepair.search.lattice`.
 
     Returns status, actions, poses, the scaled integer cost and the number of expansions. Raises
     :class:`OverflowError` when the problem does not fit the integer kernel (the caller then uses
@@ -384,11 +394,11 @@ def plan_lattice(
     pw = maze.width + 2
     n_states = 4 * (maze.height + 2) * pw
     weight = Fraction(problem.clearance_weight)
-    wmul = 3 * weight.numerator * (scale // (3 * weight.denominator))
+    wmul = weight.numerator * (scale // weight.denominator)
     pen = _padded_penalty(maze, problem.clearance_radius) if wmul else _NO_PENALTY
     hdist = bound.padded.ravel()
     rate = bound.rate * scale
-    tables = _motion_tables(tuple(motions.values()), pw, scale)
+    tables = _motion_tables(problem.domain, moves, pw, scale)
     _check_int64(tables[2], pen, wmul, hdist, rate, n_states)
     start_cell = (problem.start.y + 1) * pw + problem.start.x + 1
     start = 4 * start_cell + int(problem.start.heading)
@@ -407,8 +417,9 @@ def plan_lattice(
     nbr = _neighbourhoods(maze)
 
     def run(limit: int) -> int:
+        kernel: Any = _lattice  # a numba dispatcher: typed loosely
         return int(
-            _lattice(
+            kernel(
                 nbr, pen, hdist, rate.numerator, rate.denominator, wmul, *tables,
                 goal_cell, goal_head, limit,
                 flag, g, parent, pmove, pos, hn, hf, hh, hc, scal,
@@ -420,7 +431,6 @@ def plan_lattice(
     if status is not PlanStatus.SOLVED:
         return status, (), (), 0, expansions
     path = _walk_back(parent, start, int(scal[_FOUND]))
-    moves = tuple(motions.values())
     actions = tuple(moves[k] for k in pmove[path[1:]].tolist())
     cells, headings = (path >> 2) - pw - 1, (path & 3).tolist()
     xs, ys = (cells % pw).tolist(), (cells // pw).tolist()
@@ -580,5 +590,3 @@ def grid_search(
     cells = _walk_back(parent, s, goal_p) - pw - 1
     xs, ys = (cells % pw).tolist(), (cells // pw).tolist()
     return status, tuple(zip(xs, ys, strict=True)), expansions
-
-

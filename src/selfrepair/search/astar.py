@@ -1,8 +1,9 @@
 """A small generic A* core: binary heap, deterministic tie-breaking, node and time budgets.
 
-The pure-Python planners (:mod:`selfrepair.search.lattice` on the robot lattice, :mod:`selfrepair.search.grid`
-on plain grids) both run on :func:`astar`; the numba kernels in :mod:`selfrepair.search._kernels`
-implement the same loop with the same keys, so both backends pop nodes in the same order.
+The pure-Python planners (:mod:`selfrepair.search.lattice` on the robot lattice,
+:mod:`selfrepair.search.grid` on plain grids) both run on :func:`astar`; the numba kernels in
+:mod:`selfrepair.search._kernels` implement the same loop with the same keys, so both backends
+pop nodes in the same order.
 
 Heap entries are ``(f, h, counter, node)``: lowest ``f = g + h`` first, among equal ``f`` the node
 nearer the goal (lowest ``h``), and among those the one pushed first (``counter``; networkx's
@@ -23,11 +24,15 @@ import time
 from collections.abc import Callable, Hashable, Iterable
 from dataclasses import dataclass
 from enum import Enum
-from typing import Generic, TypeVar
+from fractions import Fraction
+from typing import Any, Generic, TypeVar
+
+from selfrepair.geometry import Pose
 
 __all__ = [
     "BACKENDS",
     "MAX_TIME_LIMIT",
+    "PlanResult",
     "PlanStatus",
     "SearchOutcome",
     "astar",
@@ -147,3 +152,22 @@ def _walk_back(goal: N, parent: dict[N, tuple[N, L]]) -> tuple[tuple[N, ...], tu
     nodes.reverse()
     labels.reverse()
     return tuple(nodes), tuple(labels)
+
+
+@dataclass(frozen=True, slots=True)
+class PlanResult:
+    """The outcome of :func:`plan`.
+
+    ``actions`` are the domain's actions (the fastest available one of each motion class), ``poses``
+    the ``len(actions) + 1`` poses from start to goal; both are empty unless solved. ``cost`` is
+    duration plus clearance term (``None`` unless solved), ``duration`` the total ticks (0 unless
+    solved). ``expansions`` counts closed nodes; ``wall_time_ns`` is the wall time of the call.
+    """
+
+    status: PlanStatus
+    actions: tuple[Any, ...]
+    poses: tuple[Pose, ...]
+    cost: Fraction | None
+    duration: Fraction
+    expansions: int
+    wall_time_ns: int

@@ -14,7 +14,8 @@ __all__ = ["BACKENDS", "numba_available", "use_numba"]
 
 
 def numba_available() -> bool:
-    """Whether the compiled kernels of :mod:`selfrepair.search._kernels` can be used (numba importable)."""
+    """Whether the compiled kernels of :mod:`selfrepair.search._kernels` can be used (numba is
+    importable)."""
     from selfrepair.search import _kernels
 
     return _kernels.NUMBA

@@ -107,7 +107,7 @@ def _grid_python(
     free = (~maze.walls).tolist()
 
     def is_free(x: int, y: int) -> bool:
-        return 0 <= x < w and 0 <= y < h and free[y][x]
+        return 0 <= x < w and 0 <= y < h and bool(free[y][x])
 
     def successors(cell: Cell) -> list[tuple[Cell, float, None]]:
         x, y = cell

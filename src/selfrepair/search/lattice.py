@@ -1,15 +1,15 @@
-"""Exact A* for the four-wheel robot on its pose lattice ``(x, y, heading)``.
+"""Exact A* on a robot's pose lattice ``(x, y, heading)``, for any :class:`Domain`.
 
 Search space and pruning
     A node is a :class:`~selfrepair.geometry.Pose`. Only actions available under the faults the
-    planner knows about are used, and among those with the same motion only the fastest
-    (:func:`selfrepair.robots.four_wheel.fastest_by_motion`): every other one has the same effect and is no
-    shorter, so it can never improve a plan. WAIT is never useful (it costs time and changes
-    nothing). The branching factor is therefore at most eight. A plan reports the concrete wheel
-    action chosen for each step.
+    planner knows about are used, and of each motion class only the fastest
+    (:func:`selfrepair.robots.domain.primitive_by_motion`): every other one has the same effect
+    and is no shorter, so it can never improve a plan. Actions that change nothing (the four-wheel
+    robot's WAIT) are never useful and are left out. For the four-wheel robot the branching
+    factor is therefore at most eight. A plan reports the concrete action chosen for each step.
 
 Cost (exact formula)
-    For an action started at ``pose``, with swept cells ``C`` (start cell included)::
+    For an action started at ``pose``, with footprint cells ``C`` (start cell included)::
 
         cost = duration + clearance_weight * sum(max(0, clearance_radius - clearance(c)) for c in C)
 
@@ -21,47 +21,53 @@ Cost (exact formula)
 
 Heuristics (:data:`HEURISTICS`), all admissible and consistent
     Each is ``h(pose) = rate * d(pose.cell)`` with ``rate`` the least number of ticks per cell of
-    Manhattan progress over the available motions (``min duration / (|forward| + |lateral|)``;
-    1 for a healthy robot). ``"zero"`` uses ``d = 0``; ``"manhattan"`` the Manhattan distance to the
-    goal cell; ``"grid-distance"`` the exact 4-connected BFS distance to the goal cell on the maze
-    (cells that cannot reach the goal are pruned). Consistency: an action whose endpoints are
-    ``a`` and ``b`` with Manhattan displacement ``m`` sweeps a 4-connected free path from ``a`` to
-    ``b`` of length ``m`` (a straight move is one step; an arc sweeps ``a``, the cell ahead, and
-    ``b`` beside it), so ``d(a) <= m + d(b)`` for both distances, and
-    ``cost >= duration >= rate * m >= rate * (d(a) - d(b))``. Turns have ``m = 0`` and leave ``d``
-    unchanged. The clearance term is non-negative, so the bound holds for any weight, and
-    ``d(goal) = 0``. Internally costs are scaled to integers (``S = 3 * weight denominator``) and
-    ``h`` is rounded down, which keeps it consistent because edge costs are integers.
+    Manhattan progress over the available actions, from any heading (:func:`progress_rate`; 1 for a
+    healthy four-wheel robot). ``"zero"`` uses ``d = 0``; ``"manhattan"`` the Manhattan distance to
+    the goal cell; ``"grid-distance"`` the exact 4-connected BFS distance to the goal cell on the
+    maze (cells that cannot reach the goal are pruned). Consistency: an action whose endpoints are
+    ``a`` and ``b`` with Manhattan displacement ``m`` changes the Manhattan distance by at most
+    ``m``, so ``cost >= duration >= rate * m >= rate * (d(a) - d(b))``. For the BFS distance this
+    needs one more property of the domain, ``Domain.footprint_connected``: the footprint holds a
+    4-connected free path from ``a`` to ``b`` of length ``m`` (true for the four-wheel robot: a
+    straight move is one step; an arc sweeps ``a``, the cell ahead, and ``b`` beside it). For a
+    domain without it ``"grid-distance"`` is refused. The clearance term is non-negative, so the
+    bound holds for any weight, and ``d(goal) = 0``. Internally costs are scaled to integers
+    (``S = lcm of the duration denominators * weight denominator``) and ``h`` is rounded down,
+    which keeps it consistent because edge costs are integers.
 
 Determinism
-    Heap keys ``(f, h, counter)`` and a fixed successor order (that of ``fastest_by_motion``), in
-    the pure-Python backend (the reference, on :func:`selfrepair.search.astar` with
-    :func:`selfrepair.robots.four_wheel.step`) and in the numba backend, which therefore return the same plan.
+    Heap keys ``(f, h, counter)`` and a fixed successor order (that of ``primitive_by_motion``), in
+    the pure-Python backend (the reference, on :func:`selfrepair.search.astar.astar` with
+    ``Domain.step``) and in the numba backend, which therefore return the same plan. The kernel
+    takes any domain whose actions stay within the 3x3 cells around the robot; for others the
+    exact Python search runs.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections import deque
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import replace
 from fractions import Fraction
-from typing import Protocol
+from functools import lru_cache
+from typing import Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
 
+from selfrepair.caching import BoundedCache
 from selfrepair.errors import ProblemError
-from selfrepair.geometry import Cell, Pose
+from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.limits import MAX_CLEARANCE_WEIGHT
-from selfrepair.robots import four_wheel
-from selfrepair.robots.four_wheel import Action, FaultSet, Motion, MotionKind
-from selfrepair.search.astar import PlanStatus, astar, deadline_from
+from selfrepair.robots.domain import Domain, primitive_by_motion
+from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.search.astar import PlanResult, PlanStatus, astar, deadline_from
 from selfrepair.search.backend import BACKENDS, numba_available, use_numba
 from selfrepair.search.problem import (
     CellBound,
     PlanningProblem,
-    PlanResult,
     check_search_inputs,
     with_border,
 )
@@ -70,66 +76,122 @@ from selfrepair.world.maze import Maze, clearance_map, clearance_penalties
 __all__ = [
     "BACKENDS",
     "HEURISTICS",
+    "MAX_CLEARANCE_RADIUS",
     "CellBound",
     "PlanResult",
     "PlanStatus",
     "PlanningProblem",
     "action_cost",
     "bfs_distances",
+    "cost_scale",
     "numba_available",
     "plan",
     "plan_cost",
-    "planning_motions",
+    "planning_actions",
+    "progress_rate",
 ]
 
 
-_DURATION_UNITS = {a.code: int(a.duration * four_wheel.TICKS_DENOMINATOR) for a in four_wheel.ACTIONS}
-"""Each action's duration in units of ``1 / TICKS_DENOMINATOR`` ticks (exact integers)."""
-
-
 class HeuristicFn(Protocol):
-    """A heuristic builder: ``(maze, goal, motions, *, backend) -> CellBound``."""
+    """A heuristic builder: ``(maze, goal, domain, actions, *, backend) -> CellBound``."""
 
     def __call__(
-        self, maze: Maze, goal: Cell, motions: Mapping[Motion, Action], *, backend: str = "auto"
+        self,
+        maze: Maze,
+        goal: Cell,
+        domain: Domain[Any, Any],
+        actions: Sequence[Any],
+        *,
+        backend: str = "auto",
     ) -> CellBound: ...
 
 
-def planning_motions(faults: FaultSet) -> dict[Motion, Action]:
-    """The fastest available action of each motion except WAIT, in ``fastest_by_motion`` order."""
-    return {
-        m: a for m, a in four_wheel.fastest_by_motion(faults).items() if m.kind is not MotionKind.WAIT
-    }
+def planning_actions(domain: Domain[Any, Any], faults: frozenset[Any]) -> tuple[Any, ...]:
+    """The actions the planner expands under ``faults``: the fastest available one of each motion
+    class (:func:`~selfrepair.robots.domain.primitive_by_motion` order), without actions that
+    leave the pose unchanged (computed once per domain and fault set)."""
+    return _ACTIONS.get((domain, faults), lambda: _planning_actions(domain, faults))
 
 
-def progress_rate(motions: Mapping[Motion, Action]) -> Fraction:
-    """Least ticks per cell of Manhattan displacement over ``motions`` (0 if none moves)."""
-    rates = [
-        a.duration / (abs(m.forward) + abs(m.lateral))
-        for m, a in motions.items()
-        if abs(m.forward) + abs(m.lateral) > 0
-    ]
+def _planning_actions(domain: Domain[Any, Any], faults: frozenset[Any]) -> tuple[Any, ...]:
+    return tuple(a for a in primitive_by_motion(domain, faults).values() if not _no_op(domain, a))
+
+
+_ACTIONS: BoundedCache[tuple[Domain[Any, Any], frozenset[Any]], tuple[Any, ...]] = BoundedCache(
+    "planner actions per fault set", 1024
+)
+
+
+def _no_op(domain: Domain[Any, Any], action: Any) -> bool:
+    return all(domain.apply(Pose(0, 0, h), action) == Pose(0, 0, h) for h in Heading)
+
+
+def progress_rate(domain: Domain[Any, Any], actions: Sequence[Any]) -> Fraction:
+    """Least ticks per cell of Manhattan displacement over ``actions`` from any heading (0 if none
+    moves)."""
+    return _RATES.get((domain, tuple(actions)), lambda: _progress_rate(domain, actions))
+
+
+_RATES: BoundedCache[tuple[Domain[Any, Any], tuple[Any, ...]], Fraction] = BoundedCache(
+    "planner progress rates", 1024
+)
+
+
+def _progress_rate(domain: Domain[Any, Any], actions: Sequence[Any]) -> Fraction:
+    rates = []
+    for action in actions:
+        for heading in Heading:
+            end = domain.apply(Pose(0, 0, heading), action)
+            moved = abs(end.x) + abs(end.y)
+            if moved:
+                rates.append(Fraction(domain.duration(action)) / moved)
     return min(rates, default=Fraction(0))
 
 
+def cost_scale(domain: Domain[Any, Any], weight: Fraction) -> int:
+    """The factor that makes every edge cost an integer: the lcm of the duration denominators
+    times the clearance weight's denominator."""
+    return _duration_scale(domain) * weight.denominator
+
+
+@lru_cache(maxsize=64)
+def _duration_scale(domain: Domain[Any, Any]) -> int:
+    return math.lcm(*(Fraction(domain.duration(a)).denominator for a in domain.actions))
+
+
 def _zero_bound(
-    maze: Maze, goal: Cell, motions: Mapping[Motion, Action], *, backend: str = "auto"
+    maze: Maze,
+    goal: Cell,
+    domain: Domain[Any, Any],
+    actions: Sequence[Any],
+    *,
+    backend: str = "auto",
 ) -> CellBound:
     return CellBound(with_border(np.zeros(maze.walls.shape, dtype=np.int64)), Fraction(0))
 
 
 def _manhattan_bound(
-    maze: Maze, goal: Cell, motions: Mapping[Motion, Action], *, backend: str = "auto"
+    maze: Maze,
+    goal: Cell,
+    domain: Domain[Any, Any],
+    actions: Sequence[Any],
+    *,
+    backend: str = "auto",
 ) -> CellBound:
     ys, xs = np.indices(maze.walls.shape, dtype=np.int64)
     distance = np.abs(xs - goal[0]) + np.abs(ys - goal[1])
-    return CellBound(with_border(distance), progress_rate(motions))
+    return CellBound(with_border(distance), progress_rate(domain, actions))
 
 
 def _grid_distance_bound(
-    maze: Maze, goal: Cell, motions: Mapping[Motion, Action], *, backend: str = "auto"
+    maze: Maze,
+    goal: Cell,
+    domain: Domain[Any, Any],
+    actions: Sequence[Any],
+    *,
+    backend: str = "auto",
 ) -> CellBound:
-    return CellBound(_bfs_padded(maze, goal, backend), progress_rate(motions))
+    return CellBound(_bfs_padded(maze, goal, backend), progress_rate(domain, actions))
 
 
 HEURISTICS: dict[str, HeuristicFn] = {
@@ -137,7 +199,11 @@ HEURISTICS: dict[str, HeuristicFn] = {
     "manhattan": _manhattan_bound,
     "grid-distance": _grid_distance_bound,
 }
-"""Heuristic registry: name -> function ``(maze, goal, motions, *, backend) -> CellBound``."""
+"""Heuristic registry: name -> function ``(maze, goal, domain, actions, *, backend) ->
+CellBound``."""
+
+NEEDS_CONNECTED_FOOTPRINTS = frozenset({"grid-distance"})
+"""Heuristics that are admissible only for domains with ``footprint_connected``."""
 
 
 def bfs_distances(maze: Maze, goal: Cell, *, backend: str = "auto") -> npt.NDArray[np.int32]:
@@ -167,50 +233,60 @@ def _bfs_padded(maze: Maze, goal: Cell, backend: str) -> npt.NDArray[np.int32]:
 
 
 def action_cost(
-    maze: Maze, pose: Pose, action: Action, *, clearance_weight: Fraction, clearance_radius: int
+    maze: Maze,
+    pose: Pose,
+    action: Any,
+    *,
+    clearance_weight: Fraction,
+    clearance_radius: int,
+    domain: Domain[Any, Any] = FOUR_WHEEL,
 ) -> Fraction:
-    """The exact cost of ``action`` at ``pose`` (see the module docstring for the formula).
+    """The exact cost of ``action`` at ``pose`` (see the module docstring for the formula), for
+    the four-wheel robot unless ``domain`` is given.
 
-    Does not check that the swept cells are free; :func:`plan_cost` does.
+    Does not check that the footprint cells are free; :func:`plan_cost` does.
     """
-    clearance = clearance_map(maze)
-    cost = action.duration
+    cost = Fraction(domain.duration(action))
     if clearance_weight:
+        clearance = clearance_map(maze)
         penalty = sum(
             max(0, clearance_radius - int(clearance[y, x]))
             if maze.in_bounds(x, y)
             else clearance_radius
-            for x, y in four_wheel.swept_cells(pose, action)
+            for x, y in domain.footprint(pose, action)
         )
         cost += clearance_weight * penalty
-    return Fraction(cost)
+    return cost
 
 
-def plan_cost(problem: PlanningProblem, actions: Sequence[Action]) -> Fraction:
+def plan_cost(problem: PlanningProblem, actions: Sequence[Any]) -> Fraction:
     """Re-simulate ``actions`` from ``problem.start`` and return their total cost.
 
     Raises :class:`ProblemError` if an action is unavailable under ``problem.faults``, sweeps a wall
     or leaves the grid, or if the plan does not end at the goal.
     """
+    domain = problem.domain
     pose = problem.start
     total = Fraction(0)
     for index, action in enumerate(actions):
-        if not four_wheel.available(action, problem.faults):
-            raise ProblemError(f"action {index} ({action}) is not available under the faults")
-        end, swept, _ = four_wheel.step(pose, action)
+        name = domain.format_action(action)
+        if not domain.available(action, problem.faults):
+            raise ProblemError(f"action {index} ({name}) is not available under the faults")
+        end, swept, _ = domain.step(pose, action)
         if not problem.maze.all_free(swept):
             raise ProblemError(
-                f"action {index} ({action}) at {pose} sweeps a wall or leaves the grid"
+                f"action {index} ({name}) at {pose} sweeps a wall or leaves the grid"
             )
         total += action_cost(
             problem.maze,
             pose,
             action,
-            clearance_weight=problem.clearance_weight,
+            clearance_weight=Fraction(problem.clearance_weight),
             clearance_radius=problem.clearance_radius,
+            domain=domain,
         )
         pose = end
-    if not _at_goal(problem, pose):
+    if not problem.at_goal(pose):
         raise ProblemError(f"the plan ends at {pose}, not at the goal")
     return total
 
@@ -227,77 +303,72 @@ def plan(
 
     ``max_expansions`` and ``time_limit`` (seconds) bound the search; hitting either gives
     :attr:`PlanStatus.BUDGET_EXHAUSTED`. Raises :class:`ProblemError` for a start or goal outside
-    the grid or in a wall, an unknown heuristic or backend, a negative budget, a weight outside
-    ``[0, MAX_CLEARANCE_WEIGHT]`` (:mod:`selfrepair.limits`) or a radius outside
-    ``[0, MAX_CLEARANCE_RADIUS]``.
+    the grid or in a wall, an unknown heuristic or backend, a heuristic that is not admissible for
+    the domain, a negative budget, a weight outside ``[0, MAX_CLEARANCE_WEIGHT]``
+    (:mod:`selfrepair.limits`) or a radius outside ``[0, MAX_CLEARANCE_RADIUS]``.
     """
     t0 = time.perf_counter_ns()
     _validate(problem, heuristic, max_expansions, time_limit, backend)
     if not isinstance(problem.clearance_weight, Fraction):
         problem = replace(problem, clearance_weight=Fraction(problem.clearance_weight))
-    if _at_goal(problem, problem.start):
+    if problem.at_goal(problem.start):
         return PlanResult(
             PlanStatus.SOLVED, (), (problem.start,), Fraction(0), Fraction(0), 0, _since(t0)
         )
-    motions = planning_motions(problem.faults)
+    domain = problem.domain
+    actions = planning_actions(domain, problem.faults)
     fast = use_numba(backend)
     bound = HEURISTICS[heuristic](
-        problem.maze, problem.goal, motions, backend="numba" if fast else "python"
+        problem.maze, problem.goal, domain, actions, backend="numba" if fast else "python"
     )
-    scale = 3 * problem.clearance_weight.denominator
+    scale = cost_scale(domain, Fraction(problem.clearance_weight))
     deadline = deadline_from(time_limit, t0)
     found: _Found | None = None
     if fast:
         from selfrepair.search import _kernels
 
         try:
-            found = _kernels.plan_lattice(problem, motions, bound, scale, max_expansions, deadline)
-        except OverflowError:  # scaled costs beyond int64: the exact Python search still works
+            found = _kernels.plan_lattice(problem, actions, bound, scale, max_expansions, deadline)
+        except OverflowError:  # beyond int64 or the 3x3 neighbourhood: the Python search works
             found = None
     if found is None:
-        found = _plan_python(problem, motions, bound, scale, max_expansions, deadline)
-    status, actions, poses, cost_scaled, expansions = found
+        found = _plan_python(problem, actions, bound, scale, max_expansions, deadline)
+    status, steps, poses, cost_scaled, expansions = found
     if status is not PlanStatus.SOLVED:
         return PlanResult(status, (), (), None, Fraction(0), expansions, _since(t0))
-    total = Fraction(sum(_DURATION_UNITS[a.code] for a in actions), four_wheel.TICKS_DENOMINATOR)
+    total = sum((Fraction(domain.duration(a)) for a in steps), Fraction(0))
     return PlanResult(
-        status,
-        actions,
-        poses,
-        Fraction(cost_scaled, scale),
-        total,
-        expansions,
-        _since(t0),
+        status, steps, poses, Fraction(cost_scaled, scale), total, expansions, _since(t0)
     )
 
 
-_Found = tuple[PlanStatus, tuple[Action, ...], tuple[Pose, ...], int, int]
+_Found = tuple[PlanStatus, tuple[Any, ...], tuple[Pose, ...], int, int]
 
 
 def _plan_python(
     problem: PlanningProblem,
-    motions: Mapping[Motion, Action],
+    actions: Sequence[Any],
     bound: CellBound,
     scale: int,
     max_expansions: int | None,
     deadline_ns: int | None,
 ) -> _Found:
-    """The reference search: poses as nodes, :func:`four_wheel.step` for every successor."""
+    """The reference search: poses as nodes, ``Domain.step`` for every successor."""
     maze = problem.maze
+    domain = problem.domain
     weight = problem.clearance_weight
     penalty = clearance_penalties(maze, problem.clearance_radius).tolist()
     distance = bound.distance.tolist()
     rate = bound.rate * scale
-    moves = tuple(motions.values())
 
     def heuristic(pose: Pose) -> int | None:
         d = distance[pose.y][pose.x]
         return None if d < 0 else d * rate.numerator // rate.denominator
 
-    def successors(pose: Pose) -> list[tuple[Pose, int, Action]]:
+    def successors(pose: Pose) -> list[tuple[Pose, int, Any]]:
         out = []
-        for action in moves:
-            end, swept, dur = four_wheel.step(pose, action)
+        for action in actions:
+            end, swept, dur = domain.step(pose, action)
             if maze.all_free(swept):
                 cost = dur + weight * sum(penalty[y][x] for x, y in swept)
                 scaled = cost * scale
@@ -308,18 +379,12 @@ def _plan_python(
         problem.start,
         successors=successors,
         heuristic=heuristic,
-        is_goal=lambda pose: _at_goal(problem, pose),
+        is_goal=problem.at_goal,
         max_expansions=max_expansions,
         deadline_ns=deadline_ns,
     )
     cost = int(outcome.cost) if outcome.cost is not None else 0
     return outcome.status, outcome.labels, outcome.path, cost, outcome.expansions
-
-
-def _at_goal(problem: PlanningProblem, pose: Pose) -> bool:
-    return pose.cell == problem.goal and (
-        problem.goal_heading is None or pose.heading == problem.goal_heading
-    )
 
 
 MAX_CLEARANCE_RADIUS = 1_000_000
@@ -345,6 +410,11 @@ def _validate(
     if heuristic not in HEURISTICS:
         raise ProblemError(
             f"unknown heuristic {heuristic!r}; expected one of {', '.join(HEURISTICS)}"
+        )
+    if heuristic in NEEDS_CONNECTED_FOOTPRINTS and not problem.domain.footprint_connected:
+        raise ProblemError(
+            f"heuristic {heuristic!r} is admissible only for domains whose footprints are "
+            f"4-connected, which domain {problem.domain.name!r} does not declare; use manhattan"
         )
     if not 0 <= problem.clearance_weight <= MAX_CLEARANCE_WEIGHT:
         raise ProblemError(

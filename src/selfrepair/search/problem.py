@@ -13,13 +13,15 @@ import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 from fractions import Fraction
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
-from selfrepair.robots.four_wheel import Action, FaultSet
+from selfrepair.robots.domain import Domain
+from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import BACKENDS, MAX_TIME_LIMIT, PlanStatus
 from selfrepair.world.maze import Maze
 
@@ -30,7 +32,7 @@ __all__ = [
     "CellBound",
     "GridResult",
     "OctileCost",
-    "PlanResult",
+    "PlannerSettings",
     "PlanningProblem",
     "check_search_inputs",
     "grid_heuristic",
@@ -40,7 +42,8 @@ __all__ = [
 
 @dataclass(frozen=True, slots=True)
 class PlanningProblem:
-    """What to plan: from ``start`` to ``goal`` (any heading unless ``goal_heading``) on ``maze``.
+    """What to plan: from ``start`` to ``goal`` (any heading unless ``goal_heading``) on ``maze``,
+    for the robot ``domain`` (the four-wheel robot unless given).
 
     ``faults`` are the faults the planner knows about; actions they forbid are never used.
     """
@@ -49,28 +52,28 @@ class PlanningProblem:
     start: Pose
     goal: Cell
     goal_heading: Heading | None = None
-    faults: FaultSet = frozenset()
-    clearance_weight: Fraction = Fraction(0)
+    faults: frozenset[Any] = frozenset()
+    clearance_weight: Fraction | int = Fraction(0)
     clearance_radius: int = 2
+    domain: Domain[Any, Any] = FOUR_WHEEL
+
+    def at_goal(self, pose: Pose) -> bool:
+        """Whether ``pose`` satisfies the goal."""
+        return pose.cell == self.goal and (
+            self.goal_heading is None or pose.heading == self.goal_heading
+        )
 
 
 @dataclass(frozen=True, slots=True)
-class PlanResult:
-    """The outcome of :func:`plan`.
+class PlannerSettings:
+    """How every planner call of a mission is made (initial plan, replans, lookahead windows):
+    heuristic and backend names, the clearance cost term, and the node budget of a replan."""
 
-    ``actions`` are concrete wheel actions (the fastest available one for each motion), ``poses``
-    the ``len(actions) + 1`` poses from start to goal; both are empty unless solved. ``cost`` is
-    duration plus clearance term (``None`` unless solved), ``duration`` the total ticks (0 unless
-    solved). ``expansions`` counts closed nodes; ``wall_time_ns`` is the wall time of the call.
-    """
-
-    status: PlanStatus
-    actions: tuple[Action, ...]
-    poses: tuple[Pose, ...]
-    cost: Fraction | None
-    duration: Fraction
-    expansions: int
-    wall_time_ns: int
+    heuristic: str = "grid-distance"
+    backend: str = "auto"
+    clearance_weight: Fraction = Fraction(0)
+    clearance_radius: int = 2
+    max_expansions: int | None = None
 
 
 @dataclass(frozen=True, slots=True)

@@ -10,9 +10,11 @@ wherever the action fits). Remaining slots go to candidates diverse in the cells
 
 from __future__ import annotations
 
+import operator
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from functools import partial
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -20,6 +22,7 @@ import numpy.typing as npt
 from selfrepair.geometry import Cell
 from selfrepair.robots.domain import Domain
 from selfrepair.tables.enumerate import (
+    Objective,
     Path,
     Searcher,
     concrete_actions,
@@ -28,10 +31,7 @@ from selfrepair.tables.enumerate import (
     select_diverse,
     verify_entry,
 )
-from selfrepair.tables.model import TableEntry
-
-if TYPE_CHECKING:
-    from selfrepair.tables.model import GenerateOptions
+from selfrepair.tables.model import GenerateOptions, TableEntry
 
 __all__ = ["fault_agnostic_entries"]
 
@@ -63,7 +63,7 @@ def fault_agnostic_entries(
         relevant = full & ~masks[action]
         situations = [
             searcher.costs_under(f) for i, f in enumerate(scope) if relevant >> i & 1
-        ] or [searcher.costs(lambda a, x=action: a != x)]
+        ] or [searcher.costs(partial(operator.ne, action))]
         pool = _Pool(domain, options, action, motion.footprint, masks, durations, full, {}, {})
         for costs in situations:
             found = searcher.paths(costs)[motion.end]
@@ -157,7 +157,7 @@ def _healthy_rank(
 ) -> tuple[int, int, int, int, tuple[str, ...]]:
     scale = domain_classes(domain).scale
     duration = sum(int(domain.duration(a) * scale) for a in concrete)
-    cost = duration if options.objective == "duration" else len(concrete)
+    cost = duration if options.objective == Objective.DURATION else len(concrete)
     names = tuple(domain.format_action(a) for a in concrete)
     return (cost, duration, len(concrete), len(path.footprint), names)
 

@@ -11,19 +11,21 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from enum import StrEnum
 from fractions import Fraction
 from typing import Any
 
-from selfrepair.errors import ProblemError, TableError
+from selfrepair.caching import BoundedCache
+from selfrepair.errors import TableError, choice
 from selfrepair.geometry import Cell
 from selfrepair.robots.domain import Domain, run_open
 
 __all__ = [
-    "FAULT_SCOPES",
-    "OBJECTIVES",
     "ClassCost",
     "DomainClasses",
+    "FaultScope",
     "MotionClass",
+    "Objective",
     "Path",
     "Searcher",
     "candidate_cost",
@@ -40,11 +42,20 @@ __all__ = [
 ]
 
 
-FAULT_SCOPES = ("all", "singles", "doubles", "none")
-"""Which fault sets of the domain a table is made for."""
+class FaultScope(StrEnum):
+    """Which fault sets of the domain a table is made for (or measured on)."""
 
-OBJECTIVES = ("duration", "length")
-"""What a candidate's cost is: total duration in ticks, or number of actions."""
+    ALL = "all"
+    SINGLES = "singles"
+    DOUBLES = "doubles"
+    NONE = "none"
+
+
+class Objective(StrEnum):
+    """What a candidate's cost is: total duration in ticks, or number of actions."""
+
+    DURATION = "duration"
+    LENGTH = "length"
 
 
 # --- motion classes ---------------------------------------------------------------------------
@@ -72,7 +83,7 @@ class DomainClasses:
     scale: int
 
 
-_CLASS_CACHE: dict[str, DomainClasses] = {}
+_CLASSES: BoundedCache[Domain[Any, Any], DomainClasses] = BoundedCache("domain motion classes", 16)
 
 
 def motion_classes(domain: Domain[Any, Any]) -> tuple[MotionClass, ...]:
@@ -92,9 +103,12 @@ def cost_scale(domain: Domain[Any, Any]) -> int:
 
 
 def domain_classes(domain: Domain[Any, Any]) -> DomainClasses:
-    cached = _CLASS_CACHE.get(domain.name)
-    if cached is not None and cached.domain is domain:
-        return cached
+    """The domain's actions grouped by effect from the canonical state (computed once per
+    domain)."""
+    return _CLASSES.get(domain, lambda: _classes(domain))
+
+
+def _classes(domain: Domain[Any, Any]) -> DomainClasses:
     start = domain.canonical
     by_key: dict[tuple[Any, frozenset[Cell]], list[Any]] = {}
     for action in domain.actions:
@@ -108,10 +122,8 @@ def domain_classes(domain: Domain[Any, Any]) -> DomainClasses:
     identity = frozenset(
         c.index for c in classes if c.end == start and c.footprint == frozenset({start.cell})
     )
-    scale = math.lcm(*(domain.duration(a).denominator for a in domain.actions))
-    built = DomainClasses(domain, classes, of_action, identity, scale)
-    _CLASS_CACHE[domain.name] = built
-    return built
+    scale = math.lcm(*(Fraction(domain.duration(a)).denominator for a in domain.actions))
+    return DomainClasses(domain, classes, of_action, identity, scale)
 
 
 # --- fault scopes and class costs -------------------------------------------------------------
@@ -119,15 +131,12 @@ def domain_classes(domain: Domain[Any, Any]) -> DomainClasses:
 
 def scope_fault_sets(domain: Domain[Any, Any], scope: str) -> tuple[frozenset[Any], ...]:
     """The domain's fault sets selected by ``scope``: all, singles, doubles or none."""
-    if scope not in FAULT_SCOPES:
-        raise ProblemError(
-            f"unknown fault scope {scope!r}; expected one of {', '.join(FAULT_SCOPES)}"
-        )
-    if scope == "none":
+    selected = choice(FaultScope, scope, "fault scope")
+    if selected is FaultScope.NONE:
         return ()
-    if scope == "singles":
+    if selected is FaultScope.SINGLES:
         return tuple(f for f in domain.fault_sets if len(f) == 1)
-    if scope == "doubles":
+    if selected is FaultScope.DOUBLES:
         return tuple(f for f in domain.fault_sets if len(f) == 2)
     return tuple(domain.fault_sets)
 
@@ -156,7 +165,7 @@ def class_costs(
             if best is None or dur < best[0]:
                 best = (dur, action)
         if best is not None:
-            obj = best[0] if objective == "duration" else 1
+            obj = best[0] if objective == Objective.DURATION else 1
             out[motion.index] = (obj, best[0], best[1])
     return out
 
@@ -352,6 +361,6 @@ def verify_entry(
 def candidate_cost(domain: Domain[Any, Any], candidate: Iterable[Any], objective: str) -> Fraction:
     """A candidate's exact cost under ``objective``: total duration, or number of actions."""
     actions = tuple(candidate)
-    if objective == "length":
+    if objective == Objective.LENGTH:
         return Fraction(len(actions))
     return sum((domain.duration(a) for a in actions), Fraction(0))

@@ -25,12 +25,14 @@ from __future__ import annotations
 import json
 import math
 import re
+from functools import cache
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from selfrepair.caching import BoundedCache
 from selfrepair.errors import InputError, TableError
 from selfrepair.limits import MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES, check_limit
 from selfrepair.robots.domain import Domain
@@ -132,7 +134,7 @@ def parse_table(
         for number, raw in enumerate(raw_entries)
     )
     return ReplacementTable(
-        domain=dom.name,
+        domain=dom,
         shape=data["shape"],
         made_by=data["made_by"],
         entries=entries,
@@ -321,7 +323,7 @@ def _entry_sort_key(dom: Domain[Any, Any], entry: TableEntry) -> tuple[int, int,
 
 def dump_table(table: ReplacementTable) -> str:
     """The table as deterministic JSON: sorted keys, entries in domain action order, one a line."""
-    dom = get_domain(table.domain)
+    dom = table.domain
     rows = []
     for entry in sorted(table.entries, key=lambda e: _entry_sort_key(dom, e)):
         row: dict[str, Any] = {
@@ -332,11 +334,11 @@ def dump_table(table: ReplacementTable) -> str:
             row["faults"] = dom.format_faults(entry.faults)
         rows.append("  " + json.dumps(row, sort_keys=True))
     header = {
-        "domain": table.domain,
+        "domain": dom.name,
         "format": FORMAT_NAME,
-        "made_by": table.made_by,
+        "made_by": table.made_by.value,
         "parameters": dict(table.parameters),
-        "shape": table.shape,
+        "shape": table.shape.value,
         "version": table.version,
     }
     lines = ["{", ' "domain": ' + json.dumps(header["domain"]) + ",", ' "entries": [']
@@ -351,6 +353,7 @@ def dump_table(table: ReplacementTable) -> str:
     return "\n".join(line for line in lines if line) + "\n"
 
 
+@cache
 def bundled_table_names() -> tuple[str, ...]:
     """Names of the tables shipped as package data."""
     folder = resources.files("selfrepair").joinpath("data", "tables")
@@ -360,13 +363,24 @@ def bundled_table_names() -> tuple[str, ...]:
 
 
 def bundled_table(name: str = "handwritten") -> ReplacementTable:
-    """Load a table shipped with the package, e.g. ``"handwritten"`` or ``"three-action"``."""
+    """A table shipped with the package, e.g. ``"handwritten"`` or ``"three-action"`` (parsed
+    once per process; a few are kept)."""
     if name not in bundled_table_names():
         raise TableError(
             f"expected a bundled table name ({', '.join(bundled_table_names())})", source=name
         )
+    return _BUNDLED.get(name, lambda: _read_bundled(name))
+
+
+def _read_bundled(name: str) -> ReplacementTable:
     resource = resources.files("selfrepair").joinpath("data", "tables", f"{name}.json")
     return parse_table(resource.read_text(encoding="utf-8"), source=f"<bundled:{name}>")
+
+
+_BUNDLED: BoundedCache[str, ReplacementTable] = BoundedCache("bundled tables", 8)
+_FILES: BoundedCache[tuple[str, int, int, int | None, int | None], ReplacementTable] = (
+    BoundedCache("table files", 8)
+)
 
 
 def resolve_table(
@@ -375,10 +389,28 @@ def resolve_table(
     max_table_bytes: int | None = MAX_TABLE_BYTES,
     max_table_candidates: int | None = MAX_TABLE_CANDIDATES,
 ) -> ReplacementTable:
-    """A bundled table by name, else a table file by path (checked against the limits)."""
+    """A bundled table by name, else a table file by path, checked against the limits (see
+    :func:`load_table`). A file is read again when its size or modification time changed since it
+    was last read in this process, or when it is asked for with other limits."""
     text = str(spec)
     if text in bundled_table_names():
         return bundled_table(text)
-    return load_table(
-        text, max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
+    path = Path(text)
+
+    def load() -> ReplacementTable:
+        return load_table(
+            path, max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
+        )
+
+    try:
+        info = path.stat()
+    except OSError:
+        return load()  # raises the TableError that names the problem
+    key = (
+        str(path.resolve()),
+        info.st_mtime_ns,
+        info.st_size,
+        max_table_bytes,
+        max_table_candidates,
     )
+    return _FILES.get(key, load)

@@ -1,16 +1,16 @@
 """Automatic replacement tables: enumerate sub-plans in free space and keep the useful ones.
 
 The original work found hand-written tables slow to write, error-prone and full of gaps; this
-module writes them from the domain model alone, for any :class:`~selfrepair.robots.domain.Domain` whose
-states are :class:`~selfrepair.geometry.Pose` values (both shipped domains).
+module writes them from the domain model alone, for any :class:`~selfrepair.robots.domain.Domain`.
 
 How it works:
 
 1. **Motion classes.** Actions with the same open-plane effect and the same footprint from the
    canonical state form one class (the four-wheel robot's 81 actions fall into the 9 motions of
-   :data:`selfrepair.robots.four_wheel.MOTIONS`; the three-action robot's into 3). Under a fault set each class
-   costs as much as its cheapest available member, and that member (first in domain order on
-   ties, as :func:`selfrepair.robots.four_wheel.fastest_by_motion` picks) is the concrete action written.
+   :data:`selfrepair.robots.four_wheel.MOTIONS`; the three-action robot's into 3). Under a fault
+   set each class costs as much as its cheapest available member, and that member (first in
+   domain order on ties, as :func:`selfrepair.robots.domain.primitive_by_motion` picks) is the
+   concrete action written.
    So the search branches over at most 9 classes, not 81 actions, and concrete wheel actions are
    chosen only when a fault set says which ones are left.
 2. **Enumeration.** :func:`enumerate_paths` grows class sequences breadth-first from the canonical
@@ -48,12 +48,11 @@ from __future__ import annotations
 from typing import Any
 
 from selfrepair.robots.domain import Domain
-from selfrepair.robots.registry import get_domain
 from selfrepair.tables.cover import fault_agnostic_entries
 from selfrepair.tables.enumerate import (
-    FAULT_SCOPES,
-    OBJECTIVES,
+    FaultScope,
     MotionClass,
+    Objective,
     Path,
     Searcher,
     candidate_cost,
@@ -68,13 +67,19 @@ from selfrepair.tables.enumerate import (
     select_diverse,
     verify_entry,
 )
-from selfrepair.tables.model import GenerateOptions, ReplacementTable, TableEntry
+from selfrepair.tables.model import (
+    GenerateOptions,
+    MadeBy,
+    ReplacementTable,
+    TableEntry,
+    TableShape,
+)
 
 __all__ = [
-    "FAULT_SCOPES",
-    "OBJECTIVES",
+    "FaultScope",
     "GenerateOptions",
     "MotionClass",
+    "Objective",
     "Path",
     "candidate_cost",
     "class_costs",
@@ -115,20 +120,20 @@ def _fault_indexed(
 
 
 def generate_table(
-    options: GenerateOptions | None = None, domain: Domain[Any, Any] | None = None
+    domain: Domain[Any, Any], options: GenerateOptions | None = None
 ) -> ReplacementTable:
-    """Generate a replacement table (see the module docstring); deterministic in ``options``."""
+    """Generate a replacement table for ``domain`` (see the module docstring); deterministic in
+    the domain and ``options``."""
     options = options or GenerateOptions()
-    dom = domain if domain is not None else get_domain(options.domain)
-    searcher = Searcher(dom, options.objective, options.max_length, {}, {})
-    if options.shape == "fault-indexed":
-        entries = _fault_indexed(dom, options, searcher)
+    searcher = Searcher(domain, options.objective, options.max_length, {}, {})
+    if options.shape is TableShape.FAULT_INDEXED:
+        entries = _fault_indexed(domain, options, searcher)
     else:
-        entries = fault_agnostic_entries(dom, options, searcher)
+        entries = fault_agnostic_entries(domain, options, searcher)
     return ReplacementTable(
-        domain=dom.name,
+        domain=domain,
         shape=options.shape,
-        made_by="generator",
+        made_by=MadeBy.GENERATOR,
         entries=tuple(entries),
         parameters=options.parameters(),
         source="<generator>",

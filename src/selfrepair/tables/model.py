@@ -1,7 +1,8 @@
-"""Replacement tables: the value, its JSON file format, loading with re-simulation, and checks.
+"""Replacement tables: the table value, how it is checked, and the options that generate one.
 
-A replacement table maps each action to an ordered list of candidate sub-plans, stored relative to
-the robot, so one entry serves every pose and heading. Two shapes:
+A replacement table maps each action of a robot (a :class:`~selfrepair.robots.domain.Domain`) to
+an ordered list of candidate sub-plans, stored relative to the robot, so one entry serves every
+pose and heading. Two shapes (:class:`TableShape`):
 
 ``fault-agnostic``
     One entry per action: ``candidates(action, faults)`` returns that entry's list whatever the
@@ -11,17 +12,11 @@ the robot, so one entry serves every pose and heading. Two shapes:
     exactly ``known`` when the table has one, else the lists of every indexed subset of ``known``,
     largest subsets first (ties in canonical fault-text order), concatenated without duplicates.
 
-File format (JSON, written by :func:`dump_table` with sorted keys and one entry per line)::
-
-    {"format": "selfrepair-table", "version": 1, "domain": "four-wheel",
-     "shape": "fault-agnostic", "made_by": "hand", "parameters": {},
-     "entries": [{"action": "FFFF", "candidates": [["FFSS"], ["FBFB", "FBFB", "BBBB", ...]]}]}
-
-Fault-indexed entries also carry ``"faults": "FL:F,RR:B"`` (the domain's canonical fault text).
-Every table, however made, is checked when it is built: each candidate is re-simulated from the
-domain's canonical state on an open plane and must end where the replaced action ends, must not be
-empty and must not contain the replaced action. A wrong entry raises :class:`TableError` naming the
-file, the entry's line (when known), its index and action, and what was expected.
+Every table, however made, is checked when it is built: each candidate is re-simulated on an open
+plane from the canonical state facing each of the four headings, and must end where the replaced
+action ends, must not be empty and must not contain the replaced action. A wrong entry raises
+:class:`~selfrepair.errors.TableError` naming the source, the entry's line (when known), its index
+and action, and what was expected. The file format is :mod:`selfrepair.tables.fileformat`.
 """
 
 from __future__ import annotations
@@ -29,32 +24,46 @@ from __future__ import annotations
 import itertools
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from enum import StrEnum
 from typing import Any
 
-from selfrepair.errors import ProblemError, TableError
+from selfrepair.caching import BoundedCache
+from selfrepair.errors import ProblemError, TableError, choice
+from selfrepair.geometry import Heading, Pose
 from selfrepair.robots.domain import Domain, run_open
-from selfrepair.robots.registry import get_domain
-from selfrepair.tables.enumerate import FAULT_SCOPES, OBJECTIVES
+from selfrepair.tables.enumerate import FaultScope, Objective
 
 __all__ = [
     "FORMAT_NAME",
     "FORMAT_VERSION",
-    "MADE_BY",
-    "PRIORITIES",
-    "SHAPES",
     "GenerateOptions",
+    "MadeBy",
+    "Priority",
     "ReplacementTable",
     "TableEntry",
     "TableProblem",
+    "TableShape",
     "check_table",
 ]
 
 FORMAT_NAME = "selfrepair-table"
 FORMAT_VERSION = 1
-SHAPES = ("fault-agnostic", "fault-indexed")
-MADE_BY = ("hand", "generator")
 
 Candidate = tuple[Any, ...]
+
+
+class TableShape(StrEnum):
+    """How entries are keyed (see the module docstring)."""
+
+    FAULT_AGNOSTIC = "fault-agnostic"
+    FAULT_INDEXED = "fault-indexed"
+
+
+class MadeBy(StrEnum):
+    """Who wrote a table."""
+
+    HAND = "hand"
+    GENERATOR = "generator"
 
 
 @dataclass(frozen=True, slots=True)
@@ -81,50 +90,52 @@ class TableProblem:
         return f"{self.severity}: {where}{self.message}"
 
 
-@dataclass(frozen=True, slots=True)
-class ReplacementTable:
-    """A validated replacement table (see the module docstring).
+_Key = tuple[Any, frozenset[Any] | None]
 
-    Build one directly (entries are re-simulated in ``__post_init__``) or with :func:`parse_table`
-    / :func:`load_table`. ``source`` names where it came from, for error messages only.
-    Lookups through :meth:`candidates` are dictionary look-ups, memoised per (action, faults).
+
+@dataclass(frozen=True, slots=True, eq=False)
+class ReplacementTable:
+    """A validated replacement table for ``domain`` (see the module docstring).
+
+    Build one directly (entries are re-simulated in ``__post_init__``) or with
+    :func:`~selfrepair.tables.fileformat.parse_table` /
+    :func:`~selfrepair.tables.fileformat.load_table`. ``source`` names where it came from, for
+    error messages only. Two tables are equal when they are for the same domain and have the same
+    shape, author, entries, parameters and version; the hash is computed once.
     """
 
-    domain: str
-    shape: str
-    made_by: str
+    domain: Domain[Any, Any]
+    shape: TableShape
+    made_by: MadeBy
     entries: tuple[TableEntry, ...]
-    parameters: Mapping[str, Any] = field(default_factory=dict, hash=False)
+    parameters: Mapping[str, Any] = field(default_factory=dict)
     version: int = FORMAT_VERSION
-    source: str = field(default="<table>", compare=False)
-    _index: dict[tuple[Any, frozenset[Any] | None], tuple[Candidate, ...]] = field(
-        init=False, repr=False, compare=False
-    )
-    _memo: dict[tuple[Any, frozenset[Any]], tuple[Candidate, ...]] = field(
-        init=False, repr=False, compare=False
-    )
-    derived: dict[Any, Any] = field(init=False, repr=False, compare=False)
-    """Scratch space where other modules memoise structures derived from this (immutable) table,
-    e.g. :mod:`selfrepair.repair.replacement`'s compiled flat look-ups. Not part of the value."""
+    source: str = "<table>"
+    _index: dict[_Key, tuple[Candidate, ...]] = field(init=False, repr=False)
+    _hash: int = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        dom = get_domain(self.domain)
-        if self.shape not in SHAPES:
-            raise TableError(
-                f"expected shape one of {', '.join(SHAPES)}, got {self.shape!r}", source=self.source
+        if not isinstance(self.domain, Domain):
+            raise ProblemError(
+                f"a table's domain must be a Domain value, got {self.domain!r} "
+                "(look a name up with selfrepair.robots.registry.get_domain)"
             )
-        if self.made_by not in MADE_BY:
-            raise TableError(
-                f"expected made_by one of {', '.join(MADE_BY)}, got {self.made_by!r}",
-                source=self.source,
-            )
-        if self.version != FORMAT_VERSION:
+        for name, kind in (("shape", TableShape), ("made_by", MadeBy)):
+            value = getattr(self, name)
+            if value not in set(kind):
+                allowed = ", ".join(kind)
+                raise TableError(
+                    f"expected {name} one of {allowed}, got {value!r}", source=self.source
+                )
+            object.__setattr__(self, name, kind(value))
+        if type(self.version) is not int or self.version != FORMAT_VERSION:
             raise TableError(
                 f"expected version {FORMAT_VERSION}, got {self.version!r}", source=self.source
             )
-        index: dict[tuple[Any, frozenset[Any] | None], tuple[Candidate, ...]] = {}
+        index: dict[_Key, tuple[Candidate, ...]] = {}
+        checked: set[tuple[Any, Candidate]] = set()
         for number, entry in enumerate(self.entries):
-            _validate_entry(dom, self, number, entry)
+            _validate_entry(self, number, entry, checked)
             key = (entry.action, entry.faults)
             if key in index:
                 raise self._error(
@@ -132,11 +143,28 @@ class ReplacementTable:
                 )
             index[key] = entry.candidates
         object.__setattr__(self, "_index", index)
-        object.__setattr__(self, "_memo", {})
-        object.__setattr__(self, "derived", {})
+        params = tuple(sorted((k, repr(v)) for k, v in self.parameters.items()))
+        content = (self.domain, self.shape, self.made_by, self.entries, params, self.version)
+        object.__setattr__(self, "_hash", hash(content))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, ReplacementTable):
+            return NotImplemented
+        return (
+            self._hash == other._hash
+            and self.domain is other.domain
+            and self.shape == other.shape
+            and self.made_by == other.made_by
+            and self.entries == other.entries
+            and dict(self.parameters) == dict(other.parameters)
+            and self.version == other.version
+        )
+
+    def __hash__(self) -> int:
+        return self._hash
 
     def _error(self, number: int, entry: TableEntry, what: str) -> TableError:
-        dom = get_domain(self.domain)
+        dom = self.domain
         label = f"entry {number} (action {dom.format_action(entry.action)}"
         if entry.faults is not None:
             label += f", faults {dom.format_faults(entry.faults)!r}"
@@ -146,21 +174,16 @@ class ReplacementTable:
         self, action: Any, known_faults: Iterable[Any] = frozenset()
     ) -> tuple[Candidate, ...]:
         """The ordered candidates for replacing ``action`` when ``known_faults`` are known."""
-        if self.shape == "fault-agnostic":
+        if self.shape is TableShape.FAULT_AGNOSTIC:
             return self._index.get((action, None), ())
         known = frozenset(known_faults)
-        key = (action, known)
-        hit = self._memo.get(key)
-        if hit is None:
-            hit = self._indexed_lookup(action, known)
-            self._memo[key] = hit
-        return hit
-
-    def _indexed_lookup(self, action: Any, known: frozenset[Any]) -> tuple[Candidate, ...]:
         exact = self._index.get((action, known))
         if exact is not None:
             return exact
-        dom = get_domain(self.domain)
+        return _MERGED.get((self, action, known), lambda: self._merged(action, known))
+
+    def _merged(self, action: Any, known: frozenset[Any]) -> tuple[Candidate, ...]:
+        dom = self.domain
         ordered = sorted(known, key=lambda f: dom.format_faults([f]))
         merged: dict[Candidate, None] = {}
         for size in range(len(ordered) - 1, -1, -1):
@@ -174,18 +197,33 @@ class ReplacementTable:
         return frozenset(entry.action for entry in self.entries)
 
 
+_MERGED: BoundedCache[tuple[ReplacementTable, Any, frozenset[Any]], tuple[Candidate, ...]] = (
+    BoundedCache("fault-indexed merged look-ups", 4096)
+)
+"""Candidates for fault sets a fault-indexed table has no entry of its own for."""
+
+_STARTS = tuple(Pose(0, 0, heading) for heading in Heading)
+
+
 def _validate_entry(
-    dom: Domain[Any, Any], table: ReplacementTable, number: int, entry: TableEntry
+    table: ReplacementTable,
+    number: int,
+    entry: TableEntry,
+    checked: set[tuple[Any, Candidate]],
 ) -> None:
-    """Raise :class:`TableError` unless every candidate of ``entry`` re-simulates correctly."""
+    """Raise :class:`TableError` unless every candidate of ``entry`` re-simulates correctly from
+    every heading (``checked`` remembers (action, candidate) pairs already found correct)."""
+    dom = table.domain
     if entry.action not in dom.actions:
         raise table._error(number, entry, f"expected an action of domain {dom.name}")
-    if (entry.faults is None) != (table.shape == "fault-agnostic"):
-        want = 'no "faults" key' if table.shape == "fault-agnostic" else 'a "faults" key'
+    agnostic = table.shape is TableShape.FAULT_AGNOSTIC
+    if (entry.faults is None) != agnostic:
+        want = 'no "faults" key' if agnostic else 'a "faults" key'
         raise table._error(number, entry, f"expected {want} in a {table.shape} table")
-    target = dom.apply(dom.canonical, entry.action)
     name = dom.format_action(entry.action)
     for k, candidate in enumerate(entry.candidates):
+        if (entry.action, candidate) in checked:
+            continue
         text = " ".join(dom.format_action(a) for a in candidate)
         if not candidate:
             raise table._error(
@@ -198,17 +236,17 @@ def _validate_entry(
                 f"candidate {k} [{text}] contains the replaced "
                 f"action {name}; expected a sub-plan without it",
             )
-        end = run_open(dom, dom.canonical, candidate)
-        if end != target:
-            raise table._error(
-                number,
-                entry,
-                f"candidate {k} [{text}] ends at {end} from "
-                f"{dom.canonical}; expected {target} as {name} does",
-            )
-
-
-# --- text format ------------------------------------------------------------------------------
+        for start in _STARTS:
+            target = dom.apply(start, entry.action)
+            end = run_open(dom, start, candidate)
+            if end != target:
+                raise table._error(
+                    number,
+                    entry,
+                    f"candidate {k} [{text}] ends at {end} from "
+                    f"{start}; expected {target} as {name} does",
+                )
+        checked.add((entry.action, candidate))
 
 
 # --- checks -----------------------------------------------------------------------------------
@@ -221,7 +259,7 @@ def check_table(table: ReplacementTable) -> list[TableProblem]:
     be valid under exactly those faults). Warnings: an action of the domain with no entry or with
     an empty candidate list, and a candidate listed twice in one entry.
     """
-    dom = get_domain(table.domain)
+    dom = table.domain
     problems: list[TableProblem] = []
     covered = set()
     for number, entry in enumerate(table.entries):
@@ -262,54 +300,51 @@ def check_table(table: ReplacementTable) -> list[TableProblem]:
 # --- generation options ---------------------------------------------------------------------
 
 
-SHAPES = ("fault-agnostic", "fault-indexed")
+class Priority(StrEnum):
+    """Fault-agnostic tie-break after coverage: cheapest replacements first, or first the
+    candidates that fit wherever the replaced action fits."""
+
+    COST = "cost"
+    WALLS = "walls"
 
 
-PRIORITIES = ("cost", "walls")
-"""Fault-agnostic tie-break after coverage: cheapest replacements first (the issue's order), or
-first the candidates that fit wherever the replaced action fits."""
+MAX_LENGTH_LIMIT = 12
+"""The longest candidate the generator searches for (enumeration grows exponentially)."""
 
 
 @dataclass(frozen=True, slots=True)
 class GenerateOptions:
-    """Everything that determines a generated table; recorded in its header ``parameters``."""
+    """Everything that determines a generated table; recorded in its header ``parameters``.
 
-    domain: str = "four-wheel"
-    shape: str = "fault-agnostic"
+    Strings are accepted for the enum fields and converted; an unknown value raises
+    :class:`~selfrepair.errors.ProblemError` listing the allowed ones.
+    """
+
+    shape: TableShape = TableShape.FAULT_AGNOSTIC
     max_length: int = 5
     per_action: int = 5
-    faults: str = "all"
-    objective: str = "duration"
-    priority: str = "cost"
+    faults: FaultScope = FaultScope.ALL
+    objective: Objective = Objective.DURATION
+    priority: Priority = Priority.COST
 
     def __post_init__(self) -> None:
-        if self.shape not in SHAPES:
+        object.__setattr__(self, "shape", choice(TableShape, self.shape, "table shape"))
+        object.__setattr__(self, "faults", choice(FaultScope, self.faults, "fault scope"))
+        object.__setattr__(self, "objective", choice(Objective, self.objective, "objective"))
+        object.__setattr__(self, "priority", choice(Priority, self.priority, "priority"))
+        if not 1 <= self.max_length <= MAX_LENGTH_LIMIT:
             raise ProblemError(
-                f"unknown table shape {self.shape!r}; expected one of {', '.join(SHAPES)}"
+                f"max_length must be from 1 to {MAX_LENGTH_LIMIT}, got {self.max_length}"
             )
-        if self.faults not in FAULT_SCOPES:
-            raise ProblemError(
-                f"unknown fault scope {self.faults!r}; expected one of {', '.join(FAULT_SCOPES)}"
-            )
-        if self.objective not in OBJECTIVES:
-            raise ProblemError(
-                f"unknown objective {self.objective!r}; expected one of {', '.join(OBJECTIVES)}"
-            )
-        if self.priority not in PRIORITIES:
-            raise ProblemError(
-                f"unknown priority {self.priority!r}; expected one of {', '.join(PRIORITIES)}"
-            )
-        if not 1 <= self.max_length <= 12:
-            raise ProblemError(f"max_length must be from 1 to 12, got {self.max_length}")
         if self.per_action < 1:
             raise ProblemError(f"per_action must be at least 1, got {self.per_action}")
 
     def parameters(self) -> dict[str, Any]:
         """The options as the JSON header's ``parameters`` object."""
         return {
-            "faults": self.faults,
+            "faults": self.faults.value,
             "max_length": self.max_length,
-            "objective": self.objective,
+            "objective": self.objective.value,
             "per_action": self.per_action,
-            "priority": self.priority,
+            "priority": self.priority.value,
         }

@@ -14,14 +14,14 @@ reader by file suffix.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
 
+from selfrepair.caching import BoundedCache
 from selfrepair.errors import InputError
-from selfrepair.geometry import Cell
+from selfrepair.geometry import Cell, FreeGrid
 from selfrepair.limits import MAX_CELLS, check_limit
 from selfrepair.textio import strip_bom, text_lines
 
@@ -65,15 +65,20 @@ class Maze:
 
     def in_bounds(self, x: int, y: int) -> bool:
         """Whether ``(x, y)`` lies on the grid."""
-        return 0 <= x < self.walls.shape[1] and 0 <= y < self.walls.shape[0]
+        return 0 <= x < self.width and 0 <= y < self.height
 
     def is_free(self, x: int, y: int) -> bool:
         """Whether ``(x, y)`` lies on the grid and is not a wall."""
-        return self.in_bounds(x, y) and not self.walls[y, x]
+        return self.in_bounds(x, y) and not bool(self.walls[y, x])
 
     def all_free(self, cells: tuple[Cell, ...] | list[Cell]) -> bool:
         """Whether every cell in ``cells`` is free: the executability test for swept cells."""
         return all(self.is_free(x, y) for x, y in cells)
+
+    def free_grid(self, margin: int = 2) -> FreeGrid:
+        """The free cells as a :class:`~selfrepair.geometry.FreeGrid` with ``margin`` wall cells
+        around the grid (built once per maze and margin; a few are kept)."""
+        return _FREE_GRIDS.get((self, margin), lambda: _free_grid(self, margin))
 
     def free_cells(self) -> list[Cell]:
         """Every free cell, row by row."""
@@ -90,6 +95,15 @@ class Maze:
 
     def __str__(self) -> str:
         return format_maze(self)
+
+
+_FREE_GRIDS: BoundedCache[tuple[Maze, int], FreeGrid] = BoundedCache("maze free grids", 8)
+
+
+def _free_grid(maze: Maze, margin: int) -> FreeGrid:
+    padded = np.zeros((maze.height + 2 * margin, maze.width + 2 * margin), dtype=np.uint8)
+    padded[margin : margin + maze.height, margin : margin + maze.width] = ~maze.walls
+    return FreeGrid(maze.width, maze.height, margin, padded.tobytes())
 
 
 def parse_maze(
@@ -154,7 +168,6 @@ def save_maze(maze: Maze, path: str | Path) -> None:
     Path(path).write_text(format_maze(maze), encoding="utf-8")
 
 
-@lru_cache(maxsize=64)
 def clearance_map(maze: Maze) -> npt.NDArray[np.int32]:
     """Chebyshev distance from every cell to the nearest wall, computed once per maze.
 
@@ -162,6 +175,13 @@ def clearance_map(maze: Maze) -> npt.NDArray[np.int32]:
     the grid counts as wall, so a free cell on the border has clearance 1. The array is read-only,
     shaped ``(height, width)`` and indexed ``[y, x]``.
     """
+    return _CLEARANCE.get(maze, lambda: _clearance(maze))
+
+
+_CLEARANCE: BoundedCache[Maze, npt.NDArray[np.int32]] = BoundedCache("maze clearance maps", 8)
+
+
+def _clearance(maze: Maze) -> npt.NDArray[np.int32]:
     h, w = maze.walls.shape
     blocked = np.ones((h + 2, w + 2), dtype=bool)
     blocked[1:-1, 1:-1] = maze.walls
