@@ -39,8 +39,9 @@ to generate and under a second to read; the planners' arrays scale with it."""
 MAX_MISSIONS = 1_000_000
 """Missions of one experiment, counted from the configuration before any is built.
 
-Six times the bundled ``full`` experiment (159,744 missions); each mission costs about 1 kB of
-memory before it runs and one row in the results database after."""
+Six times the bundled ``full`` experiment (159,744 missions). Building a mission takes about
+0.25 ms and 1.6 kB of memory before it runs (measured on ``full``: 39 s, 250 MB at the peak), and
+it leaves one row in the results database after."""
 
 MAX_TABLE_BYTES = 64 * 1024 * 1024
 """Size of a replacement-table file (64 MiB), checked before the file is read.
