@@ -184,6 +184,13 @@ def test_scenario_errors(body: str, message: str) -> None:
         assert info.value.column is not None and info.value.column > 1
 
 
+def test_fields_may_carry_surrounding_whitespace_of_any_kind() -> None:
+    # Found by the fuzz tests: "\x1c1.0" passed the number check after strip() but float() does
+    # not strip \x1c, so it raised a ValueError.
+    text = SCEN_HEADER + "0\tsmall.map\t4\t3\t1\t1\t2\t2\t\x1c1.5 \n"
+    assert parse_scenario(text)[0].optimal_length == 1.5
+
+
 def test_scenario_lines_end_only_at_line_feeds() -> None:
     # A form feed inside a line used to split it in two, and later errors named the wrong line.
     text = SCEN_HEADER + scen_line(1, 1, 2, 2).replace("\t2\t2", "\t2\x0c\t2") + "bad\n"

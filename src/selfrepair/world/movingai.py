@@ -261,9 +261,10 @@ def _optimal_length(text: str) -> float | None:
     """A decimal number such as ``1.41421`` or ``2e3`` as a finite float, else None (no sign, no
     ``nan`` or ``inf``: a length is never negative, and a non-number is bad input, not a
     mismatch)."""
-    if _DECIMAL.fullmatch(text.strip()) is None:
+    number = text.strip()
+    if _DECIMAL.fullmatch(number) is None:
         return None
-    value = float(text)
+    value = float(number)
     return value if math.isfinite(value) else None
 
 
