@@ -10,8 +10,9 @@ Property 1 (library): the reader returns a value or raises an
 Property 2 (CLI): the command that reads the file exits 0 or 1, or exits 2 with exactly one line
 on stderr, ``selfrepair: error: ...``, which carries the library's message; a traceback fails.
 
-Default runs are small (:data:`FAST` examples per test) so the suite stays quick; the same
-properties run with :data:`SLOW` examples under ``-m slow``.
+Default runs are small (:data:`FAST` examples per test) so the suite stays quick; under
+``-m slow`` the same properties run with :data:`SLOW` examples (:data:`SLOW_CLI` for those that
+run the CLI; 12 minutes in all on the busy 2-core development machine).
 """
 
 from __future__ import annotations
@@ -40,9 +41,14 @@ from selfrepair.world.routes import load_routes, parse_routes
 
 FAST = 40
 SLOW = 2000
+SLOW_CLI = 500
 EXAMPLES = pytest.mark.parametrize(
     "examples", [FAST, pytest.param(SLOW, marks=pytest.mark.slow, id="slow")]
 )
+CLI_EXAMPLES = pytest.mark.parametrize(
+    "examples", [FAST, pytest.param(SLOW_CLI, marks=pytest.mark.slow, id="slow")]
+)
+"""Each example of a file-and-CLI property runs a command in-process (tens of milliseconds)."""
 
 # --- input strategies --------------------------------------------------------------------------
 
@@ -213,7 +219,7 @@ def test_maze_text(examples: int) -> None:
     fuzz(texts(SMALL_MAZE, "maze"), text_check(parse_maze), examples, known)
 
 
-@EXAMPLES
+@CLI_EXAMPLES
 def test_maze_file_and_cli(folder: Path, examples: int) -> None:
     def check(data: bytes) -> None:
         path = write(folder, "m.maze", data)
@@ -232,7 +238,7 @@ def test_movingai_map_text(examples: int) -> None:
     fuzz(texts(SMALL_MAP, "map"), text_check(parse_map), examples, known)
 
 
-@EXAMPLES
+@CLI_EXAMPLES
 def test_movingai_map_file_and_cli(folder: Path, examples: int) -> None:
     def check(data: bytes) -> None:
         path = write(folder, "m.map", data)
@@ -254,7 +260,7 @@ def test_movingai_scenario_text(examples: int) -> None:
     fuzz(texts(SMALL_SCEN, "scen"), check, examples, known)
 
 
-@EXAMPLES
+@CLI_EXAMPLES
 def test_movingai_scenario_file_and_cli(folder: Path, examples: int) -> None:
     def check(data: bytes) -> None:
         path = write(folder, "s.map.scen", data)
@@ -280,7 +286,7 @@ def test_route_text(examples: int) -> None:
     fuzz(texts(SMALL_ROUTES, "routes"), check, examples, ("r1 1" + "0" * 5000 + ",1,E 5,3",))
 
 
-@EXAMPLES
+@CLI_EXAMPLES
 def test_route_file_and_cli(folder: Path, examples: int) -> None:
     def check(data: bytes) -> None:
         path = write(folder, "m.routes", data)
@@ -301,7 +307,7 @@ def test_table_json_text(examples: int) -> None:
     fuzz(texts(TABLE, "table"), text_check(parse_table), examples, known)
 
 
-@EXAMPLES
+@CLI_EXAMPLES
 def test_table_file_and_cli(folder: Path, examples: int) -> None:
     def check(data: bytes) -> None:
         path = write(folder, "t.json", data)
@@ -327,7 +333,7 @@ def test_experiment_toml_text(examples: int) -> None:
     fuzz(texts(TOML, "toml"), check, examples, known)
 
 
-@EXAMPLES
+@CLI_EXAMPLES
 def test_experiment_file_and_cli(folder: Path, examples: int) -> None:
     def check(data: bytes) -> None:
         path = write(folder, "e.toml", data)
