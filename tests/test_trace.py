@@ -50,7 +50,9 @@ def trace_file(tmp_path: Path) -> Path:
 
 def test_trace_lines_have_the_documented_fields(trace_file: Path) -> None:
     lines = [json.loads(t) for t in trace_file.read_text().splitlines()]
-    header, steps, summary = lines[0], lines[1:-1], lines[-1]
+    header, body, summary = lines[0], lines[1:-1], lines[-1]
+    steps = [line for line in body if line["type"] == "step"]
+    assert {line["type"] for line in body} == {"step", "repair"}
     assert header["type"] == "header" and header["format"] == "selfrepair-trace"
     assert header["maze"]["name"] == "narrow-short" and header["maze"]["rows"][0].startswith("#")
     assert header["seed"] == 11 and header["strategy"] == "replacement"
@@ -79,6 +81,12 @@ def test_the_header_runs_the_same_mission_again(trace_file: Path) -> None:
     assert tuple(s.source for s in again.steps) == tuple(s.source for s in trace.steps)
 
 
+def _step_index(path: Path, number: int) -> int:
+    """The index (from 0) of step ``number``'s line; repair lines sit between step lines."""
+    lines = [json.loads(t) for t in path.read_text().splitlines()]
+    return next(i for i, d in enumerate(lines) if d["type"] == "step" and d["step"] == number)
+
+
 def _edit(path: Path, index: int, **changes: object) -> None:
     lines = path.read_text().splitlines()
     data = json.loads(lines[index])
@@ -88,9 +96,10 @@ def _edit(path: Path, index: int, **changes: object) -> None:
 
 
 def test_replay_names_the_first_step_that_does_not_hold(trace_file: Path) -> None:
-    _edit(trace_file, 4, to=[0, 0, "N"])
+    index = _step_index(trace_file, 3)
+    _edit(trace_file, index, to=[0, 0, "N"])
     report = replay(trace_file)
-    assert not report.ok and report.first_bad_step == 3 and report.line == 5
+    assert not report.ok and report.first_bad_step == 3 and report.line == index + 1
 
 
 def test_replay_rejects_a_known_faulty_action(trace_file: Path) -> None:
@@ -102,7 +111,7 @@ def test_replay_rejects_a_known_faulty_action(trace_file: Path) -> None:
         for a in four_wheel.ACTIONS
         if not four_wheel.available(a, step.known) and four_wheel.step(step.start, a)[0] == step.end
     )
-    _edit(trace_file, index + 1, action=faulty.code)
+    _edit(trace_file, _step_index(trace_file, index), action=faulty.code)
     report = replay(trace_file)
     assert not report.ok and report.first_bad_step == index
     assert "known-faulty" in report.reason or "true faults" in report.reason
@@ -164,6 +173,6 @@ def test_replay_checks_known_faults_under_detection_now(tmp_path: Path) -> None:
     path = tmp_path / "now.jsonl"
     write_trace(_mission("now"), path)
     assert replay(path).ok
-    _edit(path, 5, known=["FL:F", "RL:F"])  # a claim the sensors never made
+    _edit(path, _step_index(path, 4), known=["FL:F", "RL:F"])  # a claim never sensed
     report = replay(path)
     assert not report.ok and report.first_bad_step == 4 and "senses" in report.reason

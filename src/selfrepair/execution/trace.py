@@ -10,7 +10,16 @@ A trace has one JSON object per line:
    (``plan``, ``replacement``, ``lookahead``, ``replan`` or ``failed-attempt``) and ``known``
    (the faults known when the command was given, as strings; a failed attempt's fault is known
    from the next step on);
-3. the mission summary (``"type": "summary"``): the row of
+3. one line per repair (``"type": "repair"``), written just before the step line it takes
+   effect at (so a repair that ends the mission comes after the last step): ``step`` (the
+   number of the next step when the repair was made), ``pose``, ``action`` (the faulty action,
+   ``null`` for the replan made when the plan runs out away from the goal), ``status``
+   (``repaired``, ``stuck`` or ``budget_exhausted``), ``source`` (``replacement``,
+   ``lookahead`` or ``replan``), ``attempts`` (the strategies tried, in order), ``actions``
+   (what was spliced in), ``consumed`` (queued actions dropped), ``candidate_index`` and
+   ``depth`` (a table replacement's candidate position and nesting depth, else ``null``) and
+   ``latency_ns``. Traces without repair lines (written before they existed) still parse;
+4. the mission summary (``"type": "summary"``): the row of
    :meth:`selfrepair.execution.result.MissionResult.to_row`.
 
 :func:`replay` re-simulates the steps with the robot model and the fault schedule and returns a
@@ -30,7 +39,13 @@ from typing import Any
 from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.metrics import mission_row
-from selfrepair.execution.result import SOURCES, MissionResult, MissionSpec, TraceStep
+from selfrepair.execution.result import (
+    SOURCES,
+    MissionResult,
+    MissionSpec,
+    RepairRecord,
+    TraceStep,
+)
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS
 from selfrepair.geometry import Heading, Pose
 from selfrepair.repair.strategies import StrategyOptions
@@ -42,6 +57,7 @@ __all__ = [
     "TRACE_VERSION",
     "ReplayReport",
     "Trace",
+    "TraceRepair",
     "read_trace",
     "replay",
     "spec_from_header",
@@ -108,7 +124,7 @@ def step_json(step: TraceStep) -> dict[str, Any]:
 def trace_lines(result: MissionResult) -> list[str]:
     """The trace of ``result``, one JSON text per line (no newlines inside)."""
     lines = [json.dumps(header_json(result.spec, result.initial_plan.actions))]
-    lines.extend(json.dumps(step_json(s)) for s in result.steps)
+    lines.extend(json.dumps(obj) for obj in _step_and_repair_objects(result))
     lines.append(json.dumps({"type": "summary", **mission_row(result)}))
     return lines
 
@@ -118,15 +134,171 @@ def write_trace(result: MissionResult, path: str | Path) -> None:
     Path(path).write_text("\n".join(trace_lines(result)) + "\n", encoding="utf-8")
 
 
+# --- repair lines --------------------------------------------------------------------------------
+
+REPAIR_STATUSES = ("repaired", "stuck", "budget_exhausted")
+"""What a repair line's ``status`` may be (see :class:`selfrepair.repair.strategies.Repair`)."""
+
+REPAIR_SOURCES = tuple(s for s in SOURCES if s not in ("plan", "failed-attempt"))
+"""What a repair line's ``source`` may be: the step sources a strategy produces."""
+
+
+@dataclass(frozen=True, slots=True)
+class TraceRepair:
+    """One repair line: a :class:`~selfrepair.execution.result.RepairRecord` as the trace keeps
+    it (the fields are those of the line, see the module docstring)."""
+
+    step: int
+    pose: Pose
+    action: four_wheel.Action | None
+    status: str
+    source: str
+    attempts: tuple[str, ...]
+    actions: tuple[four_wheel.Action, ...]
+    consumed: int
+    candidate_index: int | None
+    depth: int | None
+    latency_ns: int
+
+
+def repair_json(record: RepairRecord) -> dict[str, Any]:
+    """One repair line's object."""
+    repair = record.repair
+    return {
+        "type": "repair",
+        "step": record.step,
+        "pose": _pose_json(record.pose),
+        "action": None if record.action is None else record.action.code,
+        "status": repair.status,
+        "source": repair.source,
+        "attempts": list(repair.attempts),
+        "actions": [a.code for a in repair.actions],
+        "consumed": repair.consumed,
+        "candidate_index": repair.candidate_index,
+        "depth": repair.depth,
+        "latency_ns": record.latency_ns,
+    }
+
+
+def _step_and_repair_objects(result: MissionResult) -> list[dict[str, Any]]:
+    """Step and repair objects in trace order: each repair just before the step it precedes,
+    the repairs made after the last step at the end."""
+    objects: list[dict[str, Any]] = []
+    repairs = list(result.repairs)
+    done = 0
+    for step in result.steps:
+        while done < len(repairs) and repairs[done].step <= step.step:
+            objects.append(repair_json(repairs[done]))
+            done += 1
+        objects.append(step_json(step))
+    objects.extend(repair_json(r) for r in repairs[done:])
+    return objects
+
+
+def _parse_repair(data: Mapping[str, Any], source: str, line: int, next_step: int) -> TraceRepair:
+    """A repair line, type-checked; it must come just before step line ``next_step``."""
+    missing = [k for k in _REPAIR_KEYS if k not in data]
+    if missing:
+        raise TraceError(f"expected a repair with key {missing[0]!r}", source=source, line=line)
+    step = _count(data, "step", source, line)
+    if step != next_step:
+        raise TraceError(
+            f"expected a repair for step {next_step} (the next step line), got step {step}",
+            source=source,
+            line=line,
+        )
+    action = data["action"]
+    return TraceRepair(
+        step=next_step,
+        pose=_parse_pose(data["pose"], source, line, "'pose'"),
+        action=None if action is None else _codes([action], "action", source, line)[0],
+        status=_choice(data, "status", REPAIR_STATUSES, source, line),
+        source=_choice(data, "source", REPAIR_SOURCES, source, line),
+        attempts=_names(data["attempts"], source, line),
+        actions=_codes(data["actions"], "actions", source, line),
+        consumed=_count(data, "consumed", source, line),
+        candidate_index=_optional_count(data, "candidate_index", source, line),
+        depth=_optional_count(data, "depth", source, line),
+        latency_ns=_count(data, "latency_ns", source, line),
+    )
+
+
+_REPAIR_KEYS = (
+    "step",
+    "pose",
+    "action",
+    "status",
+    "source",
+    "attempts",
+    "actions",
+    "consumed",
+    "candidate_index",
+    "depth",
+    "latency_ns",
+)
+
+
+def _count(data: Mapping[str, Any], key: str, source: str, line: int) -> int:
+    value = data[key]
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise TraceError(
+            f"expected repair {key!r} to be an integer >= 0, got {value!r}",
+            source=source,
+            line=line,
+        )
+    return value
+
+
+def _optional_count(data: Mapping[str, Any], key: str, source: str, line: int) -> int | None:
+    return None if data[key] is None else _count(data, key, source, line)
+
+
+def _choice(
+    data: Mapping[str, Any], key: str, choices: tuple[str, ...], source: str, line: int
+) -> str:
+    value = data[key]
+    if value not in choices:
+        raise TraceError(
+            f"expected repair {key!r} in {', '.join(choices)}, got {value!r}",
+            source=source,
+            line=line,
+        )
+    return str(value)
+
+
+def _names(value: Any, source: str, line: int) -> tuple[str, ...]:
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise TraceError(
+            f"expected repair 'attempts' to be a list of strategy names, got {value!r}",
+            source=source,
+            line=line,
+        )
+    return tuple(value)
+
+
+def _codes(value: Any, key: str, source: str, line: int) -> tuple[four_wheel.Action, ...]:
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise TraceError(
+            f"expected repair {key!r} as action codes, got {value!r}", source=source, line=line
+        )
+    try:
+        return tuple(four_wheel.parse_action(v, source=source) for v in value)
+    except InputError as exc:
+        raise TraceError(f"bad repair {key!r}: {exc.reason}", source=source, line=line) from None
+
+
 @dataclass(frozen=True, slots=True)
 class Trace:
-    """A parsed trace: the header object, the steps (with their line numbers) and the summary."""
+    """A parsed trace: the header object, the steps (with their line numbers), the summary, and
+    the repairs (with their line numbers; empty for traces written before repair lines)."""
 
     source: str
     header: Mapping[str, Any]
     steps: tuple[TraceStep, ...]
     step_lines: tuple[int, ...]
     summary: Mapping[str, Any] | None
+    repairs: tuple[TraceRepair, ...] = ()
+    repair_lines: tuple[int, ...] = ()
 
 
 def _parse_pose(value: Any, source: str, line: int, what: str) -> Pose:
@@ -175,6 +347,8 @@ def parse_trace(text: str, source: str = "<trace>") -> Trace:
     summary: Mapping[str, Any] | None = None
     steps: list[TraceStep] = []
     lines: list[int] = []
+    repairs: list[TraceRepair] = []
+    repair_lines: list[int] = []
     for number, raw in enumerate(text.splitlines(), start=1):
         if not raw.strip():
             continue
@@ -207,15 +381,22 @@ def parse_trace(text: str, source: str = "<trace>") -> Trace:
         elif kind == "step":
             steps.append(_parse_step(data, source, number))
             lines.append(number)
+        elif kind == "repair":
+            repairs.append(_parse_repair(data, source, number, next_step=len(steps)))
+            repair_lines.append(number)
         elif kind == "summary":
             summary = data
         else:
             raise TraceError(
-                f"expected a step or summary line, got type {kind!r}", source=source, line=number
+                f"expected a step, repair or summary line, got type {kind!r}",
+                source=source,
+                line=number,
             )
     if header is None:
         raise TraceError("expected a header line, got an empty file", source=source)
-    return Trace(source, header, tuple(steps), tuple(lines), summary)
+    return Trace(
+        source, header, tuple(steps), tuple(lines), summary, tuple(repairs), tuple(repair_lines)
+    )
 
 
 def read_trace(path: str | Path) -> Trace:
@@ -353,7 +534,7 @@ def _check_summary(trace: Trace, spec: MissionSpec, pose: Pose, ticks: Fraction)
     summary = trace.summary
     if summary is None:
         return ReplayReport(True, count)
-    line = (trace.step_lines[-1] if trace.step_lines else 1) + 1
+    line = max((*trace.step_lines[-1:], *trace.repair_lines[-1:]), default=1) + 1
     at_goal = pose.cell == spec.goal and (
         spec.goal_heading is None or pose.heading == spec.goal_heading
     )

@@ -147,7 +147,9 @@ class Repair(NamedTuple):
     ``"lookahead"`` or ``"replan"``). ``attempts`` lists the strategies tried, in order.
     ``replans`` counts full replans (0 or 1); ``candidate_length``/``depth`` describe a table
     replacement; ``examined`` counts table candidates looked at; ``expansions`` the search nodes
-    expanded by lookahead and replan.
+    expanded by lookahead and replan. ``candidate_index`` is the position of the candidate a
+    replacement used in the list the table gives for the faulty action and the known faults
+    (``None`` for lookahead and replan).
     """
 
     status: str
@@ -160,6 +162,7 @@ class Repair(NamedTuple):
     examined: int = 0
     expansions: int = 0
     attempts: tuple[str, ...] = ()
+    candidate_index: int | None = None
 
 
 Strategy = Callable[[RepairRequest], Repair]
@@ -239,6 +242,7 @@ def replacement(request: RepairRequest) -> Repair:
             depth=found.depth,
             examined=found.examined,
             attempts=("replacement",),
+            candidate_index=found.index,
         )
     fallback = replan(request)
     return _chain(fallback, ("replacement",), examined=_examined_all(table, request))
@@ -284,6 +288,7 @@ def _chain(
         repair.examined + examined,
         repair.expansions + expansions,
         before + repair.attempts,
+        repair.candidate_index,
     )
 
 
