@@ -22,6 +22,7 @@ from selfrepair.experiment.report import pick_mission
 from selfrepair.experiment.store import ResultStore
 from selfrepair.experiment.viewer import mission_payload, render_html, wall_runs
 from selfrepair.geometry import Heading, Pose
+from selfrepair.repair.strategies import StrategyOptions
 from selfrepair.robots import four_wheel
 from selfrepair.world.bundled import bundled_routes, load_bundled
 from selfrepair.world.maze import Maze
@@ -138,6 +139,24 @@ def test_repairs_carry_their_source_candidate_latency_and_path(
         if line.source == "replacement":
             assert f"table candidate index {line.candidate_index}" in shown["how"]
     assert any(r["source"] == "replacement" and r["executed"] for r in repairs)
+
+
+def test_a_fallback_repair_says_what_found_nothing_before_it() -> None:
+    route = bundled_routes("narrow-short")[0]
+    spec = MissionSpec(
+        load_bundled("narrow-short"),
+        route.start,
+        route.goal,
+        schedule=FaultSchedule.permanent(four_wheel.parse_faults("FL:F,RR:B")),
+        options=StrategyOptions(table="generated-agnostic"),
+    )
+    trace = parse_trace("\n".join(trace_lines(run_mission(spec))))
+    repairs = mission_payload(trace)["repairs"]
+    fallbacks = [r for r in repairs if r["attempts"] == ["replacement", "replan"]]
+    assert fallbacks and all(r["source"] == "replan" for r in fallbacks)
+    assert all(r["how"] == "replan from scratch (after replacement found none)" for r in fallbacks)
+    direct = [r for r in repairs if r["attempts"] == ["replacement"]]
+    assert direct and all(r["how"].startswith("table candidate index ") for r in direct)
 
 
 def test_lookahead_and_replan_repairs_say_so() -> None:

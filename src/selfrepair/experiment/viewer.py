@@ -203,15 +203,19 @@ def fault_timeline(true: Sequence[FaultSet], known: Sequence[FaultSet]) -> list[
 
 
 def _how(repair: TraceRepair) -> str:
-    """Where a repair came from, in words."""
+    """Where a repair came from, in words, with the strategies that found nothing before it."""
     if repair.source == "replacement":
         depth = f", nested depth {repair.depth}" if repair.depth else ""
-        return f"table candidate index {repair.candidate_index}{depth}"
-    if repair.source == "lookahead":
-        return f"lookahead window over the next {repair.consumed} queued actions"
-    if repair.action is None:
-        return "replan (the plan ran out away from the goal)"
-    return "replan from scratch"
+        how = f"table candidate index {repair.candidate_index}{depth}"
+    elif repair.source == "lookahead":
+        plural = "" if repair.consumed == 1 else "s"
+        how = f"lookahead window over the next {repair.consumed} queued action{plural}"
+    elif repair.action is None:
+        how = "replan (the plan ran out away from the goal)"
+    else:
+        how = "replan from scratch"
+    before = [a for a in repair.attempts[:-1] if a != repair.source]
+    return f"{how} (after {' then '.join(before)} found none)" if before else how
 
 
 def _latency(ns: int) -> str:
