@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from selfrepair.errors import InputError, ProblemError
+from selfrepair.errors import InputError, ProblemError, choice
 from selfrepair.execution.faults import (
     Detection,
     FaultEvent,
@@ -198,8 +198,11 @@ class FaultSpec:
     probability: tuple[float, float] = (0.2, 0.8)
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "persistence", tuple(Persistence(p) for p in self.persistence))
-        object.__setattr__(self, "detection", tuple(Detection(d) for d in self.detection))
+        persistence = tuple(choice(Persistence, p, "persistence") for p in self.persistence)
+        object.__setattr__(self, "persistence", persistence)
+        object.__setattr__(
+            self, "detection", tuple(choice(Detection, d, "detection") for d in self.detection)
+        )
         if self.sets is not None:
             object.__setattr__(self, "sets", tuple(self.sets))
         if self.sets == () or not self.persistence or not self.detection:
