@@ -287,6 +287,10 @@ def test_tabulated_motion_equals_the_domain(name: str) -> None:
     ):
         pose = Pose(x, y, heading)
         assert fast.step(pose, action) == domain.step(pose, action)
+    for faults in (frozenset(), *domain.fault_sets):
+        for action in domain.actions:
+            assert fast.available(action, faults) == domain.available(action, faults)
+            assert fast.blocking(action, faults) == domain.blocking(action, faults)
 
 
 def test_maze_sources_generator_file_and_bundled(tmp_path: Path) -> None:

@@ -67,7 +67,7 @@ from selfrepair.execution.executor import mission_context
 from selfrepair.execution.faults import Detection, FaultSchedule
 from selfrepair.execution.result import MissionSpec
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS, Outcome, Simulator, StepOutcome
-from selfrepair.geometry import Cell, Pose, parse_cell, parse_pose
+from selfrepair.geometry import Cell, Heading, Pose, parse_cell, parse_pose
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import RepairSource, StrategyName, StrategyOptions, uses_table
 from selfrepair.robots.domain import Domain
@@ -86,6 +86,8 @@ MAX_VIEW_RADIUS = 32
 Observation = dict[str, Any]
 
 _RESET_OPTIONS = frozenset({"maze", "start", "goal", "faults"})
+_HEADING_LETTERS = "".join(h.name for h in Heading)
+_FAILED_TICKS = float(FAILED_ATTEMPT_TICKS)
 
 
 @dataclass(frozen=True, slots=True)
@@ -177,6 +179,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
                 f"view_radius must be from 0 to {MAX_VIEW_RADIUS}, got {view_radius}"
             )
         self.view_radius = view_radius
+        self._side = 2 * view_radius + 1
         self.guide = guide
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ProblemError(
@@ -193,6 +196,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         self._senses = False
         self._goal: Cell = (0, 0)
         self._steps = 0
+        self._elapsed = 0.0
         self._limit = 0
         self._padded: npt.NDArray[np.int8] = np.zeros((0, 0), dtype=np.int8)
         self._fault_views: dict[frozenset[Any], tuple[npt.NDArray[np.int8], str]] = {}
@@ -214,7 +218,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         domain = self.domain
         self.actions: tuple[Any, ...] = domain.actions
         self._index = {action: i for i, action in enumerate(self.actions)}
-        self._move_rewards = tuple(-float(domain.duration(a)) for a in self.actions)
+        self._durations = tuple(float(domain.duration(a)) for a in self.actions)
         self._fault_index = {fault: i for i, fault in enumerate(domain.faults)}
         side = 2 * self.view_radius + 1
         reach = max(source.largest_side for source in self.sources) - 1
@@ -301,9 +305,10 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         if options:
             scenario = self._with_options(scenario, options)
         self._begin(scenario)
-        info = self._info(None)
+        pose = self._simulator().pose
+        info = self._info(pose, None)
         info.update(self._episode_info())
-        return self._observe(), info
+        return self._observe(pose), info
 
     def step(
         self, action: np.int64 | int
@@ -320,22 +325,27 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         status = outcome.status
         rewards = self.rewards
         if status is Outcome.MOVED:
-            reward = self._move_rewards[index]
+            duration = self._durations[index]
+            reward = -duration
         elif status is Outcome.FAILED_ATTEMPT:
-            reward = -float(FAILED_ATTEMPT_TICKS) - rewards.fault_penalty
+            duration = _FAILED_TICKS
+            reward = -duration - rewards.fault_penalty
             if not self._senses:
                 self._known = self._known | outcome.blocking
         else:
+            duration = 0.0
             reward = -rewards.blocked_penalty
+        self._elapsed += duration
         if self._senses:
             self._known = sim.sense()
-        terminated = sim.pose.cell == self._goal
+        pose = sim.pose
+        terminated = pose.x == self._goal[0] and pose.y == self._goal[1]
         if terminated:
             reward += rewards.goal_bonus
         truncated = not terminated and self._steps >= self._limit
         if self._guide is not None:
             self._guide.record(command, status)
-        return self._observe(), reward, terminated, truncated, self._info(outcome)
+        return self._observe(pose), reward, terminated, truncated, self._info(pose, status)
 
     def render(self) -> str | npt.NDArray[np.uint8] | None:
         """The frame of ``render_mode``: an RGB array or the ASCII picture (``None`` without a
@@ -391,6 +401,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         self._known = self._sim.sense()
         self._goal = scenario.goal
         self._steps = 0
+        self._elapsed = 0.0
         self.last_outcome = None
         self._limit = self.max_steps or 4 * maze.width * maze.height
         grid = maze.free_grid(self.view_radius)
@@ -400,14 +411,14 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         self._base_frame = None
         self._guide = self.navigator(StrategyName.REPLACEMENT) if self.guide else None
 
-    def _observe(self) -> Observation:
-        pose = self._simulator().pose
+    def _observe(self, pose: Pose) -> Observation:
         x, y = pose.x, pose.y
-        side = 2 * self.view_radius + 1
+        side = self._side
+        goal = self._goal
         observation: Observation = {
             "window": self._padded[y : y + side, x : x + side].copy(),
             "heading": int(pose.heading),
-            "goal": np.array((self._goal[0] - x, self._goal[1] - y), dtype=np.int32),
+            "goal": np.array((goal[0] - x, goal[1] - y), dtype=np.int32),
         }
         if self._fault_index:
             observation["faults"] = self._fault_view(self._known)[0].copy()
@@ -424,20 +435,19 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
             self._fault_views[known] = view
         return view
 
-    def _info(self, outcome: StepOutcome | None) -> dict[str, Any]:
-        sim = self._simulator()
+    def _info(self, pose: Pose, status: Outcome | None) -> dict[str, Any]:
         info: dict[str, Any] = {
-            "outcome": "" if outcome is None else outcome.status.value,
-            "pose": str(sim.pose),
+            "outcome": "" if status is None else str(status),
+            "pose": f"{pose.x},{pose.y},{_HEADING_LETTERS[pose.heading]}",
             "known_faults": self._fault_view(self._known)[1],
-            "ticks": float(sim.ticks),
+            "ticks": self._elapsed,
         }
         if self._guide is not None:
-            info.update(self._hints(self._guide, sim))
+            info.update(self._hints(self._guide, pose, self._simulator().steps))
         return info
 
-    def _hints(self, guide: Navigator, sim: Simulator) -> dict[str, Any]:
-        planned = guide.next_action(sim.pose, self._known, sim.steps)
+    def _hints(self, guide: Navigator, pose: Pose, steps: int) -> dict[str, Any]:
+        planned = guide.next_action(pose, self._known, steps)
         repair = guide.last_repair
         suggested: tuple[int, ...] = ()
         if repair is not None and repair.source is RepairSource.REPLACEMENT:

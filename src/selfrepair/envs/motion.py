@@ -5,8 +5,10 @@ registered) says that ``apply`` and ``footprint`` commute with translation: an a
 same thing in every cell. So the effect of every action from every heading, computed once by the
 domain's own :meth:`~selfrepair.robots.domain.Domain.step` at the origin, gives its effect anywhere
 by a shift. :func:`tabulated` returns the domain with ``apply``, ``footprint`` and ``duration``
-answered that way; nothing about the motion is re-derived, and ``tests/test_envs.py`` checks that
-the answers are identical to the domain's on every action, heading and some shifted cells.
+answered that way, and ``available`` answered from the set of actions the domain's own
+``available`` allows under each fault set met (kept in a bounded cache). Nothing about the motion
+or the faults is re-derived, and ``tests/test_envs.py`` checks that the answers are identical to
+the domain's on every action, heading, some shifted cells and every fault set in scope.
 
 The environment gives the tabulated copy to its :class:`~selfrepair.execution.simulator.Simulator`
 only; everything that compares domains by identity (tables, mission specs) keeps the original.
@@ -28,6 +30,9 @@ _Move = tuple[int, int, Heading, tuple[Cell, ...]]
 
 _TABULATED: BoundedCache[Domain[Any, Any], Domain[Any, Any]] = BoundedCache(
     "tabulated domains", 8
+)
+_AVAILABLE: BoundedCache[tuple[Domain[Any, Any], frozenset[Any]], frozenset[Any]] = BoundedCache(
+    "available actions per fault set", 1024
 )
 
 
@@ -54,6 +59,16 @@ def _tabulate(domain: Domain[Any, Any]) -> Domain[Any, Any]:
         x, y = pose.x, pose.y
         return tuple([(x + cx, y + cy) for cx, cy in moves[(pose.heading, action)][3]])
 
+    def allowed(faults: frozenset[Any]) -> frozenset[Any]:
+        return frozenset(a for a in domain.actions if domain.available(a, faults))
+
+    def available(action: Any, faults: frozenset[Any]) -> bool:
+        return action in _AVAILABLE.get((domain, faults), lambda: allowed(faults))
+
     return dataclasses.replace(
-        domain, apply=apply, footprint=footprint, duration=durations.__getitem__
+        domain,
+        apply=apply,
+        footprint=footprint,
+        duration=durations.__getitem__,
+        available=available,
     )

@@ -82,7 +82,8 @@ class Simulator:
         """
         steps, ticks = self.steps, self.ticks
         active = self._active
-        if active is not None and active[0] == steps and active[1] == ticks:
+        # ``ticks`` is a new Fraction whenever time passes, so identity is the cheap test.
+        if active is not None and active[0] == steps and active[1] is ticks:
             return active[2]
         faults = self.schedule.active_faults(steps, ticks, self.seed)
         self._active = (steps, ticks, faults)
