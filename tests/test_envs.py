@@ -26,9 +26,11 @@ from selfrepair.errors import InputError, ProblemError
 from selfrepair.execution.faults import Detection, FaultEvent, FaultSchedule, Persistence
 from selfrepair.geometry import Heading, Pose
 from selfrepair.repair.replacement import flat_replacement
-from selfrepair.robots.registry import get_domain
+from selfrepair.robots.registry import get_domain, load_plugin
 from selfrepair.world.maze import save_maze
 from selfrepair.world.mazegen import generate_maze
+
+OMNI = Path(__file__).resolve().parent.parent / "examples" / "omni"
 
 CORNER = {"maze": "narrow-short", "start": "1,1,E", "goal": "13,13"}
 """A narrow-short mission whose first move, forward to 2,1, is free; backward hits the wall."""
@@ -43,6 +45,8 @@ def _strict_make(**kwargs: Any) -> gym.Env[Any, Any]:
     [
         {"domain": "four-wheel"},
         {"domain": "three-action"},
+        {"domain": "omni"},
+        {"domain": "omni", "table": str(OMNI / "table-indexed.json"), "guide": True},
         {"domain": "four-wheel", "guide": True},
         {"domain": "three-action", "guide": True, "mazes": "wide-short"},
         {
@@ -55,9 +59,21 @@ def _strict_make(**kwargs: Any) -> gym.Env[Any, Any]:
             "view_radius": 2,
         },
     ],
-    ids=["four-wheel", "three-action", "four-wheel-guide", "three-action-guide", "generated"],
+    ids=[
+        "four-wheel",
+        "three-action",
+        "omni-generated-table",
+        "omni-guide",
+        "four-wheel-guide",
+        "three-action-guide",
+        "generated-mazes",
+    ],
 )
 def test_check_env_passes_with_warnings_as_errors(kwargs: dict[str, Any]) -> None:
+    """The four-wheel robot, the paper's three-action robot and the example robot of
+    docs/extending.md (examples/omni), which the library does not ship."""
+    if kwargs.get("domain") == "omni":
+        load_plugin(OMNI / "robot.py")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         env = _strict_make(**kwargs)

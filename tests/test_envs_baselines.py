@@ -8,6 +8,7 @@ import math
 import subprocess
 import sys
 from importlib import resources
+from pathlib import Path
 
 import pytest
 
@@ -161,6 +162,15 @@ def test_gym_eval_paper_faults_and_generated_mazes(capsys: pytest.CaptureFixture
     )
     data = json.loads(capsys.readouterr().out)
     assert code == 0 and all(r["maze"].startswith("gen15x15") for r in data["runs"])
+
+
+def test_gym_eval_with_a_plugin_robot(capsys: pytest.CaptureFixture[str]) -> None:
+    omni = Path(__file__).resolve().parent.parent / "examples" / "omni"
+    args = ["--domain", "omni", "--table", str(omni / "table-indexed.json"), "--faults", "FL:F"]
+    plugin = ["--plugin", str(omni / "robot.py")]
+    code = main([*plugin, "gym-eval", *args, "--episodes", "3", "--json"])
+    data = json.loads(capsys.readouterr().out)
+    assert code == 0 and data["domain"] == "omni" and data["successes"] == 3
 
 
 @pytest.mark.parametrize(
