@@ -42,6 +42,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/planner.py
 	$(PY) benchmarks/repair_latency.py
 	$(PY) benchmarks/tablegen.py
+	$(PY) benchmarks/gym_env.py
 
 clean:
 	rm -rf $(VENV) build dist .pytest_cache .ruff_cache .hypothesis
