@@ -3,8 +3,9 @@
 The robot is any registered :class:`~selfrepair.robots.domain.Domain` (``domain=``, default
 ``four-wheel``); an action is an index into ``domain.actions``. Motion and faults are the project's
 own world model: every command goes to a :class:`~selfrepair.execution.simulator.Simulator`, which
-moves the robot by ``Domain.step`` and holds the true faults of the episode's
-:class:`~selfrepair.execution.faults.FaultSchedule`. The agent sees only what the executor would:
+moves the robot by ``Domain.step`` (of the domain's tabulated copy, :mod:`selfrepair.envs.motion`)
+and holds the true faults of the episode's :class:`~selfrepair.execution.faults.FaultSchedule`.
+The agent sees only what the executor would:
 
 ``window``
     The free cells (1) and walls (0) of the ``(2r+1) x (2r+1)`` square centred on the robot
@@ -28,7 +29,10 @@ Episodes are drawn by :mod:`selfrepair.envs.scenarios` from the environment's ``
 ``reset(seed=s)`` fixes the maze, the route, the faults and the seed of intermittent faults;
 ``reset(options=...)`` can fix any of them (see :meth:`FaultyMazeEnv.reset`).
 
-``info`` (from ``reset`` and ``step``) carries the *guide*: a
+Every ``info`` has ``outcome`` (the simulator's :class:`~selfrepair.execution.simulator.Outcome`,
+``""`` at reset), ``pose`` (``"x,y,H"``), ``known_faults`` (their text) and ``ticks`` (elapsed);
+the reset ``info`` also describes the episode's draw. With ``guide=True``, ``info`` carries the
+*guide*'s hints: a
 :class:`~selfrepair.envs.guide.Navigator` with the ``replacement`` strategy and the environment's
 table, which plans from the start without knowing any fault (as the executor does) and follows the
 robot. ``planned_action`` is what it would command now; when its next planned action is faulty under
