@@ -25,7 +25,7 @@ demo: $(STAMP)
 # Lint: style (ruff), the architecture's import rules (import-linter contracts in
 # pyproject.toml) and types (mypy --strict on the library).
 lint: $(STAMP)
-	$(VENV)/bin/ruff check src tests benchmarks
+	$(VENV)/bin/ruff check src tests benchmarks examples
 	$(VENV)/bin/lint-imports
 	$(VENV)/bin/mypy
 
@@ -42,6 +42,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/planner.py
 	$(PY) benchmarks/repair_latency.py
 	$(PY) benchmarks/tablegen.py
+	$(PY) benchmarks/gym_env.py
 
 clean:
 	rm -rf $(VENV) build dist .pytest_cache .ruff_cache .hypothesis

@@ -136,5 +136,13 @@ class FreeGrid:
         return 0 <= x < self.width and 0 <= y < self.height and self.data[self.index(x, y)] == 1
 
     def all_free(self, cells: Iterable[Cell]) -> bool:
-        """Whether every cell of ``cells`` lies on the grid and is free."""
-        return all(self.is_free(x, y) for x, y in cells)
+        """Whether every cell of ``cells`` lies on the grid and is free (:meth:`is_free`, inlined:
+        this is the executability test of every simulated step)."""
+        width, height, margin, data = self.width, self.height, self.margin, self.data
+        stride = width + 2 * margin
+        for x, y in cells:
+            if not (0 <= x < width and 0 <= y < height) or data[
+                (y + margin) * stride + x + margin
+            ] != 1:
+                return False
+        return True

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import sys
+from pathlib import Path
 from typing import Annotated, Any
 
 import typer
@@ -28,6 +29,24 @@ table_app = typer.Typer(
 )
 app.add_typer(maze_app, name="maze")
 app.add_typer(table_app, name="table")
+
+
+@app.callback()
+def _global_options(
+    plugin: Annotated[
+        list[Path] | None,
+        typer.Option(
+            "--plugin",
+            help="A Python file that registers a robot domain (repeatable); see docs/extending.md.",
+        ),
+    ] = None,
+) -> None:
+    """Self-repairing robot plans: replacement tables versus replanning from scratch."""
+    if plugin:
+        from selfrepair.robots.registry import load_plugin
+
+        for path in plugin:
+            load_plugin(path)
 
 
 def console() -> Console:

@@ -64,7 +64,7 @@ from selfrepair.repair.strategies import (
 )
 from selfrepair.search.astar import PlanResult, PlanStatus
 from selfrepair.search.backend import use_numba
-from selfrepair.search.lattice import action_cost, plan
+from selfrepair.search.lattice import action_cost, cost_scale, plan
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.tables.model import ReplacementTable
 
@@ -135,6 +135,7 @@ def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> Missio
         grid=grid,
         cost=cost,
         world=spec.maze,
+        cost_scale=cost_scale(spec.domain, weight),
     )
 
 

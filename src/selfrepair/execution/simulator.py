@@ -13,10 +13,9 @@ tests check that).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from enum import StrEnum
 from fractions import Fraction
-from typing import Any
+from typing import Any, NamedTuple
 
 from selfrepair.execution.faults import Detection, FaultSchedule
 from selfrepair.geometry import Cell, Pose
@@ -37,9 +36,12 @@ class Outcome(StrEnum):
     COLLISION = "collision"
 
 
-@dataclass(frozen=True, slots=True)
-class StepOutcome:
-    """What one command did, where from and to, how long it took and which faults blocked it."""
+class StepOutcome(NamedTuple):
+    """What one command did, where from and to, how long it took and which faults blocked it.
+
+    An immutable ``NamedTuple`` rather than a frozen dataclass: one is built for every simulated
+    step, and a frozen dataclass costs several times more to construct.
+    """
 
     status: Outcome
     step: int
@@ -70,10 +72,22 @@ class Simulator:
         self.pose = start
         self.steps = 0
         self.ticks = Fraction(0)
+        self._active: tuple[int, Fraction, frozenset[Any]] | None = None
 
     def true_faults(self) -> frozenset[Any]:
-        """The faults active now (at the start of the next step)."""
-        return self.schedule.active_faults(self.steps, self.ticks, self.seed)
+        """The faults active now (at the start of the next step).
+
+        A pure function of (schedule, seed, step, tick), so it is computed once per step: the
+        executor and the Gymnasium environment ask for it to sense and again to execute.
+        """
+        steps, ticks = self.steps, self.ticks
+        active = self._active
+        # ``ticks`` is a new Fraction whenever time passes, so identity is the cheap test.
+        if active is not None and active[0] == steps and active[1] is ticks:
+            return active[2]
+        faults = self.schedule.active_faults(steps, ticks, self.seed)
+        self._active = (steps, ticks, faults)
+        return faults
 
     def sense(self) -> frozenset[Any]:
         """What the robot's sensors report before the next step.

@@ -58,6 +58,7 @@ __all__ = [
     "TRACE_VERSION",
     "ReplayReport",
     "Trace",
+    "TraceRepair",
     "header_json",
     "parse_trace",
     "read_trace",
@@ -173,17 +174,36 @@ def write_trace(result: MissionResult, path: str | Path) -> None:
 
 
 @dataclass(frozen=True, slots=True)
+class TraceRepair:
+    """One repair line, read back: a :class:`~selfrepair.execution.result.RepairRecord` as the
+    trace keeps it (the fields are those of the line, see the module docstring)."""
+
+    step: int
+    pose: Pose
+    action: Any | None
+    status: RepairStatus
+    source: RepairSource
+    attempts: tuple[str, ...]
+    actions: tuple[Any, ...]
+    consumed: int
+    candidate_index: int | None
+    depth: int | None
+    latency_ns: int
+
+
+@dataclass(frozen=True, slots=True)
 class Trace:
-    """A parsed trace: the robot, the header object, the steps (with their line numbers), the
-    repair lines (type-checked objects) and the summary (``None`` only for a partial trace)."""
+    """A parsed trace: the robot, the header object, the steps and repairs (with their line
+    numbers) and the summary (``None`` only for a partial trace)."""
 
     source: str
     domain: Domain[Any, Any]
     header: Mapping[str, Any]
     steps: tuple[TraceStep, ...]
     step_lines: tuple[int, ...]
-    repairs: tuple[Mapping[str, Any], ...]
-    summary: Mapping[str, Any] | None
+    repairs: tuple[TraceRepair, ...] = ()
+    repair_lines: tuple[int, ...] = ()
+    summary: Mapping[str, Any] | None = None
     summary_line: int | None = None
 
 
@@ -271,22 +291,25 @@ def _parse_step(domain: Domain[Any, Any], f: _Fields) -> TraceStep:
     )
 
 
-def _check_repair(domain: Domain[Any, Any], f: _Fields) -> Mapping[str, Any]:
-    f.integer("step", minimum=0)
-    f.pose("pose")
+def _parse_repair(domain: Domain[Any, Any], f: _Fields, next_step: int) -> TraceRepair:
+    """A repair line, type-checked; it must come just before step line ``next_step``."""
+    step = f.integer("step", minimum=0)
+    if step != next_step:
+        raise f.fail(f"expected a repair for step {next_step} (the next step line), got {step}")
     action = f.text("action", optional=True)
-    if action is not None:
-        f.parsed("action", domain.parse_action, action)
-    f.choice("status", (s.value for s in RepairStatus))
-    f.choice("source", (s.value for s in RepairSource))
-    f.texts("attempts")
-    for text in f.texts("actions"):
-        f.parsed("action", domain.parse_action, text)
-    f.integer("consumed", minimum=0)
-    f.integer("candidate_index", optional=True, minimum=0)
-    f.integer("depth", optional=True, minimum=0)
-    f.integer("latency_ns", minimum=0)
-    return f.data
+    return TraceRepair(
+        step=step,
+        pose=f.pose("pose"),
+        action=None if action is None else f.parsed("action", domain.parse_action, action),
+        status=RepairStatus(f.choice("status", (s.value for s in RepairStatus))),
+        source=RepairSource(f.choice("source", (s.value for s in RepairSource))),
+        attempts=tuple(f.texts("attempts")),
+        actions=tuple(f.parsed("action", domain.parse_action, t) for t in f.texts("actions")),
+        consumed=f.integer("consumed", minimum=0),
+        candidate_index=f.integer("candidate_index", optional=True, minimum=0),
+        depth=f.integer("depth", optional=True, minimum=0),
+        latency_ns=f.integer("latency_ns", minimum=0),
+    )
 
 
 def _header(data: Any, source: str, number: int) -> tuple[Mapping[str, Any], Domain[Any, Any]]:
@@ -319,7 +342,8 @@ def parse_trace(text: str, source: str = "<trace>", *, partial: bool = False) ->
     summary_line: int | None = None
     steps: list[TraceStep] = []
     lines: list[int] = []
-    repairs: list[Mapping[str, Any]] = []
+    repairs: list[TraceRepair] = []
+    repair_lines: list[int] = []
     for number, raw in enumerate(text.split("\n"), start=1):
         if not raw.strip():
             continue
@@ -340,7 +364,9 @@ def parse_trace(text: str, source: str = "<trace>", *, partial: bool = False) ->
             steps.append(_parse_step(domain, _Fields(data, source, number)))
             lines.append(number)
         elif kind == "repair":
-            repairs.append(_check_repair(domain, _Fields(data, source, number)))
+            next_step = len(steps)
+            repairs.append(_parse_repair(domain, _Fields(data, source, number), next_step))
+            repair_lines.append(number)
         elif kind == "summary":
             summary, summary_line = data, number
         else:
@@ -359,7 +385,15 @@ def parse_trace(text: str, source: str = "<trace>", *, partial: bool = False) ->
             source=source,
         )
     return Trace(
-        source, domain, header, tuple(steps), tuple(lines), tuple(repairs), summary, summary_line
+        source,
+        domain,
+        header,
+        tuple(steps),
+        tuple(lines),
+        tuple(repairs),
+        tuple(repair_lines),
+        summary,
+        summary_line,
     )
 
 

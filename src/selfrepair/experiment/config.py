@@ -7,6 +7,7 @@ The file format is described in ``docs/experiments.md``; in short::
     repeats = 1                  # seeds per mission
 
     domain = "four-wheel"        # the robot: a name in the domain registry (default four-wheel)
+    plugins = []                 # Python files that register robots (paths relative to this file)
 
     [[mazes]]
     bundled = "narrow-short"     # or file = "x.maze" / generate = {width=.., height=.., ...}
@@ -59,7 +60,7 @@ from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CLEARANCE_WEIGHT
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.robots.domain import Domain
-from selfrepair.robots.registry import get_domain
+from selfrepair.robots.registry import get_domain, load_plugin
 from selfrepair.textio import read_text, strip_bom, text_lines
 
 __all__ = [
@@ -267,6 +268,7 @@ class ExperimentConfig(_Frozen):
     name: Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")]
     description: str = ""
     domain: str = DEFAULT_DOMAIN
+    plugins: tuple[str, ...] = ()
     seed: Int = 0
     repeats: Annotated[Int, Field(ge=1, le=1000)] = 1
     mazes: Annotated[tuple[MazeConfig, ...], Field(min_length=1)]
@@ -357,6 +359,7 @@ def parse_config(text: str, *, source: str = "<string>") -> ExperimentConfig:
         ) from None
     if "source" in data:
         raise ConfigError("unknown key 'source' (it is set by the loader)", source=source)
+    _load_plugins(data, text, source)
     domain = _config_domain(data, text, source)
     try:
         return ExperimentConfig.model_validate(
@@ -364,6 +367,25 @@ def parse_config(text: str, *, source: str = "<string>") -> ExperimentConfig:
         )
     except ValidationError as exc:
         raise _config_error(exc, text, source) from None
+
+
+def _load_plugins(data: dict[str, Any], text: str, source: str) -> None:
+    """Run the plug-in files the experiment names (key ``plugins``, paths relative to the file)
+    so that the domain it names can be found."""
+    plugins = data.get("plugins", [])
+    line = find_line(text, ("plugins",))
+    if not isinstance(plugins, list) or not all(isinstance(p, str) for p in plugins):
+        raise ConfigError(
+            f"key 'plugins': expected a list of file paths, got {plugins!r}",
+            source=source,
+            line=line,
+        )
+    base = Path(source).parent if not source.startswith("<") else Path.cwd()
+    for plugin in plugins:
+        try:
+            load_plugin(base / plugin)
+        except InputError as exc:
+            raise ConfigError(f"key 'plugins': {exc}", source=source, line=line) from None
 
 
 def _config_domain(data: dict[str, Any], text: str, source: str) -> Domain[Any, Any]:

@@ -50,7 +50,7 @@ from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import StrategyOptions
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
-from selfrepair.robots.registry import get_domain
+from selfrepair.robots.registry import get_domain, load_plugin
 from selfrepair.world.maze import Maze
 from selfrepair.world.routes import Route
 
@@ -373,6 +373,16 @@ def _check_table(path: Path) -> None:
         ) from None
 
 
+def _plugin_identities(config: ExperimentConfig) -> list[dict[str, str]]:
+    """Each plug-in file of ``config`` by absolute path (to load it in workers) and content hash
+    (so editing the robot gives its missions new keys)."""
+    out = []
+    for plugin in config.plugins:
+        path = (config.base_dir / plugin).resolve()
+        out.append({"file": str(path), "sha256": load_plugin(path)})
+    return out
+
+
 def portable(settings: dict[str, Any]) -> dict[str, Any]:
     """``settings`` as the key and seed see them: files by name and content hash, not by their
     absolute path, so a checkout or data directory can move without changing any key."""
@@ -380,6 +390,9 @@ def portable(settings: dict[str, Any]) -> dict[str, Any]:
     maze = out.get("maze")
     if isinstance(maze, dict) and "file" in maze:
         out["maze"] = {**maze, "file": Path(maze["file"]).name}
+    plugins = out.get("plugins")
+    if isinstance(plugins, list):
+        out["plugins"] = [{**p, "file": Path(p["file"]).name} for p in plugins]
     options = out.get("options")
     if isinstance(options, dict) and "table_sha256" in options:
         out["options"] = {**options, "table": Path(options["table"]).name}
@@ -476,6 +489,7 @@ def expand(
         source=config.source,
     )
     variants = list(strategy_variants(config))
+    plugins = _plugin_identities(config)
     domain = get_domain(config.domain)
     fault_sets = fault_profile(config.faults.sets, domain)
     missions: dict[str, Mission] = {}
@@ -504,6 +518,8 @@ def expand(
                             }
                             if domain is not FOUR_WHEEL:  # absent for the four-wheel robot,
                                 situation["domain"] = domain.name  # so older keys stay valid
+                            if plugins:
+                                situation["plugins"] = plugins
                             seed = derive_seed(config.seed, portable(situation))
                             for variant, weights in variants:
                                 for weight in weights:
@@ -569,6 +585,8 @@ def to_spec(mission: Mission) -> MissionSpec:
     Mazes and tables are loaded once per process (cached), so a worker pays for them once.
     """
     s = mission.settings
+    for plugin in s.get("plugins", []):
+        load_plugin(plugin["file"])  # a worker process loads the robot before it is looked up
     domain = get_domain(s.get("domain", FOUR_WHEEL.name))
     events = tuple(
         FaultEvent(

@@ -17,6 +17,7 @@ from collections import Counter
 from collections.abc import Sequence
 from fractions import Fraction
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from selfrepair.errors import InputError
 from selfrepair.experiment.findings import (
@@ -29,7 +30,10 @@ from selfrepair.experiment.findings import (
 from selfrepair.experiment.missions import Mission
 from selfrepair.experiment.store import ResultStore
 
-__all__ = ["choose_mission", "markdown_table", "write_report"]
+if TYPE_CHECKING:
+    from selfrepair.execution.result import MissionResult
+
+__all__ = ["choose_mission", "markdown_table", "pick_mission", "rerun_mission", "write_report"]
 
 
 def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = None) -> list[Path]:
@@ -52,7 +56,10 @@ def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = N
         plots.figure_clearance(rows, out_dir / "clearance.png"),
         plots.figure_heatmap(rows, out_dir / "heatmap.png"),
     ]
-    chosen = _pick(rows, mission_key, str(db))
+    if mission_key is None:
+        chosen = choose_mission(rows)
+    else:
+        chosen = pick_mission(rows, mission_key, str(db))
     mission_files = _mission_files(chosen, out_dir)
     written += mission_files
     report = out_dir / "report.md"
@@ -70,14 +77,17 @@ def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = N
     return [report, *written]
 
 
-def _pick(rows: Sequence[Row], mission_key: str | None, source: str) -> Row:
-    if mission_key is None:
-        return choose_mission(rows)
-    hits = [r for r in rows if str(r["key"]).startswith(mission_key)]
+def pick_mission(
+    rows: Sequence[Row], key_prefix: str, source: str, *, option: str = "--mission"
+) -> Row:
+    """The row whose key starts with ``key_prefix``; none or several is an
+    :class:`~selfrepair.errors.InputError` naming ``option`` (the flag the prefix came from)."""
+    hits = [r for r in rows if key_prefix and str(r["key"]).startswith(key_prefix)]
     if len(hits) != 1:
+        examples = ", ".join(str(r["key"])[:12] for r in hits[:3])
         raise InputError(
-            f"expected --mission to match exactly one stored key, {len(hits)} match "
-            f"{mission_key!r}",
+            f"expected {option} to match exactly one stored key, {len(hits)} match "
+            f"{key_prefix!r}" + (f" (e.g. {examples}); give more characters" if hits else ""),
             source=source,
         )
     return hits[0]
@@ -106,18 +116,25 @@ def choose_mission(rows: Sequence[Row]) -> Row:
     return max(rows, key=score)
 
 
-def _mission_files(row: Row, out_dir: Path) -> list[Path]:
-    """Run the chosen mission again, write its trace, picture and GIF."""
+def rerun_mission(row: Row) -> MissionResult:
+    """Run a stored mission again from its canonical configuration (results are deterministic,
+    so this gives its steps and repairs; the timings are new)."""
     from selfrepair.execution.executor import run_mission
-    from selfrepair.execution.trace import read_trace, write_trace
-    from selfrepair.experiment import plots
-    from selfrepair.experiment.animate import animate_trace
     from selfrepair.experiment.missions import to_spec
 
     mission = Mission(
         str(row["key"]), str(row["experiment"]), int(row["seed"] or 0), str(row["config"]), ()
     )
-    result = run_mission(to_spec(mission))
+    return run_mission(to_spec(mission))
+
+
+def _mission_files(row: Row, out_dir: Path) -> list[Path]:
+    """Run the chosen mission again, write its trace, picture and GIF."""
+    from selfrepair.execution.trace import read_trace, write_trace
+    from selfrepair.experiment import plots
+    from selfrepair.experiment.animate import animate_trace
+
+    result = rerun_mission(row)
     trace_path = out_dir / "mission.jsonl"
     write_trace(result, trace_path)
     picture = plots.picture_from_trace(read_trace(trace_path))

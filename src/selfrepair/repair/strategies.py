@@ -33,6 +33,7 @@ it is available under the known faults, so the repaired queue starts with an exe
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
@@ -156,7 +157,8 @@ class MissionContext:
     ``plan`` plans on the mission's map; ``replan_budget`` is the node budget of a full replan
     (``None``: unbounded). ``free`` tests a footprint, ``grid`` is the same map as a
     :class:`~selfrepair.geometry.FreeGrid` with a margin of at least the table's reach, and
-    ``cost(pose, action)`` is the exact cost of one step (duration plus clearance term). ``world``
+    ``cost(pose, action)`` is the exact cost of one step (duration plus clearance term), and
+    ``cost * cost_scale`` is an integer for every step. ``world``
     is the map itself (a :class:`selfrepair.world.maze.Maze`), typed loosely so that this layer does
     not depend on the world layer; only strategies that must read the map (e.g. to export it)
     use it.
@@ -173,6 +175,7 @@ class MissionContext:
     grid: FreeGrid
     cost: Callable[[Pose, Any], Fraction]
     world: object = None
+    cost_scale: int = 1
 
     def at_goal(self, pose: Pose) -> bool:
         """Whether ``pose`` satisfies the mission's goal."""
@@ -350,6 +353,12 @@ STRATEGIES: dict[str, StrategyFactory] = {
 _TABLE_USERS: set[str] = {StrategyName.REPLACEMENT, StrategyName.LOOKAHEAD}
 """Strategies that use a replacement table (the executor loads one only for these)."""
 
+_BUILT_ELSEWHERE: dict[str, str] = {
+    "dstar-lite": "selfrepair.repair.dstar_lite:start_dstar_lite",
+}
+"""Strategies whose modules import this one, by ``"module:factory"``: imported on first use (so
+that importing the registry does not import every strategy, and no module imports itself)."""
+
 
 def register_strategy(
     name: str, factory: StrategyFactory, *, replace: bool = False, uses_table: bool = False
@@ -374,9 +383,15 @@ def get_strategy(name: str) -> StrategyFactory:
     factory = STRATEGIES.get(name)
     if factory is not None:
         return factory
+    target = _BUILT_ELSEWHERE.get(name)
+    if target is not None:
+        module, _, attribute = target.partition(":")
+        factory = getattr(importlib.import_module(module), attribute)
+        STRATEGIES[name] = factory
+        return factory  # type: ignore[no-any-return]  # a factory by contract
     raise ProblemError(f"unknown strategy {name!r}; expected one of {', '.join(strategy_names())}")
 
 
 def strategy_names() -> tuple[str, ...]:
     """Every strategy name :func:`get_strategy` accepts, built-ins first."""
-    return tuple(STRATEGIES)
+    return tuple(dict.fromkeys([*STRATEGIES, *_BUILT_ELSEWHERE]))

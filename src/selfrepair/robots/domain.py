@@ -45,6 +45,7 @@ __all__ = [
     "Domain",
     "check_domain",
     "primitive_by_motion",
+    "progress_rate",
     "run_open",
     "singles_and_doubles",
 ]
@@ -134,6 +135,20 @@ def primitive_by_motion(domain: Domain[A, F], faults: frozenset[F]) -> dict[str,
         if current is None or domain.duration(action) < domain.duration(current):
             best[key] = action
     return best
+
+
+def progress_rate(domain: Domain[Any, Any], actions: Iterable[Any]) -> Fraction:
+    """The least ticks per cell of Manhattan displacement over ``actions``, from any heading (0 if
+    none moves): ``rate * manhattan(a, b)`` never exceeds the duration of getting from ``a`` to
+    ``b`` with those actions, which is what makes the planners' heuristics admissible."""
+    rates = []
+    for action in actions:
+        for heading in Heading:
+            end = domain.apply(Pose(0, 0, heading), action)
+            moved = abs(end.x) + abs(end.y)
+            if moved:
+                rates.append(Fraction(domain.duration(action)) / moved)
+    return min(rates, default=Fraction(0))
 
 
 _PROBES = tuple(Pose(0, 0, heading) for heading in Heading)

@@ -12,18 +12,34 @@ where text names a robot. Three sources, in this order:
 
 Built-ins and plug-ins are named here as ``"module:attribute"`` strings and imported by name, so
 that the generic layers (tables, repair) that look domains up never import a concrete robot.
+
+A robot defined in a plain Python file (not an installed package) is a *plug-in file*:
+:func:`load_plugin` runs it once per process, and the file registers its domain with
+:func:`register_domain`. The command line's ``--plugin FILE`` and an experiment file's
+``plugins = [...]`` key do exactly that (an experiment's worker processes load the same files before
+they run a mission).
 """
 
 from __future__ import annotations
 
+import hashlib
 import importlib
+import importlib.util
+import sys
 from importlib.metadata import entry_points
+from pathlib import Path
 from typing import Any
 
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.robots.domain import Domain, check_domain
 
-__all__ = ["ENTRY_POINT_GROUP", "domain_names", "get_domain", "register_domain"]
+__all__ = [
+    "ENTRY_POINT_GROUP",
+    "domain_names",
+    "get_domain",
+    "load_plugin",
+    "register_domain",
+]
 
 ENTRY_POINT_GROUP = "selfrepair.domains"
 
@@ -86,3 +102,53 @@ def _load(name: str, target: str) -> Domain[Any, Any]:
         raise ProblemError(f"domain {name!r}: {target!r} is not a Domain named {name!r}")
     check_domain(value)
     return value
+
+
+_PLUGINS: dict[str, str] = {}
+"""Plug-in files run in this process: resolved path -> SHA-256 of the content that was run."""
+_RUN: set[str] = set()
+"""The SHA-256 of every plug-in content run in this process (a copy of a file is not run twice)."""
+
+
+def load_plugin(path: str | Path) -> str:
+    """Run the plug-in file ``path`` (a Python file that registers one or more domains) unless
+    this process already ran it, or a file with the same content; returns the SHA-256 of its
+    content.
+
+    Raises :class:`InputError` naming the file when it cannot be read or fails while running, and
+    when the same path is asked for again after its content changed (a process keeps the robot
+    it started with).
+    """
+    file = Path(path)
+    try:
+        data = file.read_bytes()
+    except OSError as exc:
+        raise InputError(f"cannot read plug-in file: {exc.strerror}", source=str(file)) from None
+    digest = hashlib.sha256(data).hexdigest()
+    key = str(file.resolve())
+    done = _PLUGINS.get(key)
+    if done is not None:
+        if done != digest:
+            raise InputError(
+                "the plug-in file changed since this process loaded it", source=str(file)
+            )
+        return digest
+    if digest in _RUN:
+        _PLUGINS[key] = digest
+        return digest
+    name = f"selfrepair_plugin_{digest[:16]}"
+    spec = importlib.util.spec_from_file_location(name, file)
+    if spec is None or spec.loader is None:
+        raise InputError("expected a Python file (.py)", source=str(file))
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    try:
+        spec.loader.exec_module(module)
+    except Exception as exc:  # the file is the user's code: any failure is bad input
+        del sys.modules[name]
+        raise InputError(
+            f"the plug-in file failed: {type(exc).__name__}: {exc}", source=str(file)
+        ) from None
+    _PLUGINS[key] = digest
+    _RUN.add(digest)
+    return digest

@@ -62,6 +62,7 @@ from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.limits import MAX_CLEARANCE_WEIGHT
 from selfrepair.robots.domain import Domain, primitive_by_motion
+from selfrepair.robots.domain import progress_rate as domain_progress_rate
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import PlanResult, PlanStatus, astar, deadline_from
 from selfrepair.search.backend import BACKENDS, numba_available, use_numba
@@ -138,14 +139,7 @@ _RATES: BoundedCache[tuple[Domain[Any, Any], tuple[Any, ...]], Fraction] = Bound
 
 
 def _progress_rate(domain: Domain[Any, Any], actions: Sequence[Any]) -> Fraction:
-    rates = []
-    for action in actions:
-        for heading in Heading:
-            end = domain.apply(Pose(0, 0, heading), action)
-            moved = abs(end.x) + abs(end.y)
-            if moved:
-                rates.append(Fraction(domain.duration(action)) / moved)
-    return min(rates, default=Fraction(0))
+    return domain_progress_rate(domain, actions)
 
 
 def cost_scale(domain: Domain[Any, Any], weight: Fraction) -> int:

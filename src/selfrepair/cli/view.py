@@ -1,0 +1,61 @@
+"""``selfrepair view``: write a mission as one self-contained HTML page (no server, no network).
+
+``selfrepair view TRACE -o mission.html`` views a trace written by ``run --trace``;
+``selfrepair view RESULTS.sqlite --key K -o mission.html`` re-runs the stored mission whose key
+starts with ``K`` and views it. Bad input (a missing file, a file that is neither, an unknown or
+ambiguous key) is one line on stderr and exit code 2 (see :func:`selfrepair.cli.main`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from selfrepair.cli._app import app, echo
+from selfrepair.errors import InputError
+from selfrepair.experiment.viewer import MAX_VIEW_STEPS, view_results, view_trace
+
+__all__ = ["view"]
+
+_SQLITE_MAGIC = b"SQLite format 3\x00"
+
+
+def _is_sqlite(path: Path) -> bool:
+    with path.open("rb") as handle:
+        return handle.read(len(_SQLITE_MAGIC)) == _SQLITE_MAGIC
+
+
+@app.command()
+def view(
+    source: Annotated[
+        Path, typer.Argument(help="A trace (run --trace) or a results database (with --key).")
+    ],
+    out: Annotated[Path, typer.Option("--out", "-o", help="HTML file to write.")],
+    key: Annotated[
+        str | None,
+        typer.Option("--key", help="Key (or unique key prefix) of a mission in the database."),
+    ] = None,
+    max_steps: Annotated[
+        int, typer.Option("--max-steps", min=1, help="Refuse missions with more steps.")
+    ] = MAX_VIEW_STEPS,
+) -> int:
+    """Write an HTML page that replays a mission: maze, plan, path, faults and repairs."""
+    if not source.is_file():
+        raise InputError("expected a trace file or a results database", source=str(source))
+    if _is_sqlite(source):
+        if key is None:
+            raise InputError(
+                "a results database holds many missions: choose one with --key", source=str(source)
+            )
+        written = view_results(source, key, out, max_steps=max_steps)
+    else:
+        if key is not None:
+            raise InputError(
+                "--key chooses a mission in a results database, but this is not one",
+                source=str(source),
+            )
+        written = view_trace(source, out, max_steps=max_steps)
+    echo(f"wrote {written}")
+    return 0

@@ -1,0 +1,490 @@
+"""``selfrepair/FaultyMaze-v0``: a robot with faults driving through a maze, as a Gymnasium task.
+
+The robot is any registered :class:`~selfrepair.robots.domain.Domain` (``domain=``, default
+``four-wheel``); an action is an index into ``domain.actions``. Motion and faults are the project's
+own world model: every command goes to a :class:`~selfrepair.execution.simulator.Simulator`, which
+moves the robot by ``Domain.step`` (of the domain's tabulated copy, :mod:`selfrepair.envs.motion`)
+and holds the true faults of the episode's :class:`~selfrepair.execution.faults.FaultSchedule`.
+The agent sees only what the executor would:
+
+``window``
+    The free cells (1) and walls (0) of the ``(2r+1) x (2r+1)`` square centred on the robot
+    (``r = view_radius``; outside the maze counts as wall), north up.
+``heading``
+    The robot's heading, 0..3 for N, E, S, W.
+``goal``
+    The goal's offset ``(dx, dy)`` from the robot's cell (x east, y south).
+``faults``
+    The faults the robot knows, one flag per ``domain.faults`` entry (absent for a domain without
+    faults). With detection ``now`` the robot senses the active faults before every step; with
+    ``on-use`` it learns a fault when an action it forbids fails.
+
+Reward per step: minus the step's duration in ticks; a failed attempt (an action a true fault
+forbids: the robot does not move, one tick passes) also costs ``fault_penalty``; a blocked command
+(its footprint is not free: the simulator refuses it, nothing changes) costs ``blocked_penalty``;
+reaching the goal cell adds ``goal_bonus`` and terminates the episode. ``max_steps`` commands
+without reaching the goal truncate it.
+
+Episodes are drawn by :mod:`selfrepair.envs.scenarios` from the environment's ``np_random``, so
+``reset(seed=s)`` fixes the maze, the route, the faults and the seed of intermittent faults;
+``reset(options=...)`` can fix any of them (see :meth:`FaultyMazeEnv.reset`).
+
+Every ``info`` has ``outcome`` (the simulator's :class:`~selfrepair.execution.simulator.Outcome`,
+``""`` at reset), ``pose`` (``"x,y,H"``), ``known_faults`` (their text) and ``ticks`` (elapsed);
+the reset ``info`` also describes the episode's draw. With ``guide=True``, ``info`` carries the
+*guide*'s hints: a
+:class:`~selfrepair.envs.guide.Navigator` with the ``replacement`` strategy and the environment's
+table, which plans from the start without knowing any fault (as the executor does) and follows the
+robot. ``planned_action`` is what it would command now; when its next planned action is faulty under
+the known faults, ``faulty_action`` is that action and ``replacement`` the table's suggestion (the
+first valid candidate, as action indices). Off the plan the guide replans, which costs a planner
+call per deviating step, so the guide is off unless ``guide=True``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, SupportsFloat
+
+import gymnasium as gym
+import numpy as np
+import numpy.typing as npt
+from gymnasium import spaces
+
+from selfrepair.caching import BoundedCache
+from selfrepair.envs.guide import Navigator
+from selfrepair.envs.motion import tabulated
+from selfrepair.envs.render import ansi_frame, check_cell_pixels, maze_frame, rgb_frame
+from selfrepair.envs.scenarios import (
+    BUNDLED,
+    FaultSpec,
+    MazeSource,
+    MazeSpec,
+    RouteChoice,
+    Scenario,
+    draw_scenario,
+    maze_sources,
+    random_route,
+)
+from selfrepair.errors import ProblemError, choice
+from selfrepair.execution.executor import mission_context
+from selfrepair.execution.faults import Detection, FaultSchedule
+from selfrepair.execution.result import MissionSpec
+from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS, Outcome, Simulator, StepOutcome
+from selfrepair.geometry import Cell, Heading, Pose, parse_cell, parse_pose
+from selfrepair.repair.replacement import RecursionMode
+from selfrepair.repair.strategies import RepairSource, StrategyName, StrategyOptions, uses_table
+from selfrepair.robots.domain import Domain
+from selfrepair.robots.registry import get_domain
+from selfrepair.tables.fileformat import bundled_table, bundled_table_names, resolve_table
+from selfrepair.tables.generate import generate_table
+from selfrepair.tables.model import ReplacementTable
+from selfrepair.world.bundled import resolve_maze
+from selfrepair.world.maze import Maze
+
+__all__ = ["MAX_VIEW_RADIUS", "FaultyMazeEnv", "Rewards", "default_table"]
+
+MAX_VIEW_RADIUS = 32
+"""The largest ``view_radius`` accepted (the window has ``(2r+1)**2`` cells)."""
+
+Observation = dict[str, Any]
+
+_RESET_OPTIONS = frozenset({"maze", "start", "goal", "faults"})
+_HEADING_LETTERS = "".join(h.name for h in Heading)
+_FAILED_TICKS = float(FAILED_ATTEMPT_TICKS)
+
+
+@dataclass(frozen=True, slots=True)
+class Rewards:
+    """The reward terms besides minus each step's duration (see the module docstring)."""
+
+    goal_bonus: float = 100.0
+    blocked_penalty: float = 1.0
+    fault_penalty: float = 1.0
+
+
+_GENERATED: BoundedCache[Domain[Any, Any], ReplacementTable] = BoundedCache(
+    "generated environment tables", 4
+)
+
+
+def default_table(domain: Domain[Any, Any]) -> ReplacementTable:
+    """The table the guide and the replacement policy use when none is given: the paper's
+    hand-written one for the four-wheel robot, a bundled table named after the domain when there
+    is one (``three-action``), else a table generated for the domain (default options; made once
+    per process for a few domains)."""
+    if domain.name == "four-wheel":
+        return bundled_table("handwritten")
+    if domain.name in bundled_table_names():
+        table = bundled_table(domain.name)
+        if table.domain is domain:
+            return table
+    return _GENERATED.get(domain, lambda: generate_table(domain))
+
+
+class FaultyMazeEnv(gym.Env[Observation, np.int64]):
+    """See the module docstring. Keyword arguments (all optional):
+
+    ``domain``
+        A registered domain name or a :class:`Domain` (default ``"four-wheel"``).
+    ``mazes``
+        ``"bundled"`` (default), a bundled name, a maze file, a ``Maze``, a
+        :class:`~selfrepair.envs.scenarios.MazeGenerator`, or a sequence of these.
+    ``routes``
+        ``"bundled"`` (a bundled maze's own routes, random routes elsewhere) or ``"random"``.
+    ``faults``
+        A :class:`~selfrepair.envs.scenarios.FaultSpec` (default: one single or double fault,
+        permanent from the first step, detected at once).
+    ``table``, ``recursion``
+        The guide's replacement table (a bundled name, a file or a table; default
+        :func:`default_table`) and recursion mode (default ``flat``).
+    ``rewards``
+        :class:`Rewards`. ``max_steps``: commands per episode (default ``4 * width * height``).
+    ``view_radius``
+        ``r`` of the ``(2r+1)``-square window (default 3, at most :data:`MAX_VIEW_RADIUS`).
+    ``guide``
+        Whether ``info`` carries the guide's hints (default ``False``: they cost a planner call
+        for every step off the guide's plan).
+    ``render_mode``, ``cell_pixels``
+        ``"ansi"`` or ``"rgb_array"``; pixels per cell of an RGB frame (default 8).
+    """
+
+    metadata = {"render_modes": ["ansi", "rgb_array"], "render_fps": 8}  # noqa: RUF012 (Gymnasium's)
+
+    def __init__(
+        self,
+        *,
+        domain: str | Domain[Any, Any] = "four-wheel",
+        mazes: MazeSpec | tuple[MazeSpec, ...] | list[MazeSpec] = BUNDLED,
+        routes: str = RouteChoice.BUNDLED,
+        faults: FaultSpec | None = None,
+        table: str | ReplacementTable | None = None,
+        recursion: str = RecursionMode.FLAT,
+        rewards: Rewards | None = None,
+        max_steps: int | None = None,
+        view_radius: int = 3,
+        guide: bool = False,
+        render_mode: str | None = None,
+        cell_pixels: int = 8,
+    ) -> None:
+        self.domain = get_domain(domain) if isinstance(domain, str) else domain
+        self.sources: tuple[MazeSource, ...] = maze_sources(mazes)
+        self.routes = choice(RouteChoice, routes, "route choice")
+        self.faults = faults or FaultSpec()
+        self._fault_sets = self.faults.fault_sets(self.domain)
+        self.table = self._table(table)
+        self.recursion = choice(RecursionMode, recursion, "recursion mode")
+        self.rewards = rewards or Rewards()
+        if max_steps is not None and max_steps < 1:
+            raise ProblemError(f"max_steps must be at least 1, got {max_steps}")
+        self.max_steps = max_steps
+        if not 0 <= view_radius <= MAX_VIEW_RADIUS:
+            raise ProblemError(
+                f"view_radius must be from 0 to {MAX_VIEW_RADIUS}, got {view_radius}"
+            )
+        self.view_radius = view_radius
+        self._side = 2 * view_radius + 1
+        self.guide = guide
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ProblemError(
+                f"render_mode must be one of {', '.join(self.metadata['render_modes'])} or None, "
+                f"got {render_mode!r}"
+            )
+        self.render_mode = render_mode
+        self.cell_pixels = check_cell_pixels(cell_pixels)
+        self._setup_spaces()
+        self._scenario: Scenario | None = None
+        self._sim: Simulator | None = None
+        self.last_outcome: StepOutcome | None = None
+        self._known: frozenset[Any] = frozenset()
+        self._senses = False
+        self._goal: Cell = (0, 0)
+        self._steps = 0
+        self._elapsed = 0.0
+        self._limit = 0
+        self._padded: npt.NDArray[np.int8] = np.zeros((0, 0), dtype=np.int8)
+        self._fault_views: dict[frozenset[Any], tuple[npt.NDArray[np.int8], str]] = {}
+        self._base_frame: npt.NDArray[np.uint8] | None = None
+        self._guide: Navigator | None = None
+
+    def _table(self, table: str | ReplacementTable | None) -> ReplacementTable:
+        resolved = default_table(self.domain) if table is None else (
+            table if isinstance(table, ReplacementTable) else resolve_table(table)
+        )  # fmt: skip
+        if resolved.domain is not self.domain:
+            raise ProblemError(
+                f"table {resolved.source!r} is for the {resolved.domain.name!r} domain, "
+                f"not {self.domain.name!r}"
+            )
+        return resolved
+
+    def _setup_spaces(self) -> None:
+        domain = self.domain
+        self.actions: tuple[Any, ...] = domain.actions
+        self._index = {action: i for i, action in enumerate(self.actions)}
+        self._durations = tuple(float(domain.duration(a)) for a in self.actions)
+        self._fault_index = {fault: i for i, fault in enumerate(domain.faults)}
+        side = 2 * self.view_radius + 1
+        reach = max(source.largest_side for source in self.sources) - 1
+        observation: dict[str, spaces.Space[Any]] = {
+            "window": spaces.MultiBinary((side, side)),
+            "heading": spaces.Discrete(4),
+            "goal": spaces.Box(-reach, reach, shape=(2,), dtype=np.int32),
+        }
+        if domain.faults:
+            observation["faults"] = spaces.MultiBinary(len(domain.faults))
+        self.observation_space = spaces.Dict(observation)
+        self.action_space = spaces.Discrete(len(self.actions))
+
+    # --- episode state, read by policies ------------------------------------------------------
+
+    @property
+    def scenario(self) -> Scenario:
+        """The current episode's maze, route and true fault schedule."""
+        if self._scenario is None:
+            raise ProblemError("the environment has no episode yet: call reset() first")
+        return self._scenario
+
+    @property
+    def pose(self) -> Pose:
+        """The robot's pose now."""
+        return self._simulator().pose
+
+    @property
+    def known(self) -> frozenset[Any]:
+        """The faults the robot knows now (what the ``faults`` observation shows)."""
+        self._simulator()
+        return self._known
+
+    @property
+    def steps(self) -> int:
+        """Commands given in this episode (failed and blocked ones included)."""
+        return self._steps
+
+    def _simulator(self) -> Simulator:
+        if self._sim is None:
+            raise ProblemError("the environment has no episode yet: call reset() first")
+        return self._sim
+
+    def action_index(self, action: Any) -> int:
+        """The index (in the action space) of one of the domain's actions."""
+        return self._index[action]
+
+    def mission_spec(self, strategy: str) -> MissionSpec:
+        """The executor's :class:`MissionSpec` of this episode for ``strategy`` (the same maze,
+        route, true faults, fault seed, table and step limit)."""
+        scenario = self.scenario
+        return MissionSpec(
+            maze=scenario.maze,
+            start=scenario.start,
+            goal=scenario.goal,
+            schedule=scenario.schedule,
+            strategy=strategy,
+            options=StrategyOptions(table=self.table, recursion=self.recursion),
+            seed=scenario.fault_seed,
+            max_steps=self._limit,
+            domain=self.domain,
+        )
+
+    def navigator(self, strategy: str) -> Navigator:
+        """A :class:`Navigator` for ``strategy`` that plans from the robot's pose now, knowing no
+        fault (as the executor's initial plan does)."""
+        spec = self.mission_spec(strategy)
+        context = mission_context(spec, self.table if uses_table(strategy) else None)
+        return Navigator(context, strategy, self.pose, frozenset())
+
+    # --- the Gymnasium API --------------------------------------------------------------------
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Observation, dict[str, Any]]:
+        """Start an episode drawn from ``np_random`` (seeded by ``seed``). ``options`` may fix
+        ``maze`` (a bundled name, file or ``Maze``; the route is then drawn on it unless given),
+        ``start`` (a pose ``"x,y,H"``), ``goal`` (a cell ``"x,y"``) and ``faults`` (a fault-set
+        text, permanent from the first step and detected at once, or a ``FaultSchedule``)."""
+        super().reset(seed=seed)
+        scenario = draw_scenario(
+            self.sources, self.routes, self.domain, self.faults, self.np_random, self._fault_sets
+        )
+        if options:
+            scenario = self._with_options(scenario, options)
+        self._begin(scenario)
+        pose = self._simulator().pose
+        info = self._info(pose, None)
+        info.update(self._episode_info())
+        return self._observe(pose), info
+
+    def step(
+        self, action: np.int64 | int
+    ) -> tuple[Observation, SupportsFloat, bool, bool, dict[str, Any]]:
+        """Send command ``action`` (an index into the domain's actions) to the simulator."""
+        sim = self._simulator()
+        index = int(action)
+        if not 0 <= index < len(self.actions):
+            raise ProblemError(f"expected an action index from 0 to {len(self.actions) - 1}")
+        command = self.actions[index]
+        outcome = sim.execute(command)
+        self.last_outcome = outcome
+        self._steps += 1
+        status = outcome.status
+        rewards = self.rewards
+        if status is Outcome.MOVED:
+            duration = self._durations[index]
+            reward = -duration
+        elif status is Outcome.FAILED_ATTEMPT:
+            duration = _FAILED_TICKS
+            reward = -duration - rewards.fault_penalty
+            if not self._senses:
+                self._known = self._known | outcome.blocking
+        else:
+            duration = 0.0
+            reward = -rewards.blocked_penalty
+        self._elapsed += duration
+        if self._senses:
+            self._known = sim.sense()
+        pose = sim.pose
+        terminated = pose.x == self._goal[0] and pose.y == self._goal[1]
+        if terminated:
+            reward += rewards.goal_bonus
+        truncated = not terminated and self._steps >= self._limit
+        if self._guide is not None:
+            self._guide.record(command, status)
+        return self._observe(pose), reward, terminated, truncated, self._info(pose, status)
+
+    def render(self) -> str | npt.NDArray[np.uint8] | None:
+        """The frame of ``render_mode``: an RGB array or the ASCII picture (``None`` without a
+        render mode, as Gymnasium expects)."""
+        if self.render_mode is None:
+            return None
+        scenario, pose = self.scenario, self.pose
+        if self.render_mode == "ansi":
+            known = self.domain.format_faults(self._known) or "none"
+            return ansi_frame(
+                scenario.maze, pose, scenario.goal, (f"step {self._steps}, known faults {known}",)
+            )
+        if self._base_frame is None:
+            self._base_frame = maze_frame(scenario.maze, scenario.goal, self.cell_pixels)
+        return rgb_frame(self._base_frame, pose, self.cell_pixels)
+
+    # --- internals -------------------------------------------------------------------------
+
+    def _with_options(self, scenario: Scenario, options: dict[str, Any]) -> Scenario:
+        unknown = set(options) - _RESET_OPTIONS
+        if unknown:
+            raise ProblemError(
+                f"unknown reset option(s) {', '.join(sorted(unknown))}; expected "
+                f"{', '.join(sorted(_RESET_OPTIONS))}"
+            )
+        maze, label, route = scenario.maze, scenario.maze_label, scenario.route
+        if "maze" in options:
+            given = options["maze"]
+            maze = given if isinstance(given, Maze) else resolve_maze(str(given))
+            label = maze.name or str(given)
+            route = random_route(maze, self.np_random)
+        start = _pose(options.get("start", route.start))
+        goal = _cell(options.get("goal", route.goal))
+        for what, cell in (("start", start.cell), ("goal", goal)):
+            if not maze.is_free(*cell):
+                raise ProblemError(f"reset option {what}: {cell} is not a free cell of the maze")
+        schedule = scenario.schedule
+        if "faults" in options:
+            given = options["faults"]
+            schedule = given if isinstance(given, FaultSchedule) else FaultSchedule.permanent(
+                self.domain.parse_faults(str(given))
+            )  # fmt: skip
+        route = type(route)(route.name, start, goal)
+        return Scenario(maze, label, route, schedule, scenario.fault_seed)
+
+    def _begin(self, scenario: Scenario) -> None:
+        self._scenario = scenario
+        maze = scenario.maze
+        self._sim = Simulator(
+            tabulated(self.domain), maze, scenario.start, scenario.schedule, scenario.fault_seed
+        )
+        self._senses = scenario.schedule.detection is Detection.NOW
+        self._known = self._sim.sense()
+        self._goal = scenario.goal
+        self._steps = 0
+        self._elapsed = 0.0
+        self.last_outcome = None
+        self._limit = self.max_steps or 4 * maze.width * maze.height
+        grid = maze.free_grid(self.view_radius)
+        rows, cols = grid.height + 2 * grid.margin, grid.width + 2 * grid.margin
+        self._padded = np.frombuffer(grid.data, dtype=np.int8).reshape(rows, cols)
+        self._fault_views = {}
+        self._base_frame = None
+        self._guide = self.navigator(StrategyName.REPLACEMENT) if self.guide else None
+
+    def _observe(self, pose: Pose) -> Observation:
+        x, y = pose.x, pose.y
+        side = self._side
+        goal = self._goal
+        observation: Observation = {
+            "window": self._padded[y : y + side, x : x + side].copy(),
+            "heading": int(pose.heading),
+            "goal": np.array((goal[0] - x, goal[1] - y), dtype=np.int32),
+        }
+        if self._fault_index:
+            observation["faults"] = self._fault_view(self._known)[0].copy()
+        return observation
+
+    def _fault_view(self, known: frozenset[Any]) -> tuple[npt.NDArray[np.int8], str]:
+        """The mask and text of a known-fault set (kept per episode: at most one per subset of
+        the schedule's faults)."""
+        view = self._fault_views.get(known)
+        if view is None:
+            mask = np.zeros(len(self._fault_index), dtype=np.int8)
+            mask[[self._fault_index[f] for f in known]] = 1
+            view = (mask, self.domain.format_faults(known))
+            self._fault_views[known] = view
+        return view
+
+    def _info(self, pose: Pose, status: Outcome | None) -> dict[str, Any]:
+        info: dict[str, Any] = {
+            "outcome": "" if status is None else str(status),
+            "pose": f"{pose.x},{pose.y},{_HEADING_LETTERS[pose.heading]}",
+            "known_faults": self._fault_view(self._known)[1],
+            "ticks": self._elapsed,
+        }
+        if self._guide is not None:
+            info.update(self._hints(self._guide, pose, self._simulator().steps))
+        return info
+
+    def _hints(self, guide: Navigator, pose: Pose, steps: int) -> dict[str, Any]:
+        planned = guide.next_action(pose, self._known, steps)
+        repair = guide.last_repair
+        suggested: tuple[int, ...] = ()
+        if repair is not None and repair.source is RepairSource.REPLACEMENT:
+            suggested = tuple(self._index[a] for a in repair.actions)
+        return {
+            "planned_action": -1 if planned is None else self._index[planned],
+            "faulty_action": -1 if guide.last_faulty is None else self._index[guide.last_faulty],
+            "replacement": suggested,
+            "repair_source": "" if repair is None else repair.source.value,
+        }
+
+    def _episode_info(self) -> dict[str, Any]:
+        scenario = self.scenario
+        schedule = scenario.schedule
+        return {
+            "maze": scenario.maze_label,
+            "start": str(scenario.start),
+            "goal": f"{scenario.goal[0]},{scenario.goal[1]}",
+            "faults": self.domain.format_faults(schedule.all_faults()),
+            "schedule": schedule.describe(),
+            "detection": schedule.detection.value,
+            "fault_seed": scenario.fault_seed,
+            "np_random_seed": self.np_random_seed,
+            "max_steps": self._limit,
+        }
+
+
+def _pose(value: Pose | str) -> Pose:
+    return value if isinstance(value, Pose) else parse_pose(str(value), source="reset option start")
+
+
+def _cell(value: Cell | str) -> Cell:
+    if isinstance(value, tuple):
+        return (int(value[0]), int(value[1]))
+    return parse_cell(str(value), source="reset option goal")
+
