@@ -13,7 +13,7 @@ STAMP := $(VENV)/.installed-stamp
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[dev,viz,dask,gym]'
+	$(PY) -m pip install --quiet -e '.[dev,viz,dask,gym,pddl]'
 	touch $(STAMP)
 
 # The main job: the replacement-vs-replanning study on the bundled mazes, then

@@ -1,0 +1,309 @@
+"""Plan repair with LPG-adapt (Fox, Gerevini, Long, Serina 2006), and plain LPG planning, through
+unified-planning and the LPG-td 1.4 binary that the ``up-lpg`` wheel ships (``pddl`` extra).
+
+:func:`lpg_adapt_repair` hands LPG the problem as it stands now (the robot's current pose as the
+start, the known faults as missing ``(healthy W M)`` facts) together with the plan that was left
+when the fault struck; LPG-adapt searches from that plan for a valid one, keeping as much of it as
+it can. :func:`lpg_plan` asks LPG for a plan from scratch. Both return an :class:`LpgResult`:
+time-outs and LPG failures are statuses, never exceptions, and a plan is only ``SOLVED`` after it
+re-simulates in the maze under the known faults (:func:`selfrepair.search.lattice.plan_cost`).
+
+What LPG is given, and why (each point found by running the binary)
+    * No action costs: LPG-td 1.4 crashes (segmentation fault) on ``-input_plan`` whenever the
+      problem has a numeric fluent, and ``total-cost`` is one; its plain search also fails to find
+      a plan on a 15 x 15 maze with costs (and finds one without). LPG therefore looks for any
+      valid plan; its duration is computed here, from the world model.
+    * No waits: a schema whose effect is empty makes LPG's parser fail (``Null PLNODE!!!``), and a
+      wait never helps reach a goal. Waits in the remaining plan are left out of the input plan.
+    * Only the useful schemas: the fastest available action of each motion under the known faults
+      (as the lattice planner prunes) plus every action of the remaining plan, so that LPG can keep
+      the plan's steps as they are. The remaining plan's faulty steps stay in the input plan; LPG
+      finds their schema inapplicable and repairs around them.
+    * The input plan stops before the first step that would leave the maze's free cells (its
+      parameters would name no cell); ``LpgResult.message`` says so when that happens.
+    * No empty input plan: LPG-adapt crashes (segmentation fault) when no step of the input plan
+      survives grounding, e.g. when the fault forbids every step. Then LPG plans from scratch
+      (up-lpg's ``lpg`` engine) and ``LpgResult.message`` says so.
+    * No fact with four arguments: LPG-adapt crashes on those too; the export splits an arc's
+      fact in two (see :mod:`selfrepair.baselines.pddl`).
+    * At most 2000 objects: LPG-td 1.4 is compiled with ``MAX_CONSTANTS`` 2000, so a maze with
+      more free cells (``wide-long`` has 2721) ends as ``ERROR`` with LPG's own message.
+    * ``-n 1`` (the first plan found), ``-seed`` (LPG is randomised; the seed is recorded) and
+      ``-cputime`` (LPG's own CPU limit), under a wall-clock limit that UP enforces on the process.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from enum import Enum
+from fractions import Fraction
+from types import ModuleType
+from typing import Any
+
+from selfrepair.baselines.pddl import MAX_PDDL_CELLS, PddlTask, export_pddl
+from selfrepair.errors import InputError, ProblemError
+from selfrepair.geometry import Pose
+from selfrepair.robots import four_wheel
+from selfrepair.robots.four_wheel import Action, FaultSet, MotionKind
+from selfrepair.search.lattice import plan_cost
+from selfrepair.search.problem import PlanningProblem
+
+__all__ = [
+    "MAX_LPG_TIME_LIMIT",
+    "LpgResult",
+    "LpgStatus",
+    "lpg_actions",
+    "lpg_adapt_repair",
+    "lpg_available",
+    "lpg_plan",
+]
+
+MAX_LPG_TIME_LIMIT = 3600.0
+"""Largest time limit (seconds) that :func:`lpg_adapt_repair` and :func:`lpg_plan` accept."""
+
+
+class LpgStatus(Enum):
+    """How an LPG call ended."""
+
+    SOLVED = "solved"
+    NO_PLAN = "no-plan"
+    TIMEOUT = "timeout"
+    ERROR = "error"
+
+
+@dataclass(frozen=True, slots=True)
+class LpgResult:
+    """The outcome of an LPG call.
+
+    ``actions`` (empty unless solved) run from the problem's start and have been re-simulated in
+    the maze under the known faults; ``duration`` is their total in ticks (0 unless solved).
+    ``wall_time_ns`` is the whole call (export, UP problem, LPG, check), ``lpg_time_s`` the LPG
+    process alone as UP timed it (``None`` if LPG did not run). ``input_steps`` counts the steps of
+    the remaining plan handed to LPG-adapt (0 for plain planning); ``seed`` is LPG's seed.
+    ``message`` explains anything but a clean solve.
+    """
+
+    status: LpgStatus
+    actions: tuple[Action, ...]
+    duration: Fraction
+    wall_time_ns: int
+    lpg_time_s: float | None
+    seed: int
+    input_steps: int
+    message: str
+
+
+def lpg_available() -> bool:
+    """Whether the ``pddl`` extra (unified-planning and up-lpg) can be imported."""
+    try:
+        _bridge()
+    except ProblemError:
+        return False
+    return True
+
+
+def _bridge() -> ModuleType:
+    try:
+        from selfrepair.baselines import unified
+    except ImportError as exc:
+        raise ProblemError(
+            f"LPG needs the pddl extra (pip install 'selfrepair[pddl]'): {exc}"
+        ) from None
+    return unified
+
+
+def lpg_actions(faults: FaultSet, plan: Sequence[Action] = ()) -> tuple[Action, ...]:
+    """The schemas LPG is given: the fastest available action of each motion under ``faults``
+    and every action of ``plan``, waits left out (module docstring), in :data:`ACTIONS` order."""
+    chosen = set(four_wheel.fastest_by_motion(faults).values()) | set(plan)
+    return tuple(
+        a for a in four_wheel.ACTIONS if a in chosen and a.motion.kind is not MotionKind.WAIT
+    )
+
+
+def _input_steps(
+    problem: PlanningProblem, remaining: Sequence[Action]
+) -> tuple[tuple[Action, ...], str]:
+    """The remaining plan as LPG-adapt gets it: no waits, cut before a step that leaves the maze."""
+    steps: list[Action] = []
+    pose = problem.start
+    for index, action in enumerate(remaining):
+        if action.motion.kind is MotionKind.WAIT:
+            continue
+        end, swept, _ = four_wheel.step(pose, action)
+        if not problem.maze.all_free(swept):
+            return tuple(steps), (
+                f"the remaining plan was cut before step {index} ({action} at {pose}), which "
+                "leaves the maze's free cells"
+            )
+        steps.append(action)
+        pose = end
+    return tuple(steps), ""
+
+
+def _check_call(time_limit_s: float, seed: int) -> None:
+    if not 0 < time_limit_s <= MAX_LPG_TIME_LIMIT:
+        raise ProblemError(
+            f"time_limit_s must be above 0 and at most {MAX_LPG_TIME_LIMIT:g}, got {time_limit_s}"
+        )
+    if not 0 <= seed < 2**31:
+        raise ProblemError(f"seed must be from 0 to 2**31 - 1, got {seed}")
+
+
+def lpg_adapt_repair(
+    problem: PlanningProblem,
+    remaining_plan: Sequence[Action],
+    *,
+    time_limit_s: float,
+    seed: int = 0,
+    max_cells: int = MAX_PDDL_CELLS,
+) -> LpgResult:
+    """Repair ``remaining_plan`` (actions from ``problem.start``) with LPG-adapt.
+
+    ``problem`` is the situation now: the current pose as ``start``, the goal, and the known
+    faults. LPG runs through UP's ``PlanRepairer`` operation mode for at most ``time_limit_s``
+    seconds with ``seed``. Raises :class:`ProblemError` only for misuse: the ``pddl`` extra
+    missing, a time limit outside (0, :data:`MAX_LPG_TIME_LIMIT`], a bad seed, or a problem that
+    :func:`~selfrepair.baselines.pddl.export_pddl` refuses (``max_cells``).
+    """
+    return _run(problem, tuple(remaining_plan), time_limit_s, seed, max_cells, repair=True)
+
+
+def lpg_plan(
+    problem: PlanningProblem,
+    *,
+    time_limit_s: float,
+    seed: int = 0,
+    max_cells: int = MAX_PDDL_CELLS,
+) -> LpgResult:
+    """Plan from scratch with LPG (UP's ``OneshotPlanner`` with up-lpg's ``lpg`` engine); the
+    same limits, statuses and check as :func:`lpg_adapt_repair`."""
+    return _run(problem, (), time_limit_s, seed, max_cells, repair=False)
+
+
+_Outcome = tuple[LpgStatus, tuple[Action, ...], Fraction, float | None, str]
+"""Status, actions, duration, LPG process time and message of one call."""
+
+
+def _run(
+    problem: PlanningProblem,
+    remaining: tuple[Action, ...],
+    time_limit_s: float,
+    seed: int,
+    max_cells: int,
+    *,
+    repair: bool,
+) -> LpgResult:
+    t0 = time.perf_counter_ns()
+    _check_call(time_limit_s, seed)
+    bridge = _bridge()
+    steps, note = _input_steps(problem, remaining) if repair else ((), "")
+    task = export_pddl(
+        problem,
+        actions=lpg_actions(problem.faults, steps),
+        action_costs=False,
+        max_cells=max_cells,
+    )
+    if repair and not any(four_wheel.available(a, problem.faults) for a in steps):
+        repair = False  # LPG-adapt crashes when no step of its input plan survives grounding
+        note = "; ".join(
+            m
+            for m in ("no step of the remaining plan is available: LPG planned from scratch", note)
+            if m
+        )
+    if _at_goal(problem, problem.start):
+        outcome: _Outcome = (LpgStatus.SOLVED, (), Fraction(0), None, "already at the goal")
+    else:
+        outcome = _call(bridge, problem, task, steps, time_limit_s, seed, repair=repair)
+    status, actions, duration, lpg_time, message = outcome
+    return LpgResult(
+        status=status,
+        actions=actions,
+        duration=duration,
+        wall_time_ns=time.perf_counter_ns() - t0,
+        lpg_time_s=lpg_time,
+        seed=seed,
+        input_steps=len(steps),
+        message="; ".join(m for m in (message, note) if m),
+    )
+
+
+def _call(
+    bridge: ModuleType,
+    problem: PlanningProblem,
+    task: PddlTask,
+    steps: tuple[Action, ...],
+    time_limit_s: float,
+    seed: int,
+    *,
+    repair: bool,
+) -> _Outcome:
+    """Run LPG through UP; any failure inside UP or LPG becomes an ``ERROR`` outcome."""
+    env = bridge.environment()
+    up_problem = bridge.up_problem(task, env=env, for_writer=True)
+    options = {"-seed": str(seed), "-cputime": f"{time_limit_s:g}"}
+    try:
+        with bridge.quiet(env):
+            if repair:
+                up_plan = bridge.to_up_plan(up_problem, problem.start, steps)
+                params: dict[str, Any] = {"timeout": time_limit_s, **options}
+                with env.factory.PlanRepairer(name=bridge.LPG_ADAPT_ENGINE, params=params) as lpg:
+                    generated = lpg.repair(up_problem, up_plan)
+            else:
+                with env.factory.OneshotPlanner(name="lpg", params=options) as lpg:
+                    generated = lpg.solve(up_problem, timeout=time_limit_s)
+    except Exception as exc:  # UP and LPG failures are statuses, not exceptions
+        return (
+            LpgStatus.ERROR,
+            (),
+            Fraction(0),
+            None,
+            f"LPG call failed: {type(exc).__name__}: {exc}",
+        )
+    return _interpret(bridge, problem, generated, time_limit_s)
+
+
+def _interpret(
+    bridge: ModuleType, problem: PlanningProblem, generated: Any, time_limit_s: float
+) -> _Outcome:
+    """UP's ``PlanGenerationResult`` as an outcome; a plan counts only if it re-simulates."""
+    from unified_planning.engines import PlanGenerationResultStatus as Up
+
+    metrics = generated.metrics or {}
+    lpg_time = float(metrics["engine_internal_time"]) if "engine_internal_time" in metrics else None
+    status = generated.status
+    if status in (Up.SOLVED_SATISFICING, Up.SOLVED_OPTIMALLY) and generated.plan is not None:
+        try:
+            actions = bridge.from_up_plan(generated.plan, problem.start)
+            duration = plan_cost(problem, actions)
+        except (InputError, ProblemError) as exc:
+            message = f"LPG's plan does not re-simulate: {exc}"
+            return LpgStatus.ERROR, (), Fraction(0), lpg_time, message
+        return LpgStatus.SOLVED, actions, duration, lpg_time, ""
+    if status is Up.TIMEOUT or (
+        status is Up.UNSOLVABLE_INCOMPLETELY and lpg_time is not None and lpg_time >= time_limit_s
+    ):
+        return LpgStatus.TIMEOUT, (), Fraction(0), lpg_time, f"no plan within {time_limit_s:g} s"
+    if status in (Up.UNSOLVABLE_INCOMPLETELY, Up.UNSOLVABLE_PROVEN):
+        return LpgStatus.NO_PLAN, (), Fraction(0), lpg_time, "LPG stopped without a plan"
+    message = f"LPG failed ({status.name}): {_last_output(generated)}"
+    return LpgStatus.ERROR, (), Fraction(0), lpg_time, message
+
+
+def _last_output(outcome: Any) -> str:
+    """The last non-empty line LPG wrote (stdout or stderr), for an error message."""
+    lines = [
+        line.strip()
+        for log in outcome.log_messages or ()
+        for line in log.message.splitlines()
+        if line.strip()
+    ]
+    return lines[-1] if lines else "no output"
+
+
+def _at_goal(problem: PlanningProblem, pose: Pose) -> bool:
+    return pose.cell == problem.goal and (
+        problem.goal_heading is None or pose.heading == problem.goal_heading
+    )
