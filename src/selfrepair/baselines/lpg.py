@@ -57,6 +57,7 @@ __all__ = [
     "lpg_actions",
     "lpg_adapt_repair",
     "lpg_available",
+    "lpg_input_plan",
     "lpg_plan",
 ]
 
@@ -123,10 +124,11 @@ def lpg_actions(faults: FaultSet, plan: Sequence[Action] = ()) -> tuple[Action, 
     )
 
 
-def _input_steps(
+def lpg_input_plan(
     problem: PlanningProblem, remaining: Sequence[Action]
 ) -> tuple[tuple[Action, ...], str]:
-    """The remaining plan as LPG-adapt gets it: no waits, cut before a step that leaves the maze."""
+    """The remaining plan as LPG-adapt gets it (waits left out, cut before the first step that
+    leaves the maze's free cells) and a note on the cut (``""`` if none)."""
     steps: list[Action] = []
     pose = problem.start
     for index, action in enumerate(remaining):
@@ -199,7 +201,7 @@ def _run(
     t0 = time.perf_counter_ns()
     _check_call(time_limit_s, seed)
     bridge = _bridge()
-    steps, note = _input_steps(problem, remaining) if repair else ((), "")
+    steps, note = lpg_input_plan(problem, remaining) if repair else ((), "")
     task = export_pddl(
         problem,
         actions=lpg_actions(problem.faults, steps),

@@ -13,7 +13,17 @@ import typer
 from typer._click.exceptions import ClickException, NoArgsIsHelpError
 
 # Importing the command modules registers their commands on ``app``.
-from selfrepair.cli import basics, domains, execution, experiments, gym, planning, tables, view  # noqa: F401
+from selfrepair.cli import (  # noqa: F401
+    basics,
+    domains,
+    execution,
+    experiments,
+    gym,
+    pddl,
+    planning,
+    tables,
+    view,
+)
 from selfrepair.cli._app import app
 from selfrepair.errors import SelfRepairError
 
