@@ -34,6 +34,7 @@ What LPG is given, and why (each point found by running the binary)
 
 from __future__ import annotations
 
+import importlib
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -107,7 +108,7 @@ def lpg_available() -> bool:
 
 def _bridge() -> ModuleType:
     try:
-        from selfrepair.baselines import unified
+        unified = importlib.import_module("selfrepair.baselines.unified")
     except ImportError as exc:
         raise ProblemError(
             f"LPG needs the pddl extra (pip install 'selfrepair[pddl]'): {exc}"
@@ -290,18 +291,29 @@ def _interpret(
         return LpgStatus.TIMEOUT, (), Fraction(0), lpg_time, f"no plan within {time_limit_s:g} s"
     if status in (Up.UNSOLVABLE_INCOMPLETELY, Up.UNSOLVABLE_PROVEN):
         return LpgStatus.NO_PLAN, (), Fraction(0), lpg_time, "LPG stopped without a plan"
+    if any(_UNREACHABLE in line for line in _output(generated)):  # LPG exits with status 1
+        message = "LPG's reachability analysis: the goal cannot be reached"
+        return LpgStatus.NO_PLAN, (), Fraction(0), lpg_time, message
     message = f"LPG failed ({status.name}): {_last_output(generated)}"
     return LpgStatus.ERROR, (), Fraction(0), lpg_time, message
 
 
-def _last_output(outcome: Any) -> str:
-    """The last non-empty line LPG wrote (stdout or stderr), for an error message."""
-    lines = [
+_UNREACHABLE = "Goals of the planning problem can not be reached"
+
+
+def _output(generated: Any) -> list[str]:
+    """The non-empty lines LPG wrote (stdout, then stderr)."""
+    return [
         line.strip()
-        for log in outcome.log_messages or ()
+        for log in generated.log_messages or ()
         for line in log.message.splitlines()
         if line.strip()
     ]
+
+
+def _last_output(generated: Any) -> str:
+    """The last non-empty line LPG wrote, for an error message."""
+    lines = _output(generated)
     return lines[-1] if lines else "no output"
 
 

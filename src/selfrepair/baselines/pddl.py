@@ -46,15 +46,15 @@ Size
     a pose per object and a ``(move-ok ?from ?to)`` fact per motion, the 54 in-place turn actions
     and 9 waits would ground to ``63 * 4 * free cells`` instances; here to 54 * 4 and 9. Ground
     instances (``PddlTask.ground_actions``) and problem-file sizes on the bundled mazes, all 81
-    schemas:
+    schemas (the domain file is 24 kB whatever the maze):
 
     ============  ======  ==========  ============  ==============  =============  ==========
     maze          cells   free cells  static facts  ground actions  pose encoding  problem.pddl
     ============  ======  ==========  ============  ==============  =============  ==========
-    narrow-short  15x15   97          408           2,145           26,364         14 kB
-    wide-short    25x25   382         5,348         17,725          113,764        206 kB
-    narrow-long   49x49   1,167       4,752         23,865          317,724        167 kB
-    wide-long     61x61   2,721       47,496        149,841         835,308        1.9 MB
+    narrow-short  15x15   97          408           2,145           26,364         13 kB
+    wide-short    25x25   382         5,348         17,725          113,764        189 kB
+    narrow-long   49x49   1,167       4,752         23,865          317,724        152 kB
+    wide-long     61x61   2,721       47,496        149,841         835,308        1.7 MB
     ============  ======  ==========  ============  ==============  =============  ==========
 
     A planner call need not take all 81 schemas: under known faults only the fastest available
@@ -73,8 +73,9 @@ Plans
 
 from __future__ import annotations
 
+import itertools
 import re
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
@@ -486,21 +487,31 @@ def domain_text(task: PddlTask) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _packed(items: Sequence[str], per_line: int) -> list[str]:
+    return ["    " + " ".join(items[i : i + per_line]) for i in range(0, len(items), per_line)]
+
+
 def problem_text(task: PddlTask) -> str:
-    """The problem file: the maze's cells, the start pose, wheel health, geometry and goal."""
-    per_line = 12
-    objects = [
-        "    " + " ".join(task.cells[i : i + per_line]) for i in range(0, len(task.cells), per_line)
+    """The problem file: the maze's cells, the start pose, wheel health, geometry and goal.
+
+    The initial state has one line for the pose, then one group of lines per predicate.
+    """
+    pose = [_atom(a) for a in task.init if a[0] in ("robot-at", "facing")]
+    groups = [
+        _packed([_atom(a) for a in atoms], 4)
+        for name, atoms in itertools.groupby(task.init, key=lambda a: a[0])
+        if name not in ("robot-at", "facing")
     ]
     lines = [
         f";; {task.comment}",
         f"(define (problem {task.name})",
         f"  (:domain {DOMAIN_NAME})",
         "  (:objects",
-        *objects,
+        *_packed(task.cells, 12),
         "    - cell)",
         "  (:init",
-        *(f"    {_atom(a)}" for a in task.init),
+        "    " + " ".join(pose),
+        *(line for group in groups for line in group),
     ]
     if task.action_costs:
         lines.append("    (= (total-cost) 0)")
