@@ -98,13 +98,22 @@ def test_time_limit_is_a_status() -> None:
 
 
 @needs_lpg
-@pytest.mark.slow
 def test_too_many_objects_for_lpg_is_an_error_status() -> None:
-    corridor = parse_maze("." * 2001 + "\n")  # LPG-td 1.4 takes at most 2000 objects
-    problem = PlanningProblem(corridor, Pose(0, 0, Heading.E), (2000, 0))
+    corridor = parse_maze("." * 1990 + "\n")  # 1990 cells and 11 constants: one too many
+    problem = PlanningProblem(corridor, Pose(0, 0, Heading.E), (1989, 0))
     result = lpg_plan(problem, time_limit_s=30)
-    assert result.status is LpgStatus.ERROR
-    assert "MAX_CONSTANTS" in result.message
+    assert result.status is LpgStatus.ERROR and result.lpg_time_s is None
+    assert "at most 2000 objects" in result.message and "2001" in result.message
+
+
+@needs_lpg
+@pytest.mark.slow
+def test_the_object_limit_is_lpgs() -> None:
+    """One cell fewer, LPG runs and solves the corridor: the limit is not too strict."""
+    corridor = parse_maze("." * 1989 + "\n")
+    problem = PlanningProblem(corridor, Pose(0, 0, Heading.E), (3, 0))
+    result = lpg_plan(problem, time_limit_s=60)
+    assert result.status is LpgStatus.SOLVED, result.message
 
 
 @needs_lpg
@@ -141,13 +150,29 @@ def test_already_at_the_goal() -> None:
 
 
 @pytest.mark.parametrize(
-    ("limit", "seed", "message"),
-    [(0, 0, "time_limit_s"), (1e9, 0, "time_limit_s"), (1, -1, "seed")],
+    ("limit", "seed", "options", "message"),
+    [
+        (0, 0, {}, "time_limit_s"),
+        (1e9, 0, {}, "time_limit_s"),
+        (1, -1, {}, "seed"),
+        (1, 0, {"-seed": "2"}, "other than -cputime"),
+        (1, 0, {"noise": "0.3"}, "got 'noise'"),
+    ],
 )
-def test_misuse_raises(limit: float, seed: int, message: str) -> None:
+def test_misuse_raises(limit: float, seed: int, options: dict, message: str) -> None:
     problem = PlanningProblem(U_TURN, Pose(0, 0, Heading.E), (4, 2))
     with pytest.raises(ProblemError, match=message):
-        lpg_adapt_repair(problem, (), time_limit_s=limit, seed=seed)
+        lpg_adapt_repair(problem, (), time_limit_s=limit, seed=seed, options=options)
+
+
+@needs_lpg
+def test_options_reach_lpg() -> None:
+    problem = PlanningProblem(U_TURN, Pose(0, 0, Heading.E), (4, 2))
+    result = lpg_plan(problem, time_limit_s=30, options={"-bogus": ""})
+    assert result.status is LpgStatus.ERROR  # LPG prints its usage and exits non-zero
+    problem, _ = narrow_short_after(0, "FL:F")  # LPG's best-first search instead of local search
+    result = lpg_plan(problem, time_limit_s=30, options={"-onlybestfirst": ""})
+    assert result.status is LpgStatus.SOLVED, result.message
 
 
 def test_missing_extra_raises_a_clear_error(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -26,8 +26,9 @@ What LPG is given, and why (each point found by running the binary)
       (up-lpg's ``lpg`` engine) and ``LpgResult.message`` says so.
     * No fact with four arguments: LPG-adapt crashes on those too; the export splits an arc's
       fact in two (see :mod:`selfrepair.baselines.pddl`).
-    * At most 2000 objects: LPG-td 1.4 is compiled with ``MAX_CONSTANTS`` 2000, so a maze with
-      more free cells (``wide-long`` has 2721) ends as ``ERROR`` with LPG's own message.
+    * At most 2000 objects (:data:`LPG_MAX_OBJECTS`): LPG-td 1.4 is compiled with
+      ``MAX_CONSTANTS`` 2000, so a maze with more than 1989 free cells (``wide-long`` has 2721)
+      ends as ``ERROR`` at once, without running LPG.
     * ``-n 1`` (the first plan found), ``-seed`` (LPG is randomised; the seed is recorded) and
       ``-cputime`` (LPG's own CPU limit), under a wall-clock limit that UP enforces on the process.
 """
@@ -36,14 +37,21 @@ from __future__ import annotations
 
 import importlib
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from enum import Enum
 from fractions import Fraction
 from types import ModuleType
 from typing import Any
 
-from selfrepair.baselines.pddl import MAX_PDDL_CELLS, PddlTask, export_pddl
+from selfrepair.baselines.pddl import (
+    HEADING_NAMES,
+    MAX_PDDL_CELLS,
+    MODE_NAMES,
+    WHEEL_NAMES,
+    PddlTask,
+    export_pddl,
+)
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.geometry import Pose
 from selfrepair.robots import four_wheel
@@ -52,6 +60,7 @@ from selfrepair.search.lattice import plan_cost
 from selfrepair.search.problem import PlanningProblem
 
 __all__ = [
+    "LPG_MAX_OBJECTS",
     "MAX_LPG_TIME_LIMIT",
     "LpgResult",
     "LpgStatus",
@@ -61,6 +70,11 @@ __all__ = [
     "lpg_input_plan",
     "lpg_plan",
 ]
+
+LPG_MAX_OBJECTS = 2000
+"""LPG-td 1.4 as shipped is compiled with ``MAX_CONSTANTS`` 2000: a problem with more objects (free
+cells plus 11 constants) ends as ``ERROR`` without running LPG (LPG itself would stop with "too many
+constants!" after UP spent seconds writing the problem)."""
 
 MAX_LPG_TIME_LIMIT = 3600.0
 """Largest time limit (seconds) that :func:`lpg_adapt_repair` and :func:`lpg_plan` accept."""
@@ -146,13 +160,37 @@ def lpg_input_plan(
     return tuple(steps), ""
 
 
-def _check_call(time_limit_s: float, seed: int) -> None:
-    if not 0 < time_limit_s <= MAX_LPG_TIME_LIMIT:
-        raise ProblemError(
-            f"time_limit_s must be above 0 and at most {MAX_LPG_TIME_LIMIT:g}, got {time_limit_s}"
-        )
-    if not 0 <= seed < 2**31:
-        raise ProblemError(f"seed must be from 0 to 2**31 - 1, got {seed}")
+_OWN_OPTIONS = frozenset({"-o", "-f", "-n", "-out", "-input_plan", "-seed", "-cputime"})
+"""The LPG options this module sets itself; ``options=`` may not name them."""
+
+
+@dataclass(frozen=True, slots=True)
+class _Call:
+    """The settings of one LPG call, checked on construction."""
+
+    time_limit_s: float
+    seed: int
+    options: dict[str, str]
+    max_cells: int
+
+    def __post_init__(self) -> None:
+        if not 0 < self.time_limit_s <= MAX_LPG_TIME_LIMIT:
+            raise ProblemError(
+                f"time_limit_s must be above 0 and at most {MAX_LPG_TIME_LIMIT:g}, "
+                f"got {self.time_limit_s}"
+            )
+        if not 0 <= self.seed < 2**31:
+            raise ProblemError(f"seed must be from 0 to 2**31 - 1, got {self.seed}")
+        for key, value in self.options.items():
+            if not key.startswith("-") or key in _OWN_OPTIONS or not isinstance(value, str):
+                raise ProblemError(
+                    f"expected LPG options such as {{'-noise': '0.3'}} other than "
+                    f"{', '.join(sorted(_OWN_OPTIONS))}, got {key!r}: {value!r}"
+                )
+
+    def lpg_options(self) -> dict[str, str]:
+        """Seed, LPG's own CPU limit (it exits cleanly at it) and the caller's options."""
+        return {"-seed": str(self.seed), "-cputime": f"{self.time_limit_s:g}", **self.options}
 
 
 def lpg_adapt_repair(
@@ -161,17 +199,21 @@ def lpg_adapt_repair(
     *,
     time_limit_s: float,
     seed: int = 0,
+    options: Mapping[str, str] | None = None,
     max_cells: int = MAX_PDDL_CELLS,
 ) -> LpgResult:
     """Repair ``remaining_plan`` (actions from ``problem.start``) with LPG-adapt.
 
     ``problem`` is the situation now: the current pose as ``start``, the goal, and the known
     faults. LPG runs through UP's ``PlanRepairer`` operation mode for at most ``time_limit_s``
-    seconds with ``seed``. Raises :class:`ProblemError` only for misuse: the ``pddl`` extra
-    missing, a time limit outside (0, :data:`MAX_LPG_TIME_LIMIT`], a bad seed, or a problem that
+    seconds with ``seed``; ``options`` are further LPG command-line options, e.g.
+    ``{"-noise": "0.3"}`` (``""`` for a flag). Raises :class:`ProblemError` only for misuse: the
+    ``pddl`` extra missing, a time limit outside (0, :data:`MAX_LPG_TIME_LIMIT`], a bad seed, an
+    option this module sets itself, or a problem that
     :func:`~selfrepair.baselines.pddl.export_pddl` refuses (``max_cells``).
     """
-    return _run(problem, tuple(remaining_plan), time_limit_s, seed, max_cells, repair=True)
+    call = _Call(time_limit_s, seed, dict(options or {}), max_cells)
+    return _run(problem, tuple(remaining_plan), call, repair=True)
 
 
 def lpg_plan(
@@ -179,11 +221,15 @@ def lpg_plan(
     *,
     time_limit_s: float,
     seed: int = 0,
+    options: Mapping[str, str] | None = None,
     max_cells: int = MAX_PDDL_CELLS,
 ) -> LpgResult:
     """Plan from scratch with LPG (UP's ``OneshotPlanner`` with up-lpg's ``lpg`` engine); the
-    same limits, statuses and check as :func:`lpg_adapt_repair`."""
-    return _run(problem, (), time_limit_s, seed, max_cells, repair=False)
+    same arguments, limits, statuses and check as :func:`lpg_adapt_repair`. On mazes,
+    ``options={"-onlybestfirst": ""}`` (LPG's best-first search instead of its local search) finds
+    plans much sooner; see docs/baselines.md."""
+    call = _Call(time_limit_s, seed, dict(options or {}), max_cells)
+    return _run(problem, (), call, repair=False)
 
 
 _Outcome = tuple[LpgStatus, tuple[Action, ...], Fraction, float | None, str]
@@ -191,35 +237,32 @@ _Outcome = tuple[LpgStatus, tuple[Action, ...], Fraction, float | None, str]
 
 
 def _run(
-    problem: PlanningProblem,
-    remaining: tuple[Action, ...],
-    time_limit_s: float,
-    seed: int,
-    max_cells: int,
-    *,
-    repair: bool,
+    problem: PlanningProblem, remaining: tuple[Action, ...], call: _Call, *, repair: bool
 ) -> LpgResult:
     t0 = time.perf_counter_ns()
-    _check_call(time_limit_s, seed)
     bridge = _bridge()
     steps, note = lpg_input_plan(problem, remaining) if repair else ((), "")
     task = export_pddl(
         problem,
         actions=lpg_actions(problem.faults, steps),
         action_costs=False,
-        max_cells=max_cells,
+        max_cells=call.max_cells,
     )
+    notes = [note]
     if repair and not any(four_wheel.available(a, problem.faults) for a in steps):
         repair = False  # LPG-adapt crashes when no step of its input plan survives grounding
-        note = "; ".join(
-            m
-            for m in ("no step of the remaining plan is available: LPG planned from scratch", note)
-            if m
-        )
+        notes.insert(0, "no step of the remaining plan is available: LPG planned from scratch")
+    objects = len(task.cells) + len(HEADING_NAMES) + len(WHEEL_NAMES) + len(MODE_NAMES)
     if _at_goal(problem, problem.start):
         outcome: _Outcome = (LpgStatus.SOLVED, (), Fraction(0), None, "already at the goal")
+    elif objects > LPG_MAX_OBJECTS:
+        message = (
+            f"LPG-td 1.4 takes at most {LPG_MAX_OBJECTS} objects (its MAX_CONSTANTS); this "
+            f"problem has {objects} ({len(task.cells)} free cells); LPG was not run"
+        )
+        outcome = (LpgStatus.ERROR, (), Fraction(0), None, message)
     else:
-        outcome = _call(bridge, problem, task, steps, time_limit_s, seed, repair=repair)
+        outcome = _call(bridge, problem, task, steps, call, repair=repair)
     status, actions, duration, lpg_time, message = outcome
     return LpgResult(
         status=status,
@@ -227,9 +270,9 @@ def _run(
         duration=duration,
         wall_time_ns=time.perf_counter_ns() - t0,
         lpg_time_s=lpg_time,
-        seed=seed,
+        seed=call.seed,
         input_steps=len(steps),
-        message="; ".join(m for m in (message, note) if m),
+        message="; ".join(m for m in (message, *notes) if m),
     )
 
 
@@ -238,34 +281,28 @@ def _call(
     problem: PlanningProblem,
     task: PddlTask,
     steps: tuple[Action, ...],
-    time_limit_s: float,
-    seed: int,
+    call: _Call,
     *,
     repair: bool,
 ) -> _Outcome:
     """Run LPG through UP; any failure inside UP or LPG becomes an ``ERROR`` outcome."""
     env = bridge.environment()
     up_problem = bridge.up_problem(task, env=env, for_writer=True)
-    options = {"-seed": str(seed), "-cputime": f"{time_limit_s:g}"}
+    options = call.lpg_options()
     try:
         with bridge.quiet(env):
             if repair:
                 up_plan = bridge.to_up_plan(up_problem, problem.start, steps)
-                params: dict[str, Any] = {"timeout": time_limit_s, **options}
+                params: dict[str, Any] = {"timeout": call.time_limit_s, **options}
                 with env.factory.PlanRepairer(name=bridge.LPG_ADAPT_ENGINE, params=params) as lpg:
                     generated = lpg.repair(up_problem, up_plan)
             else:
                 with env.factory.OneshotPlanner(name="lpg", params=options) as lpg:
-                    generated = lpg.solve(up_problem, timeout=time_limit_s)
+                    generated = lpg.solve(up_problem, timeout=call.time_limit_s)
     except Exception as exc:  # UP and LPG failures are statuses, not exceptions
-        return (
-            LpgStatus.ERROR,
-            (),
-            Fraction(0),
-            None,
-            f"LPG call failed: {type(exc).__name__}: {exc}",
-        )
-    return _interpret(bridge, problem, generated, time_limit_s)
+        message = f"LPG call failed: {type(exc).__name__}: {exc}"
+        return LpgStatus.ERROR, (), Fraction(0), None, message
+    return _interpret(bridge, problem, generated, call.time_limit_s)
 
 
 def _interpret(
