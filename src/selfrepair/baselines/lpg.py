@@ -189,7 +189,8 @@ class _Call:
                 )
 
     def lpg_options(self) -> dict[str, str]:
-        """Seed, LPG's own CPU limit (it exits cleanly at it) and the caller's options."""
+        """Seed, LPG's own CPU limit (not always honoured: UP's wall limit is the hard one) and
+        the caller's options."""
         return {"-seed": str(self.seed), "-cputime": f"{self.time_limit_s:g}", **self.options}
 
 
