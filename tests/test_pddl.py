@@ -25,6 +25,7 @@ from selfrepair.errors import InputError, ProblemError
 from selfrepair.geometry import Heading, Pose
 from selfrepair.robots import four_wheel
 from selfrepair.robots.four_wheel import ACTIONS, MotionKind, parse_action, parse_faults
+from selfrepair.robots.registry import get_domain
 from selfrepair.search.lattice import plan
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.world import bundled
@@ -121,6 +122,7 @@ def test_size_limit_is_checked_and_can_be_raised() -> None:
         ({"start": Pose(1, 1, Heading.N)}, "start"),
         ({"goal": (9, 9)}, "goal"),
         ({"clearance_weight": 1}, "clearance_weight"),
+        ({"domain": get_domain("three-action")}, "four-wheel robot only, got domain"),
     ],
 )
 def test_problems_that_cannot_be_exported(change: dict, message: str) -> None:

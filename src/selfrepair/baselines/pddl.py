@@ -307,6 +307,10 @@ class PddlTask:
 
 
 def _check_exportable(problem: PlanningProblem, max_cells: int) -> None:
+    if problem.domain is not four_wheel.FOUR_WHEEL:
+        raise ProblemError(
+            f"the PDDL export knows the four-wheel robot only, got domain {problem.domain.name!r}"
+        )
     maze = problem.maze
     if max_cells < 1:
         raise ProblemError(f"max_cells must be >= 1, got {max_cells}")
@@ -389,9 +393,10 @@ def export_pddl(
     may pass fewer, e.g. only the fastest available action of each motion. ``action_costs=False``
     leaves out costs and the metric (for planners that cannot take numeric fluents).
 
-    Raises :class:`ProblemError` for a maze of more than ``max_cells`` cells (width times height,
-    see :data:`MAX_PDDL_CELLS`), a start or goal outside the maze or in a wall, a non-zero
-    clearance weight (the encoding's cost is duration only), or no action.
+    Raises :class:`ProblemError` for another robot than the four-wheel one, a maze of more than
+    ``max_cells`` cells (width times height, see :data:`MAX_PDDL_CELLS`), a start or goal outside
+    the maze or in a wall, a non-zero clearance weight (the encoding's cost is duration only), or
+    no action.
     """
     _check_exportable(problem, max_cells)
     chosen = set(actions)
