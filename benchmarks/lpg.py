@@ -12,7 +12,7 @@ the plan has to be repaired. Three repairs of the same situation are timed:
 For the LPG calls the table shows the status, the LPG process time (``lpg s``, as UP measured it)
 and the whole call (``wall s``: export, UP problem, PDDL writing, LPG, parsing, re-simulation);
 for every solved repair, its duration over the optimal one (``/opt``). The first LPG call of a
-process also pays about 2 s of imports (unified-planning, scipy); a warm-up call on a tiny maze
+process also pays about 1 s of imports (unified-planning, scipy); a warm-up call on a tiny maze
 takes it out of the figures. LPG is randomised: ``--seed`` is passed to it and printed.
 
 Usage: ``python benchmarks/lpg.py [--time-limit S] [--routes N] [--faults FL:F,FR:B,...]``.
