@@ -53,7 +53,6 @@ from selfrepair.baselines.pddl import (
     export_pddl,
 )
 from selfrepair.errors import InputError, ProblemError
-from selfrepair.geometry import Pose
 from selfrepair.robots import four_wheel
 from selfrepair.robots.four_wheel import Action, FaultSet, MotionKind
 from selfrepair.search.lattice import plan_cost
@@ -254,7 +253,7 @@ def _run(
         repair = False  # LPG-adapt crashes when no step of its input plan survives grounding
         notes.insert(0, "no step of the remaining plan is available: LPG planned from scratch")
     objects = len(task.cells) + len(HEADING_NAMES) + len(WHEEL_NAMES) + len(MODE_NAMES)
-    if _at_goal(problem, problem.start):
+    if problem.at_goal(problem.start):
         outcome: _Outcome = (LpgStatus.SOLVED, (), Fraction(0), None, "already at the goal")
     elif objects > LPG_MAX_OBJECTS:
         message = (
@@ -353,9 +352,3 @@ def _last_output(generated: Any) -> str:
     """The last non-empty line LPG wrote, for an error message."""
     lines = _output(generated)
     return lines[-1] if lines else "no output"
-
-
-def _at_goal(problem: PlanningProblem, pose: Pose) -> bool:
-    return pose.cell == problem.goal and (
-        problem.goal_heading is None or pose.heading == problem.goal_heading
-    )
