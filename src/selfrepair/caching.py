@@ -13,7 +13,7 @@ Keys must be hashable with a cheap hash: values such as mazes and tables cache t
 from __future__ import annotations
 
 from collections import OrderedDict
-from collections.abc import Callable, Hashable
+from collections.abc import Callable, Hashable, Iterable
 from dataclasses import dataclass
 from typing import Any, Generic, TypeVar
 
@@ -89,7 +89,10 @@ def cache_stats() -> tuple[CacheStats, ...]:
     return tuple(sorted((c.stats() for c in _ALL), key=lambda s: s.name))
 
 
-def clear_caches() -> None:
-    """Empty every cache (e.g. to measure the first, cold call of something)."""
+def clear_caches(keep: Iterable[str] = ()) -> None:
+    """Empty every cache (e.g. to measure the first, cold call of something), except those named
+    in ``keep``."""
+    spared = frozenset(keep)
     for cache in _ALL:
-        cache.clear()
+        if cache.name not in spared:
+            cache.clear()

@@ -5,6 +5,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from functools import partial
 from pathlib import Path
 from typing import Annotated
 
@@ -28,11 +29,19 @@ from selfrepair.cli._app import MaxCells, MaxMissions, app, console, echo
 from selfrepair.experiment.config import load_config
 from selfrepair.experiment.findings import Finding, StrategySummary, check_findings, summarize
 from selfrepair.experiment.missions import expand
-from selfrepair.experiment.runner import check_backend, run_missions
+from selfrepair.experiment.runner import check_backend, execute_mission, run_missions
 from selfrepair.experiment.store import ResultStore, require_pyarrow
 from selfrepair.limits import MAX_CELLS, MAX_MISSIONS
+from selfrepair.experiment.summary import FaultSetBite, fault_set_bite
 
-__all__ = ["animate", "experiment", "print_findings", "print_summary", "report"]
+__all__ = [
+    "animate",
+    "experiment",
+    "print_fault_sets",
+    "print_findings",
+    "print_summary",
+    "report",
+]
 
 
 def resolve_experiment(spec: str) -> Path:
@@ -70,6 +79,15 @@ def experiment(
     ] = None,
     max_missions: MaxMissions = MAX_MISSIONS,
     max_cells: MaxCells = MAX_CELLS,
+    repeats: Annotated[
+        int,
+        typer.Option(
+            "--repeats",
+            help="Warm timing runs per mission (after one cold run); timings are their medians.",
+            min=1,
+            max=1000,
+        ),
+    ] = 1,
 ) -> int:
     """Run an experiment (resumable: missions already in the database are skipped), then print the
     per-strategy summary and the original study's findings checked on all stored rows."""
@@ -89,6 +107,7 @@ def experiment(
                 backend=backend,
                 scheduler=scheduler,
                 address=address,
+                execute=partial(execute_mission, repeats=repeats),
                 on_progress=on_progress,
             )
         echo(
@@ -98,6 +117,7 @@ def experiment(
         keys = {m.key for m in missions}
         rows = [r for r in store.rows() if r["key"] in keys]
         print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
+        print_fault_sets(fault_set_bite(rows))
         print_findings(check_findings(rows))
         if export_csv is not None:
             echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
@@ -135,16 +155,23 @@ def _progress(label: str) -> Iterator[Callable[[int, int], None] | None]:
 
 _SHORT_HEADERS = {
     "completed": "done",
-    "compute/action median µs": "compute/\naction\nmedian µs",
-    "compute/action p99 µs": "compute/\naction\np99 µs",
+    "met a fault": "met a\nfault",
+    "no replan": "no replan\n(missions)",
+    "resolved locally (per encounter)": "resolved\nlocally\n(per enc.)",
+    "replans/mission": "replans/\nmission",
+    "ticks over optimum": "ticks over\noptimum",
+    "plan distance": "plan\ndistance",
+    "plan distance by motion": "plan dist.\nby motion",
+    "repair compute/mission µs": "repair\ncompute/\nmission µs",
+    "first repair cold µs": "first\nrepair\ncold µs",
+    "first repair warm µs": "first\nrepair\nwarm µs",
     "repair latency median µs": "repair\nlatency\nmedian µs",
     "repair latency p99 µs": "repair\nlatency\np99 µs",
-    "replans/mission": "replans/\nmission",
-    "resolved locally": "resolved\nlocally",
-    "extra ticks": "extra\nticks",
-    "plan distance": "plan\ndistance",
 }
 """Stacked headers for a terminal, where every column must fit without truncating a number."""
+
+_PIPED_WIDTH = 1000
+"""Piped output is as wide as the table needs (up to this), so nothing is cut."""
 
 _WIDE_ENOUGH = 120
 """Below this terminal width the table is split in two (times, then outcomes)."""
@@ -157,14 +184,14 @@ def print_summary(summaries: list[StrategySummary], *, title: str) -> None:
     rows = [s.cells() for s in summaries]
     headers = StrategySummary.HEADERS
     if not sys.stdout.isatty():
-        out = Console(file=sys.stdout, width=200, soft_wrap=True, highlight=False)
+        out = Console(file=sys.stdout, width=_PIPED_WIDTH, soft_wrap=True, highlight=False)
         out.print(_table(title, headers, rows, range(1, len(headers)), short=False))
         return
     out = console()
     if out.width >= _WIDE_ENOUGH:
         groups = [range(1, len(headers))]
     else:
-        groups = [range(1, 6), range(6, len(headers))]
+        groups = [range(1, 9), range(9, len(headers))]
     for part, columns in enumerate(groups, start=1):
         label = title if len(groups) == 1 else f"{title} ({part}/{len(groups)})"
         out.print(_table(label, headers, rows, columns, short=True))
@@ -194,9 +221,19 @@ def _table(
 
 
 def print_findings(findings: list[Finding]) -> None:
-    """Each finding on one line: held / not held / not tested, with its numbers."""
+    """Each finding as a short paragraph: its outcome and claim, then the evidence."""
     for f in findings:
-        echo(f"Finding {f.number} {f.verdict.upper()}: {f.claim} -- {f.evidence}")
+        echo(f.paragraph())
+
+
+def print_fault_sets(bites: list[FaultSetBite]) -> None:
+    """Per fault set: missions that met a faulty action, of all missions and of the replanner's."""
+    echo("Fault sets: missions that met a faulty action (all strategies; replanning robot)")
+    for b in bites:
+        echo(
+            f"  {b.faults or '(none)':<12} {b.met:>5}/{b.missions:<5} "
+            f"{b.replan_met:>4}/{b.replan_missions}"
+        )
 
 
 @app.command()

@@ -13,7 +13,9 @@ and the step cost on this mission's map) and then asked for each repair.
    faults; with ``on-use`` the known faults are those revealed by failed attempts so far.
 2. If the next queued action is unavailable under the known faults, ask the strategy for a repair
    (timed with ``time.perf_counter_ns``: the repair latency runs from meeting the faulty action to
-   having the next executable action) and splice it into the queue.
+   having the next executable action) and splice it into the queue. A strategy with a
+   ``horizon`` (lookahead with a window before the faulty action) is asked as soon as one of the
+   next ``horizon`` actions after the first is known to be faulty.
 3. Send the next action to the simulator. A failed attempt (a fault the executor did not know
    yet) is recorded as a step with source ``failed-attempt`` and reveals its blocking faults.
 
@@ -233,6 +235,8 @@ def _loop(run: _Run) -> tuple[MissionStatus, str]:
     spec = run.spec
     domain = spec.domain
     limit = spec.step_limit()
+    horizon = int(getattr(run.repairer, "horizon", 0))
+    early_at = -1  # the step of the last early repair: at most one per step, so none can loop
     while True:
         if spec.at_goal(run.sim.pose):
             return MissionStatus.REACHED, "goal reached"
@@ -244,11 +248,27 @@ def _loop(run: _Run) -> tuple[MissionStatus, str]:
             if repair.status is not RepairStatus.REPAIRED:
                 return MissionStatus(repair.status), _why(repair, run)
             continue
+        if horizon and early_at != run.sim.steps and (ahead := _faulty_ahead(run, horizon)):
+            early_at = run.sim.steps
+            repair = run.repair(ahead[0])  # a known fault ahead: the repairer wants it early
+            if repair.status is not RepairStatus.REPAIRED:
+                return MissionStatus(repair.status), _why(repair, run)
+            continue
         action, source = run.queue[0]
         terminal = run.execute(action, source)
         if terminal is not None:
             name = domain.format_action(action)
             return terminal, f"{name} at {run.sim.pose} would sweep a wall"
+
+
+def _faulty_ahead(run: _Run, horizon: int) -> tuple[Any] | None:
+    """The first of the ``horizon`` queued actions after the front that is unavailable under the
+    known faults, in a 1-tuple (``None`` when all are available)."""
+    available, known, queue = run.spec.domain.available, run.known, run.queue
+    for i in range(1, min(horizon + 1, len(queue))):
+        if not available(queue[i][0], known):
+            return (queue[i][0],)
+    return None
 
 
 def _why(repair: Repair, run: _Run) -> str:

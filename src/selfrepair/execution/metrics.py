@@ -6,20 +6,33 @@ that are not in ``b`` plus the number of actions of ``b`` that are not in ``a``,
 multisets of ground actions. Here a ground action is the pair (start pose, wheel code): the action
 together with its parameters, so a plan that drives the same wheels along another route counts as
 different. Lower is more stable; 0 means the same multiset of actions.
+
+Plan distance *by motion* (:func:`motion_distance`) takes a ground action as (start pose, motion
+class) instead: swapping an action for another of the same motion class (``FFFF`` for the slower
+``SFFS``, both "forward one cell") is no change, because the robot does the same thing.
+
+Mission-level figures (docs/experiments.md): ``completed_without_replan`` (the goal reached and no
+full replan, table fallbacks included), ``repair_compute_ns`` (the time of every repair added up;
+the initial plan, identical for every strategy of a situation, left out) and, when the caller
+gives the fault-free optimum at clearance weight 0 (:func:`optimum_ticks`, one reference for
+every strategy variant of a route), ``ticks_over_optimum``.
 """
 
 from __future__ import annotations
 
 import json
 from collections import Counter
-from collections.abc import Hashable, Iterable, Sequence
+from collections.abc import Callable, Hashable, Iterable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
-from selfrepair.execution.result import MissionResult
+from selfrepair.caching import BoundedCache
+from selfrepair.execution.result import MissionResult, MissionSpec
 from selfrepair.repair.strategies import RepairSource, RepairStatus
-from selfrepair.search.lattice import action_cost
+from selfrepair.search.astar import PlanStatus
+from selfrepair.search.lattice import action_cost, plan
+from selfrepair.search.problem import PlanningProblem
 
 if TYPE_CHECKING:
     from selfrepair.execution.result import MissionResult
@@ -32,6 +45,8 @@ __all__ = [
     "histogram_text",
     "latency_stats",
     "mission_row",
+    "motion_distance",
+    "optimum_ticks",
     "plan_distance",
 ]
 
@@ -53,6 +68,47 @@ def plan_distance(first: Iterable[Hashable], second: Iterable[Hashable]) -> Plan
     """Multiset difference counts between two plans of ground actions."""
     a, b = Counter(first), Counter(second)
     return PlanDistance(sum((a - b).values()), sum((b - a).values()))
+
+
+def motion_distance(
+    domain_motion: Callable[[Any], str],
+    first: Iterable[tuple[Hashable, Any]],
+    second: Iterable[tuple[Hashable, Any]],
+) -> PlanDistance:
+    """:func:`plan_distance` with each ground action ``(start, action)`` taken as
+    ``(start, motion class)``: an action swapped for another of the same motion is no change."""
+    return plan_distance(
+        ((start, domain_motion(a)) for start, a in first),
+        ((start, domain_motion(a)) for start, a in second),
+    )
+
+
+_OPTIMUM: BoundedCache[tuple[Hashable, ...], Fraction | None] = BoundedCache(
+    "fault-free optimum ticks", 1024
+)
+
+
+def optimum_ticks(spec: MissionSpec) -> Fraction | None:
+    """The duration of the fault-free optimal plan at clearance weight 0 from ``spec``'s start to
+    its goal: the common reference of "time to goal" for every strategy variant and weight of a
+    route (``None`` when no plan exists). Planned once per (maze, route, robot) and process."""
+    key = (spec.maze, spec.start, spec.goal, spec.goal_heading, spec.domain, spec.heuristic)
+    return _OPTIMUM.get(key, lambda: _optimum(spec))
+
+
+def _optimum(spec: MissionSpec) -> Fraction | None:
+    problem = PlanningProblem(
+        spec.maze,
+        spec.start,
+        spec.goal,
+        spec.goal_heading,
+        frozenset(),
+        Fraction(0),
+        spec.clearance_radius,
+        spec.domain,
+    )
+    result = plan(problem, heuristic=spec.heuristic, backend=spec.backend)
+    return result.duration if result.status is PlanStatus.SOLVED else None
 
 
 @dataclass(frozen=True, slots=True)
@@ -115,10 +171,11 @@ def executed_cost(result: MissionResult) -> Fraction:
     )
 
 
-def mission_row(result: MissionResult) -> Row:
+def mission_row(result: MissionResult, *, optimum: Fraction | None = None) -> Row:
     """Flatten a mission result into one row; the columns are :data:`ROW_COLUMNS`, documented in
     docs/replacement.md. Exact values are strings (``"31/3"``) with ``_float`` twins; times are
-    integer nanoseconds."""
+    integer nanoseconds. ``optimum`` is the reference duration of ``ticks_over_optimum``
+    (:func:`optimum_ticks`); without it that column is ``None``."""
     spec = result.spec
     options = spec.options
     initial = result.initial_plan
@@ -134,7 +191,10 @@ def mission_row(result: MissionResult) -> Row:
     cost_after = executed_cost(result)
     compute_ns = result.initial_planning_ns + stats.total_ns
     planned = list(zip(initial.poses, initial.actions, strict=False))
-    distance = plan_distance(planned, [(s.start, s.action) for s in executed])
+    done = [(s.start, s.action) for s in executed]
+    distance = plan_distance(planned, done)
+    by_motion = motion_distance(spec.domain.motion_class, planned, done)
+    replans = sum(r.repair.replans for r in repairs)
     row: Row = {
         "maze": spec.maze.name,
         "maze_width": spec.maze.width,
@@ -179,7 +239,7 @@ def mission_row(result: MissionResult) -> Row:
             if r.repair.status is RepairStatus.REPAIRED
             and r.repair.source is RepairSource.LOOKAHEAD
         ),
-        "replans": sum(r.repair.replans for r in repairs),
+        "replans": replans,
         "replans_failed": sum(
             1
             for r in repairs
@@ -201,6 +261,13 @@ def mission_row(result: MissionResult) -> Row:
         "plan_distance_removed": distance.removed,
         "plan_distance_added": distance.added,
         "final_pose": str(result.final_pose),
+        "completed_without_replan": int(result.reached and replans == 0),
+        "repair_compute_ns": stats.total_ns,
+        "plan_distance_motion": by_motion.total,
+        "optimum_ticks": None if optimum is None else float(optimum),
+        "ticks_over_optimum": (
+            float(result.ticks - optimum) if optimum is not None and result.reached else None
+        ),
     }
     return row
 
@@ -261,5 +328,10 @@ ROW_COLUMNS: tuple[str, ...] = (
     "plan_distance_removed",
     "plan_distance_added",
     "final_pose",
+    "completed_without_replan",
+    "repair_compute_ns",
+    "plan_distance_motion",
+    "optimum_ticks",
+    "ticks_over_optimum",
 )
 """The row's columns, in order. Stable: the experiments' SQLite schema is built from it."""

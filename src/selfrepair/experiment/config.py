@@ -248,10 +248,12 @@ class ReplacementStrategy(_Frozen):
 
 
 class LookaheadStrategy(ReplacementStrategy):
-    """Replace a window of ``window`` actions after the faulty one; one variant per window."""
+    """Replace a window of ``window`` actions after the faulty one and, when the fault is known
+    ahead, ``before`` actions before it; one variant per (window, before) pair."""
 
     name: Literal["lookahead"]  # type: ignore[assignment]
     window: tuple[Annotated[Int, Field(ge=0, le=64)], ...] = (3,)
+    before: tuple[Annotated[Int, Field(ge=0, le=64)], ...] = (0,)
 
 
 StrategyConfig = Annotated[

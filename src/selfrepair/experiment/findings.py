@@ -1,289 +1,296 @@
-"""Per-strategy summaries and the original study's three findings, checked on stored rows.
+"""The original study's findings, judged on stored rows by paired tests over missions.
 
-Rows are the dicts of :meth:`selfrepair.experiment.store.ResultStore.rows`: label columns
-(``variant``, ``clearance_weight``, ``maze``, ``route``, ``faults``, ...) and the executor's metrics
-(``reached``, ``faulty_encounters``, ``replacements``, ``lookaheads``, ``replans``,
-``repair_latencies_ns``, ``repair_sources``, ``compute_per_action_ns``, ``extra_ticks``,
-``plan_distance``, ...). Every number is computed here from those rows, so the CLI, the report
-and the README all say the same thing.
+Each finding compares two robots **in the same situations** (maze, route, faults, timing,
+detection, replicate): the unit is the pair of missions, never the repair. Outcomes
+(:class:`Outcome`) are HELD, NOT HELD or INCONCLUSIVE; the thresholds are the constants below, and
+docs/experiments.md states them with their reasons.
 
-Definitions (also in docs/experiments.md):
+1. *With replacement, time per action is negligible whenever every faulty action found a
+   substitute*: the median over pairs of (replacing robot's repair compute / replanning robot's
+   repair compute), for replacing missions that met a fault and never replanned. HELD when the
+   upper end of its 95% bootstrap interval is at most :data:`NEGLIGIBLE`; NOT HELD when the lower
+   end is above it.
+1b. *...and replanning time falls when most did*: the same for the time spent in replans, over
+   missions where most but not all encounters were replaced; threshold :data:`FALLS`.
+2. *Clearance weight > 0 raises the share of successful replacements*: per replacement variant
+   and weight above 0, against weight 0, the missions completed without a replan (paired yes/no:
+   exact sign test on the pairs that differ, and the 95% interval of the paired difference).
+3. *Generated tables resolve more than the hand-written one*: the same test, per recursion mode
+   at weight 0, each other table against the hand-written table.
+4. *The primitive/complex scheme works badly with a small table* (the paper's section 4): the
+   same test, guarded against primitive recursion with the hand-written table (generated tables
+   are reported alongside).
 
-* *compute time per executed action*: (initial planning + every repair) / actions executed, per
-  mission; median and 99th percentile over missions.
-* *repair latency*: from meeting a faulty action to having the next executable action, pooled
-  over every repair of every mission; median and 99th percentile.
-* *resolved locally*: share of faulty encounters repaired by a table replacement or a lookahead
-  window, i.e. without a full replan.
-* *extra ticks*: ticks taken minus the duration of the mission's initial (fault-free) plan, mean
-  over reached missions.
-* *plan stability*: the plan distance of Fox et al. (2006) between initial and executed plan,
-  mean over missions (lower is more stable).
+A yes/no comparison is HELD when the sign test gives p < :data:`ALPHA`; NOT HELD when the
+opposite direction does, or when the interval's upper end is below :data:`MIN_EFFECT` (a rise
+that small is ruled out); INCONCLUSIVE otherwise or with fewer than :data:`MIN_PAIRS` pairs.
+Pairs count only when at least one of the two missions met a faulty action. Comparisons whose
+baseline already completes every such pair without a replan have no room to rise: they are
+listed but count only if the other side falls significantly short. A claim over several
+comparisons (several variants, tables or modes) is NOT HELD when any comparison is NOT HELD, HELD
+when all are HELD, INCONCLUSIVE otherwise.
 """
 
 from __future__ import annotations
 
-import json
-import math
+import textwrap
 from collections import defaultdict
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from enum import StrEnum
 from fractions import Fraction
-from typing import ClassVar
 
+from selfrepair.experiment.stats import Interval, bootstrap_interval, sign_test, wilcoxon_greater
 from selfrepair.experiment.store import Value
+from selfrepair.experiment.summary import (
+    Row,
+    StrategySummary,
+    group_label,
+    local_share,
+    median,
+    met_fault,
+    num,
+    percentile,
+    repairs_of,
+    summarize,
+)
 
 __all__ = [
+    "ALPHA",
+    "FALLS",
+    "MIN_EFFECT",
+    "MIN_PAIRS",
+    "NEGLIGIBLE",
     "Finding",
+    "Outcome",
+    "Row",
     "StrategySummary",
     "check_findings",
     "group_label",
+    "local_share",
+    "median",
     "percentile",
+    "repairs_of",
     "summarize",
 ]
 
-Row = dict[str, Value]
-
 NEGLIGIBLE = 0.1
-"""Finding 1: the replacing robot's repair time per executed action counts as negligible when it
-is at most this share of the replanning robot's on the same situations (an order of magnitude
-less), median over missions."""
-
+"""Finding 1: repair compute counts as negligible at most this share of the replanner's (an order
+of magnitude less)."""
 
 FALLS = 0.9
-"""Finding 1, part 2: replanning time "falls" when the median paired ratio of time spent in
-replans is at most this (a 10% margin, so timing noise around 1 cannot decide the verdict)."""
+"""Finding 1b: replanning time "falls" when it is at most this share of the replanner's (a 10%
+margin, so timing noise around 1 cannot decide)."""
+
+ALPHA = 0.05
+"""Significance level of the one-sided paired tests."""
+
+MIN_PAIRS = 10
+"""Fewer usable pairs than this make a comparison INCONCLUSIVE, whatever the numbers say."""
+
+MIN_EFFECT = 0.02
+"""A rise of less than this share of missions (2 percentage points) is too small to count: a
+comparison whose 95% interval stays below it is NOT HELD."""
 
 
-def percentile(values: Sequence[float], fraction: float) -> float | None:
-    """Nearest-rank percentile (``fraction`` in [0, 1]); None for no values."""
-    if not values:
-        return None
-    ordered = sorted(values)
-    rank = max(1, math.ceil(fraction * len(ordered)))
-    return float(ordered[min(rank, len(ordered)) - 1])
+class Outcome(StrEnum):
+    """How a finding came out on the data."""
 
-
-def median(values: Sequence[float]) -> float | None:
-    """The lower median (a value that occurs in the data); None for no values."""
-    if not values:
-        return None
-    ordered = sorted(values)
-    return float(ordered[(len(ordered) - 1) // 2])
-
-
-def group_label(row: Row) -> str:
-    """``variant`` plus the clearance weight when it is not 0, e.g. ``replan`` or
-    ``replacement[handwritten,guarded] w=1``."""
-    weight = str(row.get("clearance_weight") or "0")
-    return str(row["variant"]) + ("" if weight == "0" else f" w={weight}")
-
-
-def _num(row: Row, column: str) -> float:
-    value = row.get(column)
-    return float(value) if isinstance(value, int | float) else 0.0
-
-
-def repairs_of(row: Row) -> list[tuple[str, int]]:
-    """``(source, latency_ns)`` of every repair of a mission row."""
-    latencies = json.loads(str(row.get("repair_latencies_ns") or "[]"))
-    sources = json.loads(str(row.get("repair_sources") or "[]"))
-    if len(sources) != len(latencies):
-        sources = ["?"] * len(latencies)
-    return list(zip(sources, latencies, strict=True))
-
-
-def local_share(rows: Iterable[Row]) -> tuple[float | None, int, int]:
-    """(share, resolved locally, encounters) over ``rows``."""
-    resolved = encounters = 0
-    for row in rows:
-        resolved += int(_num(row, "replacements") + _num(row, "lookaheads"))
-        encounters += int(_num(row, "faulty_encounters"))
-    return (resolved / encounters if encounters else None), resolved, encounters
-
-
-@dataclass(frozen=True, slots=True)
-class StrategySummary:
-    """One line of the per-strategy table. Times are in microseconds."""
-
-    label: str
-    missions: int
-    completed: int
-    compute_per_action_median_us: float | None
-    compute_per_action_p99_us: float | None
-    latency_median_us: float | None
-    latency_p99_us: float | None
-    replans_per_mission: float
-    resolved_locally: float | None
-    extra_ticks_mean: float | None
-    plan_distance_mean: float
-
-    HEADERS: ClassVar[tuple[str, ...]] = (
-        "strategy",
-        "completed",
-        "compute/action median µs",
-        "compute/action p99 µs",
-        "repair latency median µs",
-        "repair latency p99 µs",
-        "replans/mission",
-        "resolved locally",
-        "extra ticks",
-        "plan distance",
-    )
-
-    def cells(self) -> tuple[str, ...]:
-        """The row as display strings, in :attr:`HEADERS` order."""
-        return (
-            self.label,
-            f"{self.completed}/{self.missions}",
-            _fmt(self.compute_per_action_median_us),
-            _fmt(self.compute_per_action_p99_us),
-            _fmt(self.latency_median_us),
-            _fmt(self.latency_p99_us),
-            f"{self.replans_per_mission:.2f}",
-            "-" if self.resolved_locally is None else f"{100 * self.resolved_locally:.1f}%",
-            _fmt(self.extra_ticks_mean, 2),
-            f"{self.plan_distance_mean:.1f}",
-        )
-
-
-def _fmt(value: float | None, digits: int = 0) -> str:
-    if value is None:
-        return "-"
-    if digits == 0:
-        return f"{value:,.0f}" if value >= 10 else f"{value:.1f}"
-    return f"{value:.{digits}f}"
-
-
-def summarize(rows: Iterable[Row]) -> list[StrategySummary]:
-    """One summary per strategy variant and clearance weight, in a stable order."""
-    groups: dict[str, list[Row]] = defaultdict(list)
-    for row in rows:
-        groups[group_label(row)].append(row)
-    return [_summary(label, groups[label]) for label in sorted(groups, key=_order)]
-
-
-def _order(label: str) -> tuple[int, str]:
-    rank = {"replan": 0, "replacement": 1, "lookahead": 2}
-    return rank.get(label.split("[")[0].split(" ")[0], 3), label
-
-
-def _summary(label: str, rows: list[Row]) -> StrategySummary:
-    per_action = [
-        float(v) / 1000
-        for r in rows
-        if isinstance(v := r.get("compute_per_action_ns"), int | float)
-    ]
-    latencies = [lat / 1000 for r in rows for _, lat in repairs_of(r)]
-    extra = [float(v) for r in rows if isinstance(v := r.get("extra_ticks"), int | float)]
-    share, _, _ = local_share(rows)
-    return StrategySummary(
-        label=label,
-        missions=len(rows),
-        completed=sum(1 for r in rows if r.get("reached") == 1),
-        compute_per_action_median_us=median(per_action),
-        compute_per_action_p99_us=percentile(per_action, 0.99),
-        latency_median_us=median(latencies),
-        latency_p99_us=percentile(latencies, 0.99),
-        replans_per_mission=sum(_num(r, "replans") for r in rows) / len(rows),
-        resolved_locally=share,
-        extra_ticks_mean=sum(extra) / len(extra) if extra else None,
-        plan_distance_mean=sum(_num(r, "plan_distance") for r in rows) / len(rows),
-    )
-
-
-# --- findings ----------------------------------------------------------------------------------
+    HELD = "held"
+    NOT_HELD = "not held"
+    INCONCLUSIVE = "inconclusive"
 
 
 @dataclass(frozen=True, slots=True)
 class Finding:
-    """One of the original study's claims, checked on our rows."""
+    """One claim, its outcome and the evidence: an introducing sentence, then one item per
+    comparison (mission-level figures first)."""
 
-    number: int
+    number: str
     claim: str
-    verdict: str  # "held", "not held" or "not tested"
-    evidence: str
+    outcome: Outcome
+    lines: tuple[str, ...]
+
+    @property
+    def verdict(self) -> str:
+        """The outcome's text (``held``, ``not held``, ``inconclusive``)."""
+        return self.outcome.value
+
+    @property
+    def evidence(self) -> str:
+        """The evidence as one paragraph."""
+        return " ".join(self.lines)
+
+    @property
+    def headline(self) -> str:
+        """``Finding N: OUTCOME. Claim.``"""
+        return f"Finding {self.number}: {self.outcome.value.upper()}. {_cap(self.claim)}."
+
+    def paragraph(self, width: int = 96) -> str:
+        """The headline, the introducing sentence and one item per comparison, wrapped to
+        ``width`` for a terminal."""
+        out = [textwrap.fill(self.headline, width, subsequent_indent="  ")]
+        intro, *items = self.lines
+        out.append(textwrap.fill(intro, width, initial_indent="  ", subsequent_indent="  "))
+        out += [
+            textwrap.fill(item, width, initial_indent="  - ", subsequent_indent="    ")
+            for item in items
+        ]
+        return "\n".join(out)
+
+    def markdown(self) -> str:
+        """The same as Markdown: the headline in bold, the items as a list."""
+        intro, *items = self.lines
+        head = f"**Finding {self.number}: {self.outcome.value.upper()}.** {_cap(self.claim)}."
+        return "\n".join([head, "", intro, "", *(f"- {item}" for item in items)])
 
 
-CLAIMS = (
-    "with replacement, time per action is negligible whenever every faulty action found a "
-    "substitute, and replanning time falls when most did",
-    "keeping plans away from walls (clearance weight > 0) raises the share of successful "
-    "replacements compared with weight 0",
-    "larger or generated tables resolve more encounters than the hand-written one",
-)
+def _cap(text: str) -> str:
+    return text[:1].upper() + text[1:]
+
+
+CLAIMS = {
+    "1": "with replacement, repair compute is negligible (at most 1/10 of the replanner's) "
+    "whenever every faulty action found a substitute",
+    "1b": "replanning time falls when most faulty actions found a substitute",
+    "2": "keeping plans away from walls (clearance weight > 0) raises the share of missions "
+    "completed without a replan",
+    "3": "generated tables complete more missions without a replan than the hand-written one",
+    "4": "the primitive/complex recursion scheme works badly with the hand-written table "
+    "(fewer missions without a replan than guarded recursion)",
+}
 
 
 def check_findings(rows: Sequence[Row]) -> list[Finding]:
-    """The three findings, each held / not held / not tested, with the numbers behind it."""
-    return [_finding_1(rows), _finding_2(rows), _finding_3(rows)]
+    """Every finding, each HELD / NOT HELD / INCONCLUSIVE, with the numbers behind it."""
+    return [
+        _finding_1(rows),
+        _finding_1b(rows),
+        _finding_2(rows),
+        _finding_3(rows),
+        _finding_4(rows),
+    ]
 
 
-def _situation(row: Row) -> tuple[Value, ...]:
-    return tuple(
-        row.get(c)
-        for c in (
-            "maze",
-            "route",
-            "faults",
-            "fault_at",
-            "detection",
-            "replicate",
-            "clearance_weight",
-        )
-    )
+# --- pairing ------------------------------------------------------------------------------------
+
+SITUATION = ("maze", "route", "faults", "fault_at", "detection", "replicate")
+"""What makes two missions of different strategies comparable."""
 
 
-def _repair_time_per_action(row: Row) -> float:
-    actions = _num(row, "actions_executed")
-    return _num(row, "repair_latency_total_ns") / actions if actions else 0.0
+def situation(row: Row) -> tuple[Value, ...]:
+    """The situation of a mission: the same for every strategy, variant and weight."""
+    return tuple(row.get(c) for c in SITUATION)
+
+
+def _weight(row: Row) -> Fraction:
+    return Fraction(str(row.get("clearance_weight") or "0"))
+
+
+def _by_situation(rows: Sequence[Row], keep: Callable[[Row], bool]) -> dict[tuple[Value, ...], Row]:
+    return {situation(r): r for r in rows if keep(r)}
+
+
+def _combine(outcomes: Sequence[Outcome]) -> Outcome:
+    """A claim over several comparisons (see the module docstring)."""
+    if Outcome.NOT_HELD in outcomes:
+        return Outcome.NOT_HELD
+    if outcomes and all(o is Outcome.HELD for o in outcomes):
+        return Outcome.HELD
+    return Outcome.INCONCLUSIVE
+
+
+def _is_replacement(row: Row) -> bool:
+    return row.get("strategy") == "replacement"
+
+
+# --- finding 1: compute ------------------------------------------------------------------------
+
+
+def ratio_outcome(interval: Interval | None, threshold: float) -> Outcome:
+    """A ratio claim "at most ``threshold``": HELD when the interval lies at or below it, NOT HELD
+    when it lies above, INCONCLUSIVE when it straddles it or the pairs are too few."""
+    if interval is None or interval.n < MIN_PAIRS:
+        return Outcome.INCONCLUSIVE
+    if interval.high <= threshold:
+        return Outcome.HELD
+    if interval.low > threshold:
+        return Outcome.NOT_HELD
+    return Outcome.INCONCLUSIVE
 
 
 def _finding_1(rows: Sequence[Row]) -> Finding:
-    replan = {_situation(r): r for r in rows if r.get("strategy") == "replan"}
-    table_rows = [
-        r for r in rows if r.get("strategy") == "replacement" and _num(r, "faulty_encounters") > 0
-    ]
-    if not replan or not table_rows:
-        return Finding(1, CLAIMS[0], "not tested", "needs both replan and replacement missions")
-    all_hit = [r for r in table_rows if _num(r, "replans") == 0]
-    pairs = [(r, replan[s]) for r in all_hit if (s := _situation(r)) in replan]
-    ours = [_repair_time_per_action(r) / 1000 for r, _ in pairs]
-    theirs = [_repair_time_per_action(p) / 1000 for _, p in pairs]
-    hits = [lat / 1000 for r, _ in pairs for src, lat in repairs_of(r) if src == "replacement"]
-    replans = [lat / 1000 for _, p in pairs for src, lat in repairs_of(p) if src == "replan"]
-    part1_ok = bool(pairs) and (median(ours) or 0) <= NEGLIGIBLE * (median(theirs) or 0)
-    text1 = (
-        f"{len(pairs)} replacement missions where every faulty action found a substitute: "
-        f"repair time per executed action median {_fmt(median(ours), 2)} µs vs "
-        f"{_fmt(median(theirs), 2)} µs for the replanning robot on the same situations (ratio "
-        f"{_ratio(median(ours), median(theirs))}; negligible means <= {NEGLIGIBLE:g}); per repair "
-        f"a table hit takes {_fmt(median(hits), 1)} µs and a replan {_fmt(median(replans), 1)} µs "
-        f"(medians, ratio {_ratio(median(hits), median(replans))}), but the replacing robot "
-        f"repairs {_per_mission(pairs, 0)} times per mission against {_per_mission(pairs, 1)}"
+    replan = _by_situation(rows, lambda r: r.get("strategy") == "replan")
+    variants: dict[str, list[Row]] = defaultdict(list)
+    for r in rows:
+        if _is_replacement(r) and _weight(r) == 0 and met_fault(r) and num(r, "replans") == 0:
+            variants[group_label(r)].append(r)
+    if not replan or not variants:
+        return Finding("1", CLAIMS["1"], Outcome.INCONCLUSIVE, (_NEEDS_BOTH,))
+    outcomes = []
+    lines = []
+    for label, group in sorted(variants.items()):
+        pairs = [(r, p) for r in group if (p := replan.get(situation(r))) is not None]
+        ratios = [
+            num(r, "repair_compute_ns") / num(p, "repair_compute_ns")
+            for r, p in pairs
+            if num(p, "repair_compute_ns") > 0
+        ]
+        interval = bootstrap_interval(ratios)
+        outcome = ratio_outcome(interval, NEGLIGIBLE)
+        outcomes.append(outcome)
+        lines.append(_ratio_line(label, interval, outcome, pairs))
+    return Finding("1", CLAIMS["1"], _combine(outcomes), (_ONE_INTRO, *lines))
+
+
+_NEEDS_BOTH = "Needs replanning and replacing missions in the same situations."
+_ONE_INTRO = (
+    "Paired missions that met a fault, the replacing robot without any replan; "
+    "median of (its repair compute / the replanner's), 95% interval:"
+)
+
+
+def _ratio_line(
+    label: str, interval: Interval | None, outcome: Outcome, pairs: Sequence[tuple[Row, Row]]
+) -> str:
+    if interval is None:
+        return f"{label}: no pair: {outcome.value}."
+    ours = median([num(r, "repair_count") for r, _ in pairs]) or 0
+    theirs = median([num(p, "repair_count") for _, p in pairs]) or 0
+    return (
+        f"{label}: {interval.text(3)} over {interval.n} pairs ({ours:g} repairs per mission "
+        f"against {theirs:g}): {outcome.value}."
     )
+
+
+def _finding_1b(rows: Sequence[Row]) -> Finding:
+    replan = _by_situation(rows, lambda r: r.get("strategy") == "replan")
     most = [
         r
-        for r in table_rows
-        if _num(r, "replans") > 0 and _num(r, "replacements") > _num(r, "faulty_encounters") / 2
+        for r in rows
+        if _is_replacement(r)
+        and _weight(r) == 0
+        and num(r, "replans") > 0
+        and num(r, "replacements") > num(r, "faulty_encounters") / 2
     ]
-    paired = [(r, replan[s]) for r in most if (s := _situation(r)) in replan]
-    ratios = [_replan_ns(r) / _replan_ns(p) for r, p in paired if _replan_ns(p) > 0]
-    part2_ok: bool | None = None
-    if not ratios:
-        text2 = "no mission where most but not all encounters were replaced, so part 2 untested"
+    ratios = [
+        _replan_ns(r) / _replan_ns(p)
+        for r in most
+        if (p := replan.get(situation(r))) is not None and _replan_ns(p) > 0
+    ]
+    if not replan:
+        return Finding("1b", CLAIMS["1b"], Outcome.INCONCLUSIVE, (_NEEDS_BOTH,))
+    interval = bootstrap_interval(ratios)
+    outcome = ratio_outcome(interval, FALLS)
+    if interval is None:
+        text = "No mission where most but not all faulty encounters were replaced."
     else:
-        part2_ok = (median(ratios) or 0) <= FALLS
-        text2 = (
-            f"{len(ratios)} missions where most but not all encounters were replaced: their "
-            f"time spent in replans is {median(ratios):.2f}x the replanning robot's "
-            f"(median of paired ratios; falling means <= {FALLS:g})"
+        text = (
+            f"{interval.n} missions where most but not all encounters were replaced: their time "
+            f"in replans is {interval.text(2)} times the replanner's (median of paired ratios, "
+            f"95% interval; falling means at most {FALLS:g})."
         )
-    if not pairs:
-        verdict = "not tested"
-    else:
-        verdict = "held" if part1_ok and part2_ok is not False else "not held"
-    return Finding(1, CLAIMS[0], verdict, f"{text1}; {text2}")
+    return Finding("1b", CLAIMS["1b"], outcome, (text,))
 
 
 def _replan_ns(row: Row) -> float:
@@ -291,87 +298,205 @@ def _replan_ns(row: Row) -> float:
     return float(sum(lat for src, lat in repairs_of(row) if src == "replan"))
 
 
-def _per_mission(pairs: Sequence[tuple[Row, Row]], side: int) -> str:
-    counts = [_num(pair[side], "repair_count") for pair in pairs]
-    return f"{sum(counts) / len(counts):.1f}" if counts else "-"
+# --- paired yes/no comparisons -----------------------------------------------------------------
 
 
-def _ratio(a: float | None, b: float | None) -> str:
-    if a is None or not b:
-        return "-"
-    return f"{a / b:.4f}"
+@dataclass(frozen=True, slots=True)
+class Comparison:
+    """Two robots on the same situations, by "completed without a replan" (a yes/no per mission).
+
+    ``better``/``worse``: pairs where only the candidate / only the baseline succeeded;
+    ``difference``: the paired difference of success (candidate - baseline) with its interval.
+    """
+
+    label: str
+    pairs: int
+    base_successes: int
+    successes: int
+    better: int
+    worse: int
+    difference: Interval | None
+    p_better: float
+    p_worse: float
+    outcome: Outcome
+    ceiling: bool
+
+    def line(self) -> str:
+        """One sentence with the counts, the interval and the tests."""
+        if not self.pairs:
+            return f"{self.label}: no mission met a fault: {self.outcome.value}."
+        diff = "-" if self.difference is None else self.difference.text(3)
+        return (
+            f"{self.label}: {self.successes} against {self.base_successes} of {self.pairs}; "
+            f"better in {self.better} pairs, worse in {self.worse} (sign test p = "
+            f"{self.p_better:.2g}); difference {diff}: {self.outcome.value}."
+        )
 
 
-def _weight(row: Row) -> Fraction:
-    return Fraction(str(row.get("clearance_weight") or "0"))
+def compare(label: str, pairs: Sequence[tuple[Row, Row]], *, room: bool = True) -> Comparison:
+    """The paired yes/no comparison of ``(baseline, candidate)`` mission pairs (see the module
+    docstring for the rule). With ``room`` (claims that something *rises*), a baseline that
+    already succeeds in every pair leaves no room: such a comparison is INCONCLUSIVE unless the
+    candidate falls short significantly. Without it (claims that the baseline is *bad*), a
+    baseline at 100% simply refutes the claim."""
+    used = [(b, c) for b, c in pairs if met_fault(b) or met_fault(c)]
+    ok = [(_success(b), _success(c)) for b, c in used]
+    better = sum(1 for b, c in ok if c and not b)
+    worse = sum(1 for b, c in ok if b and not c)
+    difference = bootstrap_interval([float(c) - float(b) for b, c in ok], "mean")
+    p_better, p_worse = sign_test(better, worse), sign_test(worse, better)
+    ceiling = room and bool(ok) and all(b for b, _ in ok)
+    if len(ok) < MIN_PAIRS or difference is None:
+        outcome = Outcome.INCONCLUSIVE
+    elif p_worse < ALPHA:
+        outcome = Outcome.NOT_HELD
+    elif ceiling:
+        outcome = Outcome.INCONCLUSIVE  # nothing can rise above 100%
+    elif p_better < ALPHA:
+        outcome = Outcome.HELD
+    elif difference.high < MIN_EFFECT:
+        outcome = Outcome.NOT_HELD
+    else:
+        outcome = Outcome.INCONCLUSIVE
+    return Comparison(
+        label,
+        len(ok),
+        sum(b for b, _ in ok),
+        sum(c for _, c in ok),
+        better,
+        worse,
+        difference,
+        p_better,
+        p_worse,
+        outcome,
+        ceiling,
+    )
+
+
+def _success(row: Row) -> bool:
+    return row.get("completed_without_replan") == 1
+
+
+def _pairs(base: Sequence[Row], other: Sequence[Row]) -> list[tuple[Row, Row]]:
+    index = {situation(r): r for r in base}
+    return [(b, c) for c in other if (b := index.get(situation(c))) is not None]
+
+
+def _judge(
+    number: str, comparisons: Sequence[Comparison], intro: str, extra: Sequence[str] = ()
+) -> Finding:
+    if not comparisons:
+        return Finding(
+            number, CLAIMS[number], Outcome.INCONCLUSIVE, (intro, "Nothing to compare.", *extra)
+        )
+    full = [c for c in comparisons if c.ceiling and c.outcome is not Outcome.NOT_HELD]
+    counted = [c.outcome for c in comparisons if c not in full]
+    lines = [intro, *(c.line() for c in comparisons if c not in full)]
+    if full:
+        listed = "; ".join(f"{c.label} ({c.pairs} pairs)" for c in full)
+        lines.append(f"No room to rise (the baseline completes every pair already): {listed}.")
+    return Finding(number, CLAIMS[number], _combine(counted), (*lines, *extra))
+
+
+# --- finding 2: clearance ----------------------------------------------------------------------
 
 
 def _finding_2(rows: Sequence[Row]) -> Finding:
     by_variant: dict[str, dict[Fraction, list[Row]]] = defaultdict(lambda: defaultdict(list))
     for r in rows:
-        if r.get("strategy") == "replacement":
+        if _is_replacement(r):
             by_variant[str(r.get("variant"))][_weight(r)].append(r)
-    tested = {v: w for v, w in by_variant.items() if 0 in w and any(x > 0 for x in w)}
-    if not tested:
-        return Finding(2, CLAIMS[1], "not tested", "needs replacement missions at weight 0 and > 0")
-    parts: list[str] = []
-    ok: list[bool] = []
-    for variant, weights in sorted(tested.items()):
-        shares = {w: _replacement_share(rs) for w, rs in sorted(weights.items())}
-        base = shares[Fraction(0)]
-        listed = ", ".join(f"w={w}: {_pct(s)}" for w, s in shares.items())
-        above = [s for w, s in shares.items() if w > 0 and s is not None]
-        if base is None or not above:
-            parts.append(f"{variant}: {listed} (no faulty encounter to compare)")
+    comparisons = []
+    costs = []
+    for variant, weights in sorted(by_variant.items()):
+        if 0 not in weights:
             continue
-        if base >= 1:
-            parts.append(f"{variant}: {listed} (already 100% at w=0, no room to rise)")
-            continue
-        ok.append(max(above) > base)
-        parts.append(f"{variant}: {listed}")
-    verdict = "not tested" if not ok else "held" if all(ok) else "not held"
-    return Finding(
-        2, CLAIMS[1], verdict, "share of encounters resolved by replacement - " + "; ".join(parts)
+        for weight, group in sorted(weights.items()):
+            if weight == 0:
+                continue
+            pairs = _pairs(weights[Fraction(0)], group)
+            comparisons.append(compare(f"{variant} w={weight} vs w=0", pairs))
+            costs.append(_tick_cost(f"{variant} w={weight}", pairs))
+    intro = _PAIRED
+    shares = _encounter_shares(by_variant)
+    return _judge("2", comparisons, intro, [c for c in (*costs, shares) if c])
+
+
+_PAIRED = (
+    "Missions completed without a replan (candidate against baseline), over the situations "
+    "where either met a fault:"
+)
+
+
+def _tick_cost(label: str, pairs: Sequence[tuple[Row, Row]]) -> str:
+    """What a weight costs in time to goal against the common optimum (paired, reached both)."""
+    diffs = [
+        num(c, "ticks_over_optimum") - num(b, "ticks_over_optimum")
+        for b, c in pairs
+        if isinstance(b.get("ticks_over_optimum"), int | float)
+        and isinstance(c.get("ticks_over_optimum"), int | float)
+    ]
+    interval = bootstrap_interval(diffs, "mean")
+    if interval is None:
+        return ""
+    return (
+        f"Price of {label}: {interval.text(1)} ticks more than at w=0 to the goal (mean "
+        f"paired difference; Wilcoxon p = {wilcoxon_greater(diffs):.2g})."
     )
 
 
-def _replacement_share(rows: Iterable[Row]) -> float | None:
-    replaced = encounters = 0.0
-    for r in rows:
-        replaced += _num(r, "replacements")
-        encounters += _num(r, "faulty_encounters")
-    return replaced / encounters if encounters else None
+def _encounter_shares(by_variant: dict[str, dict[Fraction, list[Row]]]) -> str:
+    parts = []
+    for variant, weights in sorted(by_variant.items()):
+        if 0 in weights and len(weights) > 1:
+            listed = ", ".join(
+                f"w={w}: {_pct(local_share(rs)[0])}" for w, rs in sorted(weights.items())
+            )
+            parts.append(f"{variant} {listed}")
+    return ("Resolved locally, per encounter: " + "; ".join(parts) + ".") if parts else ""
 
 
 def _pct(share: float | None) -> str:
     return "-" if share is None else f"{100 * share:.2f}%"
 
 
+# --- finding 3: tables --------------------------------------------------------------------------
+
+HANDWRITTEN = "handwritten"
+
+
 def _finding_3(rows: Sequence[Row]) -> Finding:
     groups: dict[str, dict[str, list[Row]]] = defaultdict(lambda: defaultdict(list))
     for r in rows:
-        if r.get("strategy") == "replacement" and _weight(r) == 0:
+        if _is_replacement(r) and _weight(r) == 0:
             groups[str(r.get("recursion"))][str(r.get("table"))].append(r)
-    tested = {m: t for m, t in groups.items() if "handwritten" in t and len(t) > 1}
-    if not tested:
-        return Finding(3, CLAIMS[2], "not tested", "needs the hand-written and another table")
-    parts: list[str] = []
-    ok: list[bool] = []
-    for mode, tables in sorted(tested.items()):
-        shares = {t: _replacement_share(rs) for t, rs in sorted(tables.items())}
-        listed = ", ".join(f"{t}: {_pct(s)}" for t, s in shares.items())
-        base = shares["handwritten"]
-        others = [s for t, s in shares.items() if t != "handwritten" and s is not None]
-        if base is None or not others:
-            parts.append(f"{mode} recursion: {listed} (no faulty encounter to compare)")
+    comparisons = []
+    for mode, tables in sorted(groups.items()):
+        if HANDWRITTEN not in tables:
             continue
-        # at a 100% ceiling nothing can do better: a tie counts, falling short does not
-        ok.extend(s > base or s >= base >= 1 for s in others)
-        note = " (hand-written already at 100%: others can only tie)" if base >= 1 else ""
-        parts.append(f"{mode} recursion: {listed}{note}")
-    return Finding(
-        3,
-        CLAIMS[2],
-        "not tested" if not ok else "held" if all(ok) else "not held",
-        "share of encounters resolved by replacement at weight 0 - " + "; ".join(parts),
-    )
+        for table, group in sorted(tables.items()):
+            if table != HANDWRITTEN:
+                pairs = _pairs(tables[HANDWRITTEN], group)
+                comparisons.append(compare(f"{table} vs {HANDWRITTEN}, {mode}", pairs))
+    return _judge("3", comparisons, _PAIRED)
+
+
+# --- finding 4: primitive/complex recursion ---------------------------------------------------
+
+PRIMITIVE, GUARDED = "primitive", "guarded"
+
+
+def _finding_4(rows: Sequence[Row]) -> Finding:
+    groups: dict[str, dict[str, list[Row]]] = defaultdict(lambda: defaultdict(list))
+    for r in rows:
+        if _is_replacement(r) and _weight(r) == 0:
+            groups[str(r.get("table"))][str(r.get("recursion"))].append(r)
+    judged: list[Comparison] = []
+    others: list[Comparison] = []
+    for table, modes in sorted(groups.items()):
+        if PRIMITIVE in modes and GUARDED in modes:
+            pairs = _pairs(modes[PRIMITIVE], modes[GUARDED])  # guarded is the candidate
+            found = compare(f"{table}: guarded against primitive", pairs, room=False)
+            (judged if table == HANDWRITTEN else others).append(found)
+    extra = [f"For comparison, {c.line()}" for c in others]
+    return _judge("4", judged, _PAIRED, extra)

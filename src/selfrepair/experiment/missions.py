@@ -25,8 +25,8 @@ from __future__ import annotations
 
 import hashlib
 import json
-from collections import deque
-from collections.abc import Iterator
+from collections import Counter, deque
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from functools import lru_cache
@@ -59,6 +59,7 @@ __all__ = [
     "PAPER_FAULT_SETS",
     "SCHEMA",
     "Mission",
+    "biting_fault_sets",
     "count_missions",
     "expand",
     "fault_profile",
@@ -74,22 +75,53 @@ SCHEMA = 1
 """Version of the canonical mission configuration; part of every key."""
 
 PAPER_FAULT_SETS: tuple[str, ...] = (
-    # one fault: each wheel mode on the left and on the right side (mazes are not mirror-symmetric)
+    # chosen by biting_fault_sets (the rule in docs/experiments.md): each disables at least one
+    # action of the initial plan of every one of the 16 bundled routes; singles first, then
+    # doubles that spread the faults over wheels and modes
     "FL:F",
-    "FR:F",
-    "FL:S",
-    "FR:S",
-    "FL:B",
-    "FR:B",
-    # two faults: one per class of pair
-    "FL:F,RL:F",  # one side can no longer drive forward at all
-    "FL:F,FR:F",  # both front wheels: forward only at half speed
-    "FL:B,FL:F",  # one wheel stuck at stop
-    "FL:F,RR:B",  # diagonal, mixed modes
-    "FL:S,FR:S",  # neither front wheel can stop
-    "FR:B,RR:B",  # one side can no longer drive backward
+    "RL:F",
+    "FR:B,RL:S",
+    "RR:B,RR:F",
+    "FL:S,FL:F",
+    "FR:S,FR:F",
+    "RL:B,RL:S",
+    "FL:F,RR:B",
+    "RL:S,RR:B",
+    "FR:B,FR:F",
+    "FL:F,RR:S",
+    "FL:B,RL:S",
 )
-"""The reference experiment's 12 fault sets (6 single, 6 double); see docs/experiments.md."""
+"""The reference experiment's 12 fault sets; see :func:`biting_fault_sets` and
+docs/experiments.md (a test checks that the rule gives exactly these)."""
+
+
+def biting_fault_sets(
+    domain: Domain[Any, Any], plans: Iterable[Sequence[Any]], count: int
+) -> tuple[str, ...]:
+    """The rule behind :data:`PAPER_FAULT_SETS`: among ``domain.fault_sets``, those that disable
+    at least one action of **every** plan of ``plans`` (so every mission meets a faulty action
+    unless a repair steers round it), at most ``count`` of them, smallest sets first, then greedily
+    the set whose wheels and modes (the two halves of ``W:M``) were used least by the sets chosen
+    so far, ties to the earlier in ``domain.fault_sets``."""
+    plans = [tuple(p) for p in plans]
+    biting = [
+        faults
+        for faults in domain.fault_sets
+        if all(any(not domain.available(a, faults) for a in p) for p in plans)
+    ]
+    used: Counter[str] = Counter()
+
+    def halves(faults: frozenset[Any]) -> list[str]:
+        return [part for f in faults for part in domain.format_faults((f,)).split(":")]
+
+    chosen: list[str] = []
+    while biting and len(chosen) < count:
+        best = min(biting, key=lambda fs: (len(fs), sum(used[h] for h in halves(fs))))
+        biting.remove(best)
+        used.update(halves(best))
+        chosen.append(domain.format_faults(best))
+    return tuple(chosen)
+
 
 BUNDLED_TABLES = ("handwritten", "generated-agnostic", "generated-indexed")
 """Table names resolved from package data; anything else is a path to a table file."""
@@ -316,18 +348,22 @@ def strategy_variants(config: ExperimentConfig) -> Iterator[tuple[dict[str, Any]
     for strategy in config.strategies:
         weights = strategy.clearance_weights or config.planner.clearance_weights
         if isinstance(strategy, ReplacementStrategy):
-            windows: tuple[int | None, ...] = (
-                strategy.window if isinstance(strategy, LookaheadStrategy) else (None,)
+            windows: tuple[tuple[int | None, int], ...] = (
+                tuple((w, b) for w in strategy.window for b in strategy.before)
+                if isinstance(strategy, LookaheadStrategy)
+                else ((None, 0),)
             )
             for table in strategy.tables:
                 for recursion in strategy.recursion:
-                    for window in windows:
+                    for window, before in windows:
                         options: dict[str, Any] = {
                             **_table_identity(table, config),
                             "recursion": recursion,
                         }
                         if window is not None:
                             options["window"] = window
+                        if before:  # absent when 0, so older mission keys stay valid
+                            options["before"] = before
                         yield {"strategy": strategy.name, "options": options}, weights
         else:
             yield {"strategy": strategy.name, "options": {}}, weights
@@ -411,6 +447,8 @@ def variant_label(strategy: str, options: dict[str, Any]) -> str:
         parts.append(str(options["recursion"]))
     if "window" in options:
         parts.append(f"k={options['window']}")
+    if options.get("before"):
+        parts.append(f"before={options['before']}")
     return f"{strategy}[{','.join(parts)}]"
 
 
@@ -610,6 +648,7 @@ def to_spec(mission: Mission) -> MissionSpec:
             table=options.get("table", "handwritten"),
             recursion=options.get("recursion", RecursionMode.FLAT),
             window=options.get("window", 3),
+            before=options.get("before", 0),
         ),
         clearance_weight=Fraction(s["clearance_weight"]),
         clearance_radius=s["clearance_radius"],

@@ -29,6 +29,7 @@ from selfrepair.experiment.findings import (
 )
 from selfrepair.experiment.missions import Mission
 from selfrepair.experiment.store import ResultStore
+from selfrepair.experiment.summary import fault_set_bite
 
 if TYPE_CHECKING:
     from selfrepair.execution.result import MissionResult
@@ -179,21 +180,45 @@ def render_markdown(
         "",
         "## Per strategy",
         "",
-        "Times in microseconds. *compute/action*: (initial planning + all repairs) / actions "
-        "executed, per mission. *repair latency*: from meeting a faulty action to having the next "
-        "executable action, over all repairs. *resolved locally*: faulty encounters repaired by a "
-        "table replacement or a lookahead window rather than a full replan. *extra ticks*: mean "
-        "over reached missions of ticks taken minus the fault-free plan's duration. *plan "
-        "distance*: mean plan stability distance (Fox et al. 2006) between initial and executed "
-        "plan, lower is more stable. `w=` is the clearance weight (0 when absent).",
+        "Mission-level figures first; intervals are 95% bootstrap intervals over missions. "
+        "*met a fault*: missions that met at least one faulty action. *no replan*: of those, the "
+        "ones that reached the goal without any full replan. *resolved locally (per "
+        "encounter)*: faulty encounters repaired by a table replacement or a lookahead window. "
+        "*ticks over optimum*: ticks taken minus the fault-free optimum at clearance weight 0 on "
+        "the same route, mean over reached missions. *plan distance*: plan stability (Fox et al. "
+        "2006) between initial and executed plan, as ground actions and by motion class. "
+        "*repair compute/mission*: every repair's time added up, median over missions that met a "
+        "fault (µs). *first repair cold/warm*: the first repair of a mission with the process's "
+        "caches emptied, and the same repair warm (µs). *repair latency*: over all repairs, "
+        "pooled. `w=` is the clearance weight (0 when absent).",
         "",
         markdown_table(StrategySummary.HEADERS, [s.cells() for s in summaries]),
+        "",
+        "### Fault sets",
+        "",
+        markdown_table(
+            ("fault set", "missions", "met a faulty action", "replanning robot: met"),
+            [
+                (
+                    b.faults or "(none)",
+                    str(b.missions),
+                    str(b.met),
+                    f"{b.replan_met}/{b.replan_missions}",
+                )
+                for b in fault_set_bite(rows)
+            ],
+        ),
         "",
         "## The original study's findings on these results",
         "",
     ]
     for f in findings:
-        parts.append(f"{f.number}. **{f.verdict.upper()}** - {f.claim}. {f.evidence}.")
+        parts.append(
+            f"**Finding {f.number}: {f.verdict.upper()}.** {f.claim[:1].upper()}{f.claim[1:]}."
+        )
+        parts.append("")
+        parts.append(f.evidence)
+        parts.append("")
     parts += [
         "",
         "## Figures",

@@ -17,13 +17,14 @@ import logging
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import ExitStack, contextmanager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import joblib
 from joblib.externals.loky.process_executor import TerminatedWorkerError
 
 from selfrepair.errors import ProblemError, SelfRepairError
 from selfrepair.execution.metrics import mission_row
+from selfrepair.execution.result import MissionResult
 from selfrepair.experiment.missions import Mission
 from selfrepair.experiment.store import ResultStore, Value
 
@@ -69,31 +70,48 @@ DUPLICATE_COLUMNS = frozenset(
 (in the experiment's naming; the exact values are in the ``config`` JSON)."""
 
 
-_WARMED: set[tuple[object, ...]] = set()
-"""(strategy, table, maze size) combinations this process has already run once."""
+INPUT_CACHES = ("bundled tables", "table files", "fault-free optimum ticks")
+"""Caches of inputs (table files) and of the common reference, kept across the cold run: filling
+them happens before any clock starts, so clearing them would only slow the sweep down."""
 
 
-def execute_mission(mission: Mission) -> Mapping[str, Value]:
+def execute_mission(mission: Mission, *, repeats: int = 1) -> Mapping[str, Value]:
     """The real mission function: run the executor on ``missions.to_spec(mission)``.
 
     The row is :meth:`MissionResult.to_row` (columns in docs/replacement.md) without the
     :data:`DUPLICATE_COLUMNS`, plus ``repair_sources`` (JSON list, the source of each repair in
     the order of ``repair_latencies_ns``), ``plan_ticks_before`` (duration of the initial,
-    fault-free plan), ``extra_ticks`` (ticks taken minus that, for reached missions) and
-    ``maze_free_cells``. Timings leave out one-off costs (JIT compilation, loading a table, the
-    first allocation for a maze size): the first mission of each strategy, table and maze size in
-    a process is run twice and only the second run is kept (results are deterministic).
+    fault-free plan), ``extra_ticks`` (ticks taken minus that, for reached missions),
+    ``maze_free_cells``, ``optimum_ticks``/``ticks_over_optimum`` (against the fault-free optimum
+    at clearance weight 0 on the same route, the same reference for every variant) and the
+    timing columns below.
+
+    Timing, with one cache policy for every strategy (docs/experiments.md): the mission first
+    runs **cold**, after every derived-data cache of the process is emptied
+    (:func:`~selfrepair.caching.clear_caches`; loaded table files and the compiled planner
+    kernels stay), so its first repair pays what a first repair in a fresh process pays:
+    ``cold_first_repair_ns``, ``cold_repair_compute_ns``, ``cold_initial_planning_ns``. Then it
+    runs ``repeats`` more times **warm** (caches as the runs before left them); every other
+    timing column is the median over those warm runs, repair by repair (results are
+    deterministic, so the repairs line up). ``timing_repeats`` records ``repeats``.
     """
+    from selfrepair.caching import clear_caches
     from selfrepair.execution.executor import run_mission
+    from selfrepair.execution.metrics import optimum_ticks
     from selfrepair.experiment.missions import to_spec
 
+    if repeats < 1:
+        raise ProblemError(f"repeats must be at least 1, got {repeats}")
     spec = to_spec(mission)
-    warm_key = (spec.strategy, str(spec.options.table), spec.maze.width, spec.maze.height)
-    if warm_key not in _WARMED:
-        run_mission(spec)  # one-off JIT compilation and table loading stay out of the timings
-        _WARMED.add(warm_key)
-    result = run_mission(spec)
-    row = {k: v for k, v in mission_row(result).items() if k not in DUPLICATE_COLUMNS}
+    clear_caches(keep=INPUT_CACHES)
+    cold = run_mission(spec)
+    warm = [run_mission(spec) for _ in range(repeats)]
+    result = _median_timings(warm)
+    row = {
+        k: v
+        for k, v in mission_row(result, optimum=optimum_ticks(spec)).items()
+        if k not in DUPLICATE_COLUMNS
+    }
     plan_ticks = result.initial_plan.duration
     row["repair_sources"] = json.dumps(
         [r.repair.source if r.repair.status == "repaired" else "failed" for r in result.repairs]
@@ -101,7 +119,35 @@ def execute_mission(mission: Mission) -> Mapping[str, Value]:
     row["plan_ticks_before"] = float(plan_ticks)
     row["extra_ticks"] = float(result.ticks - plan_ticks) if result.reached else None
     row["maze_free_cells"] = int((~result.spec.maze.walls).sum())
+    cold_latencies = [r.latency_ns for r in cold.repairs]
+    row["first_repair_ns"] = result.repairs[0].latency_ns if result.repairs else None
+    row["cold_first_repair_ns"] = cold_latencies[0] if cold_latencies else None
+    row["cold_repair_compute_ns"] = sum(cold_latencies)
+    row["cold_initial_planning_ns"] = cold.initial_planning_ns
+    row["timing_repeats"] = repeats
     return row
+
+
+def _median_timings(runs: Sequence[MissionResult]) -> MissionResult:
+    """The first run with each timing replaced by its (lower) median over ``runs``: the initial
+    planning time, and each repair's latency position by position."""
+    first = runs[0]
+    if len(runs) == 1:
+        return first
+    counts = {len(r.repairs) for r in runs}
+    planning = _lower_median([r.initial_planning_ns for r in runs])
+    if counts != {len(first.repairs)}:  # never expected: missions are deterministic
+        return replace(first, initial_planning_ns=planning)
+    repairs = tuple(
+        replace(record, latency_ns=_lower_median([r.repairs[i].latency_ns for r in runs]))
+        for i, record in enumerate(first.repairs)
+    )
+    return replace(first, repairs=repairs, initial_planning_ns=planning)
+
+
+def _lower_median(values: Sequence[int]) -> int:
+    ordered = sorted(values)
+    return ordered[(len(ordered) - 1) // 2]
 
 
 def _work(execute: MissionFunction, mission: Mission) -> tuple[str, dict[str, Value], float]:

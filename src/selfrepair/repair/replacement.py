@@ -22,6 +22,21 @@ Recursion modes (:class:`RecursionMode`; registry :data:`RECURSION_MODES` of the
     being replaced so that none of them is reused at any depth, and stopping at ``max_depth``
     nested levels. Gives up: completeness beyond the depth bound, and its worst-case cost grows
     exponentially with the depth (each level may scan every candidate of the table).
+``primitive``
+    The original paper's primitive/complex scheme (its section 4). An action is **primitive** in
+    a table when it has candidates and every one of them is made of at most two different actions
+    (``L -> R R R``; forward as turn round + back up + turn round); every other action is
+    **complex** (:func:`complex_actions`; under the known faults, as the table looks them up).
+    When a candidate is tested, a faulty primitive action inside it is replaced recursively, as
+    in ``guarded`` (guard set, ``max_depth``); a faulty complex action is **not checked unless it
+    comes first**: it stays in the replacement unreplaced (``Replacement.deferred``), and is
+    replaced when the robot reaches it, as any faulty action met during execution (the
+    ``replacement`` strategy carries the guard set over to that later repair). A complex action
+    that comes first is checked like any action: it must be available, since it runs next.
+    Healthy actions are always checked for walls, complex ones included: executing one blind
+    could drive the robot into a wall. Gives up: a deferred action may turn out to have no
+    valid replacement when it is reached, and then the robot replans from wherever it is, after
+    executing part of a replacement it cannot finish.
 ``layered``
     Actions are split into levels by the domain (``Domain.level``: primitive 0, complex higher).
     A faulty action inside a candidate may be replaced recursively only when its level is lower
@@ -55,6 +70,7 @@ __all__ = [
     "FreeTest",
     "RecursionMode",
     "Replacement",
+    "complex_actions",
     "find_replacement",
     "flat_replacement",
     "is_valid_replacement",
@@ -74,6 +90,7 @@ class RecursionMode(StrEnum):
     FLAT = "flat"
     GUARDED = "guarded"
     LAYERED = "layered"
+    PRIMITIVE = "primitive"
 
 
 class Replacement(NamedTuple):
@@ -83,6 +100,8 @@ class Replacement(NamedTuple):
     executable sequence after nested replacements are expanded (equal to ``candidate`` when
     ``depth`` is 0). ``depth`` counts nested replacement levels below this one; ``examined`` the
     candidates looked at in total, nested ones included. ``end`` is the state reached.
+    ``deferred`` lists the positions in ``actions`` of faulty complex actions left unreplaced
+    (``primitive`` mode only; never position 0): they are replaced when the robot reaches them.
     An immutable ``NamedTuple`` (cheaper to build than a frozen dataclass on the hot path).
     """
 
@@ -93,6 +112,7 @@ class Replacement(NamedTuple):
     depth: int
     examined: int
     end: Pose
+    deferred: tuple[int, ...] = ()
 
 
 RecurseRule = Callable[[Any, Any, int], bool]
@@ -122,8 +142,39 @@ RECURSION_MODES: dict[RecursionMode, ModeRule] = {
     RecursionMode.FLAT: _flat,
     RecursionMode.GUARDED: _guarded,
     RecursionMode.LAYERED: _layered,
+    RecursionMode.PRIMITIVE: _guarded,  # for primitive actions; complex ones are deferred
 }
-"""The rule of each recursion mode (see the module docstring for what each gives up)."""
+"""The rule of each recursion mode (see the module docstring for what each gives up). In
+``primitive`` mode the rule applies to primitive actions; :data:`DEFERRING` modes also leave
+faulty complex actions (:func:`complex_actions`) to be replaced when they are reached."""
+
+DEFERRING = frozenset({RecursionMode.PRIMITIVE})
+"""Modes whose replacements may keep faulty complex actions for later (``Replacement.deferred``);
+the compiled look-ups do not model them, so these modes always use :func:`find_replacement`."""
+
+PRIMITIVE_DISTINCT = 2
+"""An action is primitive when every candidate for it uses at most this many different actions."""
+
+
+def complex_actions(table: ReplacementTable, known: frozenset[Any]) -> frozenset[Any]:
+    """The actions that are complex in ``table`` under the faults ``known`` (see the module
+    docstring, ``primitive`` mode): no candidate, or some candidate made of more than
+    :data:`PRIMITIVE_DISTINCT` different actions. Computed once per (table, faults)."""
+    return _COMPLEX.get((table, known), lambda: _complex(table, known))
+
+
+def _complex(table: ReplacementTable, known: frozenset[Any]) -> frozenset[Any]:
+    out = set()
+    for action in table.domain.actions:
+        candidates = table.candidates(action, known)
+        if not candidates or any(len(set(c)) > PRIMITIVE_DISTINCT for c in candidates):
+            out.add(action)
+    return frozenset(out)
+
+
+_COMPLEX: BoundedCache[tuple[ReplacementTable, frozenset[Any]], frozenset[Any]] = BoundedCache(
+    "complex actions", 256
+)
 
 
 @dataclass(slots=True)
@@ -134,32 +185,36 @@ class _Search:
     known: frozenset[Any]
     free: FreeTest
     may_recurse: RecurseRule
+    deferrable: frozenset[Any] = frozenset()
     examined: int = 0
-    memo: dict[tuple[Any, Pose, frozenset[Any], int], Replacement | None] = field(
+    memo: dict[tuple[Any, Pose, frozenset[Any], int, bool], Replacement | None] = field(
         default_factory=dict
     )
 
     def replace(
-        self, action: Any, state: Pose, replacing: frozenset[Any], depth: int
+        self, action: Any, state: Pose, replacing: frozenset[Any], depth: int, first: bool = True
     ) -> Replacement | None:
         """The first valid replacement; nested results are memoised per (action, state, guard set,
-        depth), so a sub-problem met again in another candidate is not searched twice."""
-        key = (action, state, replacing, depth)
+        depth, whether it runs first), so a sub-problem met again in another candidate is not
+        searched twice."""
+        key = (action, state, replacing, depth, first)
         if key in self.memo:
             return self.memo[key]
-        found = self._first(action, state, replacing, depth)
+        found = self._first(action, state, replacing, depth, first)
         self.memo[key] = found
         return found
 
     def _first(
-        self, action: Any, state: Pose, replacing: frozenset[Any], depth: int
+        self, action: Any, state: Pose, replacing: frozenset[Any], depth: int, first: bool
     ) -> Replacement | None:
         for position, candidate in enumerate(self.table.candidates(action, self.known)):
             self.examined += 1
-            found = self._expand(action, candidate, state, replacing, depth)
+            found = self._expand(action, candidate, state, replacing, depth, first)
             if found is not None:
-                actions, end, nested = found
-                return Replacement(action, candidate, actions, position, nested, self.examined, end)
+                actions, end, nested, deferred = found
+                return Replacement(
+                    action, candidate, actions, position, nested, self.examined, end, deferred
+                )
         return None
 
     def _expand(
@@ -169,28 +224,38 @@ class _Search:
         state: Pose,
         replacing: frozenset[Any],
         depth: int,
-    ) -> tuple[tuple[Any, ...], Pose, int] | None:
+        first: bool,
+    ) -> tuple[tuple[Any, ...], Pose, int, tuple[int, ...]] | None:
         dom = self.table.domain
         out: list[Any] = []
+        deferred: list[int] = []
         nested = 0
         for b in candidate:
             if b in replacing:
                 return None
+            runs_first = first and not out
             if dom.available(b, self.known):
                 if not self.free(dom.footprint(state, b)):
                     return None
                 out.append(b)
                 state = dom.apply(state, b)
+            elif b in self.deferrable:  # a faulty complex action: replaced when reached
+                if runs_first:
+                    return None
+                deferred.append(len(out))
+                out.append(b)
+                state = dom.apply(state, b)
             elif self.may_recurse(b, action, depth):
-                sub = self.replace(b, state, replacing | {b}, depth + 1)
+                sub = self.replace(b, state, replacing | {b}, depth + 1, runs_first)
                 if sub is None:
                     return None
+                deferred.extend(len(out) + i for i in sub.deferred)
                 out.extend(sub.actions)
                 state = sub.end
                 nested = max(nested, sub.depth + 1)
             else:
                 return None
-        return tuple(out), state, nested
+        return tuple(out), state, nested, tuple(deferred)
 
 
 def find_replacement(
@@ -202,20 +267,25 @@ def find_replacement(
     *,
     mode: RecursionMode | str = RecursionMode.FLAT,
     max_depth: int = DEFAULT_MAX_DEPTH,
+    guard: Iterable[Any] = (),
 ) -> Replacement | None:
     """The first valid replacement for ``action`` at ``state``, or ``None`` when there is none.
 
     ``free`` tells whether a footprint is executable (all cells free), e.g. ``FreeGrid.all_free``.
     Every action of the returned ``actions`` is available under ``known_faults`` and executable in
-    turn from ``state``; none of them is ``action``.
+    turn from ``state``, except those at ``deferred`` positions (``primitive`` mode); none of them
+    is ``action`` or in ``guard`` (actions an outer replacement is still replacing).
     """
-    rule = RECURSION_MODES[choice(RecursionMode, mode, "recursion mode")]
+    chosen = choice(RecursionMode, mode, "recursion mode")
+    rule = RECURSION_MODES[chosen]
     if action not in table.domain.action_set:
         raise ProblemError(f"{action!r} is not an action of domain {table.domain.name!r}")
     if max_depth < 0:
         raise ProblemError(f"max_depth must be at least 0, got {max_depth}")
-    search = _Search(table, frozenset(known_faults), free, rule(table.domain, max_depth))
-    return search.replace(action, state, frozenset({action}), 0)
+    known = frozenset(known_faults)
+    deferrable = complex_actions(table, known) if chosen in DEFERRING else frozenset()
+    search = _Search(table, known, free, rule(table.domain, max_depth), deferrable)
+    return search.replace(action, state, frozenset(guard) | {action}, 0)
 
 
 def is_valid_replacement(
@@ -225,15 +295,23 @@ def is_valid_replacement(
     actions: Iterable[Any],
     known_faults: Iterable[Any],
     free: FreeTest,
+    *,
+    deferred: Iterable[int] = (),
 ) -> bool:
     """Check the definition directly: no ``action``, each step available and executable in turn,
-    and the end state equal to ``action``'s end state. Used by tests and trace checks."""
+    and the end state equal to ``action``'s end state. Steps at ``deferred`` positions (never the
+    first) are only followed, not checked: they are replaced when reached. Used by tests and trace
+    checks."""
     known = frozenset(known_faults)
+    later = frozenset(deferred)
     target = domain.apply(state, action)
     seq = tuple(actions)
-    if not seq or action in seq:
+    if not seq or action in seq or 0 in later:
         return False
-    for b in seq:
+    for i, b in enumerate(seq):
+        if i in later:
+            state = domain.apply(state, b)
+            continue
         if not domain.available(b, known) or not free(domain.footprint(state, b)):
             return False
         state = domain.apply(state, b)

@@ -44,8 +44,10 @@ from selfrepair.errors import ProblemError, choice
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.repair.replacement import (
     DEFAULT_MAX_DEPTH,
+    DEFERRING,
     FreeTest,
     RecursionMode,
+    Replacement,
     find_replacement,
     flat_replacement,
 )
@@ -56,6 +58,7 @@ from selfrepair.tables.model import ReplacementTable
 
 __all__ = [
     "STRATEGIES",
+    "DeferringRepairer",
     "FunctionRepairer",
     "MissionContext",
     "PlanFn",
@@ -112,7 +115,9 @@ class StrategyOptions:
     ``table`` is a bundled table name, a table file path or a :class:`ReplacementTable`;
     ``recursion`` a :class:`~selfrepair.repair.replacement.RecursionMode` (or its name);
     ``max_depth`` the depth bound of ``guarded`` mode; ``window`` the lookahead window (actions
-    after the faulty one); ``lookahead_expansions`` the budget of one window search.
+    after the faulty one); ``before`` the actions before the faulty one that a lookahead window
+    may take in as well, when the fault is known that early (see :func:`lookahead`);
+    ``lookahead_expansions`` the budget of one window search.
     """
 
     table: str | ReplacementTable = "handwritten"
@@ -120,13 +125,16 @@ class StrategyOptions:
     max_depth: int = DEFAULT_MAX_DEPTH
     window: int = 3
     lookahead_expansions: int = 20_000
+    before: int = 0
 
     def __post_init__(self) -> None:
         object.__setattr__(
             self, "recursion", choice(RecursionMode, self.recursion, "recursion mode")
         )
-        if self.window < 0 or self.max_depth < 0 or self.lookahead_expansions < 1:
-            raise ProblemError("window and max_depth must be >= 0 and lookahead_expansions >= 1")
+        if min(self.window, self.max_depth, self.before) < 0 or self.lookahead_expansions < 1:
+            raise ProblemError(
+                "window, before and max_depth must be >= 0 and lookahead_expansions >= 1"
+            )
 
     @property
     def table_label(self) -> str:
@@ -223,7 +231,13 @@ class Repair(NamedTuple):
 
 
 class Repairer(Protocol):
-    """A strategy started for one mission: answers repair requests, possibly keeping state."""
+    """A strategy started for one mission: answers repair requests, possibly keeping state.
+
+    A repairer may also have an integer attribute ``horizon`` (0 when absent): then the executor
+    asks it for a repair as soon as one of the next ``horizon`` queued actions after the first is
+    faulty under the known faults, not only when the first one is (the first faulty action is then
+    not at the front of ``RepairRequest.queue``; see :func:`lookahead`).
+    """
 
     def repair(self, request: RepairRequest) -> Repair:
         """A repair for ``request`` (its first queued action is faulty)."""
@@ -240,6 +254,7 @@ class FunctionRepairer:
 
     context: MissionContext
     fn: Callable[[MissionContext, RepairRequest], Repair]
+    horizon: int = 0
 
     def repair(self, request: RepairRequest) -> Repair:
         """``fn(context, request)``."""
@@ -310,11 +325,109 @@ def replacement(context: MissionContext, request: RepairRequest) -> Repair:
     return _chain(replan(context, request), (StrategyName.REPLACEMENT,), examined=examined)
 
 
+class DeferringRepairer:
+    """The ``replacement`` strategy in a recursion mode that defers faulty complex actions
+    (``primitive``): a replacement may keep a faulty complex action, to be replaced when the robot
+    reaches it (see :mod:`selfrepair.repair.replacement`).
+
+    State (per mission): for each deferred action still ahead in the queue, the guard set of the
+    replacement it belongs to, keyed by its distance from the end of the queue (which repairs of
+    the actions before it do not change). When the robot reaches it, its replacement is searched
+    with that guard set plus itself, so no replacement reuses an action that an enclosing one is
+    still replacing (the guard that keeps recursion from cycling, carried over execution). A full
+    replan replaces the whole queue and forgets them.
+    """
+
+    __slots__ = ("_context", "_pending")
+
+    def __init__(self, context: MissionContext) -> None:
+        self._context = context
+        self._pending: dict[int, tuple[Any, frozenset[Any]]] = {}
+
+    def repair(self, request: RepairRequest) -> Repair:
+        """The first valid candidate (deferred actions kept), else :func:`replan`."""
+        context = self._context
+        table = context.table
+        if table is None:
+            raise ProblemError("the replacement strategy needs a table")
+        queue, action = request.queue, request.queue[0]
+        remaining = len(queue)
+        pending = self._pending
+        for marker in [m for m in pending if m > remaining]:
+            del pending[marker]  # passed: no longer ahead
+        outer = pending.pop(remaining, None)
+        guard = outer[1] if outer is not None and outer[0] == action else frozenset()
+        options = context.options
+        found = find_replacement(
+            table,
+            action,
+            request.pose,
+            request.known,
+            context.free,
+            mode=options.recursion,
+            max_depth=options.max_depth,
+            guard=guard,
+        )
+        if found is None:
+            pending.clear()  # a replan replaces the whole queue
+            return _miss(context, request, action)
+        replacing = guard | {action}
+        after = remaining - 1 + len(found.actions)
+        for position in found.deferred:
+            deferred = found.actions[position]
+            pending[after - position] = (deferred, replacing | {deferred})
+        return _hit(found)
+
+
+def _hit(found: Replacement) -> Repair:
+    """The repair of a table hit."""
+    return Repair(
+        RepairStatus.REPAIRED,
+        RepairSource.REPLACEMENT,
+        found.actions,
+        1,
+        candidate_length=len(found.actions),
+        depth=found.depth,
+        examined=found.examined,
+        attempts=(StrategyName.REPLACEMENT,),
+        candidate_index=found.position,
+    )
+
+
+def _miss(context: MissionContext, request: RepairRequest, action: Any) -> Repair:
+    """No valid candidate: :func:`replan`, with the candidates looked at counted."""
+    assert context.table is not None
+    examined = len(context.table.candidates(action, request.known))
+    return _chain(replan(context, request), (StrategyName.REPLACEMENT,), examined=examined)
+
+
+def start_replacement(context: MissionContext) -> Repairer:
+    """The ``replacement`` strategy's factory: stateless, except in a deferring recursion mode
+    (:class:`DeferringRepairer`)."""
+    if context.options.recursion in DEFERRING:
+        return DeferringRepairer(context)
+    return FunctionRepairer(context, replacement)
+
+
 def lookahead(context: MissionContext, request: RepairRequest) -> Repair:
-    """Replace the window (faulty action + up to ``window`` more) by the cheapest sub-plan to the
-    window's end pose; else :func:`replacement` (which falls back to :func:`replan`)."""
-    window = request.queue[: context.options.window + 1]
-    end = run_open(context.domain, request.pose, window)
+    """Replace a window of the queue by the cheapest sub-plan to the window's end pose.
+
+    The window runs from the front of the queue to ``window`` actions after the first faulty
+    action. That faulty action is the first one queued when the executor met it there; with
+    ``before > 0`` the executor asks as soon as it is among the next ``before`` actions after the
+    front, under the faults known (:attr:`FunctionRepairer.horizon`), so the window also takes in
+    the up to ``before`` actions that would have been executed before it. The robot cannot undo
+    actions it has executed, so a window can reach back only when the fault is known ahead.
+
+    When no sub-plan is found within ``lookahead_expansions``: :func:`replacement` (which falls
+    back to :func:`replan`) for the faulty action at the pose where the robot will meet it, after
+    the healthy actions before it.
+    """
+    domain = context.domain
+    queue = request.queue
+    faulty = _first_faulty(domain, queue, request.known, context.options.before)
+    window = queue[: faulty + context.options.window + 1]
+    end = run_open(domain, request.pose, window)
     budget = context.options.lookahead_expansions
     result = context.plan(request.pose, end.cell, end.heading, request.known, budget)
     if result.status is PlanStatus.SOLVED:
@@ -326,8 +439,34 @@ def lookahead(context: MissionContext, request: RepairRequest) -> Repair:
             expansions=result.expansions,
             attempts=(StrategyName.LOOKAHEAD,),
         )
-    fallback = replacement(context, request)
+    if not faulty:
+        fallback = replacement(context, request)
+    else:
+        prefix = tuple(queue[:faulty])
+        at = run_open(domain, request.pose, prefix)
+        later = request._replace(pose=at, queue=tuple(queue[faulty:]))
+        fallback = replacement(context, later)
+        fallback = fallback._replace(
+            actions=prefix + fallback.actions, consumed=fallback.consumed + faulty
+        )
     return _chain(fallback, (StrategyName.LOOKAHEAD,), expansions=result.expansions)
+
+
+def _first_faulty(
+    domain: Domain[Any, Any], queue: Sequence[Any], known: frozenset[Any], before: int
+) -> int:
+    """The index of the first queued action unavailable under ``known``, among the first
+    ``before + 1`` (0 when none is: the front is then repaired as it is)."""
+    for i in range(min(before + 1, len(queue))):
+        if not domain.available(queue[i], known):
+            return i
+    return 0
+
+
+def start_lookahead(context: MissionContext) -> Repairer:
+    """The ``lookahead`` strategy's factory: stateless, looking ``options.before`` actions ahead
+    of the front for known faults."""
+    return FunctionRepairer(context, lookahead, context.options.before)
 
 
 def _chain(
@@ -345,8 +484,8 @@ def _chain(
 
 STRATEGIES: dict[str, StrategyFactory] = {
     StrategyName.REPLAN: stateless(replan),
-    StrategyName.REPLACEMENT: stateless(replacement),
-    StrategyName.LOOKAHEAD: stateless(lookahead),
+    StrategyName.REPLACEMENT: start_replacement,
+    StrategyName.LOOKAHEAD: start_lookahead,
 }
 """Strategy factories by name (built-ins and those registered so far)."""
 
