@@ -30,7 +30,7 @@ from selfrepair.experiment.config import load_config
 from selfrepair.experiment.findings import Finding, StrategySummary, check_findings, summarize
 from selfrepair.experiment.missions import expand
 from selfrepair.experiment.runner import check_backend, execute_mission, run_missions
-from selfrepair.experiment.store import ResultStore, require_pyarrow
+from selfrepair.experiment.store import ResultStore, Value, require_pyarrow
 from selfrepair.limits import MAX_CELLS, MAX_MISSIONS
 from selfrepair.experiment.summary import FaultSetBite, fault_set_bite
 
@@ -80,14 +80,15 @@ def experiment(
     max_missions: MaxMissions = MAX_MISSIONS,
     max_cells: MaxCells = MAX_CELLS,
     repeats: Annotated[
-        int,
+        int | None,
         typer.Option(
             "--repeats",
-            help="Warm timing runs per mission (after one cold run); timings are their medians.",
+            help="Warm timing runs per mission after one cold run (timings are their medians; "
+            "default: the experiment's timing_repeats, else 1).",
             min=1,
             max=1000,
         ),
-    ] = 1,
+    ] = None,
 ) -> int:
     """Run an experiment (resumable: missions already in the database are skipped), then print the
     per-strategy summary and the original study's findings checked on all stored rows."""
@@ -107,7 +108,7 @@ def experiment(
                 backend=backend,
                 scheduler=scheduler,
                 address=address,
-                execute=partial(execute_mission, repeats=repeats),
+                execute=partial(execute_mission, repeats=repeats or cfg.timing_repeats),
                 on_progress=on_progress,
             )
         echo(
@@ -119,6 +120,8 @@ def experiment(
         print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
         print_fault_sets(fault_set_bite(rows))
         print_findings(check_findings(rows))
+        if cfg.crossover:
+            _print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
         if export_csv is not None:
             echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
         if export_parquet is not None:
@@ -224,6 +227,30 @@ def print_findings(findings: list[Finding]) -> None:
     """Each finding as a short paragraph: its outcome and claim, then the evidence."""
     for f in findings:
         echo(f.paragraph())
+
+
+def _print_crossover(rows: list[dict[str, Value]], figure: Path) -> None:
+    """The crossover analysis of every replacement variant, and its figure when matplotlib is
+    installed."""
+    from selfrepair.experiment.scale import crossover
+
+    variants = sorted({str(r["variant"]) for r in rows if r.get("strategy") == "replacement"})
+    results = [crossover(rows, v) for v in variants]
+    echo(
+        "Crossover: the maze side where repair compute per mission falls below 1/10 of the "
+        "replanner's"
+    )
+    for result in results:
+        for line in result.lines():
+            echo("  " + line)
+    from importlib.util import find_spec
+
+    if find_spec("matplotlib") is None:  # extra viz missing: the numbers are enough
+        echo("(no figure: it needs matplotlib, pip install 'selfrepair[viz]')")
+        return
+    from selfrepair.experiment.plots import figure_crossover
+
+    echo(f"wrote {figure_crossover(results, figure)}")
 
 
 def print_fault_sets(bites: list[FaultSetBite]) -> None:

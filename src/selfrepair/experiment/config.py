@@ -265,7 +265,10 @@ class ExperimentConfig(_Frozen):
     """A whole experiment: the cross product of mazes x routes x fault settings x strategies x
     clearance weights x repeats, for the robot ``domain`` (a name in the domain registry).
     ``source`` is the file it was read from (for error messages and for resolving relative
-    paths)."""
+    paths). ``crossover``: the experiment command also estimates the maze size where
+    replacement's repair compute per mission falls below 1/10 of the replanner's
+    (:mod:`selfrepair.experiment.scale`); it does not change any mission. ``timing_repeats``:
+    warm timing runs per mission (the command line's ``--repeats`` overrides it)."""
 
     name: Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")]
     description: str = ""
@@ -273,6 +276,8 @@ class ExperimentConfig(_Frozen):
     plugins: tuple[str, ...] = ()
     seed: Int = 0
     repeats: Annotated[Int, Field(ge=1, le=1000)] = 1
+    crossover: bool = False
+    timing_repeats: Annotated[Int, Field(ge=1, le=1000)] = 1
     mazes: Annotated[tuple[MazeConfig, ...], Field(min_length=1)]
     faults: FaultsConfig = FaultsConfig()
     planner: PlannerConfig = PlannerConfig()

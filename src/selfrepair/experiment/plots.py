@@ -20,7 +20,15 @@ from typing import Any
 import numpy as np
 
 from selfrepair.errors import ProblemError
-from selfrepair.experiment.findings import Row, group_label, median, percentile, repairs_of
+from selfrepair.experiment.findings import (
+    NEGLIGIBLE,
+    Row,
+    group_label,
+    median,
+    percentile,
+    repairs_of,
+)
+from selfrepair.experiment.scale import Crossover
 from selfrepair.geometry import Cell, Pose
 from selfrepair.world.maze import Maze
 
@@ -552,4 +560,54 @@ def figure_mission(picture: MissionPicture, path: Path) -> Path:
         draw_mission(ax, picture)
         mission_legend(fig, picture)
         ax.set_title(picture.title, fontsize=9)
+        return _save(fig, path)
+
+
+# --- scale -------------------------------------------------------------------------------------
+
+
+def figure_crossover(results: Sequence[Crossover], path: Path) -> Path:
+    """Per maze, the median paired ratio of repair compute (replacing / replanning robot) with its
+    95% interval against the maze side, log-log; the fitted line, the 1/10 threshold and the
+    crossover side with its interval, one colour per replacement variant."""
+    colours = ("#009E73", "#0072B2", "#D55E00", "#CC79A7", "#E69F00")
+    with _figure(7.0, 4.8) as (fig, (ax,)):
+        sides: list[float] = []
+        for result, colour in zip(results, colours, strict=False):
+            points = [m for m in result.mazes if m.ratio is not None]
+            if not points:
+                continue
+            x = np.array([m.side for m in points])
+            mid = np.array([m.ratio.estimate for m in points if m.ratio is not None])
+            low = np.array([m.ratio.low for m in points if m.ratio is not None])
+            high = np.array([m.ratio.high for m in points if m.ratio is not None])
+            sides += list(x)
+            ax.errorbar(
+                x,
+                mid,
+                yerr=[mid - low, high - mid],
+                fmt="o",
+                color=colour,
+                capsize=3,
+                label=f"{result.variant}: median ratio, 95% interval",
+            )
+            if result.slope is not None and result.intercept is not None:
+                ends = [min(x), max(x)]
+                if result.side is not None and math.isfinite(result.side.estimate):
+                    ends[1] = max(ends[1], result.side.estimate)
+                line = np.geomspace(ends[0], ends[1], 50)
+                ax.plot(line, np.exp(result.intercept) * line**result.slope, color=colour, lw=1)
+            if result.side is not None and math.isfinite(result.side.estimate):
+                ax.axvline(result.side.estimate, color=colour, ls="--", lw=1)
+                if math.isfinite(result.side.high):
+                    ax.axvspan(result.side.low, result.side.high, color=colour, alpha=0.12)
+                sides.append(result.side.estimate)
+        ax.axhline(NEGLIGIBLE, color="#333333", ls=":", lw=1, label=f"1/10 ({NEGLIGIBLE:g})")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("maze side (square root of the cells, log scale)")
+        ax.set_ylabel("repair compute per mission, replacing / replanning")
+        ax.set_title("Where replacement's repair compute falls below 1/10 of replanning")
+        if ax.get_legend_handles_labels()[0]:
+            fig.legend(loc="outside lower center", fontsize=8, ncols=1)
         return _save(fig, path)
