@@ -150,7 +150,7 @@ def test_expansion_is_stable_and_complete() -> None:
 
 def test_fault_profiles() -> None:
     assert len(fault_profile("paper")) == 12 == len(set(PAPER_FAULT_SETS))
-    assert sum(1 for s in fault_profile("paper") if "," in s) == 6
+    assert sum(1 for s in fault_profile("paper") if "," in s) == 10
     assert len(fault_profile("singles")) == 12
     assert len(fault_profile("doubles")) == 66
     assert len(set(fault_profile("all"))) == 78

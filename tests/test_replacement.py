@@ -160,7 +160,9 @@ def test_every_replacement_found_is_valid(situation, mode: str) -> None:  # type
     hit = find_replacement(bundled_table(), action, pose, faults, maze.all_free, mode=mode)
     if hit is None:
         return
-    assert is_valid_replacement(FOUR_WHEEL, action, pose, hit.actions, faults, maze.all_free)
+    assert is_valid_replacement(
+        FOUR_WHEEL, action, pose, hit.actions, faults, maze.all_free, deferred=hit.deferred
+    )
     if mode == "flat":
         assert hit.depth == 0 and hit.actions == hit.candidate
 

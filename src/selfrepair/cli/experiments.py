@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from functools import partial
 from pathlib import Path
@@ -176,9 +176,6 @@ _SHORT_HEADERS = {
 _PIPED_WIDTH = 1000
 """Piped output is as wide as the table needs (up to this), so nothing is cut."""
 
-_WIDE_ENOUGH = 120
-"""Below this terminal width the table is split in two (times, then outcomes)."""
-
 
 def print_summary(summaries: list[StrategySummary], *, title: str) -> None:
     """The per-strategy summary as a rich table: one wide table when piped (logs keep full
@@ -191,20 +188,38 @@ def print_summary(summaries: list[StrategySummary], *, title: str) -> None:
         out.print(_table(title, headers, rows, range(1, len(headers)), short=False))
         return
     out = console()
-    if out.width >= _WIDE_ENOUGH:
-        groups = [range(1, len(headers))]
-    else:
-        groups = [range(1, 9), range(9, len(headers))]
+    groups = _column_groups(headers, rows, out.width)
     for part, columns in enumerate(groups, start=1):
         label = title if len(groups) == 1 else f"{title} ({part}/{len(groups)})"
         out.print(_table(label, headers, rows, columns, short=True))
+
+
+_NAME_WIDTH = 24
+"""Room kept for the strategy column on a terminal (names wrap after a comma)."""
+
+
+def _column_groups(
+    headers: tuple[str, ...], rows: list[tuple[str, ...]], width: int
+) -> list[list[int]]:
+    """The summary's columns packed, in order, into tables that each fit ``width``."""
+    groups: list[list[int]] = [[]]
+    used = _NAME_WIDTH
+    for i in range(1, len(headers)):
+        header = max(len(part) for part in _SHORT_HEADERS[headers[i]].split("\n"))
+        need = max([header, *(len(r[i]) for r in rows)]) + 3  # padding and rule
+        if groups[-1] and used + need > width:
+            groups.append([])
+            used = _NAME_WIDTH
+        groups[-1].append(i)
+        used += need
+    return groups
 
 
 def _table(
     title: str,
     headers: tuple[str, ...],
     rows: list[tuple[str, ...]],
-    columns: range,
+    columns: Sequence[int],
     *,
     short: bool,
 ) -> Table:

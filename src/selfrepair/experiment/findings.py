@@ -265,32 +265,33 @@ def _ratio_line(
 
 def _finding_1b(rows: Sequence[Row]) -> Finding:
     replan = _by_situation(rows, lambda r: r.get("strategy") == "replan")
-    most = [
-        r
-        for r in rows
-        if _is_replacement(r)
-        and _weight(r) == 0
-        and num(r, "replans") > 0
-        and num(r, "replacements") > num(r, "faulty_encounters") / 2
-    ]
-    ratios = [
-        _replan_ns(r) / _replan_ns(p)
-        for r in most
-        if (p := replan.get(situation(r))) is not None and _replan_ns(p) > 0
-    ]
     if not replan:
         return Finding("1b", CLAIMS["1b"], Outcome.INCONCLUSIVE, (_NEEDS_BOTH,))
-    interval = bootstrap_interval(ratios)
-    outcome = ratio_outcome(interval, FALLS)
-    if interval is None:
-        text = "No mission where most but not all faulty encounters were replaced."
-    else:
-        text = (
-            f"{interval.n} missions where most but not all encounters were replaced: their time "
-            f"in replans is {interval.text(2)} times the replanner's (median of paired ratios, "
-            f"95% interval; falling means at most {FALLS:g})."
-        )
-    return Finding("1b", CLAIMS["1b"], outcome, (text,))
+    variants: dict[str, list[float]] = defaultdict(list)
+    for r in rows:
+        if (
+            _is_replacement(r)
+            and _weight(r) == 0
+            and num(r, "replans") > 0
+            and num(r, "replacements") > num(r, "faulty_encounters") / 2
+            and (p := replan.get(situation(r))) is not None
+            and _replan_ns(p) > 0
+        ):
+            variants[group_label(r)].append(_replan_ns(r) / _replan_ns(p))
+    intro = (
+        "Missions where most but not all faulty encounters were replaced: median of (time in "
+        f"replans / the replanner's), 95% interval; falling means at most {FALLS:g}:"
+    )
+    if not variants:
+        return Finding("1b", CLAIMS["1b"], Outcome.INCONCLUSIVE, (intro, "No such mission."))
+    outcomes, lines = [], []
+    for label, ratios in sorted(variants.items()):
+        interval = bootstrap_interval(ratios)
+        outcome = ratio_outcome(interval, FALLS)
+        outcomes.append(outcome)
+        assert interval is not None
+        lines.append(f"{label}: {interval.text(2)} over {interval.n} pairs: {outcome.value}.")
+    return Finding("1b", CLAIMS["1b"], _combine(outcomes), (intro, *lines))
 
 
 def _replan_ns(row: Row) -> float:

@@ -151,7 +151,7 @@ def _crossover_interval(
 ) -> Interval | None:
     """The crossover side and its percentile interval, resampling pairs within each maze."""
     estimate = _at(threshold, slope, intercept)
-    if estimate is None:
+    if estimate is None or not math.isfinite(estimate):
         return None
     rng = np.random.default_rng(BOOTSTRAP_SEED)
     groups = [(math.log(side), np.log(np.asarray(ratios))) for (side, _), ratios in by_maze.items()]
@@ -166,5 +166,6 @@ def _crossover_interval(
         at = _at(threshold, s, c)
         found.append(math.inf if at is None else at)
     tail = (1 - LEVEL) / 2
-    low, high = np.quantile(np.asarray(found), [tail, 1 - tail])
+    # no interpolation: an infinite crossover (the line does not fall) is a value, not a nan
+    low, high = np.quantile(np.asarray(found), [tail, 1 - tail], method="inverted_cdf")
     return Interval(estimate, min(float(low), estimate), max(float(high), estimate), len(x))
