@@ -31,8 +31,8 @@ from selfrepair.experiment.findings import Finding, StrategySummary, check_findi
 from selfrepair.experiment.missions import expand
 from selfrepair.experiment.runner import check_backend, execute_mission, run_missions
 from selfrepair.experiment.store import ResultStore, Value, require_pyarrow
-from selfrepair.limits import MAX_CELLS, MAX_MISSIONS
 from selfrepair.experiment.summary import FaultSetBite, fault_set_bite
+from selfrepair.limits import MAX_CELLS, MAX_MISSIONS
 
 __all__ = [
     "animate",
