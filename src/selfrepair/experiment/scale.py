@@ -74,7 +74,7 @@ class Crossover:
             )
         else:
             out.append(
-                f"  Crossover (ratio {self.threshold:g}): side {self.side.text()} cells "
+                f"  Crossover (ratio {self.threshold:g}): a maze side of {self.side.text()} cells "
                 f"(95% interval), slope {self.slope:.2f}."
             )
         if self.first_below is not None:
