@@ -45,7 +45,7 @@ __all__ = [
 
 
 def resolve_experiment(spec: str) -> Path:
-    """A bundled experiment name (``paper``, ``full``) or a path to a TOML file."""
+    """A bundled experiment name (``paper``, ``scale``, ``full``) or a path to a TOML file."""
     from importlib import resources
 
     folder = resources.files("selfrepair").joinpath("data", "experiments")
@@ -57,7 +57,7 @@ def resolve_experiment(spec: str) -> Path:
 
 @app.command()
 def experiment(
-    config: Annotated[str, typer.Argument(help="Bundled experiment (paper, full) or FILE.toml.")],
+    config: Annotated[str, typer.Argument(help="Bundled experiment (paper, scale, full) or FILE.toml.")],
     db: Annotated[
         Path | None, typer.Option("--db", help="Results database (default results/NAME.sqlite).")
     ] = None,
