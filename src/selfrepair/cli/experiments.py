@@ -57,7 +57,9 @@ def resolve_experiment(spec: str) -> Path:
 
 @app.command()
 def experiment(
-    config: Annotated[str, typer.Argument(help="Bundled experiment (paper, scale, full) or FILE.toml.")],
+    config: Annotated[
+        str, typer.Argument(help="Bundled experiment (paper, scale, full) or FILE.toml.")
+    ],
     db: Annotated[
         Path | None, typer.Option("--db", help="Results database (default results/NAME.sqlite).")
     ] = None,
