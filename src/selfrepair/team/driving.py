@@ -1,0 +1,246 @@
+"""Carrying out ``drive(robot, a -> b)`` with the single-robot machinery, in a shared maze.
+
+A drive starts (:func:`begin_drive`) the way a single-robot mission does: the robot's own
+:class:`~selfrepair.repair.strategies.MissionContext` is built by
+:func:`selfrepair.execution.executor.mission_context` on the *known* map, the lattice planner
+(``context.plan``) plans with the robot's known wheel faults, and the robot's single-robot
+strategy is started from its factory (the strategy lifecycle). The plan is then placed in time
+around the other robots (:func:`place`: :func:`~selfrepair.team.spacetime.schedule_path`, else
+cooperative A*), and its cells are reserved.
+
+When the next primitive action turns out to be faulty, :func:`own_repair` asks the robot's own
+repairer first (its replacement table, then its replan), exactly as the single-robot executor
+does, and places the repaired plan again. Only when that fails does the team hear of it (a
+``stuck`` incident). A robot that cannot be placed waits on its cell and tries again later; idle
+robots standing on its path are asked to make room (:func:`make_room`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from enum import StrEnum
+
+from selfrepair.execution.executor import mission_context
+from selfrepair.execution.result import MissionSpec, StepSource
+from selfrepair.geometry import Cell
+from selfrepair.repair.strategies import (
+    RepairRequest,
+    RepairStatus,
+    StrategyOptions,
+    get_strategy,
+    uses_table,
+)
+from selfrepair.search.astar import PlanStatus
+from selfrepair.search.lattice import bfs_distances, planning_actions
+from selfrepair.team.model import drive as drive_action
+from selfrepair.team.reservations import FOREVER, TimedStep
+from selfrepair.team.result import OwnRepairRecord, TeamSource
+from selfrepair.team.scenario import grid_distances
+from selfrepair.team.spacetime import cost_to_go, lattice_of, plan_spacetime, schedule_path
+from selfrepair.team.state import Drive, Entry, RobotState, TeamWorld
+
+__all__ = [
+    "RETRY_TICKS",
+    "DriveStart",
+    "begin_drive",
+    "cancel_drive",
+    "make_room",
+    "own_repair",
+    "place",
+]
+
+RETRY_TICKS = 2
+"""Ticks a robot that could not place its drive waits before it tries again."""
+
+
+class DriveStart(StrEnum):
+    """How starting a drive went: placed in time, already there, waiting to try again, or an
+    incident (the robot cannot move there / the target cannot be reached on the known map)."""
+
+    PLACED = "placed"
+    ARRIVED = "arrived"
+    WAITING = "waiting"
+    STUCK = "stuck"
+    BLOCKED = "blocked"
+
+
+def cancel_drive(world: TeamWorld, robot: RobotState, at: int) -> None:
+    """Stop ``robot``'s drive: it keeps its cell from ``at`` until it plans again."""
+    robot.drive = None
+    world.reservations.release_from(robot.name, at)
+    world.reservations.park(robot.name, robot.pose.cell, at)
+    mark_stale(world, robot)
+
+
+def mark_stale(world: TeamWorld, robot: RobotState) -> None:
+    """Robots whose plans now overlap ``robot``'s reservations must place their drives again."""
+    for name in world.reservations.conflicting_robots(robot.name):
+        world.robots[name].stale = True
+
+
+def begin_drive(world: TeamWorld, robot: RobotState, entry: Entry, at: int) -> DriveStart:
+    """Plan the drive of ``entry`` with the robot's own planner and place it (see the module
+    docstring)."""
+    target = entry.action.target
+    assert target is not None
+    if robot.pose.cell == target:
+        return DriveStart.ARRIVED
+    domain = world.scenario.domain
+    if not planning_actions(domain, robot.faults):
+        return DriveStart.STUCK
+    options = world.options
+    known = world.known_map(robot.name)
+    x, y = robot.pose.cell
+    if (
+        not known.is_free(*target)
+        or bfs_distances(known, target, backend=options.backend)[y, x] < 0
+    ):
+        return DriveStart.BLOCKED
+    spec = MissionSpec(
+        known,
+        robot.pose,
+        target,
+        strategy=options.robot_strategy,
+        options=StrategyOptions(table=options.robot_table, recursion=options.recursion),
+        backend=options.backend,
+        domain=domain,
+    )
+    table = spec.options.resolved_table() if uses_table(options.robot_strategy) else None
+    context = mission_context(spec, table)
+    result = context.plan(robot.pose, target, None, robot.faults, context.replan_budget)
+    world.plans += 1
+    world.expansions += result.expansions
+    if result.status is not PlanStatus.SOLVED:
+        return DriveStart.STUCK
+    repairer = get_strategy(options.robot_strategy)(context)
+    primitives = [(a, StepSource.PLAN) for a in result.actions]
+    robot.drive = Drive(entry, target, primitives, [], repairer)
+    return DriveStart.PLACED if place(world, robot, at) else DriveStart.WAITING
+
+
+def place(world: TeamWorld, robot: RobotState, at: int) -> bool:
+    """Place the rest of ``robot``'s drive in time from ``at`` and reserve it; when neither way
+    finds a placement, the robot keeps its cell and tries again after :data:`RETRY_TICKS`."""
+    drive = robot.drive
+    assert drive is not None
+    robot.stale = False
+    res, domain, scale = world.reservations, world.scenario.domain, world.scale
+    res.release_from(robot.name, at)
+    known = world.known_map(robot.name)
+    actions = [a for a, _ in drive.primitives]
+    steps = schedule_path(
+        res, robot.name, domain, scale, known, robot.pose, at, actions,
+        max_wait=world.options.max_wait_ticks * scale,
+    )  # fmt: skip
+    if steps is None:
+        found, _ = _cooperative(world, robot, drive.target, at)
+        if found is not None:
+            steps = found
+            drive.primitives = [(a.action, StepSource.REPLAN) for a in found]
+    if steps is None:
+        res.park(robot.name, robot.pose.cell, at)
+        mark_stale(world, robot)
+        robot.retry_at = at + RETRY_TICKS * scale
+        drive.steps = []
+        make_room(world, robot, at)
+        return False
+    drive.steps = list(steps)
+    end = steps[-1].after if steps else robot.pose
+    res.reserve_path(robot.name, steps, end, steps[-1].end if steps else at)
+    return True
+
+
+def _cooperative(
+    world: TeamWorld, robot: RobotState, target: Cell, at: int
+) -> tuple[tuple[TimedStep, ...] | None, int]:
+    """Cooperative A* for ``robot`` to ``target`` from ``at``; skipped (``None``) when robots
+    parked for good wall the target off."""
+    res, domain, scale = world.reservations, world.scenario.domain, world.scale
+    extra = world.known_extra(robot.name)
+    lattice = lattice_of(world.scenario.maze, domain, planning_actions(domain, robot.faults), scale)
+    rest = cost_to_go(lattice, extra, target).get(robot.pose)
+    parked = res.parked(robot.name, at)
+    if rest is None or target in parked:
+        return None, 0
+    if robot.pose.cell not in grid_distances(
+        world.known_map(robot.name), target, frozenset(parked)
+    ):
+        return None, 0
+    found, expanded = plan_spacetime(
+        res, robot.name, lattice, extra, robot.pose, at, target,
+        wait=scale, horizon=4 * rest + 60 * scale,
+        max_expansions=world.options.spacetime_expansions,
+    )  # fmt: skip
+    world.plans += 1
+    world.expansions += expanded
+    return found, expanded
+
+
+def own_repair(world: TeamWorld, robot: RobotState, at: int) -> bool:
+    """The robot's own repair of its faulty next primitive (its single-robot strategy); places
+    the repaired plan. ``False`` when the robot's strategy found nothing."""
+    drive = robot.drive
+    assert drive is not None and drive.repairer is not None
+    if not planning_actions(world.scenario.domain, robot.faults):
+        return False
+    queue = [a for a, _ in drive.primitives]
+    t0 = time.perf_counter_ns()
+    repair = drive.repairer.repair(RepairRequest(robot.pose, queue, robot.faults, len(world.moves)))
+    latency = time.perf_counter_ns() - t0
+    world.plans += repair.replans
+    world.expansions += repair.expansions
+    world.own_repairs.append(
+        OwnRepairRecord(
+            at, robot.name, robot.pose, queue[0], repair.status, repair.source, repair.actions,
+            latency,
+        )
+    )  # fmt: skip
+    if repair.status is not RepairStatus.REPAIRED:
+        return False
+    source = StepSource(repair.source)
+    drive.primitives = [(a, source) for a in repair.actions] + drive.primitives[repair.consumed :]
+    place(world, robot, at)
+    return True
+
+
+def make_room(world: TeamWorld, robot: RobotState, at: int) -> None:
+    """Ask idle robots that stand on ``robot``'s planned path to drive to the nearest cell off
+    it (each such request is one message and one yield)."""
+    drive = robot.drive
+    if drive is None:
+        return
+    domain = world.scenario.domain
+    path: set[Cell] = {robot.pose.cell, drive.target}
+    pose = robot.pose
+    for action, _ in drive.primitives:
+        path.update(domain.footprint(pose, action))
+        pose = domain.apply(pose, action)
+    known = world.known_map()
+    taken = {r.pose.cell for r in world.robots.values()}
+    for other in world.robots.values():
+        if other is robot or other.queue or other.busy_until > at or other.stuck:
+            continue
+        if other.pose.cell not in path or not planning_actions(domain, other.faults):
+            continue
+        distances = grid_distances(known, other.pose.cell)
+        spots = sorted(
+            (d, c) for c, d in distances.items() if c not in path and c not in taken and d > 0
+        )
+        if not spots:
+            continue
+        spot = spots[0][1]
+        taken.add(spot)
+        other.queue = deque(
+            [Entry(drive_action(other.name, other.pose.cell, spot), TeamSource.YIELD)]
+        )
+        other.retry_at = 0
+        world.yields += 1
+        world.messages += 1
+
+
+def next_step_time(robot: RobotState) -> int:
+    """When ``robot``'s next placed primitive starts (:data:`FOREVER` if none)."""
+    if robot.drive is None or not robot.drive.steps:
+        return FOREVER
+    return robot.drive.steps[0].start

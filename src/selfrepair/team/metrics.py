@@ -1,0 +1,131 @@
+"""One flat row of metrics per team mission (the store's columns for team experiments).
+
+:func:`team_row` reads a :class:`~selfrepair.team.result.TeamResult`; ``baseline`` is the
+makespan of the same scenario without faults (the fault-free team plan, run by the same engine),
+which the makespan is compared with. Columns (:data:`TEAM_COLUMNS`) are described in
+docs/team.md.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from fractions import Fraction
+
+import numpy as np
+
+from selfrepair.team.result import RepairOutcome, TeamResult, TeamSource
+
+__all__ = ["TEAM_COLUMNS", "team_row"]
+
+TEAM_COLUMNS = (
+    "scenario",
+    "team_size",
+    "grippers",
+    "tasks",
+    "strategy",
+    "team_table",
+    "variant",
+    "fault_kinds",
+    "status",
+    "reason",
+    "delivered",
+    "all_delivered",
+    "delivered_share",
+    "makespan",
+    "baseline_makespan",
+    "makespan_ratio",
+    "incidents",
+    "repairs",
+    "team_replacements",
+    "reallocations",
+    "deferrals",
+    "candidates",
+    "repair_sources",
+    "repair_latency_median_ns",
+    "repair_latency_p99_ns",
+    "repair_latency_max_ns",
+    "repair_latencies_ns",
+    "repair_plans",
+    "repair_expansions",
+    "disturbed_total",
+    "disturbed_max",
+    "disturbed_mean",
+    "preemptions",
+    "messages",
+    "plans",
+    "expansions",
+    "yields",
+    "own_repairs",
+    "own_replacements",
+    "moves",
+    "acts",
+    "allocation_ns",
+    "ticks_simulated",
+)
+"""The row's columns, in order."""
+
+
+def _percentile(values: Sequence[int], q: float) -> int | None:
+    return int(np.percentile(values, q, method="lower")) if values else None
+
+
+def team_row(
+    result: TeamResult, baseline: Fraction | None = None
+) -> dict[str, int | float | str | None]:
+    """The metrics row of ``result`` (see the module docstring)."""
+    scenario, options = result.scenario, result.options
+    repairs = result.repairs
+    latencies = [r.latency_ns for r in repairs if r.outcome is RepairOutcome.REPAIRED]
+    disturbed = [len(r.disturbed) for r in repairs if r.outcome is RepairOutcome.REPAIRED]
+    makespan = result.makespan
+    ratio = (
+        float(makespan / baseline)
+        if baseline is not None and baseline > 0 and result.all_delivered
+        else None
+    )
+    return {
+        "scenario": scenario.name,
+        "team_size": len(scenario.robots),
+        "grippers": sum(r.gripper for r in scenario.robots),
+        "tasks": len(scenario.tasks),
+        "strategy": str(options.strategy),
+        "team_table": str(options.table) if options.strategy == "team-replacement" else None,
+        "variant": options.label,
+        "fault_kinds": ",".join(sorted({str(f.kind) for f in scenario.faults})),
+        "status": str(result.status),
+        "reason": result.reason,
+        "delivered": len(result.delivered),
+        "all_delivered": int(result.all_delivered),
+        "delivered_share": len(result.delivered) / len(scenario.tasks) if scenario.tasks else 1.0,
+        "makespan": float(makespan),
+        "baseline_makespan": None if baseline is None else float(baseline),
+        "makespan_ratio": ratio,
+        "incidents": len(result.incidents),
+        "repairs": len(repairs),
+        "team_replacements": sum(r.source is TeamSource.TEAM_REPLACEMENT for r in repairs),
+        "reallocations": sum(r.source is TeamSource.REALLOCATION for r in repairs),
+        "deferrals": sum(r.outcome is RepairOutcome.DEFERRED for r in repairs),
+        "candidates": json.dumps([r.candidate for r in repairs if r.candidate]),
+        "repair_sources": json.dumps([str(r.source) for r in repairs]),
+        "repair_latency_median_ns": _percentile(latencies, 50),
+        "repair_latency_p99_ns": _percentile(latencies, 99),
+        "repair_latency_max_ns": max(latencies, default=None),
+        "repair_latencies_ns": json.dumps(latencies),
+        "repair_plans": sum(r.plans for r in repairs),
+        "repair_expansions": sum(r.expansions for r in repairs),
+        "disturbed_total": sum(disturbed),
+        "disturbed_max": max(disturbed, default=0),
+        "disturbed_mean": float(np.mean(disturbed)) if disturbed else None,
+        "preemptions": sum(r.preempted for r in repairs),
+        "messages": result.messages,
+        "plans": result.plans,
+        "expansions": result.expansions,
+        "yields": result.yields,
+        "own_repairs": len(result.own_repairs),
+        "own_replacements": sum(r.source == "replacement" for r in result.own_repairs),
+        "moves": len(result.moves),
+        "acts": len(result.acts),
+        "allocation_ns": result.allocation_ns,
+        "ticks_simulated": float(Fraction(result.end, result.scale)),
+    }
