@@ -22,6 +22,7 @@ from selfrepair.cli import (  # noqa: F401
     pddl,
     planning,
     tables,
+    team,
     view,
 )
 from selfrepair.cli._app import app

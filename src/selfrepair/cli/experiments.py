@@ -26,7 +26,6 @@ from rich.table import Table
 from rich.text import Text
 
 from selfrepair.cli._app import MaxCells, MaxMissions, app, console, echo
-from selfrepair.experiment.config import load_config
 from selfrepair.experiment.findings import Finding, StrategySummary, check_findings, summarize
 from selfrepair.experiment.missions import expand
 from selfrepair.experiment.runner import check_backend, execute_mission, run_missions
@@ -58,7 +57,7 @@ def resolve_experiment(spec: str) -> Path:
 @app.command()
 def experiment(
     config: Annotated[
-        str, typer.Argument(help="Bundled experiment (paper, scale, full) or FILE.toml.")
+        str, typer.Argument(help="Bundled experiment (paper, scale, full, team) or FILE.toml.")
     ],
     db: Annotated[
         Path | None, typer.Option("--db", help="Results database (default results/NAME.sqlite).")
@@ -93,11 +92,38 @@ def experiment(
     ] = None,
 ) -> int:
     """Run an experiment (resumable: missions already in the database are skipped), then print the
-    per-strategy summary and the original study's findings checked on all stored rows."""
+    per-strategy summary and the original study's findings checked on all stored rows. A team
+    experiment (``kind = "team"``, e.g. the bundled ``team``) prints the team summary."""
     check_backend(backend, jobs=jobs, scheduler=scheduler)
     if export_parquet is not None:
         require_pyarrow()  # before the sweep, not after it
-    cfg = load_config(resolve_experiment(config))
+    from selfrepair.experiment.teams import TeamExperimentConfig, load_experiment
+
+    loaded = load_experiment(resolve_experiment(config))
+    if isinstance(loaded, TeamExperimentConfig):
+        from selfrepair.cli.team import run_team_experiment
+
+        if repeats is not None:
+            from selfrepair.errors import ProblemError
+
+            raise ProblemError(
+                "--repeats times single-robot missions; a team experiment runs each once"
+            )
+
+        return run_team_experiment(
+            loaded,
+            db,
+            jobs=joblib.cpu_count() if jobs == -1 else jobs,
+            backend=backend,
+            scheduler=scheduler,
+            address=address,
+            export_csv=export_csv,
+            export_parquet=export_parquet,
+            progress=_progress,
+            max_missions=max_missions,
+            max_cells=max_cells,
+        )
+    cfg = loaded
     missions = expand(cfg, max_missions=max_missions, max_cells=max_cells)
     db_path = db if db is not None else Path("results") / f"{cfg.name}.sqlite"
     n_jobs = joblib.cpu_count() if jobs == -1 else jobs

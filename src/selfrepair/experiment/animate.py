@@ -1,5 +1,8 @@
 """Animate a mission trace as a GIF (matplotlib animation, Pillow writer; extra ``viz``).
 
+A team trace (:mod:`selfrepair.team.trace`) is drawn by
+:func:`selfrepair.team.draw.animate_team_trace`.
+
 Each frame shows the maze, the initial plan (grey dashes), the steps executed so far coloured by
 where their action came from (plan, table replacement, lookahead, replan, failed attempt), the
 robot as a triangle pointing along its heading, and the step, its source and the faults known at
@@ -28,7 +31,12 @@ def animate_trace(
     """Write a GIF of the mission in ``trace`` to ``out``; returns the number of frames."""
     from selfrepair.execution.trace import read_trace, replay
     from selfrepair.experiment import plots
+    from selfrepair.team.trace import is_team_trace
 
+    if is_team_trace(trace):  # several robots: one colour each, items drawn
+        from selfrepair.team.draw import animate_team_trace
+
+        return animate_team_trace(trace, out, fps=fps, max_frames=max_frames)
     if not str(out).lower().endswith(".gif"):
         raise TraceError("expected an output file ending in .gif", source=str(out))
     mpl = plots._matplotlib()

@@ -75,8 +75,11 @@ __all__ = [
     "ReplanStrategy",
     "RouteConfig",
     "StrategyConfig",
+    "config_error",
+    "find_line",
     "load_config",
     "parse_config",
+    "read_toml",
 ]
 
 FAULT_PROFILES = ("paper", "singles", "doubles", "all")
@@ -341,11 +344,12 @@ def load_config(path: str | Path) -> ExperimentConfig:
     return parse_config(text, source=str(file.resolve()))
 
 
-def parse_config(text: str, *, source: str = "<string>") -> ExperimentConfig:
-    """Parse and validate experiment TOML text; ``source`` names it in errors."""
+def read_toml(text: str, *, source: str = "<string>") -> dict[str, Any]:
+    """TOML ``text`` (a byte-order mark dropped) as a dict; every syntax problem is a
+    :class:`ConfigError` with its line and column where known."""
     text = strip_bom(text)
     try:
-        data = tomllib.loads(text)
+        return tomllib.loads(text)
     except RecursionError:
         raise ConfigError(
             "invalid TOML: arrays or inline tables nested too deep (an experiment needs 3 levels)",
@@ -364,6 +368,12 @@ def parse_config(text: str, *, source: str = "<string>") -> ExperimentConfig:
         raise ConfigError(
             "invalid TOML: expected an integer of at most 4300 digits", source=source, line=line
         ) from None
+
+
+def parse_config(text: str, *, source: str = "<string>") -> ExperimentConfig:
+    """Parse and validate experiment TOML text; ``source`` names it in errors."""
+    text = strip_bom(text)
+    data = read_toml(text, source=source)
     if "source" in data:
         raise ConfigError("unknown key 'source' (it is set by the loader)", source=source)
     _load_plugins(data, text, source)
@@ -373,7 +383,7 @@ def parse_config(text: str, *, source: str = "<string>") -> ExperimentConfig:
             {**data, "source": source}, context={"domain": domain}
         )
     except ValidationError as exc:
-        raise _config_error(exc, text, source) from None
+        raise config_error(exc, text, source) from None
 
 
 def _load_plugins(data: dict[str, Any], text: str, source: str) -> None:
@@ -424,7 +434,7 @@ def _most_telling(errors: list[Any]) -> Any:
     return max(errors, key=rank)
 
 
-def _config_error(exc: ValidationError, text: str, source: str) -> ConfigError:
+def config_error(exc: ValidationError, text: str, source: str) -> ConfigError:
     """The most telling validation problem as a ConfigError naming key, line and expectation."""
     error = _most_telling(exc.errors())
     loc = _clean_loc(error["loc"])

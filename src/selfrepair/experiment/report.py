@@ -7,6 +7,9 @@
   :mod:`selfrepair.experiment.plots`;
 * ``mission.jsonl``, ``mission.png``, ``mission.gif`` - one telling mission, run again from its
   stored configuration (results are deterministic), with its trace, picture and animation.
+
+A database of a team experiment gets the team report instead
+(:func:`selfrepair.experiment.teams.write_team_report`).
 """
 
 from __future__ import annotations
@@ -51,6 +54,10 @@ def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = N
         raise InputError("expected a results database with at least one mission", source=str(db))
     out_dir = Path(out)
     out_dir.mkdir(parents=True, exist_ok=True)
+    from selfrepair.experiment.teams import is_team_rows, write_team_report
+
+    if is_team_rows(rows):
+        return write_team_report(rows, out_dir, str(db), mission_key=mission_key)
     written = [
         plots.figure_latency(rows, out_dir / "latency.png"),
         plots.figure_latency_vs_size(rows, out_dir / "latency-vs-size.png"),

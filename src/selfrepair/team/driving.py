@@ -51,7 +51,8 @@ __all__ = [
 ]
 
 RETRY_TICKS = 2
-"""Ticks a robot that could not place its drive waits before it tries again."""
+"""Ticks a robot that could not place its drive waits before it tries again (doubled after
+each failure in a row, up to eight times)."""
 
 
 class DriveStart(StrEnum):
@@ -141,10 +142,12 @@ def place(world: TeamWorld, robot: RobotState, at: int) -> bool:
     if steps is None:
         res.park(robot.name, robot.pose.cell, at)
         mark_stale(world, robot)
-        robot.retry_at = at + RETRY_TICKS * scale
+        robot.failures += 1
+        robot.retry_at = at + RETRY_TICKS * scale * min(8, 2 ** (robot.failures - 1))
         drive.steps = []
         make_room(world, robot, at)
         return False
+    robot.failures = 0
     drive.steps = list(steps)
     end = steps[-1].after if steps else robot.pose
     res.reserve_path(robot.name, steps, end, steps[-1].end if steps else at)
@@ -154,13 +157,14 @@ def place(world: TeamWorld, robot: RobotState, at: int) -> bool:
 def _cooperative(
     world: TeamWorld, robot: RobotState, target: Cell, at: int
 ) -> tuple[tuple[TimedStep, ...] | None, int]:
-    """Cooperative A* for ``robot`` to ``target`` from ``at``; skipped (``None``) when robots
-    parked for good wall the target off."""
+    """Cooperative A* for ``robot`` to ``target`` from ``at``; skipped (``None``: wait and try
+    again) when the cells that robots hold until they plan again - now or from some time on -
+    wall the target off (A* would search the whole space-time horizon in vain)."""
     res, domain, scale = world.reservations, world.scenario.domain, world.scale
     extra = world.known_extra(robot.name)
     lattice = lattice_of(world.scenario.maze, domain, planning_actions(domain, robot.faults), scale)
-    rest = cost_to_go(lattice, extra, target).get(robot.pose)
-    parked = res.parked(robot.name, at)
+    rest = lattice.cost(cost_to_go(lattice, extra, target), robot.pose)
+    parked = res.parked(robot.name)
     if rest is None or target in parked:
         return None, 0
     if robot.pose.cell not in grid_distances(
@@ -169,7 +173,7 @@ def _cooperative(
         return None, 0
     found, expanded = plan_spacetime(
         res, robot.name, lattice, extra, robot.pose, at, target,
-        wait=scale, horizon=4 * rest + 60 * scale,
+        wait=scale, horizon=3 * rest + 40 * scale,
         max_expansions=world.options.spacetime_expansions,
     )  # fmt: skip
     world.plans += 1

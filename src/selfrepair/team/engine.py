@@ -89,7 +89,7 @@ with undelivered items is over."""
 
 _ROUNDS = 12
 """Passes over the robots at one event time (a robot whose plan another changed goes again)."""
-_FORGET_EVERY = 50
+_FORGET_EVERY = 10
 """Ticks between two clean-ups of reservations that lie in the past."""
 _STEPS = 64
 """Things one robot may do at one event time before it must wait (a guard, never reached)."""

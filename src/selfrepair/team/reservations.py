@@ -126,12 +126,21 @@ class Reservations:
             out.update(e[2] for e in self.holders(cell, start, end, robot))
         return out
 
-    def parked(self, robot: str, at: int) -> set[Cell]:
-        """Cells other robots hold from ``at`` or earlier until they plan again."""
+    def snapshot(self, robot: str, after: int) -> dict[Cell, list[tuple[int, int]]]:
+        """Other robots' intervals that end after ``after``, per cell (for one search)."""
+        out: dict[Cell, list[tuple[int, int]]] = {}
+        for cell, entries in self._cells.items():
+            kept = [(s, e) for s, e, who in entries if who != robot and e > after]
+            if kept:
+                out[cell] = kept
+        return out
+
+    def parked(self, robot: str) -> set[Cell]:
+        """Cells other robots hold until they plan again (now or from some time on)."""
         return {
             cell
             for cell, entries in self._cells.items()
-            if any(e[2] != robot and e[1] >= FOREVER and e[0] <= at for e in entries)
+            if any(e[2] != robot and e[1] >= FOREVER for e in entries)
         }
 
     def of_robot(self, robot: str) -> list[tuple[Cell, int, int]]:

@@ -94,7 +94,7 @@ class TeamOptions:
     backend: str = "auto"
     max_ticks: int | None = None
     max_wait_ticks: int = 24
-    spacetime_expansions: int = 20_000
+    spacetime_expansions: int = 5_000
     seed: int = 0
 
     def __post_init__(self) -> None:

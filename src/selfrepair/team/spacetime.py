@@ -104,75 +104,118 @@ def plan_spacetime(
 ) -> SpaceTimeResult:
     """A fastest collision-free drive from ``start`` at ``t0`` to cell ``goal`` within
     ``horizon`` units, on ``lattice`` without the cells of ``extra`` (see the module
-    docstring)."""
+    docstring). Nodes are ``pose id * span + time offset`` integers, for speed."""
     h = cost_to_go(lattice, extra, goal)
-    if start not in h:
+    first = lattice.ids.get(start)
+    if first is None or h[first] < 0:
         return None, 0
-    limit = t0 + horizon
-    heap: list[tuple[int, int, int, Pose, int]] = [(h[start], h[start], 0, start, t0)]
-    parent: dict[tuple[Pose, int], tuple[tuple[Pose, int], TimedStep | None]] = {}
-    closed: set[tuple[Pose, int]] = set()
-    counter = expansions = 0
+    held = reservations.snapshot(robot, t0)
+
+    def free(cells: tuple[Cell, ...], begin: int, end: int) -> bool:
+        for cell in cells:
+            for s, e in held.get(cell, ()):
+                if s < end and begin < e:
+                    return False
+        return True
+
+    span = horizon + 1
+    goal_ids = (
+        {lattice.ids[Pose(goal[0], goal[1], heading)] for heading in Heading}
+        if (Pose(goal[0], goal[1], Heading.N) in lattice.ids)
+        else set()
+    )
+    heap: list[tuple[int, int, int]] = [(h[first], h[first], first * span)]
+    parent: dict[int, tuple[int, int]] = {}
+    closed: set[int] = set()
+    expansions = 0
+    forward = lattice.edges
     while heap:
-        _, _, _, pose, t = heapq.heappop(heap)
-        node = (pose, t)
+        _, _, node = heapq.heappop(heap)
         if node in closed:
             continue
         closed.add(node)
         expansions += 1
-        if pose.cell == goal and reservations.free((goal,), t, FOREVER, robot):
-            return _walk_back(node, parent), expansions
+        pose_id, dt = divmod(node, span)
+        t = t0 + dt
+        if pose_id in goal_ids and free((goal,), t, FOREVER):
+            return _walk_back(lattice, node, parent, span, t0), expansions
         if expansions >= max_expansions:
             return None, expansions
-        successors: list[tuple[Pose, int, TimedStep | None]] = []
-        if t + wait <= limit and reservations.free((pose.cell,), t, t + wait, robot):
-            successors.append((pose, t + wait, None))
-        for action, after, cells, length in lattice.forward.get(pose, ()):
-            if after not in h or t + length > limit or not extra.isdisjoint(cells):
-                continue
-            if reservations.free(cells, t, t + length, robot):
-                successors.append(
-                    (after, t + length, TimedStep(t, t + length, action, pose, after, cells))
-                )
-        for after, t_next, step in successors:
-            key = (after, t_next)
-            if key in closed or key in parent:
-                continue
-            parent[key] = (node, step)
-            counter += 1
+        cell = lattice.poses[pose_id].cell
+        if dt + wait <= horizon and free((cell,), t, t + wait):
+            _push(heap, parent, closed, node, pose_id * span + dt + wait, -1, dt + wait, h[pose_id])
+        for index, (_, after, cells, length) in enumerate(forward[pose_id]):
             rest = h[after]
-            heapq.heappush(heap, (t_next - t0 + rest, rest, counter, after, t_next))
+            if rest < 0 or dt + length > horizon or not extra.isdisjoint(cells):
+                continue
+            if free(cells, t, t + length):
+                _push(
+                    heap, parent, closed, node, after * span + dt + length, index, dt + length, rest
+                )
     return None, expansions
 
 
+def _push(
+    heap: list[tuple[int, int, int]],
+    parent: dict[int, tuple[int, int]],
+    closed: set[int],
+    node: int,
+    nxt: int,
+    edge: int,
+    g: int,
+    rest: int,
+) -> None:
+    if nxt in closed or nxt in parent:
+        return
+    parent[nxt] = (node, edge)
+    heapq.heappush(heap, (g + rest, rest, nxt))
+
+
 def _walk_back(
-    node: tuple[Pose, int],
-    parent: dict[tuple[Pose, int], tuple[tuple[Pose, int], TimedStep | None]],
+    lattice: Lattice, node: int, parent: dict[int, tuple[int, int]], span: int, t0: int
 ) -> tuple[TimedStep, ...]:
     steps: list[TimedStep] = []
     while node in parent:
-        node, step = parent[node]
-        if step is not None:
-            steps.append(step)
+        before, edge = parent[node]
+        if edge >= 0:
+            pose_id, dt = divmod(before, span)
+            action, after, cells, length = lattice.edges[pose_id][edge]
+            t = t0 + dt
+            steps.append(
+                TimedStep(
+                    t, t + length, action, lattice.poses[pose_id], lattice.poses[after], cells
+                )
+            )
+        node = before
     steps.reverse()
     return tuple(steps)
 
 
 # --- the lattice and the heuristic ----------------------------------------------------------------
 
-_Edge = tuple[Any, Pose, tuple[Cell, ...], int]
+_Edge = tuple[Any, int, tuple[Cell, ...], int]
 
 
 @dataclass(frozen=True, slots=True, eq=False)
 class Lattice:
-    """A robot's moves on a maze's free cells, both ways: ``forward[pose]`` lists
-    ``(action, end pose, footprint, units)``, ``reverse[pose]`` the same edges by end pose.
+    """A robot's moves on a maze's free cells, on pose ids: ``poses[i]`` is pose ``i``,
+    ``ids`` the way back, ``edges[i]`` lists ``(action, end pose id, footprint, units)`` and
+    ``reverse[j]`` the edges that end at pose ``j`` as ``(start pose id, footprint, units)``.
     Built once per maze, domain, action set and scale (:func:`lattice_of`); cells that become
     walls later (blocked cells, stuck robots) are left out per query with ``extra``."""
 
     maze: Maze
-    forward: dict[Pose, list[_Edge]]
-    reverse: dict[Pose, list[_Edge]]
+    poses: tuple[Pose, ...]
+    ids: dict[Pose, int]
+    edges: tuple[tuple[_Edge, ...], ...]
+    reverse: tuple[tuple[tuple[int, tuple[Cell, ...], int], ...], ...]
+
+    def cost(self, distances: list[int], pose: Pose) -> int | None:
+        """The cost-to-go of ``pose`` in ``distances`` (``None``: the goal cannot be reached)."""
+        index = self.ids.get(pose)
+        if index is None or distances[index] < 0:
+            return None
+        return distances[index]
 
 
 def lattice_of(
@@ -186,7 +229,7 @@ def lattice_of(
 _LATTICES: BoundedCache[tuple[Maze, Domain[Any, Any], tuple[Any, ...], int], Lattice] = (
     BoundedCache("team lattices", 32)
 )
-_COST_TO_GO: BoundedCache[tuple[Lattice, frozenset[Cell], Cell], dict[Pose, int]] = BoundedCache(
+_COST_TO_GO: BoundedCache[tuple[Lattice, frozenset[Cell], Cell], list[int]] = BoundedCache(
     "team cost-to-go maps", 512
 )
 
@@ -196,42 +239,45 @@ def _build_lattice(
 ) -> Lattice:
     grid = maze.free_grid(2)
     moves = [(a, units(domain, a, scale)) for a in actions]
-    forward: dict[Pose, list[_Edge]] = {}
-    reverse: dict[Pose, list[_Edge]] = {}
-    for x, y in maze.free_cells():
-        for heading in Heading:
-            pose = Pose(x, y, heading)
-            for action, length in moves:
-                cells = domain.footprint(pose, action)
-                if grid.all_free(cells):
-                    after = domain.apply(pose, action)
-                    forward.setdefault(pose, []).append((action, after, cells, length))
-                    reverse.setdefault(after, []).append((action, pose, cells, length))
-    return Lattice(maze, forward, reverse)
+    poses = tuple(Pose(x, y, heading) for x, y in maze.free_cells() for heading in Heading)
+    ids = {pose: i for i, pose in enumerate(poses)}
+    edges: list[list[_Edge]] = [[] for _ in poses]
+    reverse: list[list[tuple[int, tuple[Cell, ...], int]]] = [[] for _ in poses]
+    for i, pose in enumerate(poses):
+        for action, length in moves:
+            cells = domain.footprint(pose, action)
+            if grid.all_free(cells):
+                j = ids[domain.apply(pose, action)]
+                edges[i].append((action, j, cells, length))
+                reverse[j].append((i, cells, length))
+    return Lattice(
+        maze, poses, ids, tuple(tuple(e) for e in edges), tuple(tuple(r) for r in reverse)
+    )
 
 
-def cost_to_go(lattice: Lattice, extra: frozenset[Cell], goal: Cell) -> dict[Pose, int]:
-    """The least duration (units) from every pose to cell ``goal`` on ``lattice`` without the
-    cells of ``extra`` and without other robots; poses that cannot reach it are absent (kept)."""
+def cost_to_go(lattice: Lattice, extra: frozenset[Cell], goal: Cell) -> list[int]:
+    """The least duration (units) from every pose id to cell ``goal`` on ``lattice`` without
+    the cells of ``extra`` and without other robots; -1 where it cannot be reached (kept)."""
     return _COST_TO_GO.get((lattice, extra, goal), lambda: _dijkstra(lattice, extra, goal))
 
 
-def _dijkstra(lattice: Lattice, extra: frozenset[Cell], goal: Cell) -> dict[Pose, int]:
-    dist: dict[Pose, int] = {}
-    heap: list[tuple[int, int, Pose]] = []
-    if lattice.maze.is_free(*goal) and goal not in extra:
+def _dijkstra(lattice: Lattice, extra: frozenset[Cell], goal: Cell) -> list[int]:
+    dist = [-1] * len(lattice.poses)
+    heap: list[tuple[int, int]] = []
+    if goal not in extra:
         for heading in Heading:
-            pose = Pose(goal[0], goal[1], heading)
-            dist[pose] = 0
-            heap.append((0, heading, pose))
+            index = lattice.ids.get(Pose(goal[0], goal[1], heading))
+            if index is not None:
+                dist[index] = 0
+                heap.append((0, index))
     heapq.heapify(heap)
     while heap:
-        d, _, pose = heapq.heappop(heap)
-        if d > dist.get(pose, FOREVER):
+        d, index = heapq.heappop(heap)
+        if d > dist[index]:
             continue
-        for _, before, cells, length in lattice.reverse.get(pose, ()):
+        for before, cells, length in lattice.reverse[index]:
             nd = d + length
-            if nd < dist.get(before, FOREVER) and extra.isdisjoint(cells):
+            if (dist[before] < 0 or nd < dist[before]) and extra.isdisjoint(cells):
                 dist[before] = nd
-                heapq.heappush(heap, (nd, before.heading, before))
+                heapq.heappush(heap, (nd, before))
     return dist

@@ -88,6 +88,7 @@ class RobotState:
     stale: bool = False
     first_pick: int | None = None
     deferred: tuple[TeamAction, str] | None = None
+    failures: int = 0
 
     @property
     def name(self) -> str:

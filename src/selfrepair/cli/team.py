@@ -1,0 +1,282 @@
+"""Team commands: ``selfrepair team run|compare|replay|table|frame`` and the team branch of
+``selfrepair experiment``.
+
+Exit codes: ``team run`` 0 when every item is delivered, 1 otherwise; ``team replay`` 0 when the
+trace re-simulates with no conflict and no teleport, 1 otherwise; bad input is exit 2 (see
+:func:`selfrepair.cli.main`). Heavy modules (numpy-based engine, scipy, matplotlib, pydantic)
+are imported inside the commands, so ``selfrepair --help`` stays cheap.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+
+from selfrepair.cli._app import app, console, echo, echo_json
+
+if TYPE_CHECKING:
+    from selfrepair.experiment.teams import TeamExperimentConfig
+    from selfrepair.team.result import TeamResult
+
+__all__ = ["run_team_experiment", "team_app"]
+
+team_app = typer.Typer(
+    help="Team missions: several robots, teammates replacing a faulty robot's actions.",
+    no_args_is_help=True,
+)
+app.add_typer(team_app, name="team")
+
+_STRATEGY_HELP = "team-replacement, reallocation or alone."
+
+
+def _options(strategy: str, table: str, max_ticks: int | None, backend: str) -> Any:
+    from selfrepair.team.result import TeamOptions
+
+    return TeamOptions(strategy=strategy, table=table, max_ticks=max_ticks, backend=backend)
+
+
+@team_app.command("run")
+def team_run(
+    scenario: Annotated[str, typer.Argument(help="Bundled scenario (three-robots) or FILE.toml.")],
+    strategy: Annotated[str, typer.Option(help=_STRATEGY_HELP)] = "team-replacement",
+    table: Annotated[str, typer.Option(help="Team table: handwritten or generated.")] = (
+        "handwritten"
+    ),
+    trace: Annotated[
+        Path | None, typer.Option("--trace", help="Write the team trace (JSON Lines) here.")
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the metrics row as JSON.")] = False,
+    max_ticks: Annotated[
+        int | None, typer.Option(help="End the mission after this many ticks (default: generous).")
+    ] = None,
+    backend: Annotated[str, typer.Option(help="Planner backend: auto, python or numba.")] = "auto",
+) -> int:
+    """Run one team mission: allocation, team plan, execution with faults and repairs."""
+    from selfrepair.team.engine import run_team
+    from selfrepair.team.metrics import team_row
+    from selfrepair.team.scenario import resolve_scenario
+    from selfrepair.team.trace import write_team_trace
+
+    parsed = resolve_scenario(scenario)
+    options = _options(strategy, table, max_ticks, backend)
+    result = run_team(parsed, options)
+    baseline = run_team(parsed.without_faults(), options).makespan if parsed.faults else None
+    if trace is not None:
+        write_team_trace(result, trace, baseline)
+    if as_json:
+        echo_json(team_row(result, baseline))
+    else:
+        _print_result(result, baseline)
+    return 0 if result.all_delivered else 1
+
+
+def _print_result(result: TeamResult, baseline: Any) -> None:
+    scenario = result.scenario
+    echo(
+        f"{scenario.name}: {len(scenario.robots)} robots, {len(scenario.tasks)} tasks on "
+        f"{scenario.maze.name or 'the maze'}, strategy {result.options.label}"
+    )
+    for fault in scenario.faults:
+        echo(f"  fault: {fault.describe()} ({fault.persistence})")
+    ratio = (
+        f" ({float(result.makespan / baseline):.2f} x fault-free {baseline})" if baseline else ""
+    )
+    echo(
+        f"{result.status}: {len(result.delivered)}/{len(scenario.tasks)} delivered, makespan "
+        f"{result.makespan} ticks{ratio}; {result.reason}"
+    )
+    for r in result.repairs:
+        what = f"{r.candidate} with {r.helper}" if r.candidate else str(r.source)
+        echo(
+            f"  tick {r.at / result.scale:g}: {r.robot} {r.kind} at {r.action} -> {r.outcome} by "
+            f"{what}; disturbed {', '.join(r.disturbed) or 'none'}; {r.plans} plannings; "
+            f"{r.latency_ns / 1000:.0f} µs"
+        )
+    echo(
+        f"messages {result.messages}, drive plannings {result.plans}, yields {result.yields}, "
+        f"own repairs {len(result.own_repairs)}"
+    )
+
+
+@team_app.command("compare")
+def team_compare(
+    scenario: Annotated[str, typer.Argument(help="Bundled scenario (three-robots) or FILE.toml.")],
+    repeats: Annotated[
+        int, typer.Option(help="Runs per strategy; latencies are medians.", min=1, max=1000)
+    ] = 5,
+    backend: Annotated[str, typer.Option(help="Planner backend: auto, python or numba.")] = "auto",
+) -> int:
+    """Run the scenario with every team strategy and print their outcome side by side (the
+    first repair's latency is the median over the repeats)."""
+    import statistics
+
+    from rich.table import Table
+
+    from selfrepair.team.engine import run_team
+    from selfrepair.team.model import TeamStrategyName, TeamTableName
+    from selfrepair.team.scenario import resolve_scenario
+
+    parsed = resolve_scenario(scenario)
+    variants = [
+        (TeamStrategyName.TEAM_REPLACEMENT, TeamTableName.HANDWRITTEN),
+        (TeamStrategyName.TEAM_REPLACEMENT, TeamTableName.GENERATED),
+        (TeamStrategyName.REALLOCATION, TeamTableName.HANDWRITTEN),
+        (TeamStrategyName.ALONE, TeamTableName.HANDWRITTEN),
+    ]
+    baseline = run_team(parsed.without_faults(), _options("alone", "handwritten", None, backend))
+    view = Table(title=f"{parsed.name}: fault-free makespan {baseline.makespan} ticks")
+    for column in (
+        "strategy", "delivered", "makespan", "vs fault-free", "first repair µs (median)",
+        "disturbed", "plannings in repairs", "messages",
+    ):  # fmt: skip
+        view.add_column(column, justify="left" if column == "strategy" else "right")
+    for strategy, table in variants:
+        options = _options(strategy, table, None, backend)
+        run_team(parsed, options)  # warm: one-off costs stay out of the latencies
+        runs = [run_team(parsed, options) for _ in range(repeats)]
+        result = runs[-1]
+        first = [r.repairs[0].latency_ns for r in runs if r.repairs]
+        disturbed = {name for r in result.repairs for name in r.disturbed}
+        view.add_row(
+            options.label,
+            f"{len(result.delivered)}/{len(parsed.tasks)}",
+            f"{float(result.makespan):g}",
+            f"{float(result.makespan / baseline.makespan):.2f}" if result.all_delivered else "-",
+            f"{statistics.median(first) / 1000:,.0f}" if first else "-",
+            str(len(disturbed)),
+            str(sum(r.plans for r in result.repairs)),
+            str(result.messages),
+        )
+    console().print(view)
+    return 0
+
+
+@team_app.command("replay")
+def team_replay(
+    trace: Annotated[Path, typer.Argument(help="A team trace written by team run --trace.")],
+) -> int:
+    """Re-simulate a team trace: no teleport, no conflict, every act possible."""
+    from selfrepair.team.trace import read_team_trace, replay_team
+
+    report = replay_team(read_team_trace(trace))
+    echo(f"{trace}: {report}")
+    return 0 if report.ok else 1
+
+
+@team_app.command("table")
+def team_table(
+    name: Annotated[str, typer.Argument(help="handwritten or generated.")] = "handwritten",
+    as_json: Annotated[bool, typer.Option("--json", help="Print the table as JSON.")] = False,
+) -> int:
+    """Print a team replacement table: per situation, its candidates in order."""
+    from rich.table import Table
+
+    from selfrepair.team.table import get_team_table
+
+    table = get_team_table(name)
+    rows = [
+        {
+            "action": key[0].value,
+            "incident": key[1].value,
+            "load": key[2].value,
+            "candidate": t.name,
+            "scope": t.scope.value,
+            "steps": str(t),
+        }
+        for key, t in table.rows()
+    ]
+    if as_json:
+        echo_json(rows)
+        return 0
+    view = Table(title=f"team table {table.name}: {len(rows)} candidates")
+    for column in ("action", "incident", "load", "candidate", "scope", "steps"):
+        view.add_column(column)
+    for row in rows:
+        view.add_row(
+            *(row[c] for c in ("action", "incident", "load", "candidate", "scope", "steps"))
+        )
+    console().print(view)
+    return 0
+
+
+@team_app.command("frame")
+def team_frame(
+    trace: Annotated[Path, typer.Argument(help="A team trace written by team run --trace.")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="PNG file to write.")],
+    tick: Annotated[
+        float | None, typer.Option(help="The moment to draw, in ticks (default: the first repair).")
+    ] = None,
+) -> int:
+    """Draw one moment of a team trace as a PNG: robots, their paths, items and faults."""
+    from selfrepair.team.draw import draw_team_frame
+
+    written = draw_team_frame(trace, out, tick=tick)
+    echo(f"wrote {written}")
+    return 0
+
+
+def run_team_experiment(
+    config: TeamExperimentConfig,
+    db: Path | None,
+    *,
+    jobs: int,
+    backend: str,
+    scheduler: str | None,
+    address: str | None,
+    export_csv: Path | None,
+    export_parquet: Path | None,
+    progress: Any,
+) -> int:
+    """The team branch of ``selfrepair experiment``: run the missions (resumable, any
+    backend), then print the per-strategy summary of every stored row of this experiment."""
+    from selfrepair.experiment.runner import run_missions
+    from selfrepair.experiment.store import ResultStore
+    from selfrepair.experiment.teams import execute_team_mission, expand_team
+    from selfrepair.team.summary import summarize_team
+
+    missions = expand_team(config)
+    db_path = db if db is not None else Path("results") / f"{config.name}.sqlite"
+    with ResultStore(db_path) as store:
+        with progress(f"{config.name}: {len(missions)} team missions") as on_progress:
+            summary = run_missions(
+                missions,
+                store,
+                jobs=jobs,
+                backend=backend,
+                scheduler=scheduler,
+                address=address,
+                execute=execute_team_mission,
+                on_progress=on_progress,
+            )
+        echo(
+            f"{config.name}: {summary.total} missions, {summary.skipped} already stored, "
+            f"{summary.ran} run in {summary.seconds:.1f} s -> {db_path}"
+        )
+        keys = {m.key for m in missions}
+        rows = [r for r in store.rows() if r["key"] in keys]
+        print_team_summary(summarize_team(rows), title=f"{config.name}: per strategy")
+        if export_csv is not None:
+            echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
+        if export_parquet is not None:
+            echo(f"wrote {store.export_parquet(export_parquet)} rows to {export_parquet}")
+    return 0
+
+
+def print_team_summary(summaries: list[Any], *, title: str) -> None:
+    """The per-strategy team summary as a table."""
+    import sys
+
+    from rich.console import Console
+    from rich.table import Table
+
+    from selfrepair.team.summary import TeamSummary
+
+    out = console() if sys.stdout.isatty() else Console(file=sys.stdout, width=220)
+    view = Table(title=title)
+    for i, header in enumerate(TeamSummary.HEADERS):
+        view.add_column(header, justify="left" if i == 0 else "right")
+    for s in summaries:
+        view.add_row(*s.cells())
+    out.print(view)

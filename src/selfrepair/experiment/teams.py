@@ -1,0 +1,440 @@
+"""Team experiments: ``kind = "team"`` TOML files, their missions, and the mission function.
+
+The hook between the experiment machinery (config errors, stable keys and seeds, the store, the
+runner and its backends) and the team package, which builds and runs the cases
+(:mod:`selfrepair.team.experiment`). A team file (format in docs/team.md)::
+
+    kind = "team"
+    name = "team"
+    seed = 7
+    repeats = 2
+
+    [[mazes]]
+    bundled = "wide-short"       # or file = "x.maze" / generate = {width=.., corridor=2, ...}
+
+    [team]
+    sizes = [2, 4, 8]            # robots per team
+    tasks_per_robot = [1, 2]     # task loads
+    grippers = ["all"]           # all | mixed (every third robot without a gripper)
+
+    [faults]
+    cases = ["immobilised-carrying", "gripper", "blocked", "wheels"]
+    persistence = ["permanent", "transient"]
+    duration = 40                # ticks a transient fault lasts
+
+    [robot]                      # each robot's own wheel-fault handling
+    strategy = "replacement"
+    table = "handwritten"
+    recursion = "flat"
+
+    [[strategies]]
+    name = "team-replacement"    # team-replacement | reallocation | alone
+    tables = ["handwritten", "generated"]
+
+:func:`load_experiment` reads either kind of experiment file; :func:`expand_team` gives the
+missions (keys and seeds as in :mod:`selfrepair.experiment.missions`: the seed derives from the
+maze, team size, load, equipment and replicate, so every fault case and strategy of one seed
+meets the same team and tasks); :func:`execute_team_mission` is the mission function for
+:func:`selfrepair.experiment.runner.run_missions`.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+from pydantic import Field, ValidationError, field_validator, model_validator
+
+from selfrepair.errors import ConfigError
+from selfrepair.execution.faults import Persistence
+from selfrepair.experiment.config import (
+    ExperimentConfig,
+    GeneratedMaze,
+    MazeConfig,
+    _Frozen,
+    config_error,
+    find_line,
+    parse_config,
+    read_toml,
+)
+from selfrepair.experiment.missions import (
+    SCHEMA,
+    Mission,
+    canonical_json,
+    derive_seed,
+    maze_identity,
+    maze_label,
+    maze_of,
+    mission_key,
+    portable,
+)
+from selfrepair.experiment.store import Value
+from selfrepair.repair.replacement import RecursionMode
+from selfrepair.team.experiment import FaultCase, TeamCase, case_row
+from selfrepair.team.model import TeamStrategyName, TeamTableName
+from selfrepair.team.result import TeamOptions
+from selfrepair.team.scenario import MAX_ROBOTS, GripperMix, components
+
+__all__ = [
+    "TeamExperimentConfig",
+    "execute_team_mission",
+    "expand_team",
+    "is_team_rows",
+    "load_experiment",
+    "write_team_report",
+]
+
+TEAM_KIND = "team"
+"""The ``kind`` of a team experiment file (a file without ``kind`` is a single-robot one)."""
+
+
+class TeamMaze(_Frozen):
+    """Where a team maze comes from: exactly one of ``bundled``, ``file``, ``generate``."""
+
+    bundled: str | None = None
+    file: str | None = None
+    generate: GeneratedMaze | None = None
+
+    @model_validator(mode="after")
+    def _one_source(self) -> TeamMaze:
+        given = [k for k in ("bundled", "file", "generate") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(
+                "expected exactly one of 'bundled', 'file' or 'generate', got "
+                + (", ".join(repr(k) for k in given) or "none")
+            )
+        return self
+
+    def as_maze_config(self) -> MazeConfig:
+        """The same maze as the single-robot experiments describe it (routes unused)."""
+        return MazeConfig(bundled=self.bundled, file=self.file, generate=self.generate, routes=1)
+
+
+class TeamSettings(_Frozen):
+    """Team sizes, task loads (tasks per robot) and equipment mixes to cross."""
+
+    sizes: tuple[Annotated[int, Field(ge=1, le=MAX_ROBOTS)], ...]
+    tasks_per_robot: tuple[Annotated[int, Field(ge=1, le=16)], ...] = (1,)
+    grippers: tuple[GripperMix, ...] = (GripperMix.ALL,)
+
+    @field_validator("sizes", "tasks_per_robot", "grippers")
+    @classmethod
+    def _non_empty(cls, value: tuple[Any, ...]) -> tuple[Any, ...]:
+        if not value:
+            raise ValueError("expected a non-empty list")
+        return value
+
+
+class TeamFaults(_Frozen):
+    """Fault cases, persistences and the duration (ticks) of a transient fault."""
+
+    cases: tuple[FaultCase, ...]
+    persistence: tuple[Persistence, ...] = (Persistence.PERMANENT,)
+    duration: Annotated[int, Field(ge=1, le=100_000)] | None = None
+
+    @field_validator("cases", "persistence")
+    @classmethod
+    def _non_empty(cls, value: tuple[Any, ...]) -> tuple[Any, ...]:
+        if not value:
+            raise ValueError("expected a non-empty list")
+        return value
+
+    @model_validator(mode="after")
+    def _timing(self) -> TeamFaults:
+        if Persistence.INTERMITTENT in self.persistence:
+            raise ValueError("team faults are permanent or transient, not intermittent")
+        if Persistence.TRANSIENT in self.persistence and self.duration is None:
+            raise ValueError("persistence \"transient\" needs a 'duration' (ticks, >= 1)")
+        return self
+
+
+class RobotSettings(_Frozen):
+    """How each robot handles its own wheel faults (a single-robot strategy and table)."""
+
+    strategy: Literal["replacement", "replan", "lookahead"] = "replacement"
+    table: str = "handwritten"
+    recursion: RecursionMode = RecursionMode.FLAT
+
+
+class TeamStrategyConfig(_Frozen):
+    """One team strategy; team replacement once per table."""
+
+    name: TeamStrategyName
+    tables: tuple[TeamTableName, ...] = (TeamTableName.HANDWRITTEN,)
+
+
+class TeamExperimentConfig(_Frozen):
+    """A whole team experiment: mazes x team sizes x loads x equipment x fault cases x
+    persistences x strategies x repeats (see the module docstring)."""
+
+    kind: Literal["team"]
+    name: Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")]
+    description: str = ""
+    seed: int = 0
+    repeats: Annotated[int, Field(ge=1, le=1000)] = 1
+    mazes: Annotated[tuple[TeamMaze, ...], Field(min_length=1)]
+    team: TeamSettings
+    faults: TeamFaults
+    robot: RobotSettings = RobotSettings()
+    strategies: Annotated[tuple[TeamStrategyConfig, ...], Field(min_length=1)]
+    max_ticks: Annotated[int, Field(ge=1, le=10_000_000)] | None = None
+    source: str = "<string>"
+
+    @property
+    def base_dir(self) -> Path:
+        """The directory relative paths in the file are resolved against."""
+        return Path(self.source).parent if not self.source.startswith("<") else Path.cwd()
+
+
+def load_experiment(path: str | Path) -> ExperimentConfig | TeamExperimentConfig:
+    """Read an experiment file of either kind (``kind = "team"`` or none)."""
+    file = Path(path)
+    try:
+        text = file.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ConfigError(
+            f"cannot read experiment file: {exc.strerror}", source=str(file)
+        ) from None
+    source = str(file.resolve())
+    data = read_toml(text, source=source)
+    if data.get("kind") != TEAM_KIND:
+        if "kind" in data:
+            raise ConfigError(
+                f"key 'kind': expected \"{TEAM_KIND}\" (or no 'kind' for a single-robot "
+                f"experiment), got {data['kind']!r}",
+                source=source,
+                line=find_line(text, ("kind",)),
+            )
+        return parse_config(text, source=source)
+    if "source" in data:
+        raise ConfigError("unknown key 'source' (it is set by the loader)", source=source)
+    try:
+        config = TeamExperimentConfig.model_validate({**data, "source": source})
+    except ValidationError as exc:
+        raise config_error(exc, text, source) from None
+    _check_sizes(config, text)
+    return config
+
+
+def _check_sizes(config: TeamExperimentConfig, text: str) -> None:
+    """Every team and its tasks must fit each maze: one cell per robot, two per task."""
+    for index, entry in enumerate(config.mazes):
+        identity = maze_identity(entry.as_maze_config(), config.base_dir, config.source, index)
+        maze = maze_of(canonical_json(identity))
+        label = components(maze)
+        sizes: dict[int, int] = {}
+        for number in label.values():
+            sizes[number] = sizes.get(number, 0) + 1
+        area = max(sizes.values(), default=0)
+        for size in config.team.sizes:
+            need = size + 2 * size * max(config.team.tasks_per_robot)
+            if need > area:
+                raise ConfigError(
+                    f"key 'team.sizes': {size} robots with {max(config.team.tasks_per_robot)} "
+                    f"tasks each need {need} free cells; maze {maze_label(identity)!r} has "
+                    f"{area} connected free cells",
+                    source=config.source,
+                    line=find_line(text, ("team", "sizes")),
+                )
+
+
+def expand_team(config: TeamExperimentConfig) -> tuple[Mission, ...]:
+    """Every mission of ``config``, in a deterministic order, with keys and seeds."""
+    missions: dict[str, Mission] = {}
+    variants = [
+        (s.name, table if s.name is TeamStrategyName.TEAM_REPLACEMENT else None)
+        for s in config.strategies
+        for table in (s.tables if s.name is TeamStrategyName.TEAM_REPLACEMENT else s.tables[:1])
+    ]
+    robot = config.robot.model_dump(mode="json")
+    for index, entry in enumerate(config.mazes):
+        identity = maze_identity(entry.as_maze_config(), config.base_dir, config.source, index)
+        label = maze_label(identity)
+        for size in config.team.sizes:
+            for load in config.team.tasks_per_robot:
+                for mix in config.team.grippers:
+                    for replicate in range(config.repeats):
+                        base: dict[str, Any] = {
+                            "schema": SCHEMA,
+                            "kind": TEAM_KIND,
+                            "maze": identity,
+                            "team_size": size,
+                            "tasks": size * load,
+                            "grippers": mix.value,
+                            "replicate": replicate,
+                        }
+                        seed = derive_seed(config.seed, portable(base))
+                        for situation in _situations(config, base):
+                            for name, table in variants:
+                                settings = {
+                                    **situation,
+                                    "strategy": name.value,
+                                    "team_table": None if table is None else table.value,
+                                    "robot": robot,
+                                    "max_ticks": config.max_ticks,
+                                    "seed": seed,
+                                }
+                                mission = _mission(config, settings, seed, label, load)
+                                missions.setdefault(mission.key, mission)
+    return tuple(missions.values())
+
+
+def _situations(config: TeamExperimentConfig, base: dict[str, Any]) -> list[dict[str, Any]]:
+    out = []
+    for case in config.faults.cases:
+        kinds = (Persistence.PERMANENT,) if case is FaultCase.NONE else config.faults.persistence
+        for persistence in kinds:
+            transient = persistence is Persistence.TRANSIENT
+            out.append(
+                {
+                    **base,
+                    "fault": case.value,
+                    "persistence": persistence.value,
+                    "duration": config.faults.duration if transient else None,
+                }
+            )
+    return out
+
+
+def _mission(
+    config: TeamExperimentConfig, settings: dict[str, Any], seed: int, label: str, load: int
+) -> Mission:
+    text = canonical_json(settings)
+    key = mission_key(canonical_json(portable(settings)))
+    strategy, table = settings["strategy"], settings["team_table"]
+    labels: tuple[tuple[str, str | int | None], ...] = (
+        ("maze", label),
+        ("team_size", settings["team_size"]),
+        ("tasks", settings["tasks"]),
+        ("task_load", load),
+        ("grippers", settings["grippers"]),
+        ("fault_case", settings["fault"]),
+        ("persistence", settings["persistence"]),
+        ("replicate", settings["replicate"]),
+        ("strategy", strategy),
+        ("team_table", table),
+        ("variant", f"{strategy}[{table}]" if table else strategy),
+    )
+    return Mission(key, config.name, seed, text, labels)
+
+
+def is_team_rows(rows: Sequence[Mapping[str, Value]]) -> bool:
+    """Whether stored rows come from a team experiment."""
+    return bool(rows) and all("fault_case" in r and r.get("team_size") is not None for r in rows)
+
+
+_DUPLICATES = frozenset({"strategy", "team_table", "variant", "team_size", "tasks", "grippers"})
+"""Row columns that the mission's own labels already hold."""
+
+_WARMED: set[tuple[object, ...]] = set()
+"""(strategy, table, maze size) combinations this process has already run once."""
+
+
+def execute_team_mission(mission: Mission) -> Mapping[str, Value]:
+    """Run one team mission from its canonical configuration; the first mission of each
+    strategy, table and maze size in a process runs twice and only the second run is kept (so
+    one-off costs - kernel loading, lattices, the generated table - stay out of the timings)."""
+    s = mission.settings
+    maze = maze_of(canonical_json(s["maze"]))
+    case, options = _case_of(s, mission.seed), _options_of(s, mission.seed)
+    warm = (s["strategy"], s["team_table"], maze.width, maze.height)
+    if warm not in _WARMED:
+        case_row(maze, case, options)
+        _WARMED.add(warm)
+    row = case_row(maze, case, options)
+    return {k: v for k, v in row.items() if k not in _DUPLICATES}
+
+
+# --- the report -----------------------------------------------------------------------------------
+
+
+def _case_of(settings: Mapping[str, Any], seed: int) -> TeamCase:
+    return TeamCase(
+        settings["team_size"],
+        settings["tasks"],
+        GripperMix(settings["grippers"]),
+        FaultCase(settings["fault"]),
+        Persistence(settings["persistence"]),
+        settings["duration"],
+        seed,
+    )
+
+
+def _options_of(settings: Mapping[str, Any], seed: int) -> TeamOptions:
+    robot = settings["robot"]
+    return TeamOptions(
+        strategy=settings["strategy"],
+        table=settings["team_table"] or TeamTableName.HANDWRITTEN,
+        robot_strategy=robot["strategy"],
+        robot_table=robot["table"],
+        recursion=robot["recursion"],
+        max_ticks=settings["max_ticks"],
+        seed=seed,
+    )
+
+
+def _choose(
+    rows: list[Mapping[str, Value]], key_prefix: str | None, source: str
+) -> Mapping[str, Value]:
+    """The mission to draw: the one whose key starts with ``key_prefix``, else a telling one (a
+    team replacement with a handover that delivered everything, in a small team)."""
+    if key_prefix is not None:
+        hits = [r for r in rows if key_prefix and str(r["key"]).startswith(key_prefix)]
+        if len(hits) != 1:
+            raise ConfigError(
+                f"expected --mission to match exactly one stored key, {len(hits)} match "
+                f"{key_prefix!r}",
+                source=source,
+            )
+        return hits[0]
+
+    def score(row: Mapping[str, Value]) -> tuple[object, ...]:
+        candidates = str(row.get("candidates") or "")
+        return (
+            row.get("all_delivered") == 1,
+            str(row.get("variant")) == "team-replacement[handwritten]",
+            "handover" in candidates,
+            row.get("team_size") in (3, 4),
+            str(row.get("persistence")) == "permanent",
+            str(row["key"]),
+        )
+
+    return max(rows, key=score)
+
+
+def write_team_report(
+    rows: Sequence[Mapping[str, Value]],
+    out_dir: Path,
+    source: str,
+    *,
+    mission_key: str | None = None,
+) -> list[Path]:
+    """Write the team report for ``rows`` into ``out_dir`` (see :mod:`selfrepair.team.report`);
+    the chosen mission is run again from its stored configuration (deterministic)."""
+    from selfrepair.team.draw import animate_team_trace, draw_team_frame
+    from selfrepair.team.experiment import run_case
+    from selfrepair.team.report import render_team_markdown, write_team_figures
+    from selfrepair.team.trace import write_team_trace
+
+    written = write_team_figures(rows, out_dir)
+    chosen = _choose(rows, mission_key, source)
+    settings = json.loads(str(chosen["config"]))
+    seed = int(str(chosen["seed"]))
+    maze = maze_of(canonical_json(settings["maze"]))
+    result, baseline = run_case(maze, _case_of(settings, seed), _options_of(settings, seed))
+    trace = out_dir / "mission.jsonl"
+    write_team_trace(result, trace, baseline)
+    picture = draw_team_frame(trace, out_dir / "mission.png")
+    animation = out_dir / "mission.gif"
+    animate_team_trace(trace, animation, max_frames=60)
+    note = (
+        f"{settings['team_size']} robots, {settings['tasks']} tasks on {chosen['maze']}, fault "
+        f"{chosen.get('fault')} ({settings['persistence']}), {chosen['variant']}; "
+        f"{len(result.delivered)}/{settings['tasks']} delivered, makespan {result.makespan} "
+        f"ticks against {baseline} without the fault"
+    )
+    report = out_dir / "report.md"
+    report.write_text(render_team_markdown(rows, source, chosen, note), encoding="utf-8")
+    return [report, *written, trace, picture, animation]
