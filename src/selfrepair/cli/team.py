@@ -31,6 +31,16 @@ app.add_typer(team_app, name="team")
 _STRATEGY_HELP = "team-replacement, reallocation or alone."
 
 
+def _out() -> Any:
+    """A rich console on stdout: the terminal's width on a terminal, wide when piped (tables
+    keep every name and number on one line in logs)."""
+    import sys
+
+    from rich.console import Console
+
+    return console() if sys.stdout.isatty() else Console(file=sys.stdout, width=220)
+
+
 def _options(strategy: str, table: str, max_ticks: int | None, backend: str) -> Any:
     from selfrepair.team.result import TeamOptions
 
@@ -113,6 +123,7 @@ def team_compare(
     import statistics
 
     from rich.table import Table
+    from rich.text import Text
 
     from selfrepair.team.engine import run_team
     from selfrepair.team.model import TeamStrategyName, TeamTableName
@@ -140,7 +151,7 @@ def team_compare(
         first = [r.repairs[0].latency_ns for r in runs if r.repairs]
         disturbed = {name for r in result.repairs for name in r.disturbed}
         view.add_row(
-            options.label,
+            Text(options.label),
             f"{len(result.delivered)}/{len(parsed.tasks)}",
             f"{float(result.makespan):g}",
             f"{float(result.makespan / baseline.makespan):.2f}" if result.all_delivered else "-",
@@ -149,7 +160,7 @@ def team_compare(
             str(sum(r.plans for r in result.repairs)),
             str(result.messages),
         )
-    console().print(view)
+    _out().print(view)
     return 0
 
 
@@ -197,7 +208,7 @@ def team_table(
         view.add_row(
             *(row[c] for c in ("action", "incident", "load", "candidate", "scope", "steps"))
         )
-    console().print(view)
+    _out().print(view)
     return 0
 
 
@@ -266,17 +277,15 @@ def run_team_experiment(
 
 def print_team_summary(summaries: list[Any], *, title: str) -> None:
     """The per-strategy team summary as a table."""
-    import sys
-
-    from rich.console import Console
     from rich.table import Table
+    from rich.text import Text
 
     from selfrepair.team.summary import TeamSummary
 
-    out = console() if sys.stdout.isatty() else Console(file=sys.stdout, width=220)
+    out = _out()
     view = Table(title=title)
     for i, header in enumerate(TeamSummary.HEADERS):
         view.add_column(header, justify="left" if i == 0 else "right")
     for s in summaries:
-        view.add_row(*s.cells())
+        view.add_row(*(Text(cell) for cell in s.cells()))
     out.print(view)

@@ -376,7 +376,7 @@ def _options_of(settings: Mapping[str, Any], seed: int) -> TeamOptions:
 
 
 def _choose(
-    rows: list[Mapping[str, Value]], key_prefix: str | None, source: str
+    rows: Sequence[Mapping[str, Value]], key_prefix: str | None, source: str
 ) -> Mapping[str, Value]:
     """The mission to draw: the one whose key starts with ``key_prefix``, else a telling one (a
     team replacement with a handover that delivered everything, in a small team)."""

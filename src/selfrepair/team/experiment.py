@@ -130,20 +130,22 @@ def _first_tasks(scenario: TeamScenario) -> dict[str, Job]:
 
 def _corridor(scenario: TeamScenario, job: Job, rng: np.random.Generator) -> tuple[Cell, ...]:
     """Cells across the corridor half-way along the grid path of ``job`` (its pickup to its
-    drop-off), such that every robot and task cell stays connected (a detour exists)."""
+    drop-off), such that every robot and task cell stays connected (a detour exists); where
+    every such cut would split the maze, one cell of the path (the robot must go round it)."""
     maze = scenario.maze
     path = _grid_path(maze, job.source, job.dropoff)
     keep = {r.start.cell for r in scenario.robots}
     keep |= {c for t in scenario.tasks for c in (t.pickup, t.dropoff)}
     middle = path[len(path) // 4 : max(len(path) // 4 + 1, 3 * len(path) // 4)]
     order = [middle[int(i)] for i in rng.permutation(len(middle))]
-    for cell in order:
-        index = path.index(cell)
-        if index == 0 or cell in keep:
-            continue
-        across = _across(maze, cell, path[index - 1])
-        if keep.isdisjoint(across) and _connected(maze, frozenset(across), keep):
-            return tuple(sorted(across))
+    for narrow in (False, True):  # the corridor's whole width, else one cell of it
+        for cell in order:
+            index = path.index(cell)
+            if index == 0 or cell in keep:
+                continue
+            across = {cell} if narrow else _across(maze, cell, path[index - 1])
+            if keep.isdisjoint(across) and _connected(maze, frozenset(across), keep):
+                return tuple(sorted(across))
     return ()
 
 

@@ -337,16 +337,25 @@ class _Reader:
 
 
 def find_line(text: str, *needles: str) -> int | None:
-    """The 1-based number of the first line of ``text`` that contains every needle (as a key,
-    ``key =``, or as plain text), trying the needles from the most specific; ``None`` if none."""
-    lines = text.splitlines()
-    for count in range(len(needles), 0, -1):
-        wanted = needles[:count]
-        for n, line in enumerate(lines, start=1):
-            code = line.split("#", 1)[0]
-            if all(_mentions(code, w) for w in wanted):
-                return n
-    return None
+    """The 1-based line of ``text`` that the needles point at, or ``None``: the first line that
+    mentions the first needle (as ``key =``, a ``[[key]]`` header, or a quoted value such as
+    ``'"i1"'``), then, within the same table, the line that mentions the next needle."""
+    lines = [line.split("#", 1)[0] for line in text.splitlines()]
+    if not needles:
+        return None
+    found = next((n for n, line in enumerate(lines) if _mentions(line, needles[0])), None)
+    if found is None:
+        return None
+    start = next((n for n in range(found, -1, -1) if _HEADER.match(lines[n])), 0)
+    stop = next((n for n in range(found + 1, len(lines)) if _HEADER.match(lines[n])), len(lines))
+    for needle in needles[1:]:
+        hit = next((n for n in range(start, stop) if _mentions(lines[n], needle)), None)
+        if hit is not None:
+            found = hit
+    return found + 1
+
+
+_HEADER = re.compile(r"^\s*\[")
 
 
 def _mentions(line: str, needle: str) -> bool:
@@ -429,12 +438,14 @@ def _check_tasks(scenario: TeamScenario, maze: Maze, fail: Any) -> None:
             raise fail(
                 f"item {task.item} at {x},{y}: no robot with a gripper can reach it",
                 f'"{task.item}"',
+                "pickup",
             )
         if comp[task.dropoff] != comp[task.pickup]:
             bx, by = task.dropoff
             raise fail(
                 f"item {task.item} cannot be brought from {x},{y} to {bx},{by}: no path",
                 f'"{task.item}"',
+                "dropoff",
             )
 
 
@@ -501,8 +512,8 @@ def random_scenario(
     area = _largest_area(maze)
     if robots < 1 or robots > len(area) or robots > MAX_ROBOTS:
         raise InputError(
-            f"expected 1 to {min(len(area), MAX_ROBOTS)} robots for maze {maze.name or '?'} "
-            f"({len(area)} connected free cells), got {robots}"
+            f"{robots} robots do not fit: maze {maze.name or '?'} has {len(area)} connected free "
+            f"cells (expected 1 to {min(len(area), MAX_ROBOTS)} robots)"
         )
     picks = rng.permutation(len(area))[:robots]
     team = tuple(

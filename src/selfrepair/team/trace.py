@@ -563,25 +563,34 @@ def replay_team(trace: TeamTrace) -> TeamReplayReport:
 
 
 def _active_faults(trace: TeamTrace) -> list[tuple[int, int | None, TeamFault]]:
-    """Each fault's active stretch ``[on, off)`` from the fault lines (``off`` None: for good)."""
+    """Each fault's active stretch ``[on, off)`` (``off`` None: for good), computed from the
+    header - a tick, or the end of the robot's first pick in the acts, plus ``at`` - and
+    checked against the trace's fault lines."""
+    scale = trace.scale
+    first_pick: dict[str, int] = {}
+    for act in sorted(trace.acts, key=lambda a: a.start):
+        if act.action.kind is ActionKind.PICK:
+            first_pick.setdefault(act.action.robot, act.end)
+    horizon = max([m.end for m in trace.moves] + [a.end for a in trace.acts] + [0])
     spans: list[tuple[int, int | None, TeamFault]] = []
-    open_at: dict[int, tuple[int, int]] = {}
-    for f in trace.faults:
-        fault = trace.scenario.faults[f.index]
-        if f.active:
-            open_at[f.index] = (f.at, f.line)
-            if fault.trigger is Trigger.TICK and f.at != fault.at * trace.scale:
-                raise _Problem(
-                    f"fault {f.index} started at {f.at}, not at its tick {fault.at}", f.line
-                )
+    for index, fault in enumerate(trace.scenario.faults):
+        if fault.trigger is Trigger.TICK:
+            on: int | None = fault.at * scale
         else:
-            if f.index not in open_at:
-                raise _Problem(f"fault {f.index} cleared before it started", f.line)
-            on, _ = open_at.pop(f.index)
-            if fault.duration is None or f.at != on + fault.duration * trace.scale:
-                raise _Problem(f"fault {f.index} cleared at {f.at}, not after its duration", f.line)
-            spans.append((on, f.at, fault))
-    spans += [(on, None, trace.scenario.faults[i]) for i, (on, _) in open_at.items()]
+            picked = first_pick.get(fault.robot)
+            on = None if picked is None else picked + fault.at * scale
+        if on is None:
+            continue
+        off = None if fault.duration is None else on + fault.duration * scale
+        lines = [f for f in trace.faults if f.index == index]
+        expected = [(on, True)] + ([] if off is None else [(off, False)])
+        got = [(f.at, f.active) for f in lines]
+        if got != expected[: len(got)] or (on < horizon and not got):
+            line = lines[0].line if lines else None
+            raise _Problem(
+                f"fault {index} ({fault.describe()}) is logged as {got}, not {expected}", line
+            )
+        spans.append((on, off, fault))
     return spans
 
 
