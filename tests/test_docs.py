@@ -58,3 +58,10 @@ def test_readme_library_example_prints_what_the_readme_says(
     assert expected, "the example states its output in '# ' comment lines"
     exec(compile(code, "README.md", "exec"), {})
     assert capsys.readouterr().out.splitlines() == expected
+
+
+def test_team_doc_table_matches_the_code() -> None:
+    from selfrepair.team.table import HANDWRITTEN, markdown_team_table
+
+    text = (DOCS / "team.md").read_text(encoding="utf-8")
+    assert generated_block(text, "markdown_team_table") == markdown_team_table(HANDWRITTEN)

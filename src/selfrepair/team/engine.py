@@ -23,7 +23,9 @@ options give the same result (the timings aside).
    first; when that fails, or a drive meets a blocked cell, or a gripper has failed, the robot
    has an *incident* and the team strategy decides (:mod:`selfrepair.team.strategies`). The
    repair latency runs from the incident until every robot whose plan changed and is not in the
-   middle of an action has its next drive placed in time.
+   middle of an action has its next drive placed in time (garbage collection is held off
+   during it; each mission starts without kept cost-to-go maps, so a repair's cost does not
+   depend on the missions run before it in the process).
 5. **End.** When every item is delivered; when nothing more can happen (``stalled``: no robot
    with work can act, no fault will clear, nothing moved for :data:`STALL_TICKS`); or at
    ``max_ticks``.
@@ -31,6 +33,7 @@ options give the same result (the timings aside).
 
 from __future__ import annotations
 
+import gc
 import time
 from collections import deque
 from dataclasses import dataclass
@@ -77,6 +80,7 @@ from selfrepair.team.result import (
     TeamStatus,
 )
 from selfrepair.team.scenario import check_scenario
+from selfrepair.team.spacetime import clear_cost_to_go
 from selfrepair.team.state import Entry, ItemState, RobotState, TeamWorld, item_task_of
 from selfrepair.team.strategies import get_team_strategy
 from selfrepair.team.table import get_team_table
@@ -124,6 +128,7 @@ def run_team(scenario: TeamScenario, options: TeamOptions | None = None) -> Team
         from selfrepair.search.warmup import ensure_warm
 
         ensure_warm()
+    clear_cost_to_go()  # every mission's repairs start from the same (cold) heuristics
     world = _world(scenario, options)
     t0 = time.perf_counter_ns()
     _allocate(world)
@@ -497,13 +502,19 @@ def _incident(
         world.broadcast(robot.name)
     if robot.drive is not None:
         cancel_drive(world, robot, t)
-    t0 = time.perf_counter_ns()
-    plans0, expansions0 = world.plans, world.expansions
     strategy = get_team_strategy(world.options.strategy)
-    decision = strategy(world, Incident(robot.name, entry, kind, load, item, t))
-    for name in decision.changed:
-        _prepare(world, world.robots[name], t)
-    latency = time.perf_counter_ns() - t0
+    collecting = gc.isenabled()
+    gc.disable()  # a collection's pause belongs to no repair: it runs after the timed part
+    try:
+        t0 = time.perf_counter_ns()
+        plans0, expansions0 = world.plans, world.expansions
+        decision = strategy(world, Incident(robot.name, entry, kind, load, item, t))
+        for name in decision.changed:
+            _prepare(world, world.robots[name], t)
+        latency = time.perf_counter_ns() - t0
+    finally:
+        if collecting:
+            gc.enable()
     world.repairs.append(
         TeamRepairRecord(
             t,

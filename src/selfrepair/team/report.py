@@ -72,9 +72,13 @@ def write_team_figures(rows: Sequence[Row], out_dir: Path) -> list[Path]:
                     values += [v / 1000 for v in json.loads(str(row["repair_latencies_ns"]))]
             data.append(values or [float("nan")])
         params = inspect.signature(ax.boxplot).parameters  # matplotlib 3.8 to 3.11 and later
-        side = {"orientation": "horizontal"} if "orientation" in params else {"vert": False}
-        names = {"tick_labels" if "tick_labels" in params else "labels": variants}
-        ax.boxplot(data, showfliers=True, **side, **names)
+        options: dict[str, Any] = {"showfliers": True}
+        if "orientation" in params:
+            options["orientation"] = "horizontal"
+        else:
+            options["vert"] = False
+        options["tick_labels" if "tick_labels" in params else "labels"] = variants
+        ax.boxplot(data, **options)
         ax.set_xscale("log")
         ax.set_xlabel("repair latency (µs, log scale): incident to every changed robot placed")
         FigureCanvasAgg(fig).print_png(str(latency_path))  # type: ignore[no-untyped-call]

@@ -29,6 +29,9 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
 
+import numpy as np
+import numpy.typing as npt
+
 from selfrepair.caching import BoundedCache
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain
@@ -38,6 +41,7 @@ from selfrepair.world.maze import Maze
 __all__ = [
     "Lattice",
     "SpaceTimeResult",
+    "clear_cost_to_go",
     "cost_to_go",
     "lattice_of",
     "plan_spacetime",
@@ -199,8 +203,9 @@ _Edge = tuple[Any, int, tuple[Cell, ...], int]
 @dataclass(frozen=True, slots=True, eq=False)
 class Lattice:
     """A robot's moves on a maze's free cells, on pose ids: ``poses[i]`` is pose ``i``,
-    ``ids`` the way back, ``edges[i]`` lists ``(action, end pose id, footprint, units)`` and
-    ``reverse[j]`` the edges that end at pose ``j`` as ``(start pose id, footprint, units)``.
+    ``ids`` the way back, ``edges[i]`` lists ``(action, end pose id, footprint, units)``. The
+    same edges as arrays (``sources``, ``targets``, ``lengths``, with ``by_cell[c]`` the
+    indices of the edges whose footprint holds cell ``c``) feed the cost-to-go search.
     Built once per maze, domain, action set and scale (:func:`lattice_of`); cells that become
     walls later (blocked cells, stuck robots) are left out per query with ``extra``."""
 
@@ -208,7 +213,10 @@ class Lattice:
     poses: tuple[Pose, ...]
     ids: dict[Pose, int]
     edges: tuple[tuple[_Edge, ...], ...]
-    reverse: tuple[tuple[tuple[int, tuple[Cell, ...], int], ...], ...]
+    sources: npt.NDArray[np.int32]
+    targets: npt.NDArray[np.int32]
+    lengths: npt.NDArray[np.float64]
+    by_cell: dict[Cell, npt.NDArray[np.intp]]
 
     def cost(self, distances: list[int], pose: Pose) -> int | None:
         """The cost-to-go of ``pose`` in ``distances`` (``None``: the goal cannot be reached)."""
@@ -242,42 +250,66 @@ def _build_lattice(
     poses = tuple(Pose(x, y, heading) for x, y in maze.free_cells() for heading in Heading)
     ids = {pose: i for i, pose in enumerate(poses)}
     edges: list[list[_Edge]] = [[] for _ in poses]
-    reverse: list[list[tuple[int, tuple[Cell, ...], int]]] = [[] for _ in poses]
+    sources: list[int] = []
+    targets: list[int] = []
+    lengths: list[int] = []
+    by_cell: dict[Cell, list[int]] = {}
     for i, pose in enumerate(poses):
         for action, length in moves:
             cells = domain.footprint(pose, action)
             if grid.all_free(cells):
                 j = ids[domain.apply(pose, action)]
                 edges[i].append((action, j, cells, length))
-                reverse[j].append((i, cells, length))
+                for cell in cells:
+                    by_cell.setdefault(cell, []).append(len(sources))
+                sources.append(i)
+                targets.append(j)
+                lengths.append(length)
     return Lattice(
-        maze, poses, ids, tuple(tuple(e) for e in edges), tuple(tuple(r) for r in reverse)
+        maze,
+        poses,
+        ids,
+        tuple(tuple(e) for e in edges),
+        np.asarray(sources, dtype=np.int32),
+        np.asarray(targets, dtype=np.int32),
+        np.asarray(lengths, dtype=np.float64),
+        {c: np.asarray(v, dtype=np.intp) for c, v in by_cell.items()},
     )
 
 
 def cost_to_go(lattice: Lattice, extra: frozenset[Cell], goal: Cell) -> list[int]:
     """The least duration (units) from every pose id to cell ``goal`` on ``lattice`` without
-    the cells of ``extra`` and without other robots; -1 where it cannot be reached (kept)."""
+    the cells of ``extra`` and without other robots; -1 where it cannot be reached (kept).
+    One Dijkstra search backwards from the goal's poses (``scipy.sparse.csgraph``)."""
     return _COST_TO_GO.get((lattice, extra, goal), lambda: _dijkstra(lattice, extra, goal))
 
 
+def clear_cost_to_go() -> None:
+    """Forget every kept cost-to-go map (each team mission starts with none, so that what a
+    repair costs does not depend on which missions ran before in the process)."""
+    _COST_TO_GO.clear()
+
+
 def _dijkstra(lattice: Lattice, extra: frozenset[Cell], goal: Cell) -> list[int]:
-    dist = [-1] * len(lattice.poses)
-    heap: list[tuple[int, int]] = []
-    if goal not in extra:
-        for heading in Heading:
-            index = lattice.ids.get(Pose(goal[0], goal[1], heading))
-            if index is not None:
-                dist[index] = 0
-                heap.append((0, index))
-    heapq.heapify(heap)
-    while heap:
-        d, index = heapq.heappop(heap)
-        if d > dist[index]:
-            continue
-        for before, cells, length in lattice.reverse[index]:
-            nd = d + length
-            if (dist[before] < 0 or nd < dist[before]) and extra.isdisjoint(cells):
-                dist[before] = nd
-                heapq.heappush(heap, (nd, before))
-    return dist
+    from scipy.sparse import csr_matrix
+    from scipy.sparse.csgraph import dijkstra
+
+    starts = [
+        i
+        for heading in Heading
+        if goal not in extra and (i := lattice.ids.get(Pose(goal[0], goal[1], heading))) is not None
+    ]
+    size = len(lattice.poses)
+    if not starts:
+        return [-1] * size
+    keep = np.ones(len(lattice.sources), dtype=bool)
+    for cell in extra:
+        hit = lattice.by_cell.get(cell)
+        if hit is not None:
+            keep[hit] = False
+    # backwards: an edge i -> j of the lattice is j -> i here
+    graph = csr_matrix(
+        (lattice.lengths[keep], (lattice.targets[keep], lattice.sources[keep])), shape=(size, size)
+    )
+    found = dijkstra(graph, directed=True, indices=starts, min_only=True)
+    return [int(d) if np.isfinite(d) else -1 for d in found]

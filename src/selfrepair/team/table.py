@@ -60,6 +60,7 @@ __all__ = [
     "Template",
     "generate_table",
     "get_team_table",
+    "markdown_team_table",
 ]
 
 MAX_STEPS = 5
@@ -416,3 +417,17 @@ def generate_table(max_steps: int = MAX_STEPS) -> TeamTable:
                 templates.append(Template(name, steps, scope))
         entries[key] = tuple(templates)
     return TeamTable(TeamTableName.GENERATED, entries)
+
+
+def markdown_team_table(table: TeamTable) -> str:
+    """``table`` as a Markdown table (docs/team.md shows the hand-written one)."""
+    lines = [
+        "| failing action | incident | load | candidate | scope | steps |",
+        "|:---|:---|:---|:---|:---|:---|",
+    ]
+    for (kind, incident, load), template in table.rows():
+        steps = " ".join(f"`{s}`" for s in template.steps)
+        lines.append(
+            f"| {kind} | {incident} | {load} | {template.name} | {template.scope} | {steps} |"
+        )
+    return "\n".join(lines) + "\n"
