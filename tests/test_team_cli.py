@@ -252,3 +252,15 @@ def test_a_sample_of_the_team_experiment_re_simulates(tmp_path: Path) -> None:
 def test_every_trace_of_the_team_experiment_re_simulates(tmp_path: Path) -> None:
     problems = [p for m in _bundled_missions() if (p := _replays(m, tmp_path))]
     assert not problems, problems[:3]
+
+
+def test_robot_and_task_limits_name_their_flags(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["team", "run", "three-robots", "--max-robots", "2"]) == 2
+    assert "at most 2 robots" in (err := _one_error_line(capsys)) and "--max-robots" in err
+    assert main(["team", "run", "three-robots", "--max-tasks", "5"]) == 2
+    assert "--max-tasks" in _one_error_line(capsys)
+    path = _write(tmp_path, 'maze = "wide-short"\nrobots = 3\ntasks = 9\n')
+    assert main(["team", "run", str(path), "--max-tasks", "8"]) == 2
+    assert "at most 8 tasks" in _one_error_line(capsys)

@@ -62,14 +62,16 @@ def team_run(
         int | None, typer.Option(help="End the mission after this many ticks (default: generous).")
     ] = None,
     backend: Annotated[str, typer.Option(help="Planner backend: auto, python or numba.")] = "auto",
+    max_robots: Annotated[int, typer.Option(help="Refuse scenarios with more robots.", min=1)] = 64,
+    max_tasks: Annotated[int, typer.Option(help="Refuse scenarios with more tasks.", min=0)] = 256,
 ) -> int:
     """Run one team mission: allocation, team plan, execution with faults and repairs."""
     from selfrepair.team.engine import run_team
     from selfrepair.team.metrics import team_row
-    from selfrepair.team.scenario import resolve_scenario
+    from selfrepair.team.scenario import Limits, resolve_scenario
     from selfrepair.team.trace import write_team_trace
 
-    parsed = resolve_scenario(scenario)
+    parsed = resolve_scenario(scenario, limits=Limits(max_robots, max_tasks))
     options = _options(strategy, table, max_ticks, backend)
     result = run_team(parsed, options)
     baseline = run_team(parsed.without_faults(), options).makespan if parsed.faults else None
@@ -167,11 +169,14 @@ def team_compare(
 @team_app.command("replay")
 def team_replay(
     trace: Annotated[Path, typer.Argument(help="A team trace written by team run --trace.")],
+    max_bytes: Annotated[
+        int, typer.Option(help="Refuse larger trace files (default 256 MiB).", min=1)
+    ] = 256 * 1024 * 1024,
 ) -> int:
     """Re-simulate a team trace: no teleport, no conflict, every act possible."""
     from selfrepair.team.trace import read_team_trace, replay_team
 
-    report = replay_team(read_team_trace(trace))
+    report = replay_team(read_team_trace(trace, max_bytes=max_bytes))
     echo(f"{trace}: {report}")
     return 0 if report.ok else 1
 

@@ -38,6 +38,7 @@ import re
 import tomllib
 from collections import deque
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
 from enum import StrEnum
 from pathlib import Path
 from typing import Any
@@ -64,6 +65,7 @@ __all__ = [
     "MAX_ROBOTS",
     "MAX_TASKS",
     "GripperMix",
+    "Limits",
     "check_scenario",
     "components",
     "grid_distances",
@@ -75,9 +77,18 @@ __all__ = [
 ]
 
 MAX_ROBOTS = 64
-"""The most robots a scenario may have (each one is planned around all the others)."""
+"""The most robots a scenario may have unless told otherwise (each robot plans around all the
+others; ``--max-robots`` raises it)."""
 MAX_TASKS = 256
-"""The most tasks a scenario may have."""
+"""The most tasks a scenario may have unless told otherwise (``--max-tasks`` raises it)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Limits:
+    """How many robots and tasks a scenario may have."""
+
+    max_robots: int = MAX_ROBOTS
+    max_tasks: int = MAX_TASKS
 
 
 class GripperMix(StrEnum):
@@ -104,31 +115,36 @@ def scenario_names() -> tuple[str, ...]:
     return tuple(sorted(p.name[:-5] for p in folder.iterdir() if p.name.endswith(".toml")))
 
 
-def resolve_scenario(spec: str) -> TeamScenario:
+def resolve_scenario(spec: str, *, limits: Limits = Limits()) -> TeamScenario:
     """A bundled scenario by name, or a scenario file."""
     if "/" not in spec and not spec.endswith(".toml") and spec in scenario_names():
         from importlib import resources
 
         path = resources.files("selfrepair").joinpath("data", "team", f"{spec}.toml")
-        return parse_scenario(path.read_text(encoding="utf-8"), source=f"<bundled:{spec}>")
-    return load_scenario(spec)
+        text = path.read_text(encoding="utf-8")
+        return parse_scenario(text, source=f"<bundled:{spec}>", limits=limits)
+    return load_scenario(spec, limits=limits)
 
 
-def load_scenario(path: str | Path) -> TeamScenario:
+def load_scenario(path: str | Path, *, limits: Limits = Limits()) -> TeamScenario:
     """Read and check a scenario file."""
     file = Path(path)
     try:
         text = file.read_text(encoding="utf-8")
     except OSError as exc:
         raise InputError(f"cannot read scenario file: {exc.strerror}", source=str(file)) from None
-    return parse_scenario(text, source=str(file), base_dir=file.parent)
+    return parse_scenario(text, source=str(file), base_dir=file.parent, limits=limits)
 
 
 _KEYS = frozenset({"name", "maze", "domain", "seed", "robots", "tasks", "faults", "grippers"})
 
 
 def parse_scenario(
-    text: str, *, source: str = "<scenario>", base_dir: Path | None = None
+    text: str,
+    *,
+    source: str = "<scenario>",
+    base_dir: Path | None = None,
+    limits: Limits = Limits(),
 ) -> TeamScenario:
     """Parse and check scenario TOML ``text`` (``base_dir`` resolves a relative maze file)."""
     try:
@@ -154,19 +170,19 @@ def parse_scenario(
     robots_data, tasks_data = data.get("robots", []), data.get("tasks", [])
     if isinstance(robots_data, int) and not isinstance(robots_data, bool):
         count_tasks = tasks_data if isinstance(tasks_data, int) else 0
-        drawn = reader.random(maze, robots_data, count_tasks, rng, mix, domain)
+        drawn = reader.random(maze, robots_data, count_tasks, rng, mix, domain, limits)
         robots = drawn.robots
         tasks = drawn.tasks if isinstance(tasks_data, int) else reader.tasks(tasks_data)
     else:
         robots = reader.robots(robots_data)
         if isinstance(tasks_data, int) and not isinstance(tasks_data, bool):
-            tasks = reader.random_tasks(maze, robots, tasks_data, rng)
+            tasks = reader.random_tasks(maze, robots, tasks_data, rng, limits)
         else:
             tasks = reader.tasks(tasks_data)
     faults = reader.faults(data.get("faults", []), domain)
     name = str(data.get("name", Path(source).stem if not source.startswith("<") else "scenario"))
     scenario = TeamScenario(maze, robots, tasks, faults, domain, name, source)
-    check_scenario(scenario, text=text)
+    check_scenario(scenario, text=text, limits=limits)
     return scenario
 
 
@@ -320,18 +336,26 @@ class _Reader:
         rng: np.random.Generator,
         mix: GripperMix,
         domain: Domain[Any, Any],
+        limits: Limits,
     ) -> TeamScenario:
         try:
-            return random_scenario(maze, robots, tasks, rng, grippers=mix, domain=domain)
+            return random_scenario(
+                maze, robots, tasks, rng, grippers=mix, domain=domain, limits=limits
+            )
         except InputError as exc:
             raise self.fail(exc.reason, "robots") from None
 
     def random_tasks(
-        self, maze: Maze, robots: tuple[RobotSpec, ...], count: int, rng: np.random.Generator
+        self,
+        maze: Maze,
+        robots: tuple[RobotSpec, ...],
+        count: int,
+        rng: np.random.Generator,
+        limits: Limits,
     ) -> tuple[Task, ...]:
         taken = {r.start.cell for r in robots}
         try:
-            return _draw_tasks(maze, count, rng, taken)
+            return _draw_tasks(maze, count, rng, taken, limits.max_tasks)
         except InputError as exc:
             raise self.fail(exc.reason, "tasks") from None
 
@@ -369,7 +393,7 @@ def _mentions(line: str, needle: str) -> bool:
 # --- checking ----------------------------------------------------------------------------------
 
 
-def check_scenario(scenario: TeamScenario, *, text: str = "") -> None:
+def check_scenario(scenario: TeamScenario, *, text: str = "", limits: Limits | None = None) -> None:
     """Raise :class:`InputError` naming the file (and line, given the ``text``) for the first
     thing in ``scenario`` that cannot run (see the module docstring)."""
     maze, source = scenario.maze, scenario.source
@@ -378,16 +402,26 @@ def check_scenario(scenario: TeamScenario, *, text: str = "") -> None:
         return InputError(what, source=source, line=find_line(text, *needles) if text else None)
 
     free = len(maze.free_cells())
-    if len(scenario.robots) > min(free, MAX_ROBOTS):
+    if len(scenario.robots) > free:
         raise fail(
             f"{len(scenario.robots)} robots do not fit: maze {maze.name or 'of the scenario'} "
-            f"has {free} free cells (and a scenario at most {MAX_ROBOTS} robots)",
+            f"has {free} free cells",
             "robots",
         )
     if not scenario.robots:
         raise fail("expected at least one robot", "robots")
-    if len(scenario.tasks) > MAX_TASKS:
-        raise fail(f"expected at most {MAX_TASKS} tasks, got {len(scenario.tasks)}", "tasks")
+    if limits is not None and len(scenario.robots) > limits.max_robots:
+        raise fail(
+            f"expected at most {limits.max_robots} robots, got {len(scenario.robots)} "
+            "(--max-robots raises the limit)",
+            "robots",
+        )
+    if limits is not None and len(scenario.tasks) > limits.max_tasks:
+        raise fail(
+            f"expected at most {limits.max_tasks} tasks, got {len(scenario.tasks)} "
+            "(--max-tasks raises the limit)",
+            "tasks",
+        )
     _check_robots(scenario, maze, fail)
     _check_tasks(scenario, maze, fail)
     _check_faults(scenario, maze, fail)
@@ -505,15 +539,21 @@ def random_scenario(
     grippers: GripperMix = GripperMix.ALL,
     domain: Domain[Any, Any] | None = None,
     name: str = "random",
+    limits: Limits = Limits(),
 ) -> TeamScenario:
     """``robots`` robots (``r1``, ``r2``, ...) on distinct cells and ``tasks`` tasks (``i1``, ...)
     with distinct pickup and drop-off cells, all drawn from ``rng`` in the maze's largest
     4-connected area; a drop-off lies at least half the largest distance from its pickup."""
     area = _largest_area(maze)
-    if robots < 1 or robots > len(area) or robots > MAX_ROBOTS:
+    if robots < 1 or robots > len(area):
         raise InputError(
             f"{robots} robots do not fit: maze {maze.name or '?'} has {len(area)} connected free "
-            f"cells (expected 1 to {min(len(area), MAX_ROBOTS)} robots)"
+            f"cells (expected 1 to {len(area)} robots)"
+        )
+    if robots > limits.max_robots:
+        raise InputError(
+            f"expected at most {limits.max_robots} robots, got {robots} (--max-robots raises "
+            "the limit)"
         )
     picks = rng.permutation(len(area))[:robots]
     team = tuple(
@@ -524,7 +564,7 @@ def random_scenario(
         )
         for n, i in enumerate(picks)
     )
-    drawn = _draw_tasks(maze, tasks, rng, {r.start.cell for r in team})
+    drawn = _draw_tasks(maze, tasks, rng, {r.start.cell for r in team}, limits.max_tasks)
     kwargs = {} if domain is None else {"domain": domain}
     return TeamScenario(maze, team, drawn, (), name=name, source=f"<random:{name}>", **kwargs)
 
@@ -541,12 +581,16 @@ def _largest_area(maze: Maze) -> list[Cell]:
 
 
 def _draw_tasks(
-    maze: Maze, count: int, rng: np.random.Generator, taken: set[Cell]
+    maze: Maze, count: int, rng: np.random.Generator, taken: set[Cell], max_tasks: int
 ) -> tuple[Task, ...]:
     area = [c for c in _largest_area(maze) if c not in taken]
-    if count < 0 or 2 * count > len(area) or count > MAX_TASKS:
+    if count > max_tasks:
         raise InputError(
-            f"expected 0 to {min(len(area) // 2, MAX_TASKS)} tasks for maze {maze.name or '?'} "
+            f"expected at most {max_tasks} tasks, got {count} (--max-tasks raises the limit)"
+        )
+    if count < 0 or 2 * count > len(area):
+        raise InputError(
+            f"expected 0 to {len(area) // 2} tasks for maze {maze.name or '?'} "
             f"(each needs two free cells), got {count}"
         )
     used = set(taken)
