@@ -506,12 +506,12 @@ def _incident(
     collecting = gc.isenabled()
     gc.disable()  # a collection's pause belongs to no repair: it runs after the timed part
     try:
-        t0 = time.perf_counter_ns()
+        t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
         plans0, expansions0 = world.plans, world.expansions
         decision = strategy(world, Incident(robot.name, entry, kind, load, item, t))
         for name in decision.changed:
             _prepare(world, world.robots[name], t)
-        latency = time.perf_counter_ns() - t0
+        latency, cpu = time.perf_counter_ns() - t0, time.thread_time_ns() - c0
     finally:
         if collecting:
             gc.enable()
@@ -534,6 +534,7 @@ def _incident(
             latency,
             decision.changes,
             decision.lost,
+            cpu,
         )
     )
     world.messages += decision.messages

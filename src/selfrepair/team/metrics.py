@@ -46,6 +46,9 @@ TEAM_COLUMNS = (
     "repair_latency_p99_ns",
     "repair_latency_max_ns",
     "repair_latencies_ns",
+    "repair_cpu_median_ns",
+    "repair_cpu_p99_ns",
+    "repair_cpus_ns",
     "repair_plans",
     "repair_expansions",
     "disturbed_total",
@@ -77,6 +80,7 @@ def team_row(
     scenario, options = result.scenario, result.options
     repairs = result.repairs
     latencies = [r.latency_ns for r in repairs if r.outcome is RepairOutcome.REPAIRED]
+    cpus = [r.cpu_ns for r in repairs if r.outcome is RepairOutcome.REPAIRED]
     disturbed = [len(r.disturbed) for r in repairs if r.outcome is RepairOutcome.REPAIRED]
     makespan = result.makespan
     ratio = (
@@ -112,6 +116,9 @@ def team_row(
         "repair_latency_p99_ns": _percentile(latencies, 99),
         "repair_latency_max_ns": max(latencies, default=None),
         "repair_latencies_ns": json.dumps(latencies),
+        "repair_cpu_median_ns": _percentile(cpus, 50),
+        "repair_cpu_p99_ns": _percentile(cpus, 99),
+        "repair_cpus_ns": json.dumps(cpus),
         "repair_plans": sum(r.plans for r in repairs),
         "repair_expansions": sum(r.expansions for r in repairs),
         "disturbed_total": sum(disturbed),

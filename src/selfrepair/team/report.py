@@ -129,7 +129,9 @@ def render_team_markdown(rows: Sequence[Row], source: str, chosen: Row, mission_
         "*tasks delivered*: over all missions. *makespan / fault-free*: median over missions that "
         "delivered every task, against the same scenario run without faults. *repair latency*: "
         "from the incident until every robot whose plan changed has its next drive placed in "
-        "time (µs, all repairs). *robots disturbed*: teammates whose plans a repair changed. "
+        "time (µs, all repairs; wall clock). *repair CPU*: the processor time of the same "
+        "stretch, which other load on a shared machine does not inflate. *robots disturbed*: "
+        "teammates whose plans a repair changed. "
         "*messages*: robot-to-robot notifications per mission (fault broadcasts, requests and "
         "acknowledgements, new plans). *drive plannings / repair*: drives planned inside the "
         "repair latency.",

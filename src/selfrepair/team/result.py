@@ -189,7 +189,9 @@ class TeamRepairRecord:
     changed; ``messages`` counts robot-to-robot notifications (a changed plan or a broadcast
     fault, one per receiving robot); ``plans`` counts drive plannings made within the repair and
     ``expansions`` their search nodes. ``latency_ns`` runs from the incident until every changed
-    robot has its next action placed in time. ``changes`` lists the actions inserted per robot;
+    robot has its next action placed in time (wall clock); ``cpu_ns`` is the processor time the
+    engine's thread spent in that stretch, which other processes on a shared machine do not
+    inflate. ``changes`` lists the actions inserted per robot;
     ``lost`` the items given up.
     """
 
@@ -210,6 +212,7 @@ class TeamRepairRecord:
     latency_ns: int = 0
     changes: tuple[tuple[str, tuple[TeamAction, ...]], ...] = ()
     lost: tuple[str, ...] = ()
+    cpu_ns: int = 0
 
 
 @dataclass(frozen=True, slots=True)

@@ -31,6 +31,7 @@ class TeamSummary:
     makespan_ratio: float | None
     latency_median_us: float | None
     latency_p99_us: float | None
+    cpu_median_us: float | None
     repairs: int
     disturbed_per_repair: float | None
     messages_per_mission: float
@@ -44,6 +45,7 @@ class TeamSummary:
         "makespan / fault-free (median)",
         "repair latency median µs",
         "repair latency p99 µs",
+        "repair CPU median µs",
         "repairs",
         "robots disturbed / repair",
         "messages / mission",
@@ -65,6 +67,7 @@ class TeamSummary:
             num(self.makespan_ratio),
             num(self.latency_median_us, 0),
             num(self.latency_p99_us, 0),
+            num(self.cpu_median_us, 0),
             str(self.repairs),
             num(self.disturbed_per_repair),
             num(self.messages_per_mission, 1),
@@ -77,10 +80,10 @@ def _number(row: Row, key: str) -> float | None:
     return float(value) if isinstance(value, int | float) else None
 
 
-def _latencies(rows: Sequence[Row]) -> list[int]:
+def _latencies(rows: Sequence[Row], key: str = "repair_latencies_ns") -> list[int]:
     out: list[int] = []
     for row in rows:
-        text = row.get("repair_latencies_ns")
+        text = row.get(key)
         if isinstance(text, str) and text:
             out.extend(int(v) for v in json.loads(text))
     return out
@@ -113,6 +116,9 @@ def summarize_team(rows: Sequence[Row]) -> list[TeamSummary]:
                 float(np.median(ratios)) if ratios else None,
                 float(np.median(latencies)) / 1000 if latencies else None,
                 float(np.percentile(latencies, 99)) / 1000 if latencies else None,
+                float(np.median(cpus)) / 1000
+                if (cpus := _latencies(group, "repair_cpus_ns"))
+                else None,
                 repaired,
                 disturbed / repaired if repaired else None,
                 sum(_number(row, "messages") or 0 for row in group) / len(group),

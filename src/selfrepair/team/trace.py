@@ -191,6 +191,7 @@ def _repair_json(r: Any) -> dict[str, Any]:
         "plans": r.plans,
         "expansions": r.expansions,
         "latency_ns": r.latency_ns,
+        "cpu_ns": r.cpu_ns,
         "changes": {name: [str(a) for a in actions] for name, actions in r.changes},
         "lost": list(r.lost),
     }
