@@ -22,8 +22,10 @@ __all__ = [
     "MAX_CELLS",
     "MAX_CLEARANCE_WEIGHT",
     "MAX_MISSIONS",
+    "MAX_ROBOTS",
     "MAX_TABLE_BYTES",
     "MAX_TABLE_CANDIDATES",
+    "MAX_TASKS",
     "check_limit",
     "maze_file_bytes",
 ]
@@ -54,6 +56,20 @@ MAX_TABLE_CANDIDATES = 1_000_000
 
 Parsing and re-simulation take about 7 µs and 220 bytes per candidate (measured with a million
 candidates: 6.7 s, 220 MB); the bundled generated-indexed table has 3,402."""
+
+MAX_ROBOTS = 64
+"""Robots of one team scenario.
+
+Eight times the largest bundled team (8 robots). Every robot plans each drive around the
+reservations of all the others and the engine looks at every robot at every event, so the work
+per simulated tick grows with the square of the team; 64 robots on a 61x61 maze take seconds per
+mission."""
+
+MAX_TASKS = 256
+"""Tasks of one team scenario.
+
+Sixteen times the largest bundled load (16 tasks). The allocation solves one assignment problem
+per round over robots x open tasks; a re-allocation does it again at every incident."""
 
 # --- bounds (no flag) --------------------------------------------------------------------------
 

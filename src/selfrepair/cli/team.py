@@ -14,7 +14,8 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from selfrepair.cli._app import app, console, echo, echo_json
+from selfrepair.cli._app import MaxCells, app, console, echo, echo_json
+from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, MAX_ROBOTS, MAX_TASKS
 
 if TYPE_CHECKING:
     from selfrepair.experiment.teams import TeamExperimentConfig
@@ -29,6 +30,13 @@ team_app = typer.Typer(
 app.add_typer(team_app, name="team")
 
 _STRATEGY_HELP = "team-replacement, reallocation or alone."
+
+MaxRobots = Annotated[
+    int, typer.Option("--max-robots", min=1, help="Refuse a scenario of more robots than this.")
+]
+MaxTasks = Annotated[
+    int, typer.Option("--max-tasks", min=0, help="Refuse a scenario of more tasks than this.")
+]
 
 
 def _out() -> Any:
@@ -62,8 +70,9 @@ def team_run(
         int | None, typer.Option(help="End the mission after this many ticks (default: generous).")
     ] = None,
     backend: Annotated[str, typer.Option(help="Planner backend: auto, python or numba.")] = "auto",
-    max_robots: Annotated[int, typer.Option(help="Refuse scenarios with more robots.", min=1)] = 64,
-    max_tasks: Annotated[int, typer.Option(help="Refuse scenarios with more tasks.", min=0)] = 256,
+    max_robots: MaxRobots = MAX_ROBOTS,
+    max_tasks: MaxTasks = MAX_TASKS,
+    max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Run one team mission: allocation, team plan, execution with faults and repairs."""
     from selfrepair.team.engine import run_team
@@ -71,7 +80,7 @@ def team_run(
     from selfrepair.team.scenario import Limits, resolve_scenario
     from selfrepair.team.trace import write_team_trace
 
-    parsed = resolve_scenario(scenario, limits=Limits(max_robots, max_tasks))
+    parsed = resolve_scenario(scenario, limits=Limits(max_robots, max_tasks, max_cells))
     options = _options(strategy, table, max_ticks, backend)
     result = run_team(parsed, options)
     baseline = run_team(parsed.without_faults(), options).makespan if parsed.faults else None
@@ -119,6 +128,9 @@ def team_compare(
         int, typer.Option(help="Runs per strategy; latencies are medians.", min=1, max=1000)
     ] = 5,
     backend: Annotated[str, typer.Option(help="Planner backend: auto, python or numba.")] = "auto",
+    max_robots: MaxRobots = MAX_ROBOTS,
+    max_tasks: MaxTasks = MAX_TASKS,
+    max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Run the scenario with every team strategy and print their outcome side by side (the
     first repair's latency is the median over the repeats)."""
@@ -129,9 +141,9 @@ def team_compare(
 
     from selfrepair.team.engine import run_team
     from selfrepair.team.model import TeamStrategyName, TeamTableName
-    from selfrepair.team.scenario import resolve_scenario
+    from selfrepair.team.scenario import Limits, resolve_scenario
 
-    parsed = resolve_scenario(scenario)
+    parsed = resolve_scenario(scenario, limits=Limits(max_robots, max_tasks, max_cells))
     variants = [
         (TeamStrategyName.TEAM_REPLACEMENT, TeamTableName.HANDWRITTEN),
         (TeamStrategyName.TEAM_REPLACEMENT, TeamTableName.GENERATED),
@@ -244,6 +256,8 @@ def run_team_experiment(
     export_csv: Path | None,
     export_parquet: Path | None,
     progress: Any,
+    max_missions: int | None = MAX_MISSIONS,
+    max_cells: int | None = MAX_CELLS,
 ) -> int:
     """The team branch of ``selfrepair experiment``: run the missions (resumable, any
     backend), then print the per-strategy summary of every stored row of this experiment."""
@@ -252,7 +266,7 @@ def run_team_experiment(
     from selfrepair.experiment.teams import execute_team_mission, expand_team
     from selfrepair.team.summary import summarize_team
 
-    missions = expand_team(config)
+    missions = expand_team(config, max_missions=max_missions, max_cells=max_cells)
     db_path = db if db is not None else Path("results") / f"{config.name}.sqlite"
     with ResultStore(db_path) as store:
         with progress(f"{config.name}: {len(missions)} team missions") as on_progress:

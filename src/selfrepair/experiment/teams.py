@@ -71,11 +71,13 @@ from selfrepair.experiment.missions import (
     portable,
 )
 from selfrepair.experiment.store import Value
+from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, MAX_ROBOTS, check_limit
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.team.experiment import FaultCase, TeamCase, case_row
 from selfrepair.team.model import TeamStrategyName, TeamTableName
 from selfrepair.team.result import TeamOptions
-from selfrepair.team.scenario import MAX_ROBOTS, GripperMix, components
+from selfrepair.team.scenario import GripperMix, components
+from selfrepair.textio import read_text
 
 __all__ = [
     "TeamExperimentConfig",
@@ -191,12 +193,7 @@ class TeamExperimentConfig(_Frozen):
 def load_experiment(path: str | Path) -> ExperimentConfig | TeamExperimentConfig:
     """Read an experiment file of either kind (``kind = "team"`` or none)."""
     file = Path(path)
-    try:
-        text = file.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ConfigError(
-            f"cannot read experiment file: {exc.strerror}", source=str(file)
-        ) from None
+    text = read_text(file, what="experiment file", error=ConfigError)
     source = str(file.resolve())
     data = read_toml(text, source=source)
     if data.get("kind") != TEAM_KIND:
@@ -240,17 +237,47 @@ def _check_sizes(config: TeamExperimentConfig, text: str) -> None:
                 )
 
 
-def expand_team(config: TeamExperimentConfig) -> tuple[Mission, ...]:
-    """Every mission of ``config``, in a deterministic order, with keys and seeds."""
+def expand_team(
+    config: TeamExperimentConfig,
+    *,
+    max_missions: int | None = MAX_MISSIONS,
+    max_cells: int | None = MAX_CELLS,
+) -> tuple[Mission, ...]:
+    """Every mission of ``config``, in a deterministic order, with keys and seeds. Raises
+    :class:`~selfrepair.errors.LimitError` before building any mission when there would be more
+    than ``max_missions``, or a maze file has more than ``max_cells`` cells."""
     missions: dict[str, Mission] = {}
     variants = [
         (s.name, table if s.name is TeamStrategyName.TEAM_REPLACEMENT else None)
         for s in config.strategies
         for table in (s.tables if s.name is TeamStrategyName.TEAM_REPLACEMENT else s.tables[:1])
     ]
+    team, faults = config.team, config.faults
+    situations = sum(
+        1 if case is FaultCase.NONE else len(faults.persistence) for case in faults.cases
+    )
+    factors = (
+        (len(config.mazes), "mazes"),
+        (len(team.sizes), "team sizes"),
+        (len(team.tasks_per_robot), "loads"),
+        (len(team.grippers), "equipment mixes"),
+        (config.repeats, "repeats"),
+        (situations, "fault settings"),
+        (len(variants), "strategy variants"),
+    )
+    total = 1
+    for count, _ in factors:
+        total *= count
+    detail = " x ".join(f"{n} {what}" for n, what in factors)
+    check_limit(
+        total, max_missions, name="max_missions", what="missions", detail=detail,
+        source=config.source,
+    )  # fmt: skip
     robot = config.robot.model_dump(mode="json")
     for index, entry in enumerate(config.mazes):
-        identity = maze_identity(entry.as_maze_config(), config.base_dir, config.source, index)
+        identity = maze_identity(
+            entry.as_maze_config(), config.base_dir, config.source, index, max_cells
+        )
         label = maze_label(identity)
         for size in config.team.sizes:
             for load in config.team.tasks_per_robot:

@@ -48,6 +48,7 @@ import numpy as np
 from selfrepair.errors import InputError
 from selfrepair.execution.faults import Persistence
 from selfrepair.geometry import Cell, Heading, Pose, parse_cell, parse_pose
+from selfrepair.limits import MAX_CELLS, MAX_ROBOTS, MAX_TASKS, check_limit
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import get_domain
 from selfrepair.team.model import (
@@ -59,11 +60,10 @@ from selfrepair.team.model import (
     TeamScenario,
     Trigger,
 )
+from selfrepair.textio import read_text, strip_bom
 from selfrepair.world.maze import Maze
 
 __all__ = [
-    "MAX_ROBOTS",
-    "MAX_TASKS",
     "GripperMix",
     "Limits",
     "check_scenario",
@@ -76,19 +76,16 @@ __all__ = [
     "scenario_names",
 ]
 
-MAX_ROBOTS = 64
-"""The most robots a scenario may have unless told otherwise (each robot plans around all the
-others; ``--max-robots`` raises it)."""
-MAX_TASKS = 256
-"""The most tasks a scenario may have unless told otherwise (``--max-tasks`` raises it)."""
-
 
 @dataclass(frozen=True, slots=True)
 class Limits:
-    """How many robots and tasks a scenario may have."""
+    """How many robots, tasks and maze cells a scenario may have (:mod:`selfrepair.limits`;
+    ``None`` turns a check off). The commands set them with ``--max-robots``, ``--max-tasks``
+    and ``--max-cells``."""
 
-    max_robots: int = MAX_ROBOTS
-    max_tasks: int = MAX_TASKS
+    max_robots: int | None = MAX_ROBOTS
+    max_tasks: int | None = MAX_TASKS
+    max_cells: int | None = MAX_CELLS
 
 
 class GripperMix(StrEnum):
@@ -129,10 +126,7 @@ def resolve_scenario(spec: str, *, limits: Limits = Limits()) -> TeamScenario:
 def load_scenario(path: str | Path, *, limits: Limits = Limits()) -> TeamScenario:
     """Read and check a scenario file."""
     file = Path(path)
-    try:
-        text = file.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InputError(f"cannot read scenario file: {exc.strerror}", source=str(file)) from None
+    text = read_text(file, what="scenario file")
     return parse_scenario(text, source=str(file), base_dir=file.parent, limits=limits)
 
 
@@ -147,6 +141,7 @@ def parse_scenario(
     limits: Limits = Limits(),
 ) -> TeamScenario:
     """Parse and check scenario TOML ``text`` (``base_dir`` resolves a relative maze file)."""
+    text = strip_bom(text)
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -162,7 +157,7 @@ def parse_scenario(
             raise reader.fail(
                 f"unknown key {key!r}; expected one of {', '.join(sorted(_KEYS))}", key
             )
-    maze = reader.maze(data.get("maze"), base_dir)
+    maze = reader.maze(data.get("maze"), base_dir, limits.max_cells)
     domain = reader.domain(data.get("domain", "four-wheel"))
     seed = reader.integer(data, "seed", 0)
     mix = reader.member(GripperMix, data.get("grippers", GripperMix.ALL.value), "grippers")
@@ -208,14 +203,14 @@ class _Reader:
             allowed = ", ".join(m.value for m in kind)
             raise self.fail(f"key {key!r}: expected one of {allowed}, got {value!r}", key) from None
 
-    def maze(self, value: Any, base_dir: Path | None) -> Maze:
+    def maze(self, value: Any, base_dir: Path | None, max_cells: int | None) -> Maze:
         if not isinstance(value, str) or not value:
             raise self.fail("key 'maze': expected a bundled maze name or a maze file", "maze")
         from selfrepair.world.bundled import maze_names, resolve_maze
 
         if value in maze_names() or base_dir is None or Path(value).is_absolute():
-            return resolve_maze(value)
-        return resolve_maze(str(base_dir / value))
+            return resolve_maze(value, max_cells=max_cells)
+        return resolve_maze(str(base_dir / value), max_cells=max_cells)
 
     def domain(self, value: Any) -> Domain[Any, Any]:
         if not isinstance(value, str):
@@ -410,18 +405,17 @@ def check_scenario(scenario: TeamScenario, *, text: str = "", limits: Limits | N
         )
     if not scenario.robots:
         raise fail("expected at least one robot", "robots")
-    if limits is not None and len(scenario.robots) > limits.max_robots:
-        raise fail(
-            f"expected at most {limits.max_robots} robots, got {len(scenario.robots)} "
-            "(--max-robots raises the limit)",
-            "robots",
-        )
-    if limits is not None and len(scenario.tasks) > limits.max_tasks:
-        raise fail(
-            f"expected at most {limits.max_tasks} tasks, got {len(scenario.tasks)} "
-            "(--max-tasks raises the limit)",
-            "tasks",
-        )
+    if limits is not None:
+        line = find_line(text, "robots") if text else None
+        check_limit(
+            len(scenario.robots), limits.max_robots, name="max_robots", what="robots",
+            source=source, line=line,
+        )  # fmt: skip
+        line = find_line(text, "tasks") if text else None
+        check_limit(
+            len(scenario.tasks), limits.max_tasks, name="max_tasks", what="tasks",
+            source=source, line=line,
+        )  # fmt: skip
     _check_robots(scenario, maze, fail)
     _check_tasks(scenario, maze, fail)
     _check_faults(scenario, maze, fail)
@@ -550,11 +544,7 @@ def random_scenario(
             f"{robots} robots do not fit: maze {maze.name or '?'} has {len(area)} connected free "
             f"cells (expected 1 to {len(area)} robots)"
         )
-    if robots > limits.max_robots:
-        raise InputError(
-            f"expected at most {limits.max_robots} robots, got {robots} (--max-robots raises "
-            "the limit)"
-        )
+    check_limit(robots, limits.max_robots, name="max_robots", what="robots", source=name)
     picks = rng.permutation(len(area))[:robots]
     team = tuple(
         RobotSpec(
@@ -581,13 +571,10 @@ def _largest_area(maze: Maze) -> list[Cell]:
 
 
 def _draw_tasks(
-    maze: Maze, count: int, rng: np.random.Generator, taken: set[Cell], max_tasks: int
+    maze: Maze, count: int, rng: np.random.Generator, taken: set[Cell], max_tasks: int | None
 ) -> tuple[Task, ...]:
     area = [c for c in _largest_area(maze) if c not in taken]
-    if count > max_tasks:
-        raise InputError(
-            f"expected at most {max_tasks} tasks, got {count} (--max-tasks raises the limit)"
-        )
+    check_limit(count, max_tasks, name="max_tasks", what="tasks", source=maze.name or "<maze>")
     if count < 0 or 2 * count > len(area):
         raise InputError(
             f"expected 0 to {len(area) // 2} tasks for maze {maze.name or '?'} "
