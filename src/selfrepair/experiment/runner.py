@@ -433,22 +433,36 @@ class _InlinePool:
 
 
 class _LocalPool:
-    """Local worker processes (loky's reusable executor): started once, importing once."""
+    """``jobs`` local processes: this one and ``jobs - 1`` worker processes (loky's reusable
+    executor, started once, importing once).
+
+    The driver computes too: while the workers start (a second or more: a fresh interpreter
+    imports numpy, numba and the executor, and loads the compiled kernels) it is already running
+    missions, and afterwards it runs a chunk whenever the workers have enough queued. Storing a
+    chunk's rows costs the driver little beside computing them.
+    """
 
     def __init__(self, jobs: int) -> None:
         from joblib.externals.loky import get_reusable_executor
 
         self.slots = jobs
-        self.depth = 2 * jobs
+        self._queued = 2 * (jobs - 1)  # chunks per worker: one running, one waiting
+        self.depth = self._queued + 1  # and one here
+        self._inline = _InlinePool()
+        self._running: list[Future[list[_Result]]] = []
         self._executor = get_reusable_executor(
-            max_workers=jobs,
+            max_workers=jobs - 1,
             timeout=WORKER_IDLE_SECONDS,
             initializer=worker_setup,
             initargs=(os.getpid(),),
         )
 
     def submit(self, execute: MissionFunction, chunk: Sequence[Mission]) -> Future[list[_Result]]:
+        self._running = [f for f in self._running if not f.done()]
+        if len(self._running) >= self._queued:
+            return self._inline.submit(execute, chunk)
         future: Future[list[_Result]] = self._executor.submit(work_chunk, execute, list(chunk))
+        self._running.append(future)
         return future
 
     def abort(self) -> None:
