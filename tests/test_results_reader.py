@@ -298,7 +298,7 @@ def test_any_damaged_file_is_read_or_refused(
 
 @pytest.mark.slow
 @settings(
-    max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+    max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
 )
 @given(mutation=_SQL_MUTATIONS)
 def test_report_on_any_altered_database_is_written_or_one_line(

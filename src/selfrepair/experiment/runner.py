@@ -36,7 +36,7 @@ from contextlib import ExitStack, contextmanager, suppress
 from dataclasses import dataclass, replace
 from typing import Any, Protocol
 
-from selfrepair.errors import ProblemError, SelfRepairError
+from selfrepair.errors import InputError, ProblemError, SelfRepairError
 from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionResult
 from selfrepair.experiment.missions import Mission
@@ -247,7 +247,10 @@ def run_missions(
             dispatch = _Dispatch(store, pending)
             ran = _drive(pool, execute, dispatch, sizes, store, len(pending), on_progress)
     finally:
-        store.stop_writing()
+        # A claim that cannot be freed now (the database failed) is freed by the next writer
+        # that sees this process gone; it must not hide what ended the run.
+        with suppress(InputError):
+            store.stop_writing()
     return RunSummary(
         len(missions), skipped, ran, time.perf_counter() - t0, elsewhere=dispatch.elsewhere
     )
@@ -284,25 +287,21 @@ def _drive(
                 store.heartbeat()
             for future in finished:
                 sent = in_flight.pop(future)
-                results = _results_of(future, ran, store)
+                results = future.result()
                 sizes.observe(results)
                 by_key = {m.key: m for m in sent}
                 ran += store.add_many([Finished(by_key[k], row, s) for k, row, s in results])
                 if on_progress is not None:
                     on_progress(ran + dispatch.elsewhere, pending)
-    except BaseException:
+    except BrokenProcessPool as exc:  # from a result, or from submitting to the broken pool
         pool.abort()
-        raise
-
-
-def _results_of(future: Future[list[_Result]], ran: int, store: ResultStore) -> list[_Result]:
-    try:
-        return future.result()
-    except BrokenProcessPool as exc:
         raise ProblemError(
             f"a worker process died ({_first_line(exc)}); {ran} missions of this run were "
             f"stored in {store.path}; run the same command again to resume"
         ) from None
+    except BaseException:
+        pool.abort()
+        raise
 
 
 def _first_line(exc: BaseException) -> str:
