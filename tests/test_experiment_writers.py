@@ -191,7 +191,14 @@ def _experiment(config: Path, db: Path, jobs: int) -> subprocess.Popen[bytes]:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         start_new_session=True,
+        preexec_fn=_default_sigint,
     )
+
+
+def _default_sigint() -> None:
+    """In the child: Ctrl-C as in a terminal, also when this test runs in a background job
+    (where the shell ignores SIGINT, and a Python started with it ignored keeps ignoring it)."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def _count(db: Path) -> int:

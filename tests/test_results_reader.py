@@ -15,7 +15,7 @@ from contextlib import suppress
 from pathlib import Path
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from selfrepair.cli import main
@@ -287,6 +287,8 @@ def test_any_altered_database_is_read_or_refused(valid_db: Path, mutation: objec
     max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
 )
 @given(mutation=_byte_mutation())
+@example(mutation=("noise", 3195, b"\x80"))  # found by this test: text that is not UTF-8
+@example(mutation=("noise", 3154, b"["))  # found by this test: a message with line breaks
 def test_any_damaged_file_is_read_or_refused(
     valid_db: Path, mutation: tuple[str, int, bytes]
 ) -> None:

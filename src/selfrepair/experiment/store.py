@@ -201,7 +201,7 @@ class ResultStore:
         if not self.path.is_file():
             raise InputError("expected an existing results database", source=str(self.path))
         uri = self.path.resolve().as_uri()
-        with self._errors("not a results database"):
+        with self._errors("cannot read the results database"):
             try:
                 db = self._open_uri(f"{uri}?mode=ro")
             except sqlite3.OperationalError:
@@ -272,10 +272,16 @@ class ResultStore:
         except sqlite3.ProgrammingError:
             raise  # misuse of the connection: a bug, not bad input
         except sqlite3.DatabaseError as exc:
-            reason = str(exc)
+            reason = " ".join(str(exc).split())  # SQLite may quote multi-line schema text
             if "locked" in reason or "busy" in reason:
                 reason += f" (another process held it for more than {self._lock_timeout:g} s)"
             raise InputError(f"{what}: {reason}", source=str(self.path)) from None
+        except UnicodeDecodeError as exc:  # damaged text in a table or in the schema
+            byte = exc.object[exc.start]
+            raise InputError(
+                f"{what}: text that is not UTF-8 ({exc.reason}, byte 0x{byte:02x})",
+                source=str(self.path),
+            ) from None
 
     def _retry_locked(self, action: Callable[[], _T]) -> _T:
         deadline = time.monotonic() + self._lock_timeout
