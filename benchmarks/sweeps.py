@@ -16,7 +16,10 @@ Target (issue 12): jobs-2 / jobs-1 at least 1.6 when two cores are free, i.e. wh
 is close to 2. ``efficiency`` = (jobs-2 / jobs-1) / control, the share of the machine's two-process
 gain the sweep gets. The control's lone loop also reports the share of a core it got (CPU time
 over wall time): well under 100% means other work was running and the figures say little about
-two free cores. Writes ``benchmarks/results/sweeps.json``.
+two free cores. Each sweep also reports its CPU time per mission (driver and workers, from
+/proc): the jobs-2 / jobs-1 ratio of that is what parallelism costs in start-up, warm-up and
+transfer, and it is much less sensitive to other load than wall time. Writes
+``benchmarks/results/sweeps.json``.
 
 Usage: ``python benchmarks/sweeps.py [--experiment NAME|FILE.toml] [--repeats N] [--limit N]``.
 """
@@ -47,9 +50,28 @@ from selfrepair.experiment.store import ResultStore
 spec, db, jobs, limit = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
 missions = expand(load_config(resolve_experiment(spec)))
 missions = missions[:limit] if limit else missions
+
+def cpu_seconds():
+    # CPU time of this process and of the workers it started (read from /proc before they exit;
+    # None where /proc is missing)
+    import os, time
+    try:
+        tick = os.sysconf("SC_CLK_TCK")
+        total = time.process_time()
+        for task in Path("/proc/self/task").iterdir():
+            for child in (task / "children").read_text().split():
+                fields = Path(f"/proc/{child}/stat").read_text().rsplit(")", 1)[1].split()
+                total += (int(fields[11]) + int(fields[12])) / tick
+        return total
+    except OSError:
+        return None
+
 with ResultStore(db) as store:
+    cpu0 = cpu_seconds()
     summary = run_missions(missions, store, jobs=jobs)
-print(json.dumps({"missions": summary.ran, "seconds": summary.seconds}))
+    cpu1 = cpu_seconds()
+cpu = None if cpu0 is None or cpu1 is None else cpu1 - cpu0
+print(json.dumps({"missions": summary.ran, "seconds": summary.seconds, "cpu": cpu}))
 """
 
 LOOP = """
@@ -62,8 +84,9 @@ print(time.perf_counter() - t0, time.process_time() - c0)
 """
 
 
-def sweep(spec: str, jobs: int, limit: int) -> float:
-    """Missions per second of one sweep in a fresh process."""
+def sweep(spec: str, jobs: int, limit: int) -> tuple[float, float | None]:
+    """Missions per second of one sweep in a fresh process, and its CPU seconds per mission
+    (driver and workers; ``None`` without /proc)."""
     with tempfile.TemporaryDirectory() as folder:
         db = str(Path(folder) / "bench.sqlite")
         out = subprocess.run(
@@ -73,7 +96,9 @@ def sweep(spec: str, jobs: int, limit: int) -> float:
             text=True,
         ).stdout
     result = json.loads(out)
-    return float(result["missions"]) / float(result["seconds"])
+    missions = float(result["missions"])
+    cpu = None if result["cpu"] is None else float(result["cpu"]) / missions
+    return missions / float(result["seconds"]), cpu
 
 
 def control() -> tuple[float, float]:
@@ -110,20 +135,25 @@ def main() -> None:
     for repeat in range(args.repeats):
         gain, share = control()
         row = {"load_before": load_average(), "control": gain, "core_share": share}
-        row["jobs1"] = sweep(args.experiment, 1, args.limit)
-        row["jobs2"] = sweep(args.experiment, 2, args.limit)
+        row["jobs1"], row["cpu_per_mission_jobs1"] = sweep(args.experiment, 1, args.limit)
+        row["jobs2"], row["cpu_per_mission_jobs2"] = sweep(args.experiment, 2, args.limit)
         row["ratio"] = row["jobs2"] / row["jobs1"]
+        if row["cpu_per_mission_jobs1"] and row["cpu_per_mission_jobs2"]:
+            row["cpu_ratio"] = row["cpu_per_mission_jobs2"] / row["cpu_per_mission_jobs1"]
         rows.append(row)
         print(
             f"repeat {repeat + 1}: load {row['load_before']}, control {row['control']:.2f} "
             f"(a lone process got {row['core_share']:.0%} of a core), "
             f"jobs 1 {row['jobs1']:.0f}/s, jobs 2 {row['jobs2']:.0f}/s, "
-            f"ratio {row['ratio']:.2f}",
+            f"ratio {row['ratio']:.2f}; CPU per mission jobs 2 / jobs 1 "
+            f"{row.get('cpu_ratio', float('nan')):.2f}",
             flush=True,
         )
     names = ("control", "core_share", "jobs1", "jobs2")
     med = {k: statistics.median(float(r[k]) for r in rows) for k in names}
     ratio = statistics.median(float(r["ratio"]) for r in rows)
+    cpu_ratios = [float(r["cpu_ratio"]) for r in rows if "cpu_ratio" in r]
+    cpu_ratio = statistics.median(cpu_ratios) if cpu_ratios else None
     summary = {
         "experiment": args.experiment,
         "limit": args.limit,
@@ -136,6 +166,7 @@ def main() -> None:
         "median_jobs2_missions_per_s": med["jobs2"],
         "median_ratio": ratio,
         "efficiency": ratio / med["control"],
+        "median_cpu_ratio": cpu_ratio,
         "target_ratio": 1.6,
         "rows": rows,
         "measured_at": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
@@ -147,6 +178,11 @@ def main() -> None:
         f"{med['core_share']:.0%} of a core); efficiency "
         f"{ratio / med['control']:.2f}"
     )
+    if cpu_ratio is not None:
+        print(
+            f"CPU time per mission, jobs 2 / jobs 1: {cpu_ratio:.2f} (what the second process "
+            "costs in start-up, warm-up and transfer, whatever the load)"
+        )
     OUT.parent.mkdir(parents=True, exist_ok=True)
     OUT.write_text(json.dumps(summary, indent=2) + "\n")
 
