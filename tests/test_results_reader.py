@@ -76,11 +76,14 @@ def test_zeroed_pages(valid_db: Path, tmp_path: Path, capsys: pytest.CaptureFixt
     _report_fails_in_one_line(db, tmp_path / "out", capsys, "malformed")
 
 
-def test_missing_column(valid_db: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+@pytest.mark.parametrize("column", ["variant", "clearance_weight", "seed"])
+def test_missing_column(
+    valid_db: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], column: str
+) -> None:
     db = _copy(valid_db, tmp_path)
     with sqlite3.connect(db) as con:
-        con.execute("ALTER TABLE missions DROP COLUMN variant")
-    _report_fails_in_one_line(db, tmp_path / "out", capsys, "no column 'variant'")
+        con.execute(f"ALTER TABLE missions DROP COLUMN {column}")
+    _report_fails_in_one_line(db, tmp_path / "out", capsys, f"no column {column!r}")
 
 
 @pytest.mark.parametrize(

@@ -85,7 +85,7 @@ def read_results(db: str | Path) -> list[Row]:
     with ResultStore(db, read_only=True) as store:  # a report never changes its input
         columns = set(store.columns)
         rows = store.rows()
-    missing = [c for c in _TEXT if c not in columns]
+    missing = [c for c in (*_TEXT, "seed", "clearance_weight") if c not in columns]
     if missing:
         raise InputError(
             "expected a results database of `selfrepair experiment`: table 'missions' has no "
