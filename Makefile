@@ -43,6 +43,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/repair_latency.py
 	$(PY) benchmarks/tablegen.py
 	$(PY) benchmarks/gym_env.py
+	$(PY) benchmarks/sweeps.py
 
 clean:
 	rm -rf $(VENV) build dist .pytest_cache .ruff_cache .hypothesis

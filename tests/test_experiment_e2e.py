@@ -207,6 +207,7 @@ def test_killed_worker_then_resume(tmp_path: Path, capsys: pytest.CaptureFixture
     # the sweep noticed the dead worker and stopped with one line, keeping what it had stored
     assert proc.returncode == 2, err
     assert b"a worker process died" in err and b"run the same command again" in err
+    assert err.count(b"\n") == 1, err
     assert 10 <= len(before) < len(expand(load_config(config)))
     _check_resumed(config, db, before)
 

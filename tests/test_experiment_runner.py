@@ -59,7 +59,9 @@ def test_resume_skips_stored_missions(tmp_path: Path) -> None:
             missions[:5], store, execute=fake_mission, on_progress=lambda d, t: calls.append((d, t))
         )
         assert (first.total, first.skipped, first.ran) == (5, 0, 5)
-        assert calls == [(0, 5), (1, 5), (2, 5), (3, 5), (4, 5), (5, 5)]
+        # once before the first result, then after each stored chunk, ending at all done
+        assert calls[0] == (0, 5) and calls[-1] == (5, 5)
+        assert [d for d, _ in calls] == sorted({d for d, _ in calls}) and len(calls) >= 3
         second = run_missions(missions, store, execute=fake_mission)
         assert (second.skipped, second.ran) == (5, len(missions) - 5)
         third = run_missions(missions, store, execute=fake_mission)
@@ -122,17 +124,16 @@ def test_ray_backend_matches_local(tmp_path: Path) -> None:
     assert len(local) == len(missions) and local == remote
 
 
-def test_batched_results_store_every_mission_once(tmp_path: Path) -> None:
-    """The batch path (Ray's joblib backend returns whole lists) yields every mission once."""
-    from selfrepair.experiment.runner import _results
-
+@pytest.mark.parametrize(("jobs", "chunk"), [(1, 1), (1, 3), (2, 1), (2, 5), (2, 1000)])
+def test_any_chunking_stores_every_mission_once(tmp_path: Path, jobs: int, chunk: int) -> None:
+    """However missions are cut into chunks, each is stored once, with the same row."""
     missions = _missions()
-    streamed = sorted(_results(1, None, fake_mission, missions))
-    for batch in (1, 3, len(missions) + 5):
-        batched = list(_results(1, batch, fake_mission, missions))
-        assert len(batched) == len(missions)
-        assert sorted(k for k, _, _ in batched) == sorted(k for k, _, _ in streamed)
-        assert sorted((k, r) for k, r, _ in batched) == sorted((k, r) for k, r, _ in streamed)
+    with ResultStore(tmp_path / "one.sqlite") as store:
+        run_missions(missions, store, execute=fake_mission, chunk_size=1)
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        summary = run_missions(missions, store, jobs=jobs, execute=fake_mission, chunk_size=chunk)
+        assert (summary.ran, summary.elsewhere) == (len(missions), 0)
+    assert _rows(tmp_path / "r.sqlite") == _rows(tmp_path / "one.sqlite")
 
 
 def failing_mission(mission: Mission) -> dict[str, int | float | str | None]:

@@ -120,3 +120,138 @@ def test_parquet_without_pyarrow_is_a_clear_error(
         with pytest.raises(ProblemError, match=r"Parquet export needs pyarrow.*--export-csv"):
             store.export_parquet(tmp_path / "r.parquet")
     assert not (tmp_path / "r.parquet").exists()
+
+
+# --- batches, interrupts, several writers ---------------------------------------------------------
+
+
+def test_a_batch_is_stored_whole_or_not_at_all(tmp_path: Path) -> None:
+    from selfrepair.experiment.store import Finished
+
+    missions = _missions()
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        bad = [Finished(m, {"ticks": n}, 0.1) for n, m in enumerate(missions)]
+        bad[-1] = Finished(missions[-1], {"ticks": [1]}, 0.1)  # type: ignore[dict-item]
+        with pytest.raises(ProblemError):
+            store.add_many(bad)
+        assert store.count() == 0
+        fresh = [Finished(m, {"ticks": 1, "new": "x"}, 0.1) for m in missions]
+        assert store.add_many(fresh) == len(missions)
+        assert store.add_many([Finished(missions[0], {"ticks": 2}, 0.1)]) == 0
+        assert store.count() == len(missions)
+
+
+class _InterruptAfterCommit:
+    """A connection whose COMMIT succeeds and is then interrupted, as a Ctrl-C can be."""
+
+    def __init__(self, db: sqlite3.Connection) -> None:
+        self._db = db
+
+    def __getattr__(self, name: str) -> object:
+        return getattr(self._db, name)
+
+    def execute(self, sql: str, *args: object) -> sqlite3.Cursor:
+        cursor = self._db.execute(sql, *args)
+        if sql == "COMMIT":
+            raise KeyboardInterrupt
+        return cursor
+
+
+def test_interrupt_just_after_commit_keeps_the_rows_and_raises_no_rollback_error(
+    tmp_path: Path,
+) -> None:
+    missions = _missions()
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        real = store._db
+        store._db = _InterruptAfterCommit(real)  # type: ignore[assignment]
+        with pytest.raises(KeyboardInterrupt):
+            store.add(missions[0], {"ticks": 1}, 0.1)
+        store._db = real
+        assert store.keys() == {missions[0].key}
+        assert store.add(missions[1], {"ticks": 2}, 0.1)  # the connection is usable
+
+
+def test_a_second_connection_with_a_stale_column_list_adds_rows(tmp_path: Path) -> None:
+    """Two writers bring the same new metric column: the second must not add it again."""
+    a, b = _missions()[:2]
+    with ResultStore(tmp_path / "r.sqlite") as one, ResultStore(tmp_path / "r.sqlite") as two:
+        assert one.add(a, {"fresh": 1}, 0.1)
+        assert two.add(b, {"fresh": 2}, 0.1)
+        assert {str(r["key"]): r["fresh"] for r in one.rows()} == {a.key: 1, b.key: 2}
+
+
+def test_writers_claim_disjoint_missions_and_free_them(tmp_path: Path) -> None:
+    keys = [m.key for m in _missions()][:4]
+    with ResultStore(tmp_path / "r.sqlite") as one, ResultStore(tmp_path / "r.sqlite") as two:
+        one.start_writing()
+        two.start_writing()
+        first = one.claim(keys, 2)
+        second = two.claim(keys, 2)
+        assert first.claimed == tuple(keys[:2]) and first.examined == 2
+        assert second.busy == tuple(keys[:2]) and second.claimed == tuple(keys[2:4])
+        one.add(_missions()[0], {"ticks": 1}, 0.1)  # stored: its claim is gone
+        again = two.claim(keys[:2], 4)
+        assert again.stored == (keys[0],) and again.busy == (keys[1],) and not again.claimed
+        one.stop_writing()  # frees keys[1]
+        assert two.claim(keys, 4).claimed == (keys[1], keys[2], keys[3])
+        assert len(two.writers()) == 1
+
+
+def test_claims_of_dead_writers_are_taken_over(tmp_path: Path) -> None:
+    import socket
+    import subprocess
+    import time
+
+    gone = subprocess.Popen([sys.executable, "-c", "pass"])  # a pid that is gone once reaped
+    gone.wait()
+    keys = [m.key for m in _missions()]
+    now = time.time()
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        writers = [
+            ("dead-here", socket.gethostname(), gone.pid, None, now, now),
+            ("silent-elsewhere", "another-host", 1, None, now - 10_000, now - 10_000),
+            ("alive-elsewhere", "another-host", 1, None, now, now),
+        ]
+        store._db.executemany("INSERT INTO writers VALUES (?, ?, ?, ?, ?, ?)", writers)
+        store._db.executemany(
+            "INSERT INTO claims VALUES (?, ?, ?)",
+            [
+                (keys[0], "dead-here", now),
+                (keys[1], "silent-elsewhere", now),
+                (keys[2], "alive-elsewhere", now),
+                (keys[3], "never-registered", now),
+            ],
+        )
+        store.start_writing()
+        claim = store.claim(keys, 3)
+        assert claim.claimed == (keys[0], keys[1], keys[3]) and claim.busy == (keys[2],)
+        assert {w["owner"] for w in store.writers()} >= {"alive-elsewhere"}
+        assert "dead-here" not in {w["owner"] for w in store.writers()}
+
+
+def test_malformed_database_is_one_input_error(tmp_path: Path) -> None:
+    from selfrepair.errors import InputError
+
+    path = tmp_path / "r.sqlite"
+    with ResultStore(path) as store:
+        for m in _missions():
+            store.add(m, {"ticks": 1, "text": "x" * 3000}, 0.1)
+    data = bytearray(path.read_bytes())
+    data[4096:] = bytes(len(data) - 4096)  # every page after the first zeroed
+    path.write_bytes(bytes(data))
+    with pytest.raises(InputError, match="malformed"), ResultStore(path, read_only=True) as store:
+        store.rows()
+    with pytest.raises(InputError, match=r"r\.sqlite"), ResultStore(path) as store:
+        store.add(_missions()[0], {"ticks": 1}, 0.1)
+
+
+def test_foreign_missions_table_is_refused_and_left_alone(tmp_path: Path) -> None:
+    from selfrepair.errors import InputError
+
+    path = tmp_path / "other.sqlite"
+    with sqlite3.connect(path) as con:
+        con.execute("CREATE TABLE missions (id INTEGER)")
+    with pytest.raises(InputError, match="no column 'key'"):
+        ResultStore(path)
+    with sqlite3.connect(path) as con:
+        assert {r[0] for r in con.execute("SELECT name FROM sqlite_master")} == {"missions"}

@@ -26,8 +26,9 @@ from rich.table import Table
 from rich.text import Text
 
 from selfrepair.cli._app import MaxCells, MaxMissions, app, console, echo
+from selfrepair.errors import SelfRepairError
 from selfrepair.experiment.findings import Finding, StrategySummary, check_findings, summarize
-from selfrepair.experiment.missions import expand
+from selfrepair.experiment.missions import Mission, expand
 from selfrepair.experiment.runner import check_backend, execute_mission, run_missions
 from selfrepair.experiment.store import ResultStore, Value, require_pyarrow
 from selfrepair.experiment.summary import FaultSetBite, fault_set_bite
@@ -94,67 +95,91 @@ def experiment(
     """Run an experiment (resumable: missions already in the database are skipped), then print the
     per-strategy summary and the original study's findings checked on all stored rows. A team
     experiment (``kind = "team"``, e.g. the bundled ``team``) prints the team summary."""
-    check_backend(backend, jobs=jobs, scheduler=scheduler)
-    if export_parquet is not None:
-        require_pyarrow()  # before the sweep, not after it
-    from selfrepair.experiment.teams import TeamExperimentConfig, load_experiment
+    missions: tuple[Mission, ...] = ()
+    db_path: Path | None = None
+    try:
+        check_backend(backend, jobs=jobs, scheduler=scheduler)
+        if export_parquet is not None:
+            require_pyarrow()  # before the sweep, not after it
+        from selfrepair.experiment.teams import TeamExperimentConfig, load_experiment
 
-    loaded = load_experiment(resolve_experiment(config))
-    if isinstance(loaded, TeamExperimentConfig):
-        from selfrepair.cli.team import run_team_experiment
+        loaded = load_experiment(resolve_experiment(config))
+        if isinstance(loaded, TeamExperimentConfig):
+            from selfrepair.cli.team import run_team_experiment
 
-        if repeats is not None:
-            from selfrepair.errors import ProblemError
+            if repeats is not None:
+                from selfrepair.errors import ProblemError
 
-            raise ProblemError(
-                "--repeats times single-robot missions; a team experiment runs each once"
-            )
+                raise ProblemError(
+                    "--repeats times single-robot missions; a team experiment runs each once"
+                )
 
-        return run_team_experiment(
-            loaded,
-            db,
-            jobs=joblib.cpu_count() if jobs == -1 else jobs,
-            backend=backend,
-            scheduler=scheduler,
-            address=address,
-            export_csv=export_csv,
-            export_parquet=export_parquet,
-            progress=_progress,
-            max_missions=max_missions,
-            max_cells=max_cells,
-        )
-    cfg = loaded
-    missions = expand(cfg, max_missions=max_missions, max_cells=max_cells)
-    db_path = db if db is not None else Path("results") / f"{cfg.name}.sqlite"
-    n_jobs = joblib.cpu_count() if jobs == -1 else jobs
-    with ResultStore(db_path) as store:
-        with _progress(f"{cfg.name}: {len(missions)} missions") as on_progress:
-            summary = run_missions(
-                missions,
-                store,
-                jobs=n_jobs,
+            return run_team_experiment(
+                loaded,
+                db,
+                jobs=joblib.cpu_count() if jobs == -1 else jobs,
                 backend=backend,
                 scheduler=scheduler,
                 address=address,
-                execute=partial(execute_mission, repeats=repeats or cfg.timing_repeats),
-                on_progress=on_progress,
+                export_csv=export_csv,
+                export_parquet=export_parquet,
+                progress=_progress,
+                max_missions=max_missions,
+                max_cells=max_cells,
             )
-        echo(
-            f"{cfg.name}: {summary.total} missions, {summary.skipped} already stored, "
-            f"{summary.ran} run in {summary.seconds:.1f} s -> {db_path}"
-        )
-        keys = {m.key for m in missions}
-        rows = [r for r in store.rows() if r["key"] in keys]
-        print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
-        print_fault_sets(fault_set_bite(rows))
-        print_findings(check_findings(rows))
-        if cfg.crossover:
-            _print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
-        if export_csv is not None:
-            echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
-        if export_parquet is not None:
-            echo(f"wrote {store.export_parquet(export_parquet)} rows to {export_parquet}")
+        cfg = loaded
+        missions = expand(cfg, max_missions=max_missions, max_cells=max_cells)
+        db_path = db if db is not None else Path("results") / f"{cfg.name}.sqlite"
+        n_jobs = joblib.cpu_count() if jobs == -1 else jobs
+        with ResultStore(db_path) as store:
+            with _progress(f"{cfg.name}: {len(missions)} missions") as on_progress:
+                summary = run_missions(
+                    missions,
+                    store,
+                    jobs=n_jobs,
+                    backend=backend,
+                    scheduler=scheduler,
+                    address=address,
+                    execute=partial(execute_mission, repeats=repeats or cfg.timing_repeats),
+                    on_progress=on_progress,
+                )
+            elsewhere = f", {summary.elsewhere} by another writer" if summary.elsewhere else ""
+            echo(
+                f"{cfg.name}: {summary.total} missions, {summary.skipped} already stored, "
+                f"{summary.ran} run{elsewhere} in {summary.seconds:.1f} s -> {db_path}"
+            )
+            keys = {m.key for m in missions}
+            rows = [r for r in store.rows() if r["key"] in keys]
+            print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
+            print_fault_sets(fault_set_bite(rows))
+            print_findings(check_findings(rows))
+            if cfg.crossover:
+                _print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
+            if export_csv is not None:
+                echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
+            if export_parquet is not None:
+                echo(f"wrote {store.export_parquet(export_parquet)} rows to {export_parquet}")
+    except KeyboardInterrupt:
+        sys.stdout.flush()
+        sys.stderr.write(f"selfrepair: interrupted: {_stored_after_interrupt(missions, db_path)}\n")
+        raise typer.Exit(130) from None
     return 0
+
+
+def _stored_after_interrupt(missions: Sequence[Mission], db_path: Path | None) -> str:
+    """How much of an interrupted experiment is stored, and how to go on (every stored row is
+    whole: rows are committed in atomic batches)."""
+    if db_path is None or not missions:
+        return "no mission was run"
+    try:
+        with ResultStore(db_path, read_only=True) as store:
+            stored = len(store.keys() & {m.key for m in missions})
+    except SelfRepairError:
+        stored = 0
+    return (
+        f"{stored} of {len(missions)} missions are stored in {db_path}; "
+        "run the same command again to resume"
+    )
 
 
 @contextmanager
@@ -309,7 +334,7 @@ def print_fault_sets(bites: list[FaultSetBite]) -> None:
 @app.command()
 def report(
     results: Annotated[Path, typer.Argument(help="Results database written by `experiment`.")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="Directory for report.md and figures.")],
+    out: Annotated[str, typer.Option("--out", "-o", help="Directory for report.md and figures.")],
     mission: Annotated[
         str | None,
         typer.Option(help="Key (or key prefix) of the mission to draw; default: a telling one."),

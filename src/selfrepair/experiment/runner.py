@@ -1,10 +1,20 @@
-"""Run the missions of an experiment in parallel and store each result as it arrives.
+"""Run the missions of an experiment in parallel and store their results in batches.
 
-Execution goes through joblib: local worker processes by default (``jobs``), or the ``dask`` or
-``ray`` joblib backends on an existing cluster. Whatever the backend, workers only *compute*: each
-returns ``(key, metrics, seconds)`` and the driver - this process - writes the row to the
-:class:`~selfrepair.experiment.store.ResultStore`, one committed transaction per mission. A run is
-resumable: missions whose key is already stored are skipped before any work is sent out.
+Missions go out in *chunks*: each task a worker receives is a list of missions (sized to take
+about :data:`CHUNK_SECONDS`), and its results come back together and are stored in one
+transaction. Workers are long-lived processes that import the executor once. Local worker
+processes (loky, ``jobs``) are the default; the ``dask`` and ``ray`` backends use an existing
+cluster. Whatever the backend, workers only *compute*; the driver - this process - writes the
+:class:`~selfrepair.experiment.store.ResultStore`.
+
+A run is resumable and shareable: missions whose key is already stored are skipped, and every
+chunk is *claimed* in the store before it is sent out, so several drivers started on one
+database (on one host or several) split the missions between them instead of running them
+twice. A driver that finds the rest claimed by another live driver waits for it to store them,
+and takes over the claims of one that died.
+
+Local workers leave with their driver: they ignore Ctrl-C (the driver stops them), and each
+watches its parent and exits as soon as the driver is gone, also after a ``SIGKILL``.
 
 Library code does not print: progress is reported through the ``on_progress`` callback (the CLI
 draws a rich progress bar with it on a terminal).
@@ -14,22 +24,27 @@ from __future__ import annotations
 
 import json
 import logging
+import math
+import os
+import signal
+import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from contextlib import ExitStack, contextmanager
+from concurrent.futures import FIRST_COMPLETED, Future, wait
+from concurrent.futures.process import BrokenProcessPool
+from contextlib import ExitStack, contextmanager, suppress
 from dataclasses import dataclass, replace
+from typing import Any, Protocol
 
-import joblib
-from joblib.externals.loky.process_executor import TerminatedWorkerError
-
-from selfrepair.errors import ProblemError, SelfRepairError
+from selfrepair.errors import InputError, ProblemError, SelfRepairError
 from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionResult
 from selfrepair.experiment.missions import Mission
-from selfrepair.experiment.store import ResultStore, Value
+from selfrepair.experiment.store import Finished, ResultStore, Value
 
 __all__ = [
     "BACKENDS",
+    "CHUNK_SECONDS",
     "MissionFunction",
     "RunSummary",
     "check_backend",
@@ -42,15 +57,36 @@ MissionFunction = Callable[[Mission], Mapping[str, Value]]
 
 BACKENDS = ("local", "dask", "ray")
 
+CHUNK_SECONDS = 0.5
+"""Worker time a chunk of missions should take: long enough that sending it and storing its rows
+cost little beside it, short enough that a killed run loses little and workers end together."""
+
+MAX_CHUNK = 256
+"""At most this many missions per chunk, however fast they are."""
+
+WORKER_IDLE_SECONDS = 60
+"""Local worker processes left idle this long exit (a later run in the same process starts new
+ones)."""
+
+HEARTBEAT_SECONDS = 5.0
+"""The driver tells other writers it is alive at least this often while it waits."""
+
+RECHECK_SECONDS = 0.5
+"""How often a driver with nothing left to claim looks again at missions other drivers hold."""
+
+_Result = tuple[str, dict[str, Value], float]
+
 
 @dataclass(frozen=True, slots=True)
 class RunSummary:
-    """What a run did: missions in the experiment, already stored, run now, and wall time."""
+    """What a run did: missions in the experiment, already stored when it began, run and stored
+    by this run, stored meanwhile by other writers sharing the database, and wall time."""
 
     total: int
     skipped: int
     ran: int
     seconds: float
+    elsewhere: int = 0
 
 
 DUPLICATE_COLUMNS = frozenset(
@@ -150,7 +186,7 @@ def _lower_median(values: Sequence[int]) -> int:
     return ordered[(len(ordered) - 1) // 2]
 
 
-def _work(execute: MissionFunction, mission: Mission) -> tuple[str, dict[str, Value], float]:
+def _work(execute: MissionFunction, mission: Mission) -> _Result:
     """Worker side: run one mission, return its key, metric row and wall time in seconds."""
     t0 = time.perf_counter()
     try:
@@ -159,6 +195,11 @@ def _work(execute: MissionFunction, mission: Mission) -> tuple[str, dict[str, Va
         # re-raised as a plain-message error: it crosses process boundaries intact
         raise ProblemError(f"mission {mission.key[:12]} ({mission.config}): {exc}") from None
     return mission.key, row, time.perf_counter() - t0
+
+
+def work_chunk(execute: MissionFunction, chunk: Sequence[Mission]) -> list[_Result]:
+    """Worker side: run a chunk of missions in order; their results travel back together."""
+    return [_work(execute, mission) for mission in chunk]
 
 
 def run_missions(
@@ -171,61 +212,176 @@ def run_missions(
     address: str | None = None,
     execute: MissionFunction | None = None,
     on_progress: Callable[[int, int], None] | None = None,
+    chunk_size: int | None = None,
 ) -> RunSummary:
-    """Run every mission of ``missions`` not yet in ``store`` and store each result.
+    """Run every mission of ``missions`` not yet in ``store`` and store the results.
 
     ``on_progress(done, pending)`` is called once before the first result and after each stored
-    row. ``backend`` is ``local`` (``jobs`` processes; 1 runs in this process), ``dask``
-    (``scheduler`` address of a running cluster) or ``ray`` (``address`` of a running cluster, or
-    a local Ray when omitted); on a cluster ``jobs`` is ignored and every worker is used.
+    chunk; ``done`` counts the missions stored since the start, by this run or by another writer
+    sharing the database. ``backend`` is ``local`` (``jobs`` processes; 1 runs in this process),
+    ``dask`` (``scheduler`` address of a running cluster) or ``ray`` (``address`` of a running
+    cluster, or a local Ray when omitted); on a cluster ``jobs`` is ignored and every worker is
+    used. ``chunk_size`` fixes the missions per chunk (default: sized to :data:`CHUNK_SECONDS`).
+
+    On any exception, including ``KeyboardInterrupt``, the missions in flight are abandoned
+    (local workers are stopped), this run's claims are freed and the exception propagates; every
+    stored row stays, and running again resumes.
     """
     check_backend(backend, jobs=jobs, scheduler=scheduler)
+    if chunk_size is not None and chunk_size < 1:
+        raise ProblemError(f"chunk_size must be a positive number, got {chunk_size}")
     execute = execute or execute_mission
     t0 = time.perf_counter()
-    done_keys = store.keys()
-    pending = [m for m in missions if m.key not in done_keys]
-    by_key = {m.key: m for m in pending}
+    stored = store.keys()
+    unique = {m.key: m for m in missions}
+    pending = [m for m in unique.values() if m.key not in stored]
+    skipped = len(unique) - len(pending)
     if on_progress is not None:
         on_progress(0, len(pending))
-    done = 0
-    if pending:
-        with _backend(backend, jobs=jobs, scheduler=scheduler, address=address) as (n_jobs, batch):
-            try:
-                for key, metrics, seconds in _results(n_jobs, batch, execute, pending):
-                    store.add(by_key[key], metrics, seconds)
-                    done += 1
-                    if on_progress is not None:
-                        on_progress(done, len(pending))
-            except TerminatedWorkerError as exc:
-                raise ProblemError(
-                    f"a worker process died ({_first_line(exc)}); {done} missions of this run "
-                    f"were stored in {store.path}; run the same command again to resume"
-                ) from None
-    return RunSummary(len(missions), len(missions) - len(pending), done, time.perf_counter() - t0)
+    if not pending:
+        return RunSummary(len(missions), skipped, 0, time.perf_counter() - t0)
+    store.start_writing()
+    try:
+        with _pool(backend, jobs=jobs, scheduler=scheduler, address=address) as pool:
+            sizes = _ChunkSizes(pool.slots, chunk_size)
+            dispatch = _Dispatch(store, pending)
+            ran = _drive(pool, execute, dispatch, sizes, store, len(pending), on_progress)
+    finally:
+        # A claim that cannot be freed now (the database failed) is freed by the next writer
+        # that sees this process gone; it must not hide what ended the run.
+        with suppress(InputError):
+            store.stop_writing()
+    return RunSummary(
+        len(missions), skipped, ran, time.perf_counter() - t0, elsewhere=dispatch.elsewhere
+    )
 
 
-def _results(
-    n_jobs: int, batch: int | None, execute: MissionFunction, pending: Sequence[Mission]
-) -> Iterator[tuple[str, dict[str, Value], float]]:
-    """Each mission's result as soon as the driver can store it.
-
-    ``batch`` is ``None`` for backends that stream results in completion order (loky, Dask).
-    Ray's joblib backend returns only whole lists, so missions go in batches of ``batch``:
-    each batch's rows are stored before the next starts, and a killed run loses at most the
-    batch in flight (its rows were never stored, so resuming runs them again).
-    """
-    if batch is None:
-        parallel = joblib.Parallel(n_jobs=n_jobs, return_as="generator_unordered")
-        yield from parallel(joblib.delayed(_work)(execute, m) for m in pending)
-        return
-    with joblib.Parallel(n_jobs=n_jobs, return_as="list") as parallel:
-        for i in range(0, len(pending), batch):
-            chunk = pending[i : i + batch]
-            yield from parallel(joblib.delayed(_work)(execute, m) for m in chunk)
+def _drive(
+    pool: _Pool,
+    execute: MissionFunction,
+    dispatch: _Dispatch,
+    sizes: _ChunkSizes,
+    store: ResultStore,
+    pending: int,
+    on_progress: Callable[[int, int], None] | None,
+) -> int:
+    """Keep ``pool.depth`` chunks in flight, store each as it returns; the number stored."""
+    in_flight: dict[Future[list[_Result]], Sequence[Mission]] = {}
+    ran = 0
+    try:
+        while True:
+            while len(in_flight) < pool.depth:
+                chunk = dispatch.next_chunk(sizes.size(dispatch.unclaimed))
+                if not chunk:
+                    break
+                in_flight[pool.submit(execute, chunk)] = chunk
+            if not in_flight:
+                if not dispatch.waiting:
+                    return ran
+                time.sleep(RECHECK_SECONDS)  # the rest is another writer's: wait for it
+                if on_progress is not None:
+                    on_progress(ran + dispatch.elsewhere, pending)
+                continue
+            finished, _ = wait(in_flight, timeout=HEARTBEAT_SECONDS, return_when=FIRST_COMPLETED)
+            if not finished:
+                store.heartbeat()
+            for future in finished:
+                sent = in_flight.pop(future)
+                results = future.result()
+                sizes.observe(results)
+                by_key = {m.key: m for m in sent}
+                ran += store.add_many([Finished(by_key[k], row, s) for k, row, s in results])
+                if on_progress is not None:
+                    on_progress(ran + dispatch.elsewhere, pending)
+    except BrokenProcessPool as exc:  # from a result, or from submitting to the broken pool
+        pool.abort()
+        raise ProblemError(
+            f"a worker process died ({_first_line(exc)}); {ran} missions of this run were "
+            f"stored in {store.path}; run the same command again to resume"
+        ) from None
+    except BaseException:
+        pool.abort()
+        raise
 
 
 def _first_line(exc: BaseException) -> str:
     return (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+
+
+class _ChunkSizes:
+    """Chunk sizes that take about :data:`CHUNK_SECONDS` each, and split the last missions
+    between the workers so they finish together."""
+
+    def __init__(self, slots: int, fixed: int | None) -> None:
+        self._slots = slots
+        self._fixed = fixed
+        self._seconds = 0.0
+        self._count = 0
+
+    def observe(self, results: Sequence[_Result]) -> None:
+        self._seconds += sum(seconds for _, _, seconds in results)
+        self._count += len(results)
+
+    def size(self, remaining: int) -> int:
+        if self._fixed is not None:
+            return self._fixed
+        if self._count == 0:
+            return 2  # the first chunks tell how long a mission takes
+        per_mission = max(self._seconds / self._count, 1e-6)
+        size = min(MAX_CHUNK, round(CHUNK_SECONDS / per_mission))
+        share = math.ceil(remaining / (2 * self._slots))
+        return max(1, min(size, share))
+
+
+class _Dispatch:
+    """Hands out chunks of pending missions that this writer has claimed in the store.
+
+    Missions another live writer has claimed are set aside and looked at again once this
+    writer has nothing else to claim: by then they are stored (counted in :attr:`elsewhere`), or
+    their writer died and they can be claimed.
+    """
+
+    def __init__(self, store: ResultStore, pending: Sequence[Mission]) -> None:
+        self._store = store
+        self._by_key = {m.key: m for m in pending}
+        self._order = [m.key for m in pending]
+        self._cursor = 0
+        self._held: dict[str, None] = {}  # keys claimed by other writers, in order
+        self._last_recheck = 0.0
+        self.elsewhere = 0
+        """Missions found stored by other writers after this run began."""
+
+    @property
+    def unclaimed(self) -> int:
+        """Missions not yet looked at, plus those other writers hold."""
+        return len(self._order) - self._cursor + len(self._held)
+
+    @property
+    def waiting(self) -> bool:
+        """Whether missions held by other writers remain to be seen stored."""
+        return bool(self._held)
+
+    def next_chunk(self, size: int) -> list[Mission]:
+        """Up to ``size`` missions this writer now owns; empty when none can be had now."""
+        while self._cursor < len(self._order):
+            window = self._order[self._cursor : self._cursor + max(4 * size, 64)]
+            claim = self._store.claim(window, size)
+            self._cursor += claim.examined
+            self.elsewhere += len(claim.stored)
+            self._held.update(dict.fromkeys(claim.busy))
+            if claim.claimed:
+                return [self._by_key[k] for k in claim.claimed]
+        if self._held and time.monotonic() - self._last_recheck >= RECHECK_SECONDS:
+            return self._take_held(size)
+        return []
+
+    def _take_held(self, size: int) -> list[Mission]:
+        self._last_recheck = time.monotonic()
+        claim = self._store.claim(list(self._held), size)
+        for key in (*claim.stored, *claim.claimed):
+            del self._held[key]
+        self.elsewhere += len(claim.stored)
+        return [self._by_key[k] for k in claim.claimed]
 
 
 def check_backend(backend: str, *, jobs: int = 1, scheduler: str | None = None) -> None:
@@ -238,28 +394,161 @@ def check_backend(backend: str, *, jobs: int = 1, scheduler: str | None = None) 
         raise ProblemError("--backend dask needs --scheduler ADDRESS (e.g. tcp://host:8786)")
 
 
-RAY_BATCH_PER_CPU = 4
-"""Missions per Ray batch and cluster CPU: enough to keep every CPU busy, few to lose."""
+# --- where chunks run ----------------------------------------------------------------------------
+
+
+class _Pool(Protocol):
+    """Runs chunks: ``slots`` at once, ``depth`` kept in flight (so no worker waits for the
+    driver), each as a :class:`~concurrent.futures.Future` of its results."""
+
+    slots: int
+    depth: int
+
+    def submit(self, execute: MissionFunction, chunk: Sequence[Mission]) -> Future[list[_Result]]:
+        """Start ``chunk``."""
+        ...
+
+    def abort(self) -> None:
+        """Stop every chunk still running (after an error or an interrupt)."""
+        ...
+
+
+class _InlinePool:
+    """``jobs=1``: chunks run in this process, one at a time, when submitted."""
+
+    slots = 1
+    depth = 1
+
+    def submit(self, execute: MissionFunction, chunk: Sequence[Mission]) -> Future[list[_Result]]:
+        future: Future[list[_Result]] = Future()
+        try:
+            future.set_result(work_chunk(execute, chunk))
+        except Exception as exc:  # the driver re-raises it from future.result()
+            future.set_exception(exc)
+        return future
+
+    def abort(self) -> None:
+        """Nothing runs in the background."""
+
+
+class _LocalPool:
+    """``jobs`` local processes: this one and ``jobs - 1`` worker processes (loky's reusable
+    executor, started once, importing once).
+
+    The driver computes too: while the workers start (a second or more: a fresh interpreter
+    imports numpy, numba and the executor, and loads the compiled kernels) it is already running
+    missions, and afterwards it runs a chunk whenever the workers have enough queued. Storing a
+    chunk's rows costs the driver little beside computing them.
+    """
+
+    def __init__(self, jobs: int) -> None:
+        from joblib.externals.loky import get_reusable_executor
+
+        self.slots = jobs
+        self._queued = 2 * (jobs - 1)  # chunks per worker: one running, one waiting
+        self.depth = self._queued + 1  # and one here
+        self._inline = _InlinePool()
+        self._running: list[Future[list[_Result]]] = []
+        self._executor = get_reusable_executor(
+            max_workers=jobs - 1,
+            timeout=WORKER_IDLE_SECONDS,
+            initializer=worker_setup,
+            initargs=(os.getpid(),),
+        )
+
+    def submit(self, execute: MissionFunction, chunk: Sequence[Mission]) -> Future[list[_Result]]:
+        self._running = [f for f in self._running if not f.done()]
+        if len(self._running) >= self._queued:
+            return self._inline.submit(execute, chunk)
+        future: Future[list[_Result]] = self._executor.submit(work_chunk, execute, list(chunk))
+        self._running.append(future)
+        return future
+
+    def abort(self) -> None:
+        # Kill the workers first: loky then fails every pending future as after a worker crash.
+        # (shutdown(kill_workers=True) with chunks still queued trips a KeyError in loky's
+        # manager thread, printed as a traceback.)
+        for process in list(getattr(self._executor, "_processes", {}).values()):
+            with suppress(ProcessLookupError):
+                os.kill(process.pid, signal.SIGKILL)
+        self._executor.shutdown(wait=False)
+
+
+class _DaskPool:
+    """The workers of a running Dask cluster, through the client's futures executor."""
+
+    def __init__(self, client: Any) -> None:
+        self.slots = max(1, sum(client.nthreads().values()))
+        self.depth = 2 * self.slots
+        self._executor = client.get_executor(pure=False)
+
+    def submit(self, execute: MissionFunction, chunk: Sequence[Mission]) -> Future[list[_Result]]:
+        future: Future[list[_Result]] = self._executor.submit(work_chunk, execute, list(chunk))
+        return future
+
+    def abort(self) -> None:
+        self._executor.shutdown(wait=False)  # cancels what is still queued or running
+
+
+class _RayPool:
+    """The CPUs of a Ray cluster, one remote task per chunk."""
+
+    def __init__(self, cpus: int) -> None:
+        import ray
+
+        self.slots = cpus
+        self.depth = 2 * cpus
+        self._remote = ray.remote(work_chunk)
+        self._running: list[tuple[Any, Future[list[_Result]]]] = []
+
+    def submit(self, execute: MissionFunction, chunk: Sequence[Mission]) -> Future[list[_Result]]:
+        ref = self._remote.remote(execute, list(chunk))
+        future: Future[list[_Result]] = ref.future()
+        self._running = [(r, f) for r, f in self._running if not f.done()] + [(ref, future)]
+        return future
+
+    def abort(self) -> None:
+        import ray
+
+        for ref, future in self._running:
+            if not future.done():
+                ray.cancel(ref, force=True)
 
 
 @contextmanager
-def _backend(
+def _pool(
     backend: str, *, jobs: int, scheduler: str | None, address: str | None
-) -> Iterator[tuple[int, int | None]]:
-    """Enter the joblib backend; yields the ``n_jobs`` to pass to ``Parallel`` and the batch size
-    (``None``: results stream one by one; see :func:`_results`)."""
+) -> Iterator[_Pool]:
     with ExitStack() as stack:
         if backend == "local":
-            stack.enter_context(joblib.parallel_config(backend="loky"))
-            yield jobs, None
+            yield _InlinePool() if jobs == 1 else _LocalPool(_cpu_count() if jobs == -1 else jobs)
         elif backend == "dask":
-            client = stack.enter_context(_dask_client(scheduler))
-            stack.enter_context(joblib.parallel_config(backend="dask", client=client))
-            yield -1, None
+            yield _DaskPool(stack.enter_context(_dask_client(scheduler)))
         else:
-            cpus = _start_ray(address)
-            stack.enter_context(joblib.parallel_config(backend="ray"))
-            yield -1, RAY_BATCH_PER_CPU * cpus
+            yield _RayPool(_start_ray(address))
+
+
+def _cpu_count() -> int:
+    from joblib import cpu_count
+
+    return max(1, int(cpu_count()))
+
+
+def worker_setup(parent: int) -> None:
+    """Run first in every local worker process: leave Ctrl-C to the driver (which stops the
+    workers itself), and exit as soon as the driver ``parent`` is gone, however it died."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    threading.Thread(target=_exit_with, args=(parent,), daemon=True, name="exit-with").start()
+
+
+def _exit_with(parent: int) -> None:
+    while os.getppid() == parent:
+        time.sleep(PARENT_POLL_SECONDS)
+    os._exit(1)  # no clean-up: the driver that would take the results is dead
+
+
+PARENT_POLL_SECONDS = 0.2
+"""How often a local worker checks that its driver still lives."""
 
 
 @contextmanager
@@ -283,10 +572,9 @@ def _dask_client(scheduler: str | None) -> Iterator[object]:
 
 
 def _start_ray(address: str | None) -> int:
-    """Connect to (or start) Ray and register its joblib backend; returns the cluster's CPUs."""
+    """Connect to (or start) Ray; returns the cluster's CPUs."""
     try:
         import ray
-        from ray.util.joblib import register_ray
     except ImportError:
         raise ProblemError("--backend ray needs ray: pip install 'selfrepair[ray]'") from None
     if not ray.is_initialized():
@@ -299,5 +587,4 @@ def _start_ray(address: str | None) -> int:
             )
         except ConnectionError as exc:
             raise ProblemError(f"cannot reach the Ray cluster at {address}: {exc}") from None
-    register_ray()
     return max(1, int(ray.cluster_resources().get("CPU", 1)))
