@@ -24,13 +24,16 @@ __all__ = ["ensure_warm", "warm_up"]
 _WARM = False
 
 
-def ensure_warm() -> None:
+def ensure_warm() -> int:
     """Run :func:`warm_up` once per process, so a caller can keep the one-off cost of loading
-    (or compiling) the kernels out of what it times."""
+    (or compiling) the kernels out of what it times; returns the nanoseconds this call spent
+    (0 when the kernels were already warm), so the caller can report the load on its own."""
     global _WARM
-    if not _WARM:
-        warm_up()
-        _WARM = True
+    if _WARM:
+        return 0
+    spent = warm_up()
+    _WARM = True
+    return spent
 
 
 def warm_up() -> int:
