@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from extras import need
 from selfrepair.cli import main
 from selfrepair.experiment.config import load_config
 from selfrepair.experiment.missions import expand
@@ -213,7 +214,7 @@ def test_killed_worker_then_resume(tmp_path: Path, capsys: pytest.CaptureFixture
 
 
 def test_report_and_animate(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    pytest.importorskip("matplotlib")
+    need("matplotlib", "viz")
     config = _write(tmp_path, "tiny", TINY)
     db = tmp_path / "r.sqlite"
     assert main(["experiment", str(config), "--db", str(db), "--jobs", "1"]) == 0
@@ -313,3 +314,54 @@ def test_terminal_summary_never_truncates_a_number(
     assert "…" not in out
     for cell in summary.cells()[1:]:
         assert cell in out, cell
+
+
+def _long_summary(label: str) -> object:
+    from selfrepair.experiment.findings import StrategySummary
+
+    return StrategySummary(
+        label=label,
+        missions=192,
+        completed=192,
+        compute_per_action_median_us=12345.6,
+        compute_per_action_p99_us=98765.4,
+        latency_median_us=4321.0,
+        latency_p99_us=123456.7,
+        replans_per_mission=0.77,
+        resolved_locally=0.993,
+        extra_ticks_mean=33.97,
+        plan_distance_mean=104.0,
+    )
+
+
+@pytest.mark.parametrize("columns", ["80", "200"])
+def test_piped_summary_is_never_cut(
+    columns: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Not a terminal (a log, a pipe): full headers and names, whatever COLUMNS says."""
+    from selfrepair.cli.experiments import print_summary
+    from selfrepair.experiment.findings import StrategySummary
+
+    monkeypatch.setenv("COLUMNS", columns)
+    labels = [f"lookahead[generated-agnostic-variant-{i},guarded,k=12] w=1/3" for i in range(12)]
+    summaries = [_long_summary(label) for label in labels]
+    print_summary(summaries, title="a long experiment name: per strategy")  # type: ignore[arg-type]
+    out = capsys.readouterr().out
+    assert "…" not in out
+    for header in StrategySummary.HEADERS:
+        assert header in out, header
+    for label in labels:
+        assert label in out
+
+
+def test_findings_are_wrapped(capsys: pytest.CaptureFixture[str]) -> None:
+    from selfrepair.cli.experiments import FINDING_WIDTH, print_findings
+    from selfrepair.experiment.findings import Finding
+
+    evidence = "; ".join(f"variant {i} resolved 99.{i}% of 1234 encounters" for i in range(20))
+    finding = Finding(1, "a claim of the original study", "held", evidence)
+    print_findings([finding])
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == "Finding 1 HELD: a claim of the original study"
+    assert all(len(line) <= FINDING_WIDTH for line in lines)
+    assert " ".join(line.strip() for line in lines[1:]) == evidence

@@ -3,49 +3,30 @@
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable, Iterator, Sequence
+import textwrap
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from functools import partial
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
-import joblib
 import typer
-from rich import box
-from rich.console import Console
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    TaskProgressColumn,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
-from rich.table import Table
-from rich.text import Text
 
-from selfrepair.cli._app import MaxCells, MaxMissions, app, console, echo
-from selfrepair.errors import SelfRepairError
-from selfrepair.experiment.findings import Finding, StrategySummary, check_findings, summarize
-from selfrepair.experiment.missions import Mission, expand
-from selfrepair.experiment.runner import check_backend, execute_mission, run_missions
-from selfrepair.experiment.store import ResultStore, Value, require_pyarrow
-from selfrepair.experiment.summary import FaultSetBite, fault_set_bite
-from selfrepair.limits import MAX_CELLS, MAX_MISSIONS
+from selfrepair.cli._app import app, console, echo
+from selfrepair.errors import InputError, ProblemError
 
-__all__ = [
-    "animate",
-    "experiment",
-    "print_fault_sets",
-    "print_findings",
-    "print_summary",
-    "report",
-]
+if TYPE_CHECKING:
+    from rich.table import Table
+
+    from selfrepair.experiment.findings import Finding, StrategySummary
+
+__all__ = ["animate", "experiment", "print_findings", "print_summary", "report"]
+
+FINDING_WIDTH = 100
+"""Findings are wrapped to this many characters per line."""
 
 
 def resolve_experiment(spec: str) -> Path:
-    """A bundled experiment name (``paper``, ``scale``, ``full``) or a path to a TOML file."""
+    """A bundled experiment name (``paper``, ``full``) or a path to a TOML file."""
     from importlib import resources
 
     folder = resources.files("selfrepair").joinpath("data", "experiments")
@@ -55,131 +36,121 @@ def resolve_experiment(spec: str) -> Path:
     return Path(spec)
 
 
+def _check_options(backend: str, jobs: int, scheduler: str | None) -> None:
+    """The runner's checks, worded with the flags (the library names none)."""
+    from selfrepair.experiment.runner import BACKENDS
+
+    if backend not in BACKENDS:
+        raise InputError(
+            f"expected one of {', '.join(BACKENDS)}, got {backend!r}", source="--backend"
+        )
+    if jobs < 1 and jobs != -1:
+        raise InputError(
+            f"expected a positive number of workers or -1 (all cores), got {jobs}", source="--jobs"
+        )
+    if backend == "dask" and not scheduler:
+        raise InputError(
+            "expected --scheduler ADDRESS (e.g. tcp://host:8786) with --backend dask",
+            source="--scheduler",
+        )
+
+
 @app.command()
 def experiment(
     config: Annotated[
-        str, typer.Argument(help="Bundled experiment (paper, scale, full, team) or FILE.toml.")
+        str,
+        typer.Argument(metavar="CONFIG", help="Bundled experiment (paper, full) or FILE.toml."),
     ],
     db: Annotated[
-        Path | None, typer.Option("--db", help="Results database (default results/NAME.sqlite).")
+        Path | None,
+        typer.Option(
+            "--db", metavar="FILE", help="Results database (default: results/NAME.sqlite)."
+        ),
     ] = None,
     jobs: Annotated[
-        int, typer.Option("--jobs", "-j", help="Local worker processes (-1: all cores).")
+        int,
+        typer.Option("--jobs", "-j", metavar="N", help="Local worker processes (-1: all cores)."),
     ] = -1,
-    backend: Annotated[str, typer.Option(help="local, dask or ray.")] = "local",
+    backend: Annotated[
+        str, typer.Option("--backend", metavar="NAME", help="Where to run: local, dask or ray.")
+    ] = "local",
     scheduler: Annotated[
-        str | None, typer.Option(help="Dask scheduler address (with --backend dask).")
+        str | None,
+        typer.Option(
+            "--scheduler", metavar="ADDRESS", help="Dask scheduler address (with --backend dask)."
+        ),
     ] = None,
     address: Annotated[
-        str | None, typer.Option(help="Ray cluster address (with --backend ray).")
+        str | None,
+        typer.Option(
+            "--address",
+            metavar="ADDRESS",
+            help="Ray cluster address (with --backend ray; default: start a local Ray).",
+        ),
     ] = None,
     export_csv: Annotated[
-        Path | None, typer.Option("--export-csv", help="Also write every row to a CSV file.")
+        Path | None,
+        typer.Option("--export-csv", metavar="FILE", help="Also write every row to a CSV file."),
     ] = None,
     export_parquet: Annotated[
-        Path | None, typer.Option("--export-parquet", help="Also write a Parquet file (pyarrow).")
-    ] = None,
-    max_missions: MaxMissions = MAX_MISSIONS,
-    max_cells: MaxCells = MAX_CELLS,
-    repeats: Annotated[
-        int | None,
+        Path | None,
         typer.Option(
-            "--repeats",
-            help="Warm timing runs per mission after one cold run (timings are their medians; "
-            "default: the experiment's timing_repeats, else 1).",
-            min=1,
-            max=1000,
+            "--export-parquet", metavar="FILE", help="Also write a Parquet file (needs pyarrow)."
         ),
     ] = None,
 ) -> int:
-    """Run an experiment (resumable: missions already in the database are skipped), then print the
-    per-strategy summary and the original study's findings checked on all stored rows. A team
-    experiment (``kind = "team"``, e.g. the bundled ``team``) prints the team summary."""
-    missions: tuple[Mission, ...] = ()
-    db_path: Path | None = None
-    try:
-        check_backend(backend, jobs=jobs, scheduler=scheduler)
-        if export_parquet is not None:
+    """Run an experiment; print its summary and findings.
+
+    Resumable: missions already in the database are skipped. The summary and the original
+    study's findings are computed on all stored rows of the experiment.
+    """
+    import joblib
+
+    from selfrepair.experiment.config import load_config
+    from selfrepair.experiment.findings import check_findings, summarize
+    from selfrepair.experiment.missions import expand
+    from selfrepair.experiment.runner import check_backend, run_missions
+    from selfrepair.experiment.store import ResultStore, require_pyarrow
+
+    _check_options(backend, jobs, scheduler)
+    check_backend(backend, jobs=jobs, scheduler=scheduler)
+    if export_parquet is not None:
+        try:
             require_pyarrow()  # before the sweep, not after it
-        from selfrepair.experiment.teams import TeamExperimentConfig, load_experiment
-
-        loaded = load_experiment(resolve_experiment(config))
-        if isinstance(loaded, TeamExperimentConfig):
-            from selfrepair.cli.team import run_team_experiment
-
-            if repeats is not None:
-                from selfrepair.errors import ProblemError
-
-                raise ProblemError(
-                    "--repeats times single-robot missions; a team experiment runs each once"
-                )
-
-            return run_team_experiment(
-                loaded,
-                db,
-                jobs=joblib.cpu_count() if jobs == -1 else jobs,
+        except ProblemError:
+            raise InputError(
+                "Parquet export needs pyarrow: pip install 'selfrepair[parquet]' "
+                "(or use --export-csv)",
+                source="--export-parquet",
+            ) from None
+    cfg = load_config(resolve_experiment(config))
+    missions = expand(cfg)
+    db_path = db if db is not None else Path("results") / f"{cfg.name}.sqlite"
+    n_jobs = joblib.cpu_count() if jobs == -1 else jobs
+    with ResultStore(db_path) as store:
+        with _progress(f"{cfg.name}: {len(missions)} missions") as on_progress:
+            summary = run_missions(
+                missions,
+                store,
+                jobs=n_jobs,
                 backend=backend,
                 scheduler=scheduler,
                 address=address,
-                export_csv=export_csv,
-                export_parquet=export_parquet,
-                progress=_progress,
-                max_missions=max_missions,
-                max_cells=max_cells,
+                on_progress=on_progress,
             )
-        cfg = loaded
-        missions = expand(cfg, max_missions=max_missions, max_cells=max_cells)
-        db_path = db if db is not None else Path("results") / f"{cfg.name}.sqlite"
-        n_jobs = joblib.cpu_count() if jobs == -1 else jobs
-        with ResultStore(db_path) as store:
-            with _progress(f"{cfg.name}: {len(missions)} missions") as on_progress:
-                summary = run_missions(
-                    missions,
-                    store,
-                    jobs=n_jobs,
-                    backend=backend,
-                    scheduler=scheduler,
-                    address=address,
-                    execute=partial(execute_mission, repeats=repeats or cfg.timing_repeats),
-                    on_progress=on_progress,
-                )
-            elsewhere = f", {summary.elsewhere} by another writer" if summary.elsewhere else ""
-            echo(
-                f"{cfg.name}: {summary.total} missions, {summary.skipped} already stored, "
-                f"{summary.ran} run{elsewhere} in {summary.seconds:.1f} s -> {db_path}"
-            )
-            keys = {m.key for m in missions}
-            rows = [r for r in store.rows() if r["key"] in keys]
-            print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
-            print_fault_sets(fault_set_bite(rows))
-            print_findings(check_findings(rows))
-            if cfg.crossover:
-                _print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
-            if export_csv is not None:
-                echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
-            if export_parquet is not None:
-                echo(f"wrote {store.export_parquet(export_parquet)} rows to {export_parquet}")
-    except KeyboardInterrupt:
-        sys.stdout.flush()
-        sys.stderr.write(f"selfrepair: interrupted: {_stored_after_interrupt(missions, db_path)}\n")
-        raise typer.Exit(130) from None
+        echo(
+            f"{cfg.name}: {summary.total} missions, {summary.skipped} already stored, "
+            f"{summary.ran} run in {summary.seconds:.1f} s -> {db_path}"
+        )
+        keys = {m.key for m in missions}
+        rows = [r for r in store.rows() if r["key"] in keys]
+        print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
+        print_findings(check_findings(rows))
+        if export_csv is not None:
+            echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
+        if export_parquet is not None:
+            echo(f"wrote {store.export_parquet(export_parquet)} rows to {export_parquet}")
     return 0
-
-
-def _stored_after_interrupt(missions: Sequence[Mission], db_path: Path | None) -> str:
-    """How much of an interrupted experiment is stored, and how to go on (every stored row is
-    whole: rows are committed in atomic batches)."""
-    if db_path is None or not missions:
-        return "no mission was run"
-    try:
-        with ResultStore(db_path, read_only=True) as store:
-            stored = len(store.keys() & {m.key for m in missions})
-    except SelfRepairError:
-        stored = 0
-    return (
-        f"{stored} of {len(missions)} missions are stored in {db_path}; "
-        "run the same command again to resume"
-    )
 
 
 @contextmanager
@@ -188,6 +159,16 @@ def _progress(label: str) -> Iterator[Callable[[int, int], None] | None]:
     if not sys.stdout.isatty():
         yield None
         return
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TaskProgressColumn,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
     columns = (
         TextColumn("{task.description}"),
         BarColumn(),
@@ -211,80 +192,61 @@ def _progress(label: str) -> Iterator[Callable[[int, int], None] | None]:
 
 _SHORT_HEADERS = {
     "completed": "done",
-    "met a fault": "met a\nfault",
-    "no replan": "no replan\n(missions)",
-    "resolved locally (per encounter)": "resolved\nlocally\n(per enc.)",
-    "replans/mission": "replans/\nmission",
-    "ticks over optimum": "ticks over\noptimum",
-    "plan distance": "plan\ndistance",
-    "plan distance by motion": "plan dist.\nby motion",
-    "repair compute/mission µs": "repair\ncompute/\nmission µs",
-    "first repair cold µs": "first\nrepair\ncold µs",
-    "first repair warm µs": "first\nrepair\nwarm µs",
+    "compute/action median µs": "compute/\naction\nmedian µs",
+    "compute/action p99 µs": "compute/\naction\np99 µs",
     "repair latency median µs": "repair\nlatency\nmedian µs",
     "repair latency p99 µs": "repair\nlatency\np99 µs",
+    "replans/mission": "replans/\nmission",
+    "resolved locally": "resolved\nlocally",
+    "extra ticks": "extra\nticks",
+    "plan distance": "plan\ndistance",
 }
 """Stacked headers for a terminal, where every column must fit without truncating a number."""
 
-_PIPED_WIDTH = 1000
-"""Piped output is as wide as the table needs (up to this), so nothing is cut."""
+_WIDE_ENOUGH = 120
+"""Below this terminal width the table is split in two (times, then outcomes)."""
 
 
 def print_summary(summaries: list[StrategySummary], *, title: str) -> None:
-    """The per-strategy summary as a rich table: one wide table when piped (logs keep full
-    headers), stacked headers on a terminal, split in two on a narrow one. Numbers are never
-    truncated; long strategy names wrap after a comma."""
+    """The per-strategy summary as a rich table: one wide table with full headers when piped
+    (logs and files are never cut, whatever ``COLUMNS`` says), stacked headers on a terminal,
+    split in two on a narrow one. Numbers are never truncated; long strategy names wrap after a
+    comma on a terminal."""
+    from selfrepair.experiment.findings import StrategySummary
+
     rows = [s.cells() for s in summaries]
     headers = StrategySummary.HEADERS
+    out = console()
     if not sys.stdout.isatty():
-        out = Console(file=sys.stdout, width=_PIPED_WIDTH, soft_wrap=True, highlight=False)
         out.print(_table(title, headers, rows, range(1, len(headers)), short=False))
         return
-    out = console()
-    groups = _column_groups(headers, rows, out.width)
+    if out.width >= _WIDE_ENOUGH:
+        groups = [range(1, len(headers))]
+    else:
+        groups = [range(1, 6), range(6, len(headers))]
     for part, columns in enumerate(groups, start=1):
         label = title if len(groups) == 1 else f"{title} ({part}/{len(groups)})"
         out.print(_table(label, headers, rows, columns, short=True))
-
-
-_NAME_WIDTH = 24
-"""Room kept for the strategy column on a terminal (names wrap after a comma)."""
-
-
-def _column_groups(
-    headers: tuple[str, ...], rows: list[tuple[str, ...]], width: int
-) -> list[list[int]]:
-    """The summary's columns packed, in order, into tables that each fit ``width``."""
-    groups: list[list[int]] = [[]]
-    used = _NAME_WIDTH
-    for i in range(1, len(headers)):
-        header = max(len(part) for part in _SHORT_HEADERS[headers[i]].split("\n"))
-        need = max([header, *(len(r[i]) for r in rows)]) + 3  # padding and rule
-        if groups[-1] and used + need > width:
-            groups.append([])
-            used = _NAME_WIDTH
-        groups[-1].append(i)
-        used += need
-    return groups
 
 
 def _table(
     title: str,
     headers: tuple[str, ...],
     rows: list[tuple[str, ...]],
-    columns: Sequence[int],
+    columns: range,
     *,
     short: bool,
 ) -> Table:
+    from rich import box
+    from rich.table import Table
+    from rich.text import Text
+
     table = Table(title=title, box=box.SIMPLE_HEAD if short else box.HEAVY_HEAD)
     table.add_column(headers[0], overflow="fold", no_wrap=not short)
     for i in columns:
-        table.add_column(
-            _SHORT_HEADERS[headers[i]] if short else headers[i],
-            justify="right",
-            no_wrap=True,
-            min_width=max(len(r[i]) for r in rows) if rows else None,
-        )
+        header = _SHORT_HEADERS[headers[i]] if short else headers[i]
+        widest = max([len(r[i]) for r in rows] + ([] if short else [len(header)]))
+        table.add_column(header, justify="right", no_wrap=True, min_width=widest)
     for row in rows:
         name = row[0].replace(",", ", ") if short else row[0]
         table.add_row(Text(name), *(Text(row[i]) for i in columns))
@@ -292,63 +254,51 @@ def _table(
 
 
 def print_findings(findings: list[Finding]) -> None:
-    """Each finding as a short paragraph: its outcome and claim, then the evidence."""
+    """Each finding: a headline with its verdict and claim, then its numbers, wrapped to
+    :data:`FINDING_WIDTH` characters."""
     for f in findings:
-        echo(f.paragraph())
-
-
-def _print_crossover(rows: list[dict[str, Value]], figure: Path) -> None:
-    """The crossover analysis of every replacement variant, and its figure when matplotlib is
-    installed."""
-    from selfrepair.experiment.scale import crossover
-
-    variants = sorted({str(r["variant"]) for r in rows if r.get("strategy") == "replacement"})
-    results = [crossover(rows, v) for v in variants]
-    echo(
-        "Crossover: the maze side where repair compute per mission falls below 1/10 of the "
-        "replanner's"
-    )
-    for result in results:
-        for line in result.lines():
-            echo("  " + line)
-    from importlib.util import find_spec
-
-    if find_spec("matplotlib") is None:  # extra viz missing: the numbers are enough
-        echo("(no figure: it needs matplotlib, pip install 'selfrepair[viz]')")
-        return
-    from selfrepair.experiment.plots import figure_crossover
-
-    echo(f"wrote {figure_crossover(results, figure)}")
-
-
-def print_fault_sets(bites: list[FaultSetBite]) -> None:
-    """Per fault set: missions that met a faulty action, of all missions and of the replanner's."""
-    echo("Fault sets: missions that met a faulty action (all strategies; replanning robot)")
-    for b in bites:
         echo(
-            f"  {b.faults or '(none)':<12} {b.met:>5}/{b.missions:<5} "
-            f"{b.replan_met:>4}/{b.replan_missions}"
+            textwrap.fill(
+                f"Finding {f.number} {f.verdict.upper()}: {f.claim}",
+                FINDING_WIDTH,
+                subsequent_indent="    ",
+            )
         )
+        echo(textwrap.fill(f.evidence, FINDING_WIDTH, initial_indent="    ",
+                           subsequent_indent="    "))
 
 
 @app.command()
 def report(
-    results: Annotated[Path, typer.Argument(help="Results database written by `experiment`.")],
-    out: Annotated[str, typer.Option("--out", "-o", help="Directory for report.md and figures.")],
+    results: Annotated[
+        Path,
+        typer.Argument(metavar="RESULTS", help="Results database written by `experiment`."),
+    ],
+    out: Annotated[
+        Path,
+        typer.Option("--out", "-o", metavar="DIR", help="Directory for report.md and figures."),
+    ],
     mission: Annotated[
         str | None,
-        typer.Option(help="Key (or key prefix) of the mission to draw; default: a telling one."),
+        typer.Option(
+            "--mission",
+            metavar="KEY",
+            help="Key (or key prefix) of the mission to draw (default: a telling one).",
+        ),
     ] = None,
 ) -> int:
-    """Write a Markdown report with tables and PNG figures (needs matplotlib: extra `viz`)."""
+    """Write a Markdown report with tables and figures.
+
+    The figures are PNG files (they need matplotlib: the `viz` extra).
+    """
     from selfrepair.experiment.report import write_report
 
     if not results.is_file():
-        from selfrepair.errors import InputError
-
         raise InputError(
             "expected a results database written by `selfrepair experiment`", source=str(results)
         )
+    if mission is not None and not mission:
+        raise InputError("expected a non-empty mission key or key prefix", source="--mission")
     written = write_report(results, out, mission_key=mission)
     for path in written:
         echo(str(path))
@@ -358,17 +308,50 @@ def report(
 @app.command()
 def animate(
     trace: Annotated[
-        Path, typer.Argument(help="Trace file (JSON Lines) written by `run --trace`.")
+        Path,
+        typer.Argument(metavar="TRACE", help="Trace file (JSON Lines) written by `run --trace`."),
     ],
-    out: Annotated[Path, typer.Option("--out", "-o", help="GIF file to write.")],
-    fps: Annotated[int, typer.Option(help="Frames per second.", min=1, max=60)] = 4,
+    out: Annotated[
+        Path, typer.Option("--out", "-o", metavar="FILE", help="GIF file to write.")
+    ],
+    fps: Annotated[
+        int, typer.Option("--fps", metavar="N", help="Frames per second.", min=1, max=60)
+    ] = 4,
     max_frames: Annotated[
-        int, typer.Option(help="At most this many frames (long traces are subsampled).", min=1)
+        int,
+        typer.Option(
+            "--max-frames",
+            metavar="N",
+            help="At most this many frames (long traces are subsampled).",
+            min=1,
+        ),
     ] = 120,
 ) -> int:
-    """Animate a mission trace as a GIF: the robot, its path, faults and replaced segments."""
+    """Animate a mission trace as a GIF.
+
+    Shows the robot, its path, the faults and the replaced segments.
+    """
     from selfrepair.experiment.animate import animate_trace
 
-    frames = animate_trace(trace, out, fps=fps, max_frames=max_frames)
+    with _frames_progress(f"drawing {out.name}") as on_frame:
+        frames = animate_trace(trace, out, fps=fps, max_frames=max_frames, on_frame=on_frame)
     echo(f"wrote {out} ({frames} frames)")
     return 0
+
+
+@contextmanager
+def _frames_progress(label: str) -> Iterator[Callable[[int, int], None] | None]:
+    """A progress bar of the frames drawn, on a terminal only."""
+    if not sys.stdout.isatty():
+        yield None
+        return
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn())
+    with Progress(*columns, console=console(), transient=True) as progress:
+        task = progress.add_task(label, total=None)
+
+        def update(done: int, total: int) -> None:
+            progress.update(task, completed=done, total=total)
+
+        yield update
