@@ -41,9 +41,9 @@ COMMANDS = dict(commands())
 
 def test_the_commands_are_the_documented_ones() -> None:
     assert set(COMMANDS) == {
-        "actions", "plan", "path", "check-scen", "run", "compare", "replay", "experiment",
-        "report", "animate", "view", "maze show", "maze list", "maze generate", "maze routes",
-        "table show", "table check", "table generate", "table coverage",
+        "actions", "domains", "plan", "path", "check-scen", "run", "compare", "replay",
+        "experiment", "report", "animate", "view", "maze show", "maze list", "maze generate",
+        "maze routes", "table show", "table check", "table generate", "table coverage",
     }  # fmt: skip
 
 
@@ -81,7 +81,9 @@ HEAVY = (
 )
 
 
-@pytest.mark.parametrize("argv", [["--help"], ["actions"], ["maze", "--help"], ["run", "--help"]])
+@pytest.mark.parametrize(
+    "argv", [["--help"], ["actions"], ["actions", "--json"], ["maze", "--help"], ["run", "--help"]]
+)
 def test_quick_commands_load_no_heavy_module(argv: list[str]) -> None:
     """Start-up: these commands import none of the heavy libraries (checked in a fresh
     interpreter, where nothing else has imported them)."""

@@ -8,8 +8,11 @@ that into one line on stderr and exit code 2.
 Start-up stays fast: a command module imports only the standard library, typer and this module
 at its top; numpy, rich, numba, pydantic, joblib, matplotlib and the library modules that pull
 them in are imported inside the command functions (a test checks ``selfrepair --help`` and
-``selfrepair actions``). Help is plain text (``rich_markup_mode=None``): no type labels such as
-``<bool>``, and the same text on a terminal and in a pipe.
+``selfrepair actions``). Typer reads the signature of every command on each start, so the
+command modules do not use ``from __future__ import annotations`` (string annotations would be
+compiled again on every start; names imported only for type checking are quoted instead). Help is
+plain text (``rich_markup_mode=None``): no type labels such as ``<bool>``, and the same text on a
+terminal and in a pipe.
 """
 
 from __future__ import annotations

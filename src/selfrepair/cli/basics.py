@@ -1,7 +1,6 @@
 """Basic commands: ``selfrepair actions`` and the maze group (``maze show``, ``maze list``,
 ``maze generate``, ``maze routes``)."""
 
-from __future__ import annotations
 
 import sys
 from collections.abc import Sequence
@@ -56,7 +55,7 @@ def actions(
 # --- mazes ------------------------------------------------------------------------------------
 
 
-def _routes_for(spec: str, maze: Maze, routes_file: Path | None) -> tuple[Route, ...]:
+def _routes_for(spec: str, maze: "Maze", routes_file: Path | None) -> "tuple[Route, ...]":
     """The routes to overlay: an explicit file, a bundled maze's own routes, or ``FILE.routes``."""
     from selfrepair.world import bundled
     from selfrepair.world.routes import load_routes
@@ -75,7 +74,7 @@ def _routes_for(spec: str, maze: Maze, routes_file: Path | None) -> tuple[Route,
     return load_routes(sibling, maze=maze)
 
 
-def route_picture(maze: Maze, routes: Sequence[Route]) -> str:
+def route_picture(maze: "Maze", routes: "Sequence[Route]") -> str:
     """The maze with ``routes`` drawn on it, followed by one line per route."""
     from selfrepair.world.render import (
         GOAL_CHAR,
@@ -243,7 +242,7 @@ def _check_count(count: int, option: str) -> None:
         )
 
 
-def _write_routes(drawn: Sequence[Route], path: Path, comments: list[str]) -> None:
+def _write_routes(drawn: "Sequence[Route]", path: Path, comments: list[str]) -> None:
     from selfrepair.world.routes import save_routes
 
     try:

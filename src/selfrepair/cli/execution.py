@@ -10,7 +10,6 @@ Times: the compiled kernels are loaded before the mission starts (reported apart
 planning time or a repair latency), and by default the mission runs once untimed first.
 """
 
-from __future__ import annotations
 
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -79,7 +78,7 @@ _SHOWN = (
 )
 
 
-def mission_picture(result: MissionResult) -> str:
+def mission_picture(result: "MissionResult") -> str:
     """The maze with the planned path, the executed path, the repair sites, start and goal."""
     from selfrepair.execution.result import StepSource
     from selfrepair.geometry import Cell
@@ -323,7 +322,7 @@ def _us(ns: int | None) -> str:
     return "–" if ns is None else f"{ns / 1000:,.1f}"
 
 
-def _print_comparison(comparison: Comparison, title: str, load_ns: int) -> None:
+def _print_comparison(comparison: "Comparison", title: str, load_ns: int) -> None:
     from rich.table import Table
     from rich.text import Text
 
@@ -349,7 +348,7 @@ def _print_comparison(comparison: Comparison, title: str, load_ns: int) -> None:
     echo(_timing_note(load_ns, comparison.warmed_up))
 
 
-def _comparison_json(comparison: Comparison, load_ns: int) -> dict[str, Any]:
+def _comparison_json(comparison: "Comparison", load_ns: int) -> dict[str, Any]:
     return {
         "runs": [
             {

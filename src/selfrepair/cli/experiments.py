@@ -1,6 +1,5 @@
 """Experiment commands: ``selfrepair experiment``, ``selfrepair report``, ``selfrepair animate``."""
 
-from __future__ import annotations
 
 import sys
 import textwrap
@@ -207,7 +206,7 @@ _WIDE_ENOUGH = 120
 """Below this terminal width the table is split in two (times, then outcomes)."""
 
 
-def print_summary(summaries: list[StrategySummary], *, title: str) -> None:
+def print_summary(summaries: "list[StrategySummary]", *, title: str) -> None:
     """The per-strategy summary as a rich table: one wide table with full headers when piped
     (logs and files are never cut, whatever ``COLUMNS`` says), stacked headers on a terminal,
     split in two on a narrow one. Numbers are never truncated; long strategy names wrap after a
@@ -236,7 +235,7 @@ def _table(
     columns: range,
     *,
     short: bool,
-) -> Table:
+) -> "Table":
     from rich import box
     from rich.table import Table
     from rich.text import Text
@@ -253,7 +252,7 @@ def _table(
     return table
 
 
-def print_findings(findings: list[Finding]) -> None:
+def print_findings(findings: "list[Finding]") -> None:
     """Each finding: a headline with its verdict and claim, then its numbers, wrapped to
     :data:`FINDING_WIDTH` characters."""
     for f in findings:

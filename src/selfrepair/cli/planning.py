@@ -8,7 +8,6 @@ Times: the compiled kernels are loaded (or compiled) before the search starts, a
 reported on its own line (``kernels loaded in ... ms``); the search time is the search alone.
 """
 
-from __future__ import annotations
 
 import time
 from pathlib import Path
@@ -45,7 +44,7 @@ MAX_PICTURE_CELLS = 100 * 100
 draws any size)."""
 
 
-def parse_goal(text: str) -> tuple[Cell, Heading | None]:
+def parse_goal(text: str) -> "tuple[Cell, Heading | None]":
     """Parse ``X,Y`` (any heading) or ``X,Y,H`` into a goal cell and optional heading."""
     from selfrepair.geometry import parse_cell, parse_pose
 
@@ -76,7 +75,7 @@ def _ms(ns: int) -> float:
     return round(ns / 1e6, 3)
 
 
-def plan_json(result: PlanResult, load_ns: int = 0) -> dict[str, Any]:
+def plan_json(result: "PlanResult", load_ns: int = 0) -> dict[str, Any]:
     """The ``plan --json`` object: ``cost`` and ``duration`` as numbers with exact ``_exact``
     strings; ``search_ms`` is the search alone, ``kernel_load_ms`` the one-off kernel load."""
     return {
@@ -93,7 +92,7 @@ def plan_json(result: PlanResult, load_ns: int = 0) -> dict[str, Any]:
     }
 
 
-def path_json(result: GridResult, load_ns: int = 0) -> dict[str, Any]:
+def path_json(result: "GridResult", load_ns: int = 0) -> dict[str, Any]:
     """The ``path --json`` object; ``cost`` is a float, ``cost_exact`` its exact form."""
     cost = result.cost
     return {
@@ -172,7 +171,7 @@ def plan_command(
     return 0 if result.status is PlanStatus.SOLVED else 1
 
 
-def _print_plan(problem: PlanningProblem, result: PlanResult, load_ns: int) -> None:
+def _print_plan(problem: "PlanningProblem", result: "PlanResult", load_ns: int) -> None:
     from selfrepair.robots import four_wheel
     from selfrepair.world.render import GOAL_CHAR, path_layer, pose_layer, render_ascii
 
@@ -259,7 +258,7 @@ def path_command(
     return 0 if result.status is PlanStatus.SOLVED else 1
 
 
-def _print_path_picture(maze: Maze, path: Any, start: Cell, goal: Cell) -> None:
+def _print_path_picture(maze: "Maze", path: Any, start: "Cell", goal: "Cell") -> None:
     from selfrepair.world.render import GOAL_CHAR, path_layer, render_ascii
 
     layers = [path_layer(path), {goal: GOAL_CHAR, start: "S"}]

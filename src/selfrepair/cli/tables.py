@@ -1,6 +1,5 @@
 """Commands that make and measure replacement tables: ``selfrepair table generate|coverage``."""
 
-from __future__ import annotations
 
 import json
 import time
@@ -106,7 +105,7 @@ def table_generate(
     return 0
 
 
-def _mazes(names: list[str] | None, no_walls: bool) -> list[tuple[str, Maze]]:
+def _mazes(names: list[str] | None, no_walls: bool) -> "list[tuple[str, Maze]]":
     from selfrepair.world.bundled import load_bundled, maze_names, resolve_maze
 
     if no_walls:
@@ -201,7 +200,7 @@ def _percent(value: float | None) -> str:
     return "n/a" if value is None else f"{100 * value:.1f}%"
 
 
-def _summary_table(report: CoverageReport) -> Table:
+def _summary_table(report: "CoverageReport") -> "Table":
     from rich.table import Table
     t: dict[str, Any] = report.totals()
     view = Table(
@@ -238,7 +237,7 @@ def _summary_table(report: CoverageReport) -> Table:
     return view
 
 
-def _fault_table(report: CoverageReport) -> Table:
+def _fault_table(report: "CoverageReport") -> "Table":
     from rich.table import Table
     view = Table(title="Per fault set (free space)")
     for column in ("faults", "disabled", "replaceable", "covered", "optimal", "max excess"):
@@ -255,7 +254,7 @@ def _fault_table(report: CoverageReport) -> Table:
     return view
 
 
-def _wall_table(report: CoverageReport) -> Table:
+def _wall_table(report: "CoverageReport") -> "Table":
     from rich.table import Table
     view = Table(
         title="Next to walls (flat): executable (pose, fault set, action) triples with "

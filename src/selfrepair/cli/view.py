@@ -6,7 +6,6 @@ starts with ``K`` and views it. Bad input (a missing file, a file that is neithe
 ambiguous key) is one line on stderr and exit code 2 (see :func:`selfrepair.cli.main`).
 """
 
-from __future__ import annotations
 
 from pathlib import Path
 from typing import Annotated
