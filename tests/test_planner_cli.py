@@ -76,8 +76,13 @@ def test_kernels_are_loaded_before_the_search_is_timed(
     if not numba_available():
         pytest.skip("numba is not installed (the kernels are what is loaded)")
     calls: list[str] = []
-    monkeypatch.setattr(warmup, "_WARM", False)
-    monkeypatch.setattr(warmup, "warm_up", lambda: calls.append("load") or 5_000_000)
+    monkeypatch.setattr(warmup, "_WARM", set())
+
+    def load(*kinds: str) -> int:
+        calls.append("load " + ",".join(kinds))
+        return 5_000_000
+
+    monkeypatch.setattr(warmup, "warm_up", load)
     real_plan = lattice.plan
     monkeypatch.setattr(lattice, "plan", lambda *a, **k: calls.append("plan") or real_plan(*a, **k))
     code, data = run_json(
@@ -85,7 +90,8 @@ def test_kernels_are_loaded_before_the_search_is_timed(
          "--json"],
         capsys,
     )  # fmt: skip
-    assert code == 0 and calls == ["load", "plan"] and data["kernel_load_ms"] == 5.0
+    # only the lattice kernels, which plan uses, are loaded, and before the search
+    assert code == 0 and calls == ["load lattice", "plan"] and data["kernel_load_ms"] == 5.0
 
 
 def test_plan_with_faults_uses_available_actions(
@@ -232,3 +238,17 @@ def test_plan_and_path_accept_bundled_maze_names(capsys: pytest.CaptureFixture[s
         ["path", "narrow-short", "--from", "1,1", "--to", "3,1", "--json"], capsys
     )
     assert code == 0 and data["cost"] == 2
+
+
+def test_warm_up_loads_the_families_asked_for_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    from selfrepair.errors import ProblemError
+    from selfrepair.search import warmup
+
+    with pytest.raises(ProblemError, match="unknown kernel family 'gpu'"):
+        warmup.warm_up("gpu")
+    loaded: list[tuple[str, ...]] = []
+    monkeypatch.setattr(warmup, "_WARM", set())
+    monkeypatch.setattr(warmup, "warm_up", lambda *kinds: loaded.append(kinds) or 7)
+    assert warmup.ensure_warm("grid") == 7 and warmup.ensure_warm("grid") == 0
+    assert warmup.ensure_warm() == 7 and warmup.ensure_warm("lattice", "grid") == 0
+    assert loaded == [("grid",), ("lattice",)]

@@ -54,9 +54,10 @@ def parse_goal(text: str) -> "tuple[Cell, Heading | None]":
     return parse_cell(text, source="--goal"), None
 
 
-def kernel_load_ns(backend: str) -> int:
-    """Load the compiled kernels if ``backend`` uses them; the nanoseconds it took (0 when they
-    were loaded already in this process or are not used)."""
+def kernel_load_ns(backend: str, *kinds: str) -> int:
+    """Load the compiled kernels of ``kinds`` (default: all; see
+    :data:`selfrepair.search.warmup.KERNELS`) if ``backend`` uses them; the nanoseconds it took
+    (0 when they were loaded already in this process or are not used)."""
     from selfrepair.search.astar import BACKENDS
     from selfrepair.search.backend import use_numba
 
@@ -68,7 +69,7 @@ def kernel_load_ns(backend: str) -> int:
         return 0
     from selfrepair.search.warmup import ensure_warm
 
-    return ensure_warm()
+    return ensure_warm(*kinds)
 
 
 def _ms(ns: int) -> float:
@@ -156,7 +157,7 @@ def plan_command(
         clearance_weight=parse_weight(clearance_weight),
         clearance_radius=clearance_radius,
     )
-    load_ns = kernel_load_ns(backend)
+    load_ns = kernel_load_ns(backend, "lattice")
     result = plan(
         problem,
         heuristic=heuristic,
@@ -233,7 +234,7 @@ def path_command(
     maze = resolve_maze(find_input(maze_spec))
     start = parse_cell(source, source="--from")
     goal = parse_cell(target, source="--to")
-    load_ns = kernel_load_ns(backend)
+    load_ns = kernel_load_ns(backend, "grid")
     result = grid_astar(
         maze,
         start,
@@ -291,7 +292,7 @@ def check_scen_command(
     from selfrepair.search.scenarios import SCEN_TOLERANCE, check_scenarios
 
     scen = Path(find_input(str(scen_path)))
-    load_ns = kernel_load_ns(backend)
+    load_ns = kernel_load_ns(backend, "grid")
     t0 = time.perf_counter()
     report = check_scenarios(scen, sample=sample, seed=seed, backend=backend)
     seconds = time.perf_counter() - t0
