@@ -54,6 +54,8 @@ EXTRA_OF = {
     "dask": "dask",
     "pyarrow": "parquet",
     "ray": "ray",
+    "unified_planning": "pddl",
+    "up_lpg": "pddl",
     "selenium": "test",
     "hypothesis": "test",
 }

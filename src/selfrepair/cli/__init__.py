@@ -20,6 +20,7 @@ from selfrepair.cli import (  # noqa: F401
     execution,
     experiments,
     gym,
+    pddl,
     planning,
     tables,
     team,

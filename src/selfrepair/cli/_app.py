@@ -155,8 +155,50 @@ def echo(text: str = "") -> None:
 
 
 def echo_json(data: Any) -> None:
-    """Print ``data`` as indented JSON to stdout."""
-    sys.stdout.write(json.dumps(data, indent=2) + "\n")
+    """Print ``data`` as indented, valid JSON to stdout (never ``NaN`` or ``Infinity``: a
+    non-finite number is a bug and raises ``ValueError`` instead of printing invalid JSON)."""
+    sys.stdout.write(json.dumps(data, indent=2, allow_nan=False) + "\n")
+
+
+# --- limits: one flag per limit of selfrepair.limits, the same on every command ----------------
+# A command declares ``max_cells: MaxCells = MAX_CELLS`` and so on; --help shows the default.
+
+MaxCells = Annotated[
+    int,
+    typer.Option(
+        "--max-cells",
+        metavar="N",
+        min=1,
+        help="Refuse a maze (file, map or generated) of more cells than this.",
+    ),
+]
+MaxMissions = Annotated[
+    int,
+    typer.Option(
+        "--max-missions",
+        metavar="N",
+        min=1,
+        help="Refuse an experiment of more missions than this.",
+    ),
+]
+MaxTableBytes = Annotated[
+    int,
+    typer.Option(
+        "--max-table-bytes",
+        metavar="N",
+        min=1,
+        help="Refuse a table file larger than this, unread.",
+    ),
+]
+MaxTableCandidates = Annotated[
+    int,
+    typer.Option(
+        "--max-table-candidates",
+        metavar="N",
+        min=1,
+        help="Refuse a table of more candidates than this, before re-simulating any.",
+    ),
+]
 
 
 def number_json(value: Fraction | float | int | None) -> int | float | None:

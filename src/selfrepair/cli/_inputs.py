@@ -116,13 +116,19 @@ def find_input(spec: str) -> str:
 
 
 def parse_weight(text: str, option: str = "--clearance-weight") -> Fraction:
-    """Parse a non-negative exact weight such as ``2``, ``1/3`` or ``0.25``."""
+    """Parse an exact weight such as ``2``, ``1/3`` or ``0.25``, from 0 to
+    :data:`~selfrepair.limits.MAX_CLEARANCE_WEIGHT`."""
+    from selfrepair.limits import MAX_CLEARANCE_WEIGHT
+
     try:
         weight = Fraction(text.strip())
     except (ValueError, ZeroDivisionError) as exc:
         raise InputError(
-            f"expected a number such as 2, 1/3 or 0.25, got {text!r}", source=option
+            f"expected a number such as 2, 1/3 or 0.25, got {text[:40]!r}", source=option
         ) from exc
-    if weight < 0:
-        raise InputError(f"expected a weight >= 0, got {text!r}", source=option)
+    if not 0 <= weight <= MAX_CLEARANCE_WEIGHT:
+        raise InputError(
+            f"expected a weight from 0 to {MAX_CLEARANCE_WEIGHT:,}, got {text[:40]!r}",
+            source=option,
+        )
     return weight

@@ -175,10 +175,15 @@ def mission_spec(
     plan_with_faults: bool,
     seed: int,
     domain_name: str,
+    max_cells: int,
+    max_table_bytes: int,
+    max_table_candidates: int,
     strategies: Sequence[str] = (),
 ) -> MissionSpec:
     """The mission the options describe; every option is checked here, so bad input is exit 2
-    before anything runs (``strategies``: every strategy that will run, to check the table)."""
+    before anything runs (``strategies``: every strategy that will run). The table is loaded
+    here, within the limits given, and the mission gets the loaded table, so those limits are
+    the ones that hold (a bad table file is exit 2 even when no repair needs it)."""
     from selfrepair.execution.faults import Clock, Detection
     from selfrepair.execution.result import MissionSpec
     from selfrepair.geometry import parse_cell, parse_pose
@@ -187,6 +192,7 @@ def mission_spec(
     from selfrepair.search.astar import BACKENDS
     from selfrepair.search.lattice import HEURISTICS
     from selfrepair.tables.fileformat import resolve_table
+    from selfrepair.tables.model import ReplacementTable
     from selfrepair.world.bundled import resolve_maze
 
     domain = domain_named(domain_name)
@@ -197,16 +203,21 @@ def mission_spec(
     check_choice(clock, tuple(Clock), "--clock")
     check_choice(heuristic, tuple(HEURISTICS), "--heuristic")
     check_choice(backend, BACKENDS, "--backend")
+    loaded: str | ReplacementTable = table
     if any(uses_table(name) for name in (*strategies, strategy)):
-        resolve_table(table)  # a bad table file is exit 2 even when no repair needs it
+        loaded = resolve_table(
+            find_input(table),
+            max_table_bytes=max_table_bytes,
+            max_table_candidates=max_table_candidates,
+        )
     return MissionSpec(
-        maze=resolve_maze(find_input(maze)),
+        maze=resolve_maze(find_input(maze), max_cells=max_cells),
         start=parse_pose(start, source="--start"),
         goal=parse_cell(goal, source="--goal"),
         schedule=build_schedule(domain, faults, at, clock, detect, transient, intermittent),
         strategy=strategy,
         options=StrategyOptions(
-            table=table,
+            table=loaded,
             recursion=RecursionMode(recursion),
             max_depth=max_depth,
             window=window,

@@ -9,9 +9,10 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from selfrepair.cli._app import app, echo, echo_json, maze_app, text_table
+from selfrepair.cli._app import MaxCells, app, echo, echo_json, maze_app, text_table
 from selfrepair.cli._inputs import MazeArg, find_input
 from selfrepair.errors import InputError
+from selfrepair.limits import MAX_CELLS
 
 if TYPE_CHECKING:
     from selfrepair.world.maze import Maze
@@ -110,6 +111,7 @@ def maze_show(
         str | None,
         typer.Option("--route", metavar="NAME", help="Overlay only the route with this name."),
     ] = None,
+    max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Print a maze as text, optionally with its routes.
 
@@ -118,7 +120,7 @@ def maze_show(
     from selfrepair.world.bundled import resolve_maze
     from selfrepair.world.render import render_ascii
 
-    maze = resolve_maze(find_input(spec))
+    maze = resolve_maze(find_input(spec), max_cells=max_cells)
     if not (routes or routes_file is not None or route is not None):
         sys.stdout.write(render_ascii(maze))
         return 0
@@ -183,6 +185,7 @@ def maze_generate(
             "-o", "--output", metavar="FILE", help="Write the maze here (default: print it)."
         ),
     ] = None,
+    max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Generate a seeded maze in the plain-text format.
 
@@ -207,7 +210,9 @@ def maze_generate(
             "FILE.routes)",
             source="--routes",
         )
-    maze = generate_maze(width, height, corridor=corridor, braid=braid, seed=seed)
+    maze = generate_maze(
+        width, height, corridor=corridor, braid=braid, seed=seed, max_cells=max_cells
+    )
     if output is None:
         sys.stdout.write(format_maze(maze))
         return 0
@@ -263,6 +268,7 @@ def maze_routes(
             "-o", "--output", metavar="FILE", help="Write the route file here (default: print)."
         ),
     ] = None,
+    max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Draw seeded routes for a maze.
 
@@ -275,7 +281,7 @@ def maze_routes(
 
     _check_seed(seed)
     _check_count(count, "--count")
-    maze = resolve_maze(find_input(spec))
+    maze = resolve_maze(find_input(spec), max_cells=max_cells)
     drawn = random_routes(maze, count, seed)
     comments = [f"maze: {spec}", f"made by: selfrepair maze routes {spec} -n {count} --seed {seed}"]
     if output is None:

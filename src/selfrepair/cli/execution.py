@@ -16,8 +16,27 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from selfrepair.cli._app import app, console, echo, echo_json, number_json, table_app
-from selfrepair.cli._inputs import Backend, ClearanceWeight, Faults, Heuristic, Json, MazeArg, Start
+from selfrepair.cli._app import (
+    MaxCells,
+    MaxTableBytes,
+    MaxTableCandidates,
+    app,
+    console,
+    echo,
+    echo_json,
+    number_json,
+    table_app,
+)
+from selfrepair.cli._inputs import (
+    Backend,
+    ClearanceWeight,
+    Faults,
+    Heuristic,
+    Json,
+    MazeArg,
+    Start,
+    find_input,
+)
 from selfrepair.cli._mission import (
     At,
     ClockOpt,
@@ -37,6 +56,7 @@ from selfrepair.cli._mission import (
     row_json,
 )
 from selfrepair.cli.planning import kernel_load_ns
+from selfrepair.limits import MAX_CELLS, MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES
 
 if TYPE_CHECKING:
     from selfrepair.execution.result import MissionResult
@@ -160,6 +180,9 @@ def run(
     warm_up: WarmUp = True,
     as_json: Annotated[bool, typer.Option("--json", help="Print the metrics row as JSON.")] = False,
     domain_name: DomainOpt = "four-wheel",
+    max_cells: MaxCells = MAX_CELLS,
+    max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
+    max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
     """Run one mission: plan, execute with faults, repair.
 
@@ -191,6 +214,9 @@ def run(
         plan_with_faults=plan_with_faults,
         seed=seed,
         domain_name=domain_name,
+        max_cells=max_cells,
+        max_table_bytes=max_table_bytes,
+        max_table_candidates=max_table_candidates,
     )
     load_ns = kernel_load_ns(backend)
     if warm_up:
@@ -258,6 +284,9 @@ def compare(
     warm_up: WarmUp = True,
     as_json: Json = False,
     domain_name: DomainOpt = "four-wheel",
+    max_cells: MaxCells = MAX_CELLS,
+    max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
+    max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
     """Run every strategy on one mission, side by side.
 
@@ -290,6 +319,9 @@ def compare(
         plan_with_faults=plan_with_faults,
         seed=seed,
         domain_name=domain_name,
+        max_cells=max_cells,
+        max_table_bytes=max_table_bytes,
+        max_table_candidates=max_table_candidates,
         strategies=names,
     )
     from selfrepair.experiment.compare import compare_strategies
@@ -432,6 +464,8 @@ def table_show(
         typer.Argument(metavar="TABLE", help="Table file or bundled table name (handwritten)."),
     ],
     as_json: Annotated[bool, typer.Option("--json", help="Print the table file text.")] = False,
+    max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
+    max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
     """Print a replacement table.
 
@@ -442,7 +476,9 @@ def table_show(
 
     from selfrepair.tables.fileformat import dump_table, resolve_table
 
-    table = resolve_table(spec)
+    table = resolve_table(
+        find_input(spec), max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
+    )
     if as_json:
         echo(dump_table(table).rstrip("\n"))
         return 0
@@ -469,6 +505,8 @@ def table_check(
     spec: Annotated[
         str, typer.Argument(metavar="TABLE", help="Table file or bundled table name.")
     ],
+    max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
+    max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
     """Check a table: gaps and dead candidates.
 
@@ -477,7 +515,9 @@ def table_check(
     from selfrepair.tables.fileformat import resolve_table
     from selfrepair.tables.model import check_table
 
-    table = resolve_table(spec)
+    table = resolve_table(
+        find_input(spec), max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
+    )
     problems = check_table(table)
     for problem in problems:
         echo(f"{spec}: {problem}")

@@ -10,8 +10,9 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from selfrepair.cli._app import app, console, echo
+from selfrepair.cli._app import MaxCells, MaxMissions, app, console, echo
 from selfrepair.errors import InputError, ProblemError
+from selfrepair.limits import MAX_CELLS, MAX_MISSIONS
 
 if TYPE_CHECKING:
     from rich.table import Table
@@ -97,6 +98,8 @@ def experiment(
             "--export-parquet", metavar="FILE", help="Also write a Parquet file (needs pyarrow)."
         ),
     ] = None,
+    max_missions: MaxMissions = MAX_MISSIONS,
+    max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Run an experiment; print its summary and findings.
 
@@ -123,7 +126,7 @@ def experiment(
                 source="--export-parquet",
             ) from None
     cfg = load_config(resolve_experiment(config))
-    missions = expand(cfg)
+    missions = expand(cfg, max_missions=max_missions, max_cells=max_cells)
     db_path = db if db is not None else Path("results") / f"{cfg.name}.sqlite"
     n_jobs = joblib.cpu_count() if jobs == -1 else jobs
     with ResultStore(db_path) as store:

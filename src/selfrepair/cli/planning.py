@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from selfrepair.cli._app import app, echo, echo_json, exact_json, number_json
+from selfrepair.cli._app import MaxCells, app, echo, echo_json, exact_json, number_json
 from selfrepair.cli._inputs import (
     Backend,
     ClearanceWeight,
@@ -30,6 +30,7 @@ from selfrepair.cli._inputs import (
     parse_weight,
 )
 from selfrepair.errors import InputError
+from selfrepair.limits import MAX_CELLS
 
 if TYPE_CHECKING:
     from selfrepair.geometry import Cell, Heading
@@ -134,6 +135,7 @@ def plan_command(
     time_limit: TimeLimit = None,
     backend: Backend = "auto",
     as_json: Json = False,
+    max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Plan the robot's actions with exact A*.
 
@@ -146,7 +148,7 @@ def plan_command(
     from selfrepair.search.problem import PlanningProblem
     from selfrepair.world.bundled import resolve_maze
 
-    maze = resolve_maze(find_input(maze_spec))
+    maze = resolve_maze(find_input(maze_spec), max_cells=max_cells)
     goal_cell, goal_heading = parse_goal(goal)
     problem = PlanningProblem(
         maze=maze,
@@ -217,6 +219,7 @@ def path_command(
     time_limit: TimeLimit = None,
     backend: Backend = "auto",
     as_json: Json = False,
+    max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Shortest grid path under MovingAI rules.
 
@@ -231,7 +234,7 @@ def path_command(
 
     if connectivity not in CONNECTIVITIES:
         raise InputError(f"expected 4 or 8, got {connectivity}", source="--connectivity")
-    maze = resolve_maze(find_input(maze_spec))
+    maze = resolve_maze(find_input(maze_spec), max_cells=max_cells)
     start = parse_cell(source, source="--from")
     goal = parse_cell(target, source="--to")
     load_ns = kernel_load_ns(backend, "grid")
@@ -283,6 +286,7 @@ def check_scen_command(
     ] = 0,
     backend: Backend = "auto",
     as_json: Json = False,
+    max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Check grid A* against a MovingAI scenario file.
 
@@ -294,7 +298,9 @@ def check_scen_command(
     scen = Path(find_input(str(scen_path)))
     load_ns = kernel_load_ns(backend, "grid")
     t0 = time.perf_counter()
-    report = check_scenarios(scen, sample=sample, seed=seed, backend=backend)
+    report = check_scenarios(
+        scen, sample=sample, seed=seed, backend=backend, max_cells=max_cells
+    )
     seconds = time.perf_counter() - t0
     bad = report.mismatches
     if as_json:

@@ -9,10 +9,19 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from selfrepair.cli._app import console, echo, echo_json, table_app
+from selfrepair.cli._app import (
+    MaxCells,
+    MaxTableBytes,
+    MaxTableCandidates,
+    console,
+    echo,
+    echo_json,
+    table_app,
+)
 from selfrepair.cli._inputs import find_input
 from selfrepair.cli._mission import domain_named
 from selfrepair.errors import InputError
+from selfrepair.limits import MAX_CELLS, MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES
 
 if TYPE_CHECKING:
     from rich.table import Table
@@ -105,14 +114,14 @@ def table_generate(
     return 0
 
 
-def _mazes(names: list[str] | None, no_walls: bool) -> "list[tuple[str, Maze]]":
+def _mazes(names: list[str] | None, no_walls: bool, max_cells: int) -> "list[tuple[str, Maze]]":
     from selfrepair.world.bundled import load_bundled, maze_names, resolve_maze
 
     if no_walls:
         return []
     if not names:
         return [(name, load_bundled(name)) for name in maze_names()]
-    return [(name, resolve_maze(find_input(name))) for name in names]
+    return [(name, resolve_maze(find_input(name), max_cells=max_cells)) for name in names]
 
 
 @table_app.command("coverage")
@@ -159,6 +168,9 @@ def table_coverage(
         typer.Option("--json-out", metavar="FILE", help="Write the full report as JSON."),
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of tables.")] = False,
+    max_cells: MaxCells = MAX_CELLS,
+    max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
+    max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
     """Measure a table's coverage and optimality.
 
@@ -169,7 +181,9 @@ def table_coverage(
     from selfrepair.tables.enumerate import FaultScope, Objective
     from selfrepair.tables.fileformat import resolve_table
 
-    table = resolve_table(spec)
+    table = resolve_table(
+        find_input(spec), max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
+    )
     _choice(faults, FaultScope, "--faults")
     _choice(recursion, RecursionMode, "--recursion")
     if objective is not None:
@@ -179,12 +193,12 @@ def table_coverage(
         faults=faults,
         objective=objective,
         mode=recursion,
-        mazes=_mazes(maze, no_walls),
+        mazes=_mazes(maze, no_walls, max_cells),
         label=spec,
     )
     data = report.to_json()
     if json_out is not None:
-        json_out.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
+        json_out.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n", encoding="utf-8")
     if as_json:
         echo_json(data)
         return 0

@@ -18,6 +18,7 @@ import numpy as np
 
 from selfrepair.errors import InputError
 from selfrepair.geometry import Cell
+from selfrepair.limits import MAX_CELLS
 from selfrepair.search.grid import grid_astar
 from selfrepair.world.maze import Maze
 from selfrepair.world.movingai import ScenarioQuery, load_map, load_scenario
@@ -83,12 +84,19 @@ def sample_indices(total: int, sample: int | None, seed: int) -> list[int]:
 
 
 def check_scenarios(
-    scen_path: str | Path, *, sample: int | None = None, seed: int = 0, backend: str = "auto"
+    scen_path: str | Path,
+    *,
+    sample: int | None = None,
+    seed: int = 0,
+    backend: str = "auto",
+    max_cells: int | None = MAX_CELLS,
 ) -> ScenarioReport:
     """Run the scenario lines (all, or ``sample`` spread evenly) with 8-connected grid A*.
 
-    Bad input (an unreadable file, a missing map, a size that disagrees with the map, a start or
-    goal on a wall) raises :class:`~selfrepair.errors.InputError` naming the scenario line.
+    Bad input (an unreadable file, a missing map, a map over ``max_cells``, a size that disagrees
+    with the map, a start or goal on a wall) raises :class:`~selfrepair.errors.InputError` naming
+    the scenario line. Every number in a check is finite: the reader refuses a non-finite
+    ``optimal_length`` and a path cost is a sum of finite steps.
     """
     path = Path(scen_path)
     queries = load_scenario(path)
@@ -96,7 +104,7 @@ def check_scenarios(
     maps: dict[str, Maze] = {}  # the maps of this one file, dropped on return
     checks = []
     for query in chosen:
-        maze = _scenario_map(path, query, maps)
+        maze = _scenario_map(path, query, maps, max_cells)
         result = grid_astar(maze, query.start, query.goal, connectivity=8, backend=backend)
         got = None if result.cost is None else result.cost.value
         ok = got is not None and abs(got - query.optimal_length) <= SCEN_TOLERANCE
@@ -112,7 +120,9 @@ def scenario_map_path(scen_path: Path, query: ScenarioQuery) -> Path:
     return scen_path.parent / query.map_name.replace("\\", "/").rsplit("/", 1)[-1]
 
 
-def _scenario_map(scen_path: Path, query: ScenarioQuery, maps: dict[str, Maze]) -> Maze:
+def _scenario_map(
+    scen_path: Path, query: ScenarioQuery, maps: dict[str, Maze], max_cells: int | None
+) -> Maze:
     map_path = scenario_map_path(scen_path, query)
     name = map_path.name
     if name not in maps:
@@ -122,7 +132,7 @@ def _scenario_map(scen_path: Path, query: ScenarioQuery, maps: dict[str, Maze]) 
                 source=str(scen_path),
                 line=query.line,
             )
-        maze = load_map(map_path)
+        maze = load_map(map_path, max_cells=max_cells)
         if (maze.width, maze.height) != (query.width, query.height):
             raise InputError(
                 f"expected the map size {maze.width}x{maze.height}, "
