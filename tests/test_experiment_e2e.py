@@ -318,19 +318,24 @@ def test_terminal_summary_never_truncates_a_number(
 
 def _long_summary(label: str) -> object:
     from selfrepair.experiment.findings import StrategySummary
+    from selfrepair.experiment.stats import Interval
 
     return StrategySummary(
         label=label,
         missions=192,
         completed=192,
-        compute_per_action_median_us=12345.6,
-        compute_per_action_p99_us=98765.4,
+        met_fault=148,
+        no_replan=79,
+        resolved_locally=0.993,
+        replans_per_mission=0.77,
+        over_optimum=Interval(20.14, 17.5, 23.25, 192),
+        plan_distance_mean=104.0,
+        plan_distance_motion_mean=55.5,
+        repair_compute_us=Interval(12345.6, 10000.2, 98765.4, 148),
+        cold_first_repair_us=Interval(184.0, 51.0, 1234.0, 148),
+        warm_first_repair_us=Interval(16.0, 5.0, 18.0, 148),
         latency_median_us=4321.0,
         latency_p99_us=123456.7,
-        replans_per_mission=0.77,
-        resolved_locally=0.993,
-        extra_ticks_mean=33.97,
-        plan_distance_mean=104.0,
     )
 
 
@@ -355,13 +360,12 @@ def test_piped_summary_is_never_cut(
 
 
 def test_findings_are_wrapped(capsys: pytest.CaptureFixture[str]) -> None:
-    from selfrepair.cli.experiments import FINDING_WIDTH, print_findings
-    from selfrepair.experiment.findings import Finding
+    from selfrepair.cli.experiments import print_findings
+    from selfrepair.experiment.findings import Finding, Outcome
 
-    evidence = "; ".join(f"variant {i} resolved 99.{i}% of 1234 encounters" for i in range(20))
-    finding = Finding(1, "a claim of the original study", "held", evidence)
+    items = tuple(f"variant {i} resolved 99.{i}% of 1234 encounters" for i in range(20))
+    finding = Finding("1", "a claim of the original study", Outcome.HELD, ("Intro.", *items))
     print_findings([finding])
     lines = capsys.readouterr().out.splitlines()
-    assert lines[0] == "Finding 1 HELD: a claim of the original study"
-    assert all(len(line) <= FINDING_WIDTH for line in lines)
-    assert " ".join(line.strip() for line in lines[1:]) == evidence
+    assert lines[0].startswith("Finding 1: HELD.")
+    assert all(len(line) <= 100 for line in lines)

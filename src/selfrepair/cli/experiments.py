@@ -2,9 +2,9 @@
 
 
 import sys
-import textwrap
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
@@ -18,15 +18,21 @@ if TYPE_CHECKING:
     from rich.table import Table
 
     from selfrepair.experiment.findings import Finding, StrategySummary
+    from selfrepair.experiment.store import Value
+    from selfrepair.experiment.summary import FaultSetBite
 
-__all__ = ["animate", "experiment", "print_findings", "print_summary", "report"]
-
-FINDING_WIDTH = 100
-"""Findings are wrapped to this many characters per line."""
+__all__ = [
+    "animate",
+    "experiment",
+    "print_fault_sets",
+    "print_findings",
+    "print_summary",
+    "report",
+]
 
 
 def resolve_experiment(spec: str) -> Path:
-    """A bundled experiment name (``paper``, ``full``) or a path to a TOML file."""
+    """A bundled experiment name (``paper``, ``scale``, ``full``) or a path to a TOML file."""
     from importlib import resources
 
     folder = resources.files("selfrepair").joinpath("data", "experiments")
@@ -59,7 +65,9 @@ def _check_options(backend: str, jobs: int, scheduler: str | None) -> None:
 def experiment(
     config: Annotated[
         str,
-        typer.Argument(metavar="CONFIG", help="Bundled experiment (paper, full) or FILE.toml."),
+        typer.Argument(
+            metavar="CONFIG", help="Bundled experiment (paper, scale, full) or FILE.toml."
+        ),
     ],
     db: Annotated[
         Path | None,
@@ -100,6 +108,17 @@ def experiment(
     ] = None,
     max_missions: MaxMissions = MAX_MISSIONS,
     max_cells: MaxCells = MAX_CELLS,
+    repeats: Annotated[
+        int | None,
+        typer.Option(
+            "--repeats",
+            metavar="N",
+            help="Warm timing runs per mission after one cold run (timings are their medians; "
+            "default: the experiment's timing_repeats, else 1).",
+            min=1,
+            max=1000,
+        ),
+    ] = None,
 ) -> int:
     """Run an experiment; print its summary and findings.
 
@@ -111,8 +130,9 @@ def experiment(
     from selfrepair.experiment.config import load_config
     from selfrepair.experiment.findings import check_findings, summarize
     from selfrepair.experiment.missions import expand
-    from selfrepair.experiment.runner import check_backend, run_missions
+    from selfrepair.experiment.runner import check_backend, execute_mission, run_missions
     from selfrepair.experiment.store import ResultStore, require_pyarrow
+    from selfrepair.experiment.summary import fault_set_bite
 
     _check_options(backend, jobs, scheduler)
     check_backend(backend, jobs=jobs, scheduler=scheduler)
@@ -138,6 +158,7 @@ def experiment(
                 backend=backend,
                 scheduler=scheduler,
                 address=address,
+                execute=partial(execute_mission, repeats=repeats or cfg.timing_repeats),
                 on_progress=on_progress,
             )
         echo(
@@ -147,7 +168,10 @@ def experiment(
         keys = {m.key for m in missions}
         rows = [r for r in store.rows() if r["key"] in keys]
         print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
+        print_fault_sets(fault_set_bite(rows))
         print_findings(check_findings(rows))
+        if cfg.crossover:
+            _print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
         if export_csv is not None:
             echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
         if export_parquet is not None:
@@ -194,48 +218,67 @@ def _progress(label: str) -> Iterator[Callable[[int, int], None] | None]:
 
 _SHORT_HEADERS = {
     "completed": "done",
-    "compute/action median µs": "compute/\naction\nmedian µs",
-    "compute/action p99 µs": "compute/\naction\np99 µs",
+    "met a fault": "met a\nfault",
+    "no replan": "no replan\n(missions)",
+    "resolved locally (per encounter)": "resolved\nlocally\n(per enc.)",
+    "replans/mission": "replans/\nmission",
+    "ticks over optimum": "ticks over\noptimum",
+    "plan distance": "plan\ndistance",
+    "plan distance by motion": "plan dist.\nby motion",
+    "repair compute/mission µs": "repair\ncompute/\nmission µs",
+    "first repair cold µs": "first\nrepair\ncold µs",
+    "first repair warm µs": "first\nrepair\nwarm µs",
     "repair latency median µs": "repair\nlatency\nmedian µs",
     "repair latency p99 µs": "repair\nlatency\np99 µs",
-    "replans/mission": "replans/\nmission",
-    "resolved locally": "resolved\nlocally",
-    "extra ticks": "extra\nticks",
-    "plan distance": "plan\ndistance",
 }
 """Stacked headers for a terminal, where every column must fit without truncating a number."""
-
-_WIDE_ENOUGH = 120
-"""Below this terminal width the table is split in two (times, then outcomes)."""
 
 
 def print_summary(summaries: "list[StrategySummary]", *, title: str) -> None:
     """The per-strategy summary as a rich table: one wide table with full headers when piped
     (logs and files are never cut, whatever ``COLUMNS`` says), stacked headers on a terminal,
-    split in two on a narrow one. Numbers are never truncated; long strategy names wrap after a
-    comma on a terminal."""
+    split into as many tables as the terminal's width needs. Numbers are never truncated; long
+    strategy names wrap after a comma on a terminal."""
     from selfrepair.experiment.findings import StrategySummary
 
     rows = [s.cells() for s in summaries]
     headers = StrategySummary.HEADERS
-    out = console()
+    out = console()  # piped: as wide as the table needs (see console())
     if not sys.stdout.isatty():
         out.print(_table(title, headers, rows, range(1, len(headers)), short=False))
         return
-    if out.width >= _WIDE_ENOUGH:
-        groups = [range(1, len(headers))]
-    else:
-        groups = [range(1, 6), range(6, len(headers))]
+    groups = _column_groups(headers, rows, out.width)
     for part, columns in enumerate(groups, start=1):
         label = title if len(groups) == 1 else f"{title} ({part}/{len(groups)})"
         out.print(_table(label, headers, rows, columns, short=True))
+
+
+_NAME_WIDTH = 24
+"""Room kept for the strategy column on a terminal (names wrap after a comma)."""
+
+
+def _column_groups(
+    headers: tuple[str, ...], rows: list[tuple[str, ...]], width: int
+) -> list[list[int]]:
+    """The summary's columns packed, in order, into tables that each fit ``width``."""
+    groups: list[list[int]] = [[]]
+    used = _NAME_WIDTH
+    for i in range(1, len(headers)):
+        header = max(len(part) for part in _SHORT_HEADERS[headers[i]].split("\n"))
+        need = max([header, *(len(r[i]) for r in rows)]) + 3  # padding and rule
+        if groups[-1] and used + need > width:
+            groups.append([])
+            used = _NAME_WIDTH
+        groups[-1].append(i)
+        used += need
+    return groups
 
 
 def _table(
     title: str,
     headers: tuple[str, ...],
     rows: list[tuple[str, ...]],
-    columns: range,
+    columns: Sequence[int],
     *,
     short: bool,
 ) -> "Table":
@@ -256,18 +299,43 @@ def _table(
 
 
 def print_findings(findings: "list[Finding]") -> None:
-    """Each finding: a headline with its verdict and claim, then its numbers, wrapped to
-    :data:`FINDING_WIDTH` characters."""
+    """Each finding as a short paragraph: its outcome and claim, then the evidence (wrapped)."""
     for f in findings:
+        echo(f.paragraph())
+
+
+def _print_crossover(rows: "list[dict[str, Value]]", figure: Path) -> None:
+    """The crossover analysis of every replacement variant, and its figure when matplotlib is
+    installed."""
+    from selfrepair.experiment.scale import crossover
+
+    variants = sorted({str(r["variant"]) for r in rows if r.get("strategy") == "replacement"})
+    results = [crossover(rows, v) for v in variants]
+    echo(
+        "Crossover: the maze side where repair compute per mission falls below 1/10 of the "
+        "replanner's"
+    )
+    for result in results:
+        for line in result.lines():
+            echo("  " + line)
+    from importlib.util import find_spec
+
+    if find_spec("matplotlib") is None:  # extra viz missing: the numbers are enough
+        echo("(no figure: it needs matplotlib, pip install 'selfrepair[viz]')")
+        return
+    from selfrepair.experiment.plots import figure_crossover
+
+    echo(f"wrote {figure_crossover(results, figure)}")
+
+
+def print_fault_sets(bites: "list[FaultSetBite]") -> None:
+    """Per fault set: missions that met a faulty action, of all missions and of the replanner's."""
+    echo("Fault sets: missions that met a faulty action (all strategies; replanning robot)")
+    for b in bites:
         echo(
-            textwrap.fill(
-                f"Finding {f.number} {f.verdict.upper()}: {f.claim}",
-                FINDING_WIDTH,
-                subsequent_indent="    ",
-            )
+            f"  {b.faults or '(none)':<12} {b.met:>5}/{b.missions:<5} "
+            f"{b.replan_met:>4}/{b.replan_missions}"
         )
-        echo(textwrap.fill(f.evidence, FINDING_WIDTH, initial_indent="    ",
-                           subsequent_indent="    "))
 
 
 @app.command()
