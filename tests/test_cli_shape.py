@@ -44,7 +44,7 @@ def test_the_commands_are_the_documented_ones() -> None:
         "actions", "domains", "plan", "path", "check-scen", "run", "compare", "replay",
         "experiment", "report", "animate", "view", "gym-eval", "pddl", "maze show", "maze list",
         "maze generate", "maze routes", "table show", "table check", "table generate",
-        "table coverage",
+        "table coverage", "team run", "team compare", "team replay", "team table", "team frame",
     }  # fmt: skip
 
 
@@ -63,7 +63,7 @@ def test_help_has_no_type_labels_and_every_option_has_help(
             assert argument.isupper(), f"{name}: argument {argument} is not upper case"
 
 
-@pytest.mark.parametrize("group", ["", "maze", "table"])
+@pytest.mark.parametrize("group", ["", "maze", "table", "team"])
 def test_command_lists_are_not_cut(group: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert main([*group.split(), "--help"]) == 0
     listing = capsys.readouterr().out.split("Commands:", 1)[1]
@@ -82,23 +82,40 @@ HEAVY = (
 )
 
 
-@pytest.mark.parametrize(
-    "argv", [["--help"], ["actions"], ["actions", "--json"], ["maze", "--help"], ["run", "--help"]]
-)
-def test_quick_commands_load_no_heavy_module(argv: list[str]) -> None:
-    """Start-up: these commands import none of the heavy libraries (checked in a fresh
-    interpreter, where nothing else has imported them)."""
+def _heavy_modules_after(argvs: list[list[str]]) -> dict[str, list[str]]:
+    """Run each command line in turn in one fresh interpreter (where nothing else has imported
+    anything) and return, per command line, the heavy modules loaded so far."""
     code = (
-        "import sys, io, contextlib\n"
+        "import sys, io, json, contextlib\n"
         "from selfrepair.cli import main\n"
-        "with contextlib.redirect_stdout(io.StringIO()):\n"
-        f"    assert main({argv!r}) == 0\n"
-        f"print(sorted(m for m in {HEAVY!r} if m in sys.modules))\n"
+        "loaded = {}\n"
+        f"for argv in {argvs!r}:\n"
+        "    with contextlib.redirect_stdout(io.StringIO()):\n"
+        "        assert main(argv) == 0, argv\n"
+        f"    loaded[' '.join(argv)] = sorted(m for m in {HEAVY!r} if m in sys.modules)\n"
+        "print(json.dumps(loaded))\n"
     )
     out = subprocess.run(
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
     ).stdout
-    assert json.loads(out.replace("'", '"')) == []
+    result: dict[str, list[str]] = json.loads(out)
+    return result
+
+
+@pytest.mark.parametrize("argv", [["actions"], ["actions", "--json"], ["domains"]])
+def test_quick_commands_load_no_heavy_module(argv: list[str]) -> None:
+    """Start-up: these commands import none of the heavy libraries."""
+    assert _heavy_modules_after([argv]) == {" ".join(argv): []}
+
+
+def test_no_help_loads_a_heavy_module() -> None:
+    """``selfrepair --help``, every group's and every command's ``--help`` import none of the
+    heavy libraries (one interpreter runs them all: the first to load one is named)."""
+    groups = sorted({name.split()[0] for name in COMMANDS if " " in name})
+    argvs = [["--help"], *([g, "--help"] for g in groups)]
+    argvs += [[*name.split(), "--help"] for name in sorted(COMMANDS)]
+    loaded = _heavy_modules_after(argvs)
+    assert {argv: mods for argv, mods in loaded.items() if mods} == {}
 
 
 def test_the_cli_defaults_match_the_library() -> None:

@@ -98,6 +98,12 @@ class _Typer(typer.Typer):
         return decorator
 
 
+def command_group(*, help: str) -> typer.Typer:
+    """A sub-command group with this CLI's conventions (quick options, help without type
+    labels); a command module adds it with ``app.add_typer(group, name=...)``."""
+    return _Typer(help=help, no_args_is_help=True)
+
+
 app = _Typer(
     name="selfrepair",
     help="Self-repairing robot plans: replacement tables versus replanning from scratch.",
@@ -106,12 +112,8 @@ app = _Typer(
     pretty_exceptions_enable=False,
     context_settings={"max_content_width": 100},
 )
-maze_app = _Typer(
-    help="Show, list and generate mazes; draw routes for them.", no_args_is_help=True
-)
-table_app = _Typer(
-    help="Replacement tables: show, check, generate, coverage.", no_args_is_help=True
-)
+maze_app = command_group(help="Show, list and generate mazes; draw routes for them.")
+table_app = command_group(help="Replacement tables: show, check, generate, coverage.")
 app.add_typer(maze_app, name="maze")
 app.add_typer(table_app, name="table")
 

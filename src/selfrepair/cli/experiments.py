@@ -18,6 +18,7 @@ if TYPE_CHECKING:
     from rich.table import Table
 
     from selfrepair.experiment.findings import Finding, StrategySummary
+    from selfrepair.experiment.missions import Mission
     from selfrepair.experiment.store import Value
     from selfrepair.experiment.summary import FaultSetBite
 
@@ -66,7 +67,7 @@ def experiment(
     config: Annotated[
         str,
         typer.Argument(
-            metavar="CONFIG", help="Bundled experiment (paper, scale, full) or FILE.toml."
+            metavar="CONFIG", help="Bundled experiment (paper, scale, full, team) or FILE.toml."
         ),
     ],
     db: Annotated[
@@ -123,60 +124,117 @@ def experiment(
     """Run an experiment; print its summary and findings.
 
     Resumable: missions already in the database are skipped. The summary and the original
-    study's findings are computed on all stored rows of the experiment.
+    study's findings are computed on all stored rows of the experiment. A team experiment
+    (kind = "team", e.g. the bundled team) prints the team summary. Ctrl-C stops the sweep and
+    says how much is stored (exit 130); running the same command again resumes.
     """
     import joblib
 
-    from selfrepair.experiment.config import load_config
     from selfrepair.experiment.findings import check_findings, summarize
     from selfrepair.experiment.missions import expand
     from selfrepair.experiment.runner import check_backend, execute_mission, run_missions
-    from selfrepair.experiment.store import ResultStore, require_pyarrow
+    from selfrepair.experiment.store import ResultStore
     from selfrepair.experiment.summary import fault_set_bite
+    from selfrepair.experiment.teams import TeamExperimentConfig, load_experiment
 
-    _check_options(backend, jobs, scheduler)
-    check_backend(backend, jobs=jobs, scheduler=scheduler)
-    if export_parquet is not None:
-        try:
-            require_pyarrow()  # before the sweep, not after it
-        except ProblemError:
-            raise InputError(
-                "Parquet export needs pyarrow: pip install 'selfrepair[parquet]' "
-                "(or use --export-csv)",
-                source="--export-parquet",
-            ) from None
-    cfg = load_config(resolve_experiment(config))
-    missions = expand(cfg, max_missions=max_missions, max_cells=max_cells)
-    db_path = db if db is not None else Path("results") / f"{cfg.name}.sqlite"
-    n_jobs = joblib.cpu_count() if jobs == -1 else jobs
-    with ResultStore(db_path) as store:
-        with _progress(f"{cfg.name}: {len(missions)} missions") as on_progress:
-            summary = run_missions(
-                missions,
-                store,
-                jobs=n_jobs,
+    missions: tuple[Mission, ...] = ()
+    db_path: Path | None = None
+    try:
+        _check_options(backend, jobs, scheduler)
+        check_backend(backend, jobs=jobs, scheduler=scheduler)
+        if export_parquet is not None:
+            _require_pyarrow()  # before the sweep, not after it
+        loaded = load_experiment(resolve_experiment(config))
+        if isinstance(loaded, TeamExperimentConfig):
+            from selfrepair.cli.team import run_team_experiment
+
+            if repeats is not None:
+                raise InputError(
+                    "--repeats times single-robot missions; a team experiment runs each once",
+                    source="--repeats",
+                )
+            return run_team_experiment(
+                loaded,
+                db,
+                jobs=joblib.cpu_count() if jobs == -1 else jobs,
                 backend=backend,
                 scheduler=scheduler,
                 address=address,
-                execute=partial(execute_mission, repeats=repeats or cfg.timing_repeats),
-                on_progress=on_progress,
+                export_csv=export_csv,
+                export_parquet=export_parquet,
+                progress=_progress,
+                max_missions=max_missions,
+                max_cells=max_cells,
             )
-        echo(
-            f"{cfg.name}: {summary.total} missions, {summary.skipped} already stored, "
-            f"{summary.ran} run in {summary.seconds:.1f} s -> {db_path}"
-        )
-        keys = {m.key for m in missions}
-        rows = [r for r in store.rows() if r["key"] in keys]
-        print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
-        print_fault_sets(fault_set_bite(rows))
-        print_findings(check_findings(rows))
-        if cfg.crossover:
-            _print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
-        if export_csv is not None:
-            echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
-        if export_parquet is not None:
-            echo(f"wrote {store.export_parquet(export_parquet)} rows to {export_parquet}")
+        cfg = loaded
+        missions = expand(cfg, max_missions=max_missions, max_cells=max_cells)
+        db_path = db if db is not None else Path("results") / f"{cfg.name}.sqlite"
+        n_jobs = joblib.cpu_count() if jobs == -1 else jobs
+        with ResultStore(db_path) as store:
+            with _progress(f"{cfg.name}: {len(missions)} missions") as on_progress:
+                summary = run_missions(
+                    missions,
+                    store,
+                    jobs=n_jobs,
+                    backend=backend,
+                    scheduler=scheduler,
+                    address=address,
+                    execute=partial(execute_mission, repeats=repeats or cfg.timing_repeats),
+                    on_progress=on_progress,
+                )
+            elsewhere = f", {summary.elsewhere} by another writer" if summary.elsewhere else ""
+            echo(
+                f"{cfg.name}: {summary.total} missions, {summary.skipped} already stored, "
+                f"{summary.ran} run{elsewhere} in {summary.seconds:.1f} s -> {db_path}"
+            )
+            keys = {m.key for m in missions}
+            rows = [r for r in store.rows() if r["key"] in keys]
+            print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
+            print_fault_sets(fault_set_bite(rows))
+            print_findings(check_findings(rows))
+            if cfg.crossover:
+                _print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
+            if export_csv is not None:
+                echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
+            if export_parquet is not None:
+                echo(f"wrote {store.export_parquet(export_parquet)} rows to {export_parquet}")
+    except KeyboardInterrupt:
+        sys.stdout.flush()
+        sys.stderr.write(f"selfrepair: interrupted: {_stored_after_interrupt(missions, db_path)}\n")
+        raise typer.Exit(130) from None
     return 0
+
+
+def _require_pyarrow() -> None:
+    """The library's check, worded with the flags."""
+    from selfrepair.experiment.store import require_pyarrow
+
+    try:
+        require_pyarrow()
+    except ProblemError:
+        raise InputError(
+            "Parquet export needs pyarrow: pip install 'selfrepair[parquet]' (or use --export-csv)",
+            source="--export-parquet",
+        ) from None
+
+
+def _stored_after_interrupt(missions: "Sequence[Mission]", db_path: Path | None) -> str:
+    """How much of an interrupted experiment is stored, and how to go on (every stored row is
+    whole: rows are committed in atomic batches)."""
+    from selfrepair.errors import SelfRepairError
+    from selfrepair.experiment.store import ResultStore
+
+    if db_path is None or not missions:
+        return "no mission was run"
+    try:
+        with ResultStore(db_path, read_only=True) as store:
+            stored = len(store.keys() & {m.key for m in missions})
+    except SelfRepairError:
+        stored = 0
+    return (
+        f"{stored} of {len(missions)} missions are stored in {db_path}; "
+        "run the same command again to resume"
+    )
 
 
 @contextmanager
@@ -345,7 +403,7 @@ def report(
         typer.Argument(metavar="RESULTS", help="Results database written by `experiment`."),
     ],
     out: Annotated[
-        Path,
+        str,  # not a Path: an empty path must reach the report, which refuses it
         typer.Option("--out", "-o", metavar="DIR", help="Directory for report.md and figures."),
     ],
     mission: Annotated[
