@@ -79,6 +79,8 @@ HEAVY = (
     "unified_planning",
     "selenium",
     "scipy",
+    "numpy",
+    "rich",
 )
 
 

@@ -7,12 +7,13 @@ that into one line on stderr and exit code 2.
 
 Start-up stays fast: a command module imports only the standard library, typer and this module
 at its top; numpy, rich, numba, pydantic, joblib, matplotlib and the library modules that pull
-them in are imported inside the command functions (a test checks ``selfrepair --help`` and
-``selfrepair actions``). Typer reads the signature of every command on each start, so the
-command modules do not use ``from __future__ import annotations`` (string annotations would be
-compiled again on every start; names imported only for type checking are quoted instead). Help is
-plain text (``rich_markup_mode=None``): no type labels such as ``<bool>``, and the same text on a
-terminal and in a pipe.
+them in are imported inside the command functions (a test checks ``selfrepair --help``, every
+command's ``--help`` and ``selfrepair actions``). Sub-command groups are made with
+:func:`command_group`, so that their commands keep these conventions. Typer reads the
+signature of every command on each start, so the command modules do not use ``from __future__
+import annotations`` (string annotations would be compiled again on every start; names imported
+only for type checking are quoted instead). Help is plain text (``rich_markup_mode=None``): no
+type labels such as ``<bool>``, and the same text on a terminal and in a pipe.
 """
 
 from __future__ import annotations
