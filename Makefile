@@ -6,19 +6,37 @@
 PYTHON ?= python3
 VENV ?= .venv
 PY := $(VENV)/bin/python
+# Each target installs only the extras it needs (see pyproject.toml):
+#   demo: fast (numba) and viz (matplotlib);  test and lint: also test (pytest, linters,
+#   selenium), gym (the environment's tests need Gymnasium), pddl (unified-planning and LPG
+#   for the baselines' tests) and team (SciPy for the team engine);  bench: also bench (the
+#   peers: networkx, nano-astar).
+# The dask, ray and parquet extras are not installed: the tests that need them skip with the
+# reason (CI installs dask and parquet and requires them, see .ci/run).
 STAMP := $(VENV)/.installed-stamp
+DEMO_STAMP := $(VENV)/.demo-stamp
+BENCH_STAMP := $(VENV)/.bench-stamp
+MAKE_VENV = test -x $(PY) || { $(PYTHON) -m venv $(VENV) && $(PY) -m pip install --quiet --upgrade pip; }
 
 .PHONY: demo test test-slow bench lint clean
 
 $(STAMP): pyproject.toml
-	test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[dev,viz,dask,gym,pddl]'
+	$(MAKE_VENV)
+	$(PY) -m pip install --quiet -e '.[fast,viz,test,gym,pddl,team]'
 	touch $(STAMP)
+
+$(DEMO_STAMP): pyproject.toml
+	$(MAKE_VENV)
+	$(PY) -m pip install --quiet -e '.[fast,viz]'
+	touch $(DEMO_STAMP)
+
+$(BENCH_STAMP): $(STAMP)
+	$(PY) -m pip install --quiet -e '.[fast,viz,test,gym,pddl,team,bench]'
+	touch $(BENCH_STAMP)
 
 # The main job: the replacement-vs-replanning study on the bundled mazes, then
 # its Markdown report with figures (results/report/report.md).
-demo: $(STAMP)
+demo: $(DEMO_STAMP)
 	$(VENV)/bin/selfrepair experiment paper --db results/paper.sqlite
 	$(VENV)/bin/selfrepair report results/paper.sqlite -o results/report
 
@@ -38,12 +56,13 @@ test: lint
 test-slow: $(STAMP)
 	$(PY) -m pytest -m slow
 
-bench: $(STAMP)
+bench: $(BENCH_STAMP)
 	$(PY) benchmarks/planner.py
 	$(PY) benchmarks/repair_latency.py
 	$(PY) benchmarks/tablegen.py
 	$(PY) benchmarks/gym_env.py
 	$(PY) benchmarks/sweeps.py
+	$(PY) benchmarks/startup.py
 
 clean:
 	rm -rf $(VENV) build dist .pytest_cache .ruff_cache .hypothesis

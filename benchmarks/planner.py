@@ -42,13 +42,13 @@ import nano_astar
 import networkx as nx
 import numpy as np
 
-from selfrepair.cli.planning import sample_indices
 from selfrepair.geometry import Heading, Pose
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.backend import numba_available
 from selfrepair.search.grid import grid_astar
 from selfrepair.search.lattice import plan
 from selfrepair.search.problem import SQRT2, PlanningProblem
+from selfrepair.search.scenarios import sample_indices
 from selfrepair.search.warmup import warm_up
 from selfrepair.world.maze import Maze
 from selfrepair.world.movingai import ScenarioQuery, load_map, load_scenario

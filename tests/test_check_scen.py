@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 
 from selfrepair.cli import main
-from selfrepair.cli.planning import check_scenarios, sample_indices
 from selfrepair.search.backend import numba_available
+from selfrepair.search.scenarios import check_scenarios, sample_indices
 
 DATA = Path(__file__).parent / "data" / "movingai"
 MAPS = ["maze512-1-0", "maze512-4-0", "maze512-32-9"]
@@ -19,10 +19,10 @@ SAMPLE = 25 if numba_available() else 3
 
 @pytest.mark.parametrize("name", MAPS)
 def test_sampled_lines_match_the_listed_optimum(name: str) -> None:
-    total, records = check_scenarios(DATA / f"{name}.map.scen", sample=SAMPLE, seed=1)
-    assert total > 8000 and len(records) == SAMPLE
-    assert all(r["ok"] for r in records), [r for r in records if not r["ok"]]
-    assert max(r["expected"] for r in records) > 500  # the sample reaches the long queries
+    report = check_scenarios(DATA / f"{name}.map.scen", sample=SAMPLE, seed=1)
+    assert report.lines > 8000 and len(report.checks) == SAMPLE
+    assert report.mismatches == ()
+    assert max(c.expected for c in report.checks) > 500  # the sample reaches the long queries
 
 
 def test_cli_check_scen_exit_zero_and_summary(capsys: pytest.CaptureFixture[str]) -> None:
@@ -66,8 +66,8 @@ def test_json_output_lists_mismatches(tmp_path: Path, capsys: pytest.CaptureFixt
 def test_tolerance_is_absolute_001(tmp_path: Path) -> None:
     near = GOOD.replace("3.41421356", "3.42")  # off by 0.0058: within 0.01
     far = GOOD.replace("3.41421356", "3.43")  # off by 0.0158
-    _, records = check_scenarios(write_scen(tmp_path, [near, far]))
-    assert [r["ok"] for r in records] == [True, False]
+    report = check_scenarios(write_scen(tmp_path, [near, far]))
+    assert [c.ok for c in report.checks] == [True, False]
 
 
 def test_missing_map_is_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -1,4 +1,5 @@
-"""The basic commands, run in-process: actions, maze show, maze generate, demo."""
+"""The basic commands, run in-process: actions and the maze group (show, list, generate,
+routes)."""
 
 from __future__ import annotations
 
@@ -139,10 +140,10 @@ def test_maze_generate_bad_input(capsys: pytest.CaptureFixture[str], tmp_path: P
     assert_bad_input(run(capsys, *base, "--seed", "1", "-o", str(tmp_path / "m.map")), "m.map")
 
 
-def test_demo_prints_every_bundled_maze_with_its_routes(
+def test_maze_list_prints_every_bundled_maze_with_its_routes(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    code, out, err = run(capsys, "demo")
+    code, out, err = run(capsys, "maze", "list")
     assert code == 0 and err == ""
     for name in bundled.maze_names():
         maze = bundled.load_bundled(name)
@@ -151,3 +152,60 @@ def test_demo_prints_every_bundled_maze_with_its_routes(
         assert picture in out
         for route in bundled.bundled_routes(name):
             assert str(route.start) in out
+
+
+def test_demo_is_not_a_command_any_more(capsys: pytest.CaptureFixture[str]) -> None:
+    """`selfrepair demo` printed mazes and clashed with `make demo`; it is `maze list` now."""
+    assert_bad_input(run(capsys, "demo"), "demo")
+
+
+def test_maze_routes_are_seeded_and_valid(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    from selfrepair.world.routes import load_routes, parse_routes, random_routes
+
+    code, out, _ = run(capsys, "maze", "routes", "wide-short", "-n", "5", "--seed", "3")
+    maze = bundled.load_bundled("wide-short")
+    routes = parse_routes(out, maze=maze)  # every start and goal is free
+    assert code == 0 and routes == random_routes(maze, 5, 3)
+    assert [r.name for r in routes] == ["q1", "q2", "q3", "q4", "q5"]
+    assert run(capsys, "maze", "routes", "wide-short", "-n", "5", "--seed", "3")[1] == out
+    assert run(capsys, "maze", "routes", "wide-short", "-n", "5", "--seed", "4")[1] != out
+    target = tmp_path / "w.routes"
+    code, out, _ = run(capsys, "maze", "routes", "wide-short", "-n", "2", "-o", str(target))
+    assert code == 0 and f"wrote {target}: 2 routes" in out
+    assert load_routes(target, maze=maze) == random_routes(maze, 2, 0)
+
+
+def test_maze_generate_with_routes_then_show_them(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """The issue: `maze generate` wrote no routes and `maze show my.maze --routes` failed."""
+    maze_file = tmp_path / "my.maze"
+    args = ["maze", "generate", "--width", "21", "--height", "21", "--seed", "7"]
+    code, out, _ = run(capsys, *args, "--routes", "3", "-o", str(maze_file))
+    assert code == 0 and f"wrote {tmp_path / 'my.routes'}: 3 routes" in out
+    text = (tmp_path / "my.routes").read_text()
+    assert "made by: selfrepair maze generate" in text and "--routes 3" in text
+    code, out, _ = run(capsys, "maze", "show", str(maze_file), "--routes")
+    assert code == 0 and len(out.splitlines()) == 21 + 3
+    assert_bad_input(run(capsys, *args, "--routes", "3"), "--routes", "-o FILE")
+    assert_bad_input(run(capsys, *args, "--routes", "0", "-o", str(maze_file)), "--routes")
+
+
+def test_maze_routes_bad_input(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+    assert_bad_input(run(capsys, "maze", "routes", "nowhere"), "nowhere")
+    assert_bad_input(run(capsys, "maze", "routes", "narrow-short", "-n", "0"), "--count")
+    assert_bad_input(run(capsys, "maze", "routes", "narrow-short", "-n", "10001"), "10000")
+    assert_bad_input(run(capsys, "maze", "routes", "narrow-short", "--seed", "-1"), "--seed")
+    tiny = tmp_path / "tiny.maze"
+    tiny.write_text("###\n#.#\n###\n")
+    assert_bad_input(run(capsys, "maze", "routes", str(tiny)), "two free cells")
+
+
+def test_missing_sibling_routes_say_how_to_make_them(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    maze_file = tmp_path / "m.maze"
+    maze_file.write_text("#####\n#...#\n#####\n")
+    assert_bad_input(run(capsys, "maze", "show", str(maze_file), "--routes"), "maze routes")

@@ -104,3 +104,29 @@ def test_defaults_are_the_documented_constants() -> None:
     ):
         flag = "--" + name.replace("_", "-")
         assert f"| `{name}` | `{flag}` | {default} |" in doc
+
+
+@pytest.mark.parametrize(
+    ("flag", "low", "fits", "command"),
+    [
+        ("--max-cells", "224", "225", lambda f: ["maze", "routes", f["maze"], "-n", "1"]),
+        ("--max-cells", "224", "225", lambda f: ["compare", f["maze"], *ROUTE, "--strategies",
+                                                  "replan", "--no-warm-up"]),
+        ("--max-table-bytes", "1000", "table", lambda f: ["compare", "narrow-short", *ROUTE,
+                                                           "--table", f["table"],
+                                                           "--strategies", "replacement"]),
+        ("--max-table-candidates", "10", "candidates", lambda f: ["compare", "narrow-short",
+                                                                   *ROUTE, "--table", f["table"],
+                                                                   "--strategies",
+                                                                   "replacement"]),
+    ],
+)
+def test_limit_flags_of_the_newer_commands(
+    files: dict[str, str],
+    capsys: pytest.CaptureFixture[str],
+    flag: str,
+    low: str,
+    fits: str,
+    command,  # type: ignore[no-untyped-def]
+) -> None:
+    test_limit_flag_refuses_then_admits(files, capsys, flag, low, fits, command)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from selfrepair.cli import basics
+from selfrepair.robots import four_wheel_docs
 from selfrepair.world import bundled
 from selfrepair.world.render import render_ascii, route_layers
 
@@ -28,7 +28,7 @@ def generated_block(text: str, name: str) -> str:
 )
 def test_robot_doc_tables_match_the_code(name: str) -> None:
     text = (DOCS / "robot.md").read_text(encoding="utf-8")
-    assert generated_block(text, name) == getattr(basics, name)()
+    assert generated_block(text, name) == getattr(four_wheel_docs, name)()
 
 
 def test_action_table_has_81_rows_in_code_order() -> None:

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 
+from extras import need
 from selfrepair.cli import main
 from selfrepair.experiment.config import load_config
 from selfrepair.experiment.missions import expand
@@ -213,7 +214,7 @@ def test_killed_worker_then_resume(tmp_path: Path, capsys: pytest.CaptureFixture
 
 
 def test_report_and_animate(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    pytest.importorskip("matplotlib")
+    need("matplotlib", "viz")
     config = _write(tmp_path, "tiny", TINY)
     db = tmp_path / "r.sqlite"
     assert main(["experiment", str(config), "--db", str(db), "--jobs", "1"]) == 0
@@ -313,3 +314,58 @@ def test_terminal_summary_never_truncates_a_number(
     assert "…" not in out
     for cell in summary.cells()[1:]:
         assert cell in out, cell
+
+
+def _long_summary(label: str) -> object:
+    from selfrepair.experiment.findings import StrategySummary
+    from selfrepair.experiment.stats import Interval
+
+    return StrategySummary(
+        label=label,
+        missions=192,
+        completed=192,
+        met_fault=148,
+        no_replan=79,
+        resolved_locally=0.993,
+        replans_per_mission=0.77,
+        over_optimum=Interval(20.14, 17.5, 23.25, 192),
+        plan_distance_mean=104.0,
+        plan_distance_motion_mean=55.5,
+        repair_compute_us=Interval(12345.6, 10000.2, 98765.4, 148),
+        cold_first_repair_us=Interval(184.0, 51.0, 1234.0, 148),
+        warm_first_repair_us=Interval(16.0, 5.0, 18.0, 148),
+        latency_median_us=4321.0,
+        latency_p99_us=123456.7,
+    )
+
+
+@pytest.mark.parametrize("columns", ["80", "200"])
+def test_piped_summary_is_never_cut(
+    columns: str, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Not a terminal (a log, a pipe): full headers and names, whatever COLUMNS says."""
+    from selfrepair.cli.experiments import print_summary
+    from selfrepair.experiment.findings import StrategySummary
+
+    monkeypatch.setenv("COLUMNS", columns)
+    labels = [f"lookahead[generated-agnostic-variant-{i},guarded,k=12] w=1/3" for i in range(12)]
+    summaries = [_long_summary(label) for label in labels]
+    print_summary(summaries, title="a long experiment name: per strategy")  # type: ignore[arg-type]
+    out = capsys.readouterr().out
+    assert "…" not in out
+    for header in StrategySummary.HEADERS:
+        assert header in out, header
+    for label in labels:
+        assert label in out
+
+
+def test_findings_are_wrapped(capsys: pytest.CaptureFixture[str]) -> None:
+    from selfrepair.cli.experiments import print_findings
+    from selfrepair.experiment.findings import Finding, Outcome
+
+    items = tuple(f"variant {i} resolved 99.{i}% of 1234 encounters" for i in range(20))
+    finding = Finding("1", "a claim of the original study", Outcome.HELD, ("Intro.", *items))
+    print_findings([finding])
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("Finding 1: HELD.")
+    assert all(len(line) <= 100 for line in lines)

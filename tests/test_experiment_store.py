@@ -13,6 +13,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from extras import need
 from selfrepair.errors import ProblemError
 from selfrepair.experiment.config import parse_config
 from selfrepair.experiment.missions import expand
@@ -82,7 +83,7 @@ def test_export_csv_and_parquet(tmp_path: Path) -> None:
     assert len(rows) == len(missions) and {r["ticks"] for r in rows} == {
         str(n) for n in range(len(missions))
     }
-    pq = pytest.importorskip("pyarrow.parquet")
+    pq = need("pyarrow.parquet", "parquet")
     table = pq.read_table(tmp_path / "r.parquet")
     assert table.num_rows == len(missions)
     assert str(table.schema.field("ticks").type) == "int64"
@@ -117,7 +118,7 @@ def test_parquet_without_pyarrow_is_a_clear_error(
     monkeypatch.setitem(sys.modules, "pyarrow.parquet", None)
     with ResultStore(tmp_path / "r.sqlite") as store:
         store.add(_missions()[0], {"ticks": 1}, 0.1)
-        with pytest.raises(ProblemError, match=r"Parquet export needs pyarrow.*--export-csv"):
+        with pytest.raises(ProblemError, match=r"needs pyarrow.*selfrepair\[parquet\]"):
             store.export_parquet(tmp_path / "r.parquet")
     assert not (tmp_path / "r.parquet").exists()
 

@@ -38,7 +38,7 @@ def test_plan_json_shape(maze_file: Path, capsys: pytest.CaptureFixture[str]) ->
     assert data["expansions"] > 0
 
 
-def test_plan_fractional_cost_is_a_string(
+def test_plan_fractional_cost_is_a_number_with_an_exact_twin(
     maze_file: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     code, data = run_json(
@@ -47,8 +47,51 @@ def test_plan_fractional_cost_is_a_string(
         capsys,
     )  # fmt: skip
     assert code == 0
-    assert data["cost"] == "38/3"  # duration 8 + 1/3 * 14 cells of shortfall 1 (radius 2)
+    assert data["cost_exact"] == "38/3"  # duration 8 + 1/3 * 14 cells of shortfall 1 (radius 2)
+    assert data["cost"] == 12.666667  # a JSON number, rounded
+    assert data["duration"] == 8 and data["duration_exact"] == "8"
     assert data["poses"][-1] == [4, 2, "W"]
+
+
+def test_plan_reports_the_search_apart_from_the_kernel_load(
+    maze_file: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code, data = run_json(
+        ["plan", str(maze_file), "--start", "0,0,E", "--goal", "4,2", "--json"], capsys
+    )
+    assert code == 0 and set(data) >= {"search_ms", "kernel_load_ms"}
+    assert "wall_time_ms" not in data
+    assert main(["plan", str(maze_file), "--start", "0,0,E", "--goal", "4,2"]) == 0
+    last = capsys.readouterr().out.splitlines()[-1]
+    assert re.fullmatch(r"expansions: \d+  search: [\d.]+ ms(  \(kernels loaded .*\))?", last)
+
+
+def test_kernels_are_loaded_before_the_search_is_timed(
+    maze_file: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The command loads the kernels first, then calls the planner: the order is the point."""
+    from selfrepair.search import lattice, warmup
+    from selfrepair.search.backend import numba_available
+
+    if not numba_available():
+        pytest.skip("numba is not installed (the kernels are what is loaded)")
+    calls: list[str] = []
+    monkeypatch.setattr(warmup, "_WARM", set())
+
+    def load(*kinds: str) -> int:
+        calls.append("load " + ",".join(kinds))
+        return 5_000_000
+
+    monkeypatch.setattr(warmup, "warm_up", load)
+    real_plan = lattice.plan
+    monkeypatch.setattr(lattice, "plan", lambda *a, **k: calls.append("plan") or real_plan(*a, **k))
+    code, data = run_json(
+        ["plan", str(maze_file), "--start", "0,0,E", "--goal", "4,2", "--backend", "numba",
+         "--json"],
+        capsys,
+    )  # fmt: skip
+    # only the lattice kernels, which plan uses, are loaded, and before the search
+    assert code == 0 and calls == ["load lattice", "plan"] and data["kernel_load_ms"] == 5.0
 
 
 def test_plan_with_faults_uses_available_actions(
@@ -135,9 +178,18 @@ def test_path_diagonal_cost(tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     assert data["cost"] == 3.0
 
 
-def test_path_picture_on_a_movingai_map(capsys: pytest.CaptureFixture[str]) -> None:
+def test_path_on_a_big_map_prints_no_picture_by_default(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     data = Path(__file__).parent / "data" / "movingai" / "maze512-32-9.map"
     assert main(["path", str(data), "--from", "295,95", "--to", "292,96"]) == 0
+    out = capsys.readouterr().out
+    assert len(out) < 500 and "cost: 3.41421356" in out and "--picture" in out
+
+
+def test_path_picture_on_a_movingai_map(capsys: pytest.CaptureFixture[str]) -> None:
+    data = Path(__file__).parent / "data" / "movingai" / "maze512-32-9.map"
+    assert main(["path", str(data), "--from", "295,95", "--to", "292,96", "--picture"]) == 0
     out = capsys.readouterr().out.splitlines()
     assert len(out[0]) == 512
     assert out[95][295] == "S" and out[96][292] == "G"
@@ -186,3 +238,17 @@ def test_plan_and_path_accept_bundled_maze_names(capsys: pytest.CaptureFixture[s
         ["path", "narrow-short", "--from", "1,1", "--to", "3,1", "--json"], capsys
     )
     assert code == 0 and data["cost"] == 2
+
+
+def test_warm_up_loads_the_families_asked_for_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    from selfrepair.errors import ProblemError
+    from selfrepair.search import warmup
+
+    with pytest.raises(ProblemError, match="unknown kernel family 'gpu'"):
+        warmup.warm_up("gpu")
+    loaded: list[tuple[str, ...]] = []
+    monkeypatch.setattr(warmup, "_WARM", set())
+    monkeypatch.setattr(warmup, "warm_up", lambda *kinds: loaded.append(kinds) or 7)
+    assert warmup.ensure_warm("grid") == 7 and warmup.ensure_warm("grid") == 0
+    assert warmup.ensure_warm() == 7 and warmup.ensure_warm("lattice", "grid") == 0
+    assert loaded == [("grid",), ("lattice",)]

@@ -222,13 +222,14 @@ def test_limits_and_traces_that_do_not_replay_are_refused(trace: Trace) -> None:
         mission_payload(parse_trace("\n".join(lines)))
 
 
-def test_pick_mission_names_the_option_and_the_ambiguity() -> None:
+def test_pick_mission_names_the_database_and_the_ambiguity() -> None:
     rows = [{"key": "abc1"}, {"key": "abc2"}, {"key": "def0"}]
     assert pick_mission(rows, "abc1", "db")["key"] == "abc1"
-    with pytest.raises(InputError, match=r"--key to match exactly one.*2 match 'abc'.*more"):
-        pick_mission(rows, "abc", "db", option="--key")
-    with pytest.raises(InputError, match="0 match 'zz'"):
-        pick_mission(rows, "zz", "db", option="--key")
+    with pytest.raises(InputError, match=r"^db: .*exactly one stored mission.*2 match 'abc'.*more"):
+        pick_mission(rows, "abc", "db")
+    with pytest.raises(InputError, match="0 match 'zz'") as caught:
+        pick_mission(rows, "zz", "db")
+    assert "--" not in str(caught.value)  # the library names no command-line flag
     with pytest.raises(InputError, match="0 match ''"):
         pick_mission(rows, "", "db")
 
@@ -322,7 +323,7 @@ def test_view_a_stored_mission_by_key_prefix(
     assert len([r for r in data["repairs"] if r["source"] == "replacement"]) == row["replacements"]
     capsys.readouterr()
     assert main(["view", str(results), "--key", "zzzz", "-o", str(out)]) == 2
-    _one_error(capsys, "--key", "0 match 'zzzz'")
+    _one_error(capsys, "r.sqlite", "key prefix", "0 match 'zzzz'")
     assert main(["view", str(results), "--key", "", "-o", str(out)]) == 2
     _one_error(capsys, "--key")
     assert main(["view", str(results), "-o", str(out)]) == 2

@@ -12,7 +12,8 @@ from collections.abc import Sequence
 import typer
 from typer._click.exceptions import ClickException, NoArgsIsHelpError
 
-# Importing the command modules registers their commands on ``app``.
+# Importing the command modules registers their commands on ``app``; they import the heavy
+# libraries inside the commands, so that ``selfrepair --help`` starts fast.
 from selfrepair.cli import (  # noqa: F401
     basics,
     domains,

@@ -4,31 +4,122 @@ Command modules register themselves on :data:`app` (or on one of its groups) at 
 :mod:`selfrepair.cli` imports them all. Commands return an ``int`` exit code (0 unless stated) and
 raise :class:`selfrepair.errors.SelfRepairError` for bad input: :func:`selfrepair.cli.main` turns
 that into one line on stderr and exit code 2.
+
+Start-up stays fast: a command module imports only the standard library, typer and this module
+at its top; numpy, rich, numba, pydantic, joblib, matplotlib and the library modules that pull
+them in are imported inside the command functions (a test checks ``selfrepair --help``, every
+command's ``--help`` and ``selfrepair actions``). Sub-command groups are made with
+:func:`command_group`, so that their commands keep these conventions. Typer reads the
+signature of every command on each start, so the command modules do not use ``from __future__
+import annotations`` (string annotations would be compiled again on every start; names imported
+only for type checking are quoted instead). Help is plain text (``rich_markup_mode=None``): no
+type labels such as ``<bool>``, and the same text on a terminal and in a pipe.
 """
 
 from __future__ import annotations
 
 import json
+import math
 import sys
+from collections.abc import Callable, Sequence
+from fractions import Fraction
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, TypeVar
 
 import typer
-from rich.console import Console
+from typer.core import TyperArgument, TyperCommand, TyperGroup
 
-app = typer.Typer(
+if TYPE_CHECKING:
+    from rich.console import Console
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+
+
+def _no_type_label(ctx: Any) -> None:
+    return None
+
+
+def _quick(param: Any) -> None:
+    """Let an option that was not given (value ``None``) skip Typer's value coercion.
+
+    Typer 0.29 coerces parameter values through pydantic and imports it to do so, even for a
+    value that was not given and stays ``None`` (the ``--help`` flag, the global ``--plugin``
+    option); a value that was given is coerced as before. A required parameter without a value
+    still goes through Typer, which reports it missing."""
+    if getattr(param, "_selfrepair_quick", False):
+        return
+    process = param.process_value
+    multiple = bool(param.multiple or param.nargs == -1)
+
+    def process_value(ctx: Any, value: Any) -> Any:
+        if value is not None or param.required:
+            return process(ctx, value)
+        empty = () if multiple else None
+        return empty if param.callback is None else param.callback(ctx, param, empty)
+
+    param.process_value = process_value
+    param._selfrepair_quick = True
+
+
+class _QuickHelp:
+    """Two small changes to Typer's commands: options that were not given cost no import, and
+    help has no type labels.
+
+    See :func:`_quick` for the first (so ``selfrepair --help`` and ``selfrepair actions`` import
+    no pydantic). For the second, the help of an argument shows its metavar alone (``MAZE``),
+    not followed by a type label (``MAZE <str>``); options show their metavar
+    (``--start X,Y,H``) and flags nothing. Parsing is unchanged."""
+
+    def get_params(self, ctx: Any) -> Any:
+        params = super().get_params(ctx)  # type: ignore[misc]
+        for param in params:
+            _quick(param)
+            if isinstance(param, TyperArgument):
+                param.display_type_rich = _no_type_label  # type: ignore[method-assign]
+        return params
+
+
+class _Command(_QuickHelp, TyperCommand):
+    pass
+
+
+class _Group(_QuickHelp, TyperGroup):
+    pass
+
+
+class _Typer(typer.Typer):
+    """A Typer whose commands are :class:`_Command` and whose groups are :class:`_Group`."""
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(cls=_Group, rich_markup_mode=None, **kwargs)
+
+    def command(self, *args: Any, **kwargs: Any) -> Callable[[_F], _F]:
+        kwargs.setdefault("cls", _Command)
+        decorator: Callable[[_F], _F] = super().command(*args, **kwargs)
+        return decorator
+
+
+def command_group(*, help: str) -> typer.Typer:
+    """A sub-command group with this CLI's conventions (quick options, help without type
+    labels); a command module adds it with ``app.add_typer(group, name=...)``."""
+    return _Typer(help=help, no_args_is_help=True)
+
+
+app = _Typer(
     name="selfrepair",
     help="Self-repairing robot plans: replacement tables versus replanning from scratch.",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
+    context_settings={"max_content_width": 100},
 )
-maze_app = typer.Typer(help="Show and generate mazes.", no_args_is_help=True)
-table_app = typer.Typer(
-    help="Replacement tables: show, check, generate, coverage.", no_args_is_help=True
-)
+maze_app = command_group(help="Show, list and generate mazes; draw routes for them.")
+table_app = command_group(help="Replacement tables: show, check, generate, coverage.")
 app.add_typer(maze_app, name="maze")
 app.add_typer(table_app, name="table")
+
+FLOAT_DIGITS = 6
+"""Decimal places of the floats the commands print as JSON (exact values go as strings)."""
 
 
 @app.callback()
@@ -37,6 +128,7 @@ def _global_options(
         list[Path] | None,
         typer.Option(
             "--plugin",
+            metavar="FILE",
             help="A Python file that registers a robot domain (repeatable); see docs/extending.md.",
         ),
     ] = None,
@@ -50,8 +142,14 @@ def _global_options(
 
 
 def console() -> Console:
-    """A rich console on the current stdout (looked up per call so tests can capture it)."""
-    return Console(file=sys.stdout, soft_wrap=True, highlight=False)
+    """A rich console on the current stdout (looked up per call so tests can capture it).
+
+    When stdout is not a terminal the console is wide (tables are never cut in logs and pipes)."""
+    from rich.console import Console
+
+    if sys.stdout.isatty():
+        return Console(file=sys.stdout, soft_wrap=True, highlight=False)
+    return Console(file=sys.stdout, width=1000, soft_wrap=True, highlight=False)
 
 
 def echo(text: str = "") -> None:
@@ -72,6 +170,7 @@ MaxCells = Annotated[
     int,
     typer.Option(
         "--max-cells",
+        metavar="N",
         min=1,
         help="Refuse a maze (file, map or generated) of more cells than this.",
     ),
@@ -79,20 +178,58 @@ MaxCells = Annotated[
 MaxMissions = Annotated[
     int,
     typer.Option(
-        "--max-missions", min=1, help="Refuse an experiment of more missions than this."
+        "--max-missions",
+        metavar="N",
+        min=1,
+        help="Refuse an experiment of more missions than this.",
     ),
 ]
 MaxTableBytes = Annotated[
     int,
     typer.Option(
-        "--max-table-bytes", min=1, help="Refuse a table file larger than this, unread."
+        "--max-table-bytes",
+        metavar="N",
+        min=1,
+        help="Refuse a table file larger than this, unread.",
     ),
 ]
 MaxTableCandidates = Annotated[
     int,
     typer.Option(
         "--max-table-candidates",
+        metavar="N",
         min=1,
         help="Refuse a table of more candidates than this, before re-simulating any.",
     ),
 ]
+
+
+def number_json(value: Fraction | float | int | None) -> int | float | None:
+    """A JSON number: integers stay exact, anything else is rounded to :data:`FLOAT_DIGITS`
+    decimals (``None`` and NaN become ``null``)."""
+    if value is None:
+        return None
+    if isinstance(value, Fraction):
+        return value.numerator if value.denominator == 1 else round(float(value), FLOAT_DIGITS)
+    if isinstance(value, int):
+        return value
+    return None if math.isnan(value) else round(value, FLOAT_DIGITS)
+
+
+def exact_json(value: Fraction | None) -> str | None:
+    """An exact number as a JSON string, always (``"262"``, ``"31/3"``)."""
+    return None if value is None else str(value)
+
+
+def text_table(headers: Sequence[str], rows: Sequence[Sequence[str]], right: set[int]) -> str:
+    """A plain aligned table (no rich): a header, a rule, the rows; columns in ``right`` are
+    right-aligned. For commands that must start fast."""
+    widths = [max([len(h), *(len(r[i]) for r in rows)]) for i, h in enumerate(headers)]
+
+    def line(cells: Sequence[str]) -> str:
+        parts = [c.rjust(w) if i in right else c.ljust(w) for i, (c, w) in enumerate(
+            zip(cells, widths, strict=True))]
+        return "  ".join(parts).rstrip()
+
+    rule = "  ".join("-" * w for w in widths)
+    return "\n".join([line(headers), rule, *(line(r) for r in rows)]) + "\n"

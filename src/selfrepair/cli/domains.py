@@ -1,7 +1,6 @@
 """``selfrepair domains``: the robots this installation knows (built-in, plug-ins, and files loaded
 with ``--plugin``)."""
 
-from __future__ import annotations
 
 from typing import Annotated
 
@@ -14,7 +13,10 @@ from selfrepair.cli._app import app, echo, echo_json
 def domains(
     as_json: Annotated[bool, typer.Option("--json", help="Print the list as JSON.")] = False,
 ) -> int:
-    """List the robot domains: name, actions, faults and a description."""
+    """List the robot domains this installation knows.
+
+    One line each: name, actions, faults and a description.
+    """
     from selfrepair.robots.registry import domain_names, get_domain
 
     rows: list[dict[str, str | int]] = []

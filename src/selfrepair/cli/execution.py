@@ -1,19 +1,20 @@
-"""Commands that run and check missions: ``selfrepair run``, ``selfrepair replay``,
-``selfrepair table show`` and ``selfrepair table check``.
+"""Commands that run and check missions: ``selfrepair run``, ``selfrepair compare``,
+``selfrepair replay``, ``selfrepair table show`` and ``selfrepair table check``.
 
-Exit codes: ``run`` 0 when the goal is reached, 1 when the mission ends otherwise; ``replay`` 0 when
-every step holds, 1 otherwise; ``table check`` 0 without errors (warnings allowed), 1 with errors;
-bad input is exit 2 (see :func:`selfrepair.cli.main`).
+Exit codes: ``run`` 0 when the goal is reached, 1 when the mission ends otherwise; ``compare`` 0
+when every strategy reached the goal, 1 otherwise; ``replay`` 0 when every step holds, 1
+otherwise; ``table check`` 0 without errors (warnings allowed), 1 with errors; bad input is exit 2
+(see :func:`selfrepair.cli.main`).
+
+Times: the compiled kernels are loaded before the mission starts (reported apart, never inside a
+planning time or a repair latency), and by default the mission runs once untimed first.
 """
 
-from __future__ import annotations
 
-from collections.abc import Sequence
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from rich.table import Table
 
 from selfrepair.cli._app import (
     MaxCells,
@@ -23,33 +24,45 @@ from selfrepair.cli._app import (
     console,
     echo,
     echo_json,
+    number_json,
     table_app,
 )
-from selfrepair.cli.planning import parse_weight
-from selfrepair.errors import InputError
-from selfrepair.execution.executor import run_mission
-from selfrepair.execution.faults import (
-    Clock,
-    Detection,
-    FaultEvent,
-    FaultSchedule,
-    Persistence,
-    canonical_order,
+from selfrepair.cli._inputs import (
+    Backend,
+    ClearanceWeight,
+    Faults,
+    Heuristic,
+    Json,
+    MazeArg,
+    Start,
+    find_input,
 )
-from selfrepair.execution.metrics import mission_row
-from selfrepair.execution.result import MissionResult, MissionSpec, StepSource
-from selfrepair.execution.trace import replay as replay_trace
-from selfrepair.execution.trace import write_trace
-from selfrepair.geometry import Cell, parse_cell, parse_pose
+from selfrepair.cli._mission import (
+    At,
+    ClockOpt,
+    Detect,
+    DomainOpt,
+    Goal,
+    Intermittent,
+    MaxDepth,
+    PlanWithFaults,
+    Recursion,
+    Seed,
+    TableOpt,
+    Transient,
+    WarmUp,
+    Window,
+    mission_spec,
+    row_json,
+)
+from selfrepair.cli.planning import kernel_load_ns
 from selfrepair.limits import MAX_CELLS, MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES
-from selfrepair.repair.replacement import RecursionMode
-from selfrepair.repair.strategies import StrategyOptions, strategy_names, uses_table
-from selfrepair.robots.domain import Domain
-from selfrepair.robots.registry import get_domain
-from selfrepair.tables.fileformat import dump_table, resolve_table
-from selfrepair.tables.model import ReplacementTable, check_table
-from selfrepair.world.bundled import resolve_maze
-from selfrepair.world.render import GOAL_CHAR, HEADING_CHARS, render_ascii
+
+if TYPE_CHECKING:
+    from selfrepair.execution.result import MissionResult
+    from selfrepair.experiment.compare import Comparison
+
+__all__ = ["compare", "mission_picture", "replay", "run", "table_check", "table_show"]
 
 PLANNED_CHAR = "+"
 EXECUTED_CHAR = "*"
@@ -85,47 +98,12 @@ _SHOWN = (
 )
 
 
-def build_schedule(
-    domain: Domain[Any, Any],
-    faults: str,
-    at: int,
-    clock: str,
-    detect: str,
-    transient: int | None,
-    intermittent: float | None,
-) -> FaultSchedule:
-    """The fault schedule the ``run`` options describe (one persistence for every fault)."""
-    try:
-        parsed = canonical_order(domain.parse_faults(faults))
-    except InputError as exc:
-        raise InputError(exc.reason, source="--faults") from None
-    if transient is not None and intermittent is not None:
-        raise InputError(
-            "expected at most one of --transient and --intermittent", source="--transient"
-        )
-    persistence = (
-        Persistence.TRANSIENT
-        if transient is not None
-        else Persistence.INTERMITTENT
-        if intermittent is not None
-        else Persistence.PERMANENT
-    )
-    events = tuple(
-        FaultEvent(
-            f,
-            at=at,
-            clock=Clock(clock),
-            persistence=persistence,
-            duration=transient,
-            probability=intermittent,
-        )
-        for f in parsed
-    )
-    return FaultSchedule(events, detect)  # type: ignore[arg-type]
-
-
-def mission_picture(result: MissionResult) -> str:
+def mission_picture(result: "MissionResult") -> str:
     """The maze with the planned path, the executed path, the repair sites, start and goal."""
+    from selfrepair.execution.result import StepSource
+    from selfrepair.geometry import Cell
+    from selfrepair.world.render import GOAL_CHAR, HEADING_CHARS, render_ascii
+
     spec = result.spec
     domain = spec.domain
     planned: dict[Cell, str] = {}
@@ -144,175 +122,369 @@ def mission_picture(result: MissionResult) -> str:
     return render_ascii(spec.maze, [planned, executed, failed, sites, ends])
 
 
-_LEGEND = (
-    ("#", "wall"),
-    (".", "free"),
-    ("^ > v <", "start pose facing N, E, S, W"),
-    (GOAL_CHAR, "goal"),
-    (PLANNED_CHAR, "planned path (initial plan), not executed"),
-    (EXECUTED_CHAR, "executed path"),
-    ("R L P", "repair site: table replacement, lookahead window, replan"),
-    (FAILED_CHAR, "failed attempt (fault learned on use)"),
-)
-
-
 def _picture_legend() -> str:
-    width = max(len(char) for char, _ in _LEGEND)
-    return "".join(f"{char:<{width}}  {meaning}\n" for char, meaning in _LEGEND)
+    from selfrepair.world.render import GOAL_CHAR
+
+    legend = (
+        ("#", "wall"),
+        (".", "free"),
+        ("^ > v <", "start pose facing N, E, S, W"),
+        (GOAL_CHAR, "goal"),
+        (PLANNED_CHAR, "planned path (initial plan), not executed"),
+        (EXECUTED_CHAR, "executed path"),
+        ("R L P", "repair site: table replacement, lookahead window, replan"),
+        (FAILED_CHAR, "failed attempt (fault learned on use)"),
+    )
+    width = max(len(char) for char, _ in legend)
+    return "".join(f"{char:<{width}}  {meaning}\n" for char, meaning in legend)
+
+
+def _timing_note(load_ns: int, warmed: bool) -> str:
+    parts = []
+    if load_ns:
+        parts.append(f"kernels loaded in {load_ns / 1e6:.0f} ms before the mission")
+    parts.append("timed after an untimed warm-up run" if warmed else "no warm-up run")
+    return "times: " + "; ".join(parts) + " (neither is counted)"
 
 
 @app.command()
 def run(
-    maze: Annotated[str, typer.Argument(help="Bundled maze name, maze file or MovingAI .map.")],
-    start: Annotated[str, typer.Option("--start", help="Start pose X,Y,H.")],
-    goal: Annotated[str, typer.Option("--goal", help="Goal cell X,Y.")],
-    faults: Annotated[str, typer.Option("--faults", help="Faults, e.g. FL:F,RL:F.")] = "",
-    at: Annotated[int, typer.Option("--at", help="When the faults start (step or tick).")] = 0,
-    clock: Annotated[str, typer.Option("--clock", help="What --at counts: step or tick.")] = "step",
-    detect: Annotated[
-        str, typer.Option("--detect", help="Fault detection: now or on-use.")
-    ] = "now",
-    transient: Annotated[
-        int | None, typer.Option("--transient", help="Faults last this many steps/ticks.")
-    ] = None,
-    intermittent: Annotated[
-        float | None,
-        typer.Option(
-            "--intermittent", help="Faults are active at each step with this probability."
-        ),
-    ] = None,
+    maze: MazeArg,
+    start: Start,
+    goal: Goal,
+    faults: Faults = "",
+    at: At = 0,
+    clock: ClockOpt = "step",
+    detect: Detect = "now",
+    transient: Transient = None,
+    intermittent: Intermittent = None,
     strategy: Annotated[
-        str, typer.Option("--strategy", help="replan, replacement or lookahead.")
-    ] = "replacement",
-    table: Annotated[
-        str, typer.Option("--table", help="Table file or bundled table name.")
-    ] = "handwritten",
-    recursion: Annotated[
-        str, typer.Option("--recursion", help="flat, guarded or layered.")
-    ] = "flat",
-    max_depth: Annotated[int, typer.Option("--max-depth", help="Depth bound of guarded mode.")] = 2,
-    window: Annotated[
-        int, typer.Option("--window", help="Lookahead: actions after the faulty one.")
-    ] = 3,
-    clearance_weight: Annotated[
-        str, typer.Option("--clearance-weight", help="Exact weight, e.g. 1/2.")
-    ] = "0",
-    heuristic: Annotated[str, typer.Option("--heuristic")] = "grid-distance",
-    backend: Annotated[str, typer.Option("--backend")] = "auto",
-    plan_with_faults: Annotated[
-        bool,
+        str,
         typer.Option(
-            "--plan-with-faults", help="Make the initial plan with the faults sensed at step 0."
+            "--strategy", metavar="NAME", help="Repair strategy: replan, replacement or lookahead."
         ),
-    ] = False,
+    ] = "replacement",
+    table: TableOpt = "handwritten",
+    recursion: Recursion = "flat",
+    max_depth: MaxDepth = 2,
+    window: Window = 3,
+    clearance_weight: ClearanceWeight = "0",
+    heuristic: Heuristic = "grid-distance",
+    backend: Backend = "auto",
+    plan_with_faults: PlanWithFaults = False,
     trace: Annotated[
-        Path | None, typer.Option("--trace", help="Write a JSON Lines trace here.")
+        Path | None,
+        typer.Option("--trace", metavar="FILE", help="Write a JSON Lines trace here."),
     ] = None,
-    seed: Annotated[int, typer.Option("--seed", help="Seed of intermittent faults.")] = 0,
+    seed: Seed = 0,
+    warm_up: WarmUp = True,
     as_json: Annotated[bool, typer.Option("--json", help="Print the metrics row as JSON.")] = False,
-    domain_name: Annotated[
-        str, typer.Option("--domain", help="The robot: a registered domain name.")
-    ] = "four-wheel",
+    domain_name: DomainOpt = "four-wheel",
     max_cells: MaxCells = MAX_CELLS,
     max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
     max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
-    """Run one mission: plan, execute with faults, repair; show the paths and the metrics."""
-    domain = _domain(domain_name)
-    _check_choice(strategy, strategy_names(), "--strategy")
-    _check_choice(recursion, tuple(RecursionMode), "--recursion")
-    _check_choice(detect, tuple(Detection), "--detect")
-    _check_choice(clock, tuple(Clock), "--clock")
-    weight = parse_weight(clearance_weight)
-    spec = MissionSpec(
-        maze=resolve_maze(maze, max_cells=max_cells),
-        start=parse_pose(start, source="--start"),
-        goal=parse_cell(goal, source="--goal"),
-        schedule=build_schedule(domain, faults, at, clock, detect, transient, intermittent),
+    """Run one mission: plan, execute with faults, repair.
+
+    Shows the maze with the planned and executed paths and the repair sites, then the metrics.
+    Exit 1 when the goal is not reached.
+    """
+    from selfrepair.execution.executor import run_mission
+    from selfrepair.execution.metrics import mission_row
+    from selfrepair.execution.trace import write_trace
+
+    spec = mission_spec(
+        maze=maze,
+        start=start,
+        goal=goal,
+        faults=faults,
+        at=at,
+        clock=clock,
+        detect=detect,
+        transient=transient,
+        intermittent=intermittent,
         strategy=strategy,
-        options=StrategyOptions(
-            table=_table_spec(table, strategy, max_table_bytes, max_table_candidates),
-            recursion=recursion,  # type: ignore[arg-type]
-            max_depth=max_depth,
-            window=window,
-        ),
-        clearance_weight=weight,
-        seed=seed,
+        table=table,
+        recursion=recursion,
+        max_depth=max_depth,
+        window=window,
+        clearance_weight=clearance_weight,
         heuristic=heuristic,
         backend=backend,
-        initial_faults_known=plan_with_faults,
-        domain=domain,
+        plan_with_faults=plan_with_faults,
+        seed=seed,
+        domain_name=domain_name,
+        max_cells=max_cells,
+        max_table_bytes=max_table_bytes,
+        max_table_candidates=max_table_candidates,
     )
+    load_ns = kernel_load_ns(backend)
+    if warm_up:
+        run_mission(spec)
     result = run_mission(spec)
     if trace is not None:
         write_trace(result, trace)
     row = mission_row(result)
     if as_json:
-        echo_json(row)
-    else:
-        echo(mission_picture(result) + _picture_legend())
-        metrics = Table(title=f"Mission on {spec.maze.name or maze}")
-        metrics.add_column("metric")
-        metrics.add_column("value", justify="right")
-        for key in _SHOWN:
-            metrics.add_row(key, "" if row[key] is None else str(row[key]))
-        console().print(metrics)
+        echo_json({**row_json(row), "kernel_load_ms": round(load_ns / 1e6, 3), "warm_up": warm_up})
+        return 0 if result.reached else 1
+    from rich.table import Table
+    from rich.text import Text
+
+    echo(mission_picture(result) + _picture_legend())
+    metrics = Table(title=Text(f"Mission on {spec.maze.name or maze}"))
+    metrics.add_column("metric")
+    metrics.add_column("value", justify="right")
+    shown = row_json(row)
+    for key in _SHOWN:
+        value = row[key] if key in ("ticks", "plan_cost_before", "plan_cost_after") else shown[key]
+        metrics.add_row(key, Text(_cell(value)))
+    console().print(metrics)
+    echo(_timing_note(load_ns, warm_up))
     return 0 if result.reached else 1
 
 
-def _table_spec(
-    table: str, strategy: str, max_table_bytes: int, max_table_candidates: int
-) -> str | ReplacementTable:
-    """Load the table up front, within the limits (a bad file is exit 2 even when no repair
-    needs it); the mission gets the loaded table, so the limits given are the ones that hold."""
-    if not uses_table(strategy):
-        return table
-    return resolve_table(
-        table, max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
+def _cell(value: Any) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, dict):
+        return ",".join(f"{k}:{v}" for k, v in value.items())
+    return str(value)
+
+
+@app.command()
+def compare(
+    maze: MazeArg,
+    start: Start,
+    goal: Goal,
+    faults: Faults = "",
+    strategies: Annotated[
+        str,
+        typer.Option(
+            "--strategies",
+            metavar="NAMES",
+            help="Comma-separated strategies to run (default: every registered one).",
+            show_default=False,
+        ),
+    ] = "",
+    at: At = 0,
+    clock: ClockOpt = "step",
+    detect: Detect = "now",
+    transient: Transient = None,
+    intermittent: Intermittent = None,
+    table: TableOpt = "handwritten",
+    recursion: Recursion = "flat",
+    max_depth: MaxDepth = 2,
+    window: Window = 3,
+    clearance_weight: ClearanceWeight = "0",
+    heuristic: Heuristic = "grid-distance",
+    backend: Backend = "auto",
+    plan_with_faults: PlanWithFaults = False,
+    seed: Seed = 0,
+    warm_up: WarmUp = True,
+    as_json: Json = False,
+    domain_name: DomainOpt = "four-wheel",
+    max_cells: MaxCells = MAX_CELLS,
+    max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
+    max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
+) -> int:
+    """Run every strategy on one mission, side by side.
+
+    Ends with a one-line verdict. Exit 1 when a strategy does not reach the goal.
+
+    Each strategy gets the same maze, route, faults and planner; the table options apply to
+    the strategies that use a table. Latencies are taken after an untimed warm-up run.
+    """
+    from selfrepair.repair.strategies import strategy_names
+
+    names = tuple(s.strip() for s in strategies.split(",") if s.strip()) or strategy_names()
+    spec = mission_spec(
+        maze=maze,
+        start=start,
+        goal=goal,
+        faults=faults,
+        at=at,
+        clock=clock,
+        detect=detect,
+        transient=transient,
+        intermittent=intermittent,
+        strategy=names[0],
+        table=table,
+        recursion=recursion,
+        max_depth=max_depth,
+        window=window,
+        clearance_weight=clearance_weight,
+        heuristic=heuristic,
+        backend=backend,
+        plan_with_faults=plan_with_faults,
+        seed=seed,
+        domain_name=domain_name,
+        max_cells=max_cells,
+        max_table_bytes=max_table_bytes,
+        max_table_candidates=max_table_candidates,
+        strategies=names,
     )
+    from selfrepair.experiment.compare import compare_strategies
+
+    load_ns = kernel_load_ns(backend)
+    comparison = compare_strategies(spec, names, warm_up=warm_up)
+    if as_json:
+        echo_json(_comparison_json(comparison, load_ns))
+    else:
+        _print_comparison(comparison, f"{spec.maze.name or maze}: {spec.start} to "
+                          f"{spec.goal[0]},{spec.goal[1]}, faults {faults or 'none'}", load_ns)
+    return 0 if all(r.result.reached for r in comparison.runs) else 1
 
 
-def _domain(name: str) -> Domain[Any, Any]:
-    try:
-        return get_domain(name)
-    except InputError as exc:
-        raise InputError(exc.reason, source="--domain") from None
+_COMPARE_HEADERS = (
+    "strategy",
+    "status",
+    "ticks",
+    "repairs",
+    "replans",
+    "replacements",
+    "lookaheads",
+    "latency median µs",
+    "latency p99 µs",
+    "plan distance",
+)
 
 
-def _check_choice(value: str, choices: Sequence[str], option: str) -> None:
-    if value not in choices:
-        raise InputError(f"expected one of {', '.join(choices)}, got {value!r}", source=option)
+def _us(ns: int | None) -> str:
+    return "–" if ns is None else f"{ns / 1000:,.1f}"
+
+
+def _print_comparison(comparison: "Comparison", title: str, load_ns: int) -> None:
+    from rich.table import Table
+    from rich.text import Text
+
+    view = Table(title=Text(title))
+    for i, header in enumerate(_COMPARE_HEADERS):
+        view.add_column(header, justify="left" if i < 2 else "right", no_wrap=i == 0)
+    for r in comparison.runs:
+        cells = (
+            r.label,
+            r.status,
+            str(r.ticks),
+            str(r.repairs),
+            str(r.replans),
+            str(r.replacements),
+            str(r.lookaheads),
+            _us(r.latency_median_ns),
+            _us(r.latency_p99_ns),
+            str(r.plan_distance),
+        )
+        view.add_row(*(Text(c) for c in cells))  # Text: "[...]" in a label is not markup
+    console().print(view)
+    echo(f"verdict: {comparison.verdict}")
+    echo(_timing_note(load_ns, comparison.warmed_up))
+
+
+def _comparison_json(comparison: "Comparison", load_ns: int) -> dict[str, Any]:
+    return {
+        "runs": [
+            {
+                "strategy": r.label,
+                "status": r.status,
+                "ticks": number_json(r.ticks),
+                "ticks_exact": str(r.ticks),
+                "repairs": r.repairs,
+                "replans": r.replans,
+                "replacements": r.replacements,
+                "lookaheads": r.lookaheads,
+                "repair_latency_median_ns": r.latency_median_ns,
+                "repair_latency_p99_ns": r.latency_p99_ns,
+                "plan_distance": r.plan_distance,
+            }
+            for r in comparison.runs
+        ],
+        "verdict": comparison.verdict,
+        "warm_up": comparison.warmed_up,
+        "kernel_load_ms": round(load_ns / 1e6, 3),
+    }
+
+
+_Partial = Annotated[
+    bool,
+    typer.Option(
+        "--partial", help="Accept a trace without a summary line (a run that was cut short)."
+    ),
+]
+
+
+MaxTraceBytes = Annotated[
+    int | None,
+    typer.Option(
+        "--max-trace-bytes",
+        metavar="N",
+        min=1,
+        help="Refuse trace files larger than N bytes (default: 256 MiB).",
+        show_default=False,
+    ),
+]
+
+
+def read_trace_file(path: Path, *, partial: bool = False, max_bytes: int | None = None) -> Any:
+    """The parsed trace at ``path`` (``max_bytes``: the ``--max-trace-bytes`` limit, if given)."""
+    from selfrepair.execution.trace import read_trace
+
+    if max_bytes is None:
+        return read_trace(path, partial=partial)
+    return read_trace(path, partial=partial, max_bytes=max_bytes)
 
 
 @app.command()
 def replay(
-    trace: Annotated[Path, typer.Argument(help="A JSON Lines trace written by run --trace.")],
+    trace: Annotated[
+        Path, typer.Argument(metavar="TRACE", help="A JSON Lines trace written by run --trace.")
+    ],
+    partial: _Partial = False,
+    max_trace_bytes: MaxTraceBytes = None,
 ) -> int:
-    """Re-simulate a trace with the robot model; report the first step that does not hold."""
-    report = replay_trace(trace)
-    echo(f"{trace}: {report}")
+    """Re-simulate a trace; report the first bad step.
+
+    Every step is checked against the robot model and the fault schedule. Exit 1 when a step
+    does not hold.
+    """
+    from selfrepair.execution.trace import replay as replay_trace
+
+    report = replay_trace(read_trace_file(trace, partial=partial, max_bytes=max_trace_bytes))
+    if report.ok:
+        cut = " (a partial trace: no summary line)" if report.partial else ""
+        echo(f"{trace}: ok: all {report.steps_checked} steps hold under the robot model{cut}")
+    else:
+        echo(f"{trace}: {report}")
     return 0 if report.ok else 1
 
 
 @table_app.command("show")
 def table_show(
-    spec: Annotated[str, typer.Argument(help="Table file or bundled table name (handwritten).")],
+    spec: Annotated[
+        str,
+        typer.Argument(metavar="TABLE", help="Table file or bundled table name (handwritten)."),
+    ],
     as_json: Annotated[bool, typer.Option("--json", help="Print the table file text.")] = False,
     max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
     max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
-    """Print a replacement table: header, then each action's candidates in order."""
+    """Print a replacement table.
+
+    The header, then each action's candidates in order.
+    """
+    from rich.table import Table
+    from rich.text import Text
+
+    from selfrepair.tables.fileformat import dump_table, resolve_table
+
     table = resolve_table(
-        spec, max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
+        find_input(spec), max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
     )
     if as_json:
         echo(dump_table(table).rstrip("\n"))
         return 0
     dom = table.domain
-    title = (
-        f"{spec}: {dom.name}, {table.shape}, made by {table.made_by}, version {table.version}"
-    )
-    view = Table(title=title)
+    title = f"{spec}: {dom.name}, {table.shape}, made by {table.made_by}, version {table.version}"
+    view = Table(title=Text(title))
     for column in ("action", "class", "faults", "candidates"):
         view.add_column(column)
     for entry in table.entries:
@@ -321,22 +493,30 @@ def table_show(
             or "(no replacement)"
         )
         faults = "" if entry.faults is None else dom.format_faults(entry.faults)
-        view.add_row(
-            dom.format_action(entry.action), dom.motion_class(entry.action), faults, candidates
-        )
+        action = dom.format_action(entry.action)
+        cells = (action, dom.motion_class(entry.action), faults, candidates)
+        view.add_row(*(Text(c) for c in cells))
     console().print(view)
     return 0
 
 
 @table_app.command("check")
 def table_check(
-    spec: Annotated[str, typer.Argument(help="Table file or bundled table name.")],
+    spec: Annotated[
+        str, typer.Argument(metavar="TABLE", help="Table file or bundled table name.")
+    ],
     max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
     max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
-    """Load a table (re-simulating every candidate) and list gaps and dead candidates."""
+    """Check a table: gaps and dead candidates.
+
+    Loads the table (re-simulating every candidate). Exit 1 when there are errors.
+    """
+    from selfrepair.tables.fileformat import resolve_table
+    from selfrepair.tables.model import check_table
+
     table = resolve_table(
-        spec, max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
+        find_input(spec), max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
     )
     problems = check_table(table)
     for problem in problems:

@@ -1,38 +1,26 @@
 """Experiment commands: ``selfrepair experiment``, ``selfrepair report``, ``selfrepair animate``."""
 
-from __future__ import annotations
 
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from functools import partial
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
-import joblib
 import typer
-from rich import box
-from rich.console import Console
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    TaskProgressColumn,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
-from rich.table import Table
-from rich.text import Text
 
 from selfrepair.cli._app import MaxCells, MaxMissions, app, console, echo
-from selfrepair.errors import SelfRepairError
-from selfrepair.experiment.findings import Finding, StrategySummary, check_findings, summarize
-from selfrepair.experiment.missions import Mission, expand
-from selfrepair.experiment.runner import check_backend, execute_mission, run_missions
-from selfrepair.experiment.store import ResultStore, Value, require_pyarrow
-from selfrepair.experiment.summary import FaultSetBite, fault_set_bite
+from selfrepair.errors import InputError, ProblemError
 from selfrepair.limits import MAX_CELLS, MAX_MISSIONS
+
+if TYPE_CHECKING:
+    from rich.table import Table
+
+    from selfrepair.experiment.findings import Finding, StrategySummary
+    from selfrepair.experiment.missions import Mission
+    from selfrepair.experiment.store import Value
+    from selfrepair.experiment.summary import FaultSetBite
 
 __all__ = [
     "animate",
@@ -55,29 +43,69 @@ def resolve_experiment(spec: str) -> Path:
     return Path(spec)
 
 
+def _check_options(backend: str, jobs: int, scheduler: str | None) -> None:
+    """The runner's checks, worded with the flags (the library names none)."""
+    from selfrepair.experiment.runner import BACKENDS
+
+    if backend not in BACKENDS:
+        raise InputError(
+            f"expected one of {', '.join(BACKENDS)}, got {backend!r}", source="--backend"
+        )
+    if jobs < 1 and jobs != -1:
+        raise InputError(
+            f"expected a positive number of workers or -1 (all cores), got {jobs}", source="--jobs"
+        )
+    if backend == "dask" and not scheduler:
+        raise InputError(
+            "expected --scheduler ADDRESS (e.g. tcp://host:8786) with --backend dask",
+            source="--scheduler",
+        )
+
+
 @app.command()
 def experiment(
     config: Annotated[
-        str, typer.Argument(help="Bundled experiment (paper, scale, full, team) or FILE.toml.")
+        str,
+        typer.Argument(
+            metavar="CONFIG", help="Bundled experiment (paper, scale, full, team) or FILE.toml."
+        ),
     ],
     db: Annotated[
-        Path | None, typer.Option("--db", help="Results database (default results/NAME.sqlite).")
+        Path | None,
+        typer.Option(
+            "--db", metavar="FILE", help="Results database (default: results/NAME.sqlite)."
+        ),
     ] = None,
     jobs: Annotated[
-        int, typer.Option("--jobs", "-j", help="Local worker processes (-1: all cores).")
+        int,
+        typer.Option("--jobs", "-j", metavar="N", help="Local worker processes (-1: all cores)."),
     ] = -1,
-    backend: Annotated[str, typer.Option(help="local, dask or ray.")] = "local",
+    backend: Annotated[
+        str, typer.Option("--backend", metavar="NAME", help="Where to run: local, dask or ray.")
+    ] = "local",
     scheduler: Annotated[
-        str | None, typer.Option(help="Dask scheduler address (with --backend dask).")
+        str | None,
+        typer.Option(
+            "--scheduler", metavar="ADDRESS", help="Dask scheduler address (with --backend dask)."
+        ),
     ] = None,
     address: Annotated[
-        str | None, typer.Option(help="Ray cluster address (with --backend ray).")
+        str | None,
+        typer.Option(
+            "--address",
+            metavar="ADDRESS",
+            help="Ray cluster address (with --backend ray; default: start a local Ray).",
+        ),
     ] = None,
     export_csv: Annotated[
-        Path | None, typer.Option("--export-csv", help="Also write every row to a CSV file.")
+        Path | None,
+        typer.Option("--export-csv", metavar="FILE", help="Also write every row to a CSV file."),
     ] = None,
     export_parquet: Annotated[
-        Path | None, typer.Option("--export-parquet", help="Also write a Parquet file (pyarrow).")
+        Path | None,
+        typer.Option(
+            "--export-parquet", metavar="FILE", help="Also write a Parquet file (needs pyarrow)."
+        ),
     ] = None,
     max_missions: MaxMissions = MAX_MISSIONS,
     max_cells: MaxCells = MAX_CELLS,
@@ -85,6 +113,7 @@ def experiment(
         int | None,
         typer.Option(
             "--repeats",
+            metavar="N",
             help="Warm timing runs per mission after one cold run (timings are their medians; "
             "default: the experiment's timing_repeats, else 1).",
             min=1,
@@ -92,28 +121,38 @@ def experiment(
         ),
     ] = None,
 ) -> int:
-    """Run an experiment (resumable: missions already in the database are skipped), then print the
-    per-strategy summary and the original study's findings checked on all stored rows. A team
-    experiment (``kind = "team"``, e.g. the bundled ``team``) prints the team summary."""
+    """Run an experiment; print its summary and findings.
+
+    Resumable: missions already in the database are skipped. The summary and the original
+    study's findings are computed on all stored rows of the experiment. A team experiment
+    (kind = "team", e.g. the bundled team) prints the team summary. Ctrl-C stops the sweep and
+    says how much is stored (exit 130); running the same command again resumes.
+    """
+    import joblib
+
+    from selfrepair.experiment.findings import check_findings, summarize
+    from selfrepair.experiment.missions import expand
+    from selfrepair.experiment.runner import check_backend, execute_mission, run_missions
+    from selfrepair.experiment.store import ResultStore
+    from selfrepair.experiment.summary import fault_set_bite
+    from selfrepair.experiment.teams import TeamExperimentConfig, load_experiment
+
     missions: tuple[Mission, ...] = ()
     db_path: Path | None = None
     try:
+        _check_options(backend, jobs, scheduler)
         check_backend(backend, jobs=jobs, scheduler=scheduler)
         if export_parquet is not None:
-            require_pyarrow()  # before the sweep, not after it
-        from selfrepair.experiment.teams import TeamExperimentConfig, load_experiment
-
+            _require_pyarrow()  # before the sweep, not after it
         loaded = load_experiment(resolve_experiment(config))
         if isinstance(loaded, TeamExperimentConfig):
             from selfrepair.cli.team import run_team_experiment
 
             if repeats is not None:
-                from selfrepair.errors import ProblemError
-
-                raise ProblemError(
-                    "--repeats times single-robot missions; a team experiment runs each once"
+                raise InputError(
+                    "--repeats times single-robot missions; a team experiment runs each once",
+                    source="--repeats",
                 )
-
             return run_team_experiment(
                 loaded,
                 db,
@@ -166,9 +205,25 @@ def experiment(
     return 0
 
 
-def _stored_after_interrupt(missions: Sequence[Mission], db_path: Path | None) -> str:
+def _require_pyarrow() -> None:
+    """The library's check, worded with the flags."""
+    from selfrepair.experiment.store import require_pyarrow
+
+    try:
+        require_pyarrow()
+    except ProblemError:
+        raise InputError(
+            "Parquet export needs pyarrow: pip install 'selfrepair[parquet]' (or use --export-csv)",
+            source="--export-parquet",
+        ) from None
+
+
+def _stored_after_interrupt(missions: "Sequence[Mission]", db_path: Path | None) -> str:
     """How much of an interrupted experiment is stored, and how to go on (every stored row is
     whole: rows are committed in atomic batches)."""
+    from selfrepair.errors import SelfRepairError
+    from selfrepair.experiment.store import ResultStore
+
     if db_path is None or not missions:
         return "no mission was run"
     try:
@@ -188,6 +243,16 @@ def _progress(label: str) -> Iterator[Callable[[int, int], None] | None]:
     if not sys.stdout.isatty():
         yield None
         return
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TaskProgressColumn,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
     columns = (
         TextColumn("{task.description}"),
         BarColumn(),
@@ -226,21 +291,20 @@ _SHORT_HEADERS = {
 }
 """Stacked headers for a terminal, where every column must fit without truncating a number."""
 
-_PIPED_WIDTH = 1000
-"""Piped output is as wide as the table needs (up to this), so nothing is cut."""
 
+def print_summary(summaries: "list[StrategySummary]", *, title: str) -> None:
+    """The per-strategy summary as a rich table: one wide table with full headers when piped
+    (logs and files are never cut, whatever ``COLUMNS`` says), stacked headers on a terminal,
+    split into as many tables as the terminal's width needs. Numbers are never truncated; long
+    strategy names wrap after a comma on a terminal."""
+    from selfrepair.experiment.findings import StrategySummary
 
-def print_summary(summaries: list[StrategySummary], *, title: str) -> None:
-    """The per-strategy summary as a rich table: one wide table when piped (logs keep full
-    headers), stacked headers on a terminal, split in two on a narrow one. Numbers are never
-    truncated; long strategy names wrap after a comma."""
     rows = [s.cells() for s in summaries]
     headers = StrategySummary.HEADERS
+    out = console()  # piped: as wide as the table needs (see console())
     if not sys.stdout.isatty():
-        out = Console(file=sys.stdout, width=_PIPED_WIDTH, soft_wrap=True, highlight=False)
         out.print(_table(title, headers, rows, range(1, len(headers)), short=False))
         return
-    out = console()
     groups = _column_groups(headers, rows, out.width)
     for part, columns in enumerate(groups, start=1):
         label = title if len(groups) == 1 else f"{title} ({part}/{len(groups)})"
@@ -275,29 +339,30 @@ def _table(
     columns: Sequence[int],
     *,
     short: bool,
-) -> Table:
+) -> "Table":
+    from rich import box
+    from rich.table import Table
+    from rich.text import Text
+
     table = Table(title=title, box=box.SIMPLE_HEAD if short else box.HEAVY_HEAD)
     table.add_column(headers[0], overflow="fold", no_wrap=not short)
     for i in columns:
-        table.add_column(
-            _SHORT_HEADERS[headers[i]] if short else headers[i],
-            justify="right",
-            no_wrap=True,
-            min_width=max(len(r[i]) for r in rows) if rows else None,
-        )
+        header = _SHORT_HEADERS[headers[i]] if short else headers[i]
+        widest = max([len(r[i]) for r in rows] + ([] if short else [len(header)]))
+        table.add_column(header, justify="right", no_wrap=True, min_width=widest)
     for row in rows:
         name = row[0].replace(",", ", ") if short else row[0]
         table.add_row(Text(name), *(Text(row[i]) for i in columns))
     return table
 
 
-def print_findings(findings: list[Finding]) -> None:
-    """Each finding as a short paragraph: its outcome and claim, then the evidence."""
+def print_findings(findings: "list[Finding]") -> None:
+    """Each finding as a short paragraph: its outcome and claim, then the evidence (wrapped)."""
     for f in findings:
         echo(f.paragraph())
 
 
-def _print_crossover(rows: list[dict[str, Value]], figure: Path) -> None:
+def _print_crossover(rows: "list[dict[str, Value]]", figure: Path) -> None:
     """The crossover analysis of every replacement variant, and its figure when matplotlib is
     installed."""
     from selfrepair.experiment.scale import crossover
@@ -321,7 +386,7 @@ def _print_crossover(rows: list[dict[str, Value]], figure: Path) -> None:
     echo(f"wrote {figure_crossover(results, figure)}")
 
 
-def print_fault_sets(bites: list[FaultSetBite]) -> None:
+def print_fault_sets(bites: "list[FaultSetBite]") -> None:
     """Per fault set: missions that met a faulty action, of all missions and of the replanner's."""
     echo("Fault sets: missions that met a faulty action (all strategies; replanning robot)")
     for b in bites:
@@ -333,22 +398,35 @@ def print_fault_sets(bites: list[FaultSetBite]) -> None:
 
 @app.command()
 def report(
-    results: Annotated[Path, typer.Argument(help="Results database written by `experiment`.")],
-    out: Annotated[str, typer.Option("--out", "-o", help="Directory for report.md and figures.")],
+    results: Annotated[
+        Path,
+        typer.Argument(metavar="RESULTS", help="Results database written by `experiment`."),
+    ],
+    out: Annotated[
+        str,  # not a Path: an empty path must reach the report, which refuses it
+        typer.Option("--out", "-o", metavar="DIR", help="Directory for report.md and figures."),
+    ],
     mission: Annotated[
         str | None,
-        typer.Option(help="Key (or key prefix) of the mission to draw; default: a telling one."),
+        typer.Option(
+            "--mission",
+            metavar="KEY",
+            help="Key (or key prefix) of the mission to draw (default: a telling one).",
+        ),
     ] = None,
 ) -> int:
-    """Write a Markdown report with tables and PNG figures (needs matplotlib: extra `viz`)."""
+    """Write a Markdown report with tables and figures.
+
+    The figures are PNG files (they need matplotlib: the `viz` extra).
+    """
     from selfrepair.experiment.report import write_report
 
     if not results.is_file():
-        from selfrepair.errors import InputError
-
         raise InputError(
             "expected a results database written by `selfrepair experiment`", source=str(results)
         )
+    if mission is not None and not mission:
+        raise InputError("expected a non-empty mission key or key prefix", source="--mission")
     written = write_report(results, out, mission_key=mission)
     for path in written:
         echo(str(path))
@@ -358,17 +436,50 @@ def report(
 @app.command()
 def animate(
     trace: Annotated[
-        Path, typer.Argument(help="Trace file (JSON Lines) written by `run --trace`.")
+        Path,
+        typer.Argument(metavar="TRACE", help="Trace file (JSON Lines) written by `run --trace`."),
     ],
-    out: Annotated[Path, typer.Option("--out", "-o", help="GIF file to write.")],
-    fps: Annotated[int, typer.Option(help="Frames per second.", min=1, max=60)] = 4,
+    out: Annotated[
+        Path, typer.Option("--out", "-o", metavar="FILE", help="GIF file to write.")
+    ],
+    fps: Annotated[
+        int, typer.Option("--fps", metavar="N", help="Frames per second.", min=1, max=60)
+    ] = 4,
     max_frames: Annotated[
-        int, typer.Option(help="At most this many frames (long traces are subsampled).", min=1)
+        int,
+        typer.Option(
+            "--max-frames",
+            metavar="N",
+            help="At most this many frames (long traces are subsampled).",
+            min=1,
+        ),
     ] = 120,
 ) -> int:
-    """Animate a mission trace as a GIF: the robot, its path, faults and replaced segments."""
+    """Animate a mission trace as a GIF.
+
+    Shows the robot, its path, the faults and the replaced segments.
+    """
     from selfrepair.experiment.animate import animate_trace
 
-    frames = animate_trace(trace, out, fps=fps, max_frames=max_frames)
+    with _frames_progress(f"drawing {out.name}") as on_frame:
+        frames = animate_trace(trace, out, fps=fps, max_frames=max_frames, on_frame=on_frame)
     echo(f"wrote {out} ({frames} frames)")
     return 0
+
+
+@contextmanager
+def _frames_progress(label: str) -> Iterator[Callable[[int, int], None] | None]:
+    """A progress bar of the frames drawn, on a terminal only."""
+    if not sys.stdout.isatty():
+        yield None
+        return
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
+
+    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn())
+    with Progress(*columns, console=console(), transient=True) as progress:
+        task = progress.add_task(label, total=None)
+
+        def update(done: int, total: int) -> None:
+            progress.update(task, completed=done, total=total)
+
+        yield update

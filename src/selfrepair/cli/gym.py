@@ -6,8 +6,6 @@ imported inside the command, so ``selfrepair --help`` loads none of them; withou
 the command says what to install (exit code 2).
 """
 
-from __future__ import annotations
-
 import math
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -29,56 +27,88 @@ PAPER_FAULTS = "paper"
 @app.command("gym-eval")
 def gym_eval(
     policy: Annotated[
-        str, typer.Option("--policy", help="replacement, replan or random.")
+        str, typer.Option("--policy", metavar="NAME", help="replacement, replan or random.")
     ] = "replacement",
-    episodes: Annotated[int, typer.Option("--episodes", min=1, help="Episodes to run.")] = 100,
-    seed: Annotated[int, typer.Option("--seed", min=0, help="Seed of the episode seeds.")] = 0,
-    domain: Annotated[str, typer.Option("--domain", help="Robot domain name.")] = "four-wheel",
+    episodes: Annotated[
+        int, typer.Option("--episodes", metavar="N", min=1, help="Episodes to run.")
+    ] = 100,
+    seed: Annotated[
+        int, typer.Option("--seed", metavar="S", min=0, help="Seed of the episode seeds.")
+    ] = 0,
+    domain: Annotated[
+        str, typer.Option("--domain", metavar="NAME", help="Robot domain name.")
+    ] = "four-wheel",
     maze: Annotated[
         list[str] | None,
-        typer.Option("--maze", help="bundled, a bundled name or a maze file (repeatable)."),
+        typer.Option(
+            "--maze", metavar="MAZE", help="bundled, a bundled name or a maze file (repeatable)."
+        ),
     ] = None,
     generate: Annotated[
         list[str] | None,
-        typer.Option("--generate", help="A fresh WIDTHxHEIGHT maze per episode (repeatable)."),
+        typer.Option(
+            "--generate",
+            metavar="WxH",
+            help="A fresh WIDTHxHEIGHT maze per episode (repeatable).",
+        ),
     ] = None,
-    corridor: Annotated[int, typer.Option("--corridor", help="Generated corridor width.")] = 1,
-    braid: Annotated[float, typer.Option("--braid", help="Generated braid share.")] = 0.0,
-    routes: Annotated[str, typer.Option("--routes", help="bundled or random.")] = "bundled",
+    corridor: Annotated[
+        int, typer.Option("--corridor", metavar="N", help="Generated corridor width.")
+    ] = 1,
+    braid: Annotated[
+        float, typer.Option("--braid", metavar="P", help="Generated braid share.")
+    ] = 0.0,
+    routes: Annotated[
+        str, typer.Option("--routes", metavar="KIND", help="bundled or random.")
+    ] = "bundled",
     faults: Annotated[
         list[str] | None,
         typer.Option(
             "--faults",
+            metavar="FAULTS",
             help="A fault set, e.g. FL:F,RL:F (repeatable), or 'paper'; default: every single "
             "and double fault.",
         ),
     ] = None,
     persistence: Annotated[
         list[str] | None,
-        typer.Option("--persistence", help="permanent, transient or intermittent (repeatable)."),
+        typer.Option(
+            "--persistence",
+            metavar="KIND",
+            help="permanent, transient or intermittent (repeatable).",
+        ),
     ] = None,
     detection: Annotated[
-        list[str] | None, typer.Option("--detection", help="now or on-use (repeatable).")
+        list[str] | None,
+        typer.Option("--detection", metavar="KIND", help="now or on-use (repeatable)."),
     ] = None,
     at_max: Annotated[
-        int, typer.Option("--at-max", min=0, help="Faults start at a step from 0 to this.")
+        int,
+        typer.Option("--at-max", metavar="N", min=0, help="Faults start at a step from 0 to this."),
     ] = 0,
     table: Annotated[
         str | None,
-        typer.Option("--table", help="Table file or bundled name (default: per domain)."),
+        typer.Option(
+            "--table", metavar="TABLE", help="Table file or bundled name (default: per domain)."
+        ),
     ] = None,
     recursion: Annotated[
-        str, typer.Option("--recursion", help="flat, guarded or layered.")
+        str, typer.Option("--recursion", metavar="MODE", help="flat, guarded or layered.")
     ] = "flat",
     max_steps: Annotated[
-        int | None, typer.Option("--max-steps", min=1, help="Steps per episode (default 4*w*h).")
+        int | None,
+        typer.Option("--max-steps", metavar="N", min=1, help="Steps per episode (default 4*w*h)."),
     ] = None,
     max_episodes: Annotated[
-        int, typer.Option("--max-episodes", min=1, help="Refuse more episodes than this.")
+        int,
+        typer.Option("--max-episodes", metavar="N", min=1, help="Refuse more episodes than this."),
     ] = 10_000,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
 ) -> int:
-    """Evaluate a baseline policy on selfrepair/FaultyMaze-v0: success rate and return."""
+    """Evaluate a baseline policy on the Gymnasium environment.
+
+    Runs selfrepair/FaultyMaze-v0 and reports the success rate and the return.
+    """
     try:
         from selfrepair.envs import FaultSpec, FaultyMazeEnv
         from selfrepair.envs.evaluate import evaluate
@@ -118,16 +148,14 @@ def _fault_sets(faults: list[str] | None, domain: str) -> tuple[str, ...] | None
         from selfrepair.experiment.missions import PAPER_FAULT_SETS
 
         if domain != "four-wheel":
-            raise InputError(
-                "the paper fault sets are for the four-wheel robot", source="--faults"
-            )
+            raise InputError("the paper fault sets are for the four-wheel robot", source="--faults")
         return PAPER_FAULT_SETS
     return tuple(faults)
 
 
 def _mazes(
     maze: list[str] | None, generate: list[str] | None, corridor: int, braid: float
-) -> list[MazeSpec]:
+) -> "list[MazeSpec]":
     from selfrepair.envs.scenarios import MazeGenerator
 
     specs: list[MazeSpec] = list(maze or [])
@@ -139,13 +167,13 @@ def _mazes(
     return specs or ["bundled"]
 
 
-def _interval(interval: Interval, digits: int) -> str:
+def _interval(interval: "Interval", digits: int) -> str:
     if math.isnan(interval.low):
         return "n/a"
     return f"[{interval.low:.{digits}f}, {interval.high:.{digits}f}]"
 
 
-def _print(result: Evaluation, domain: str, spec: FaultSpec) -> None:
+def _print(result: "Evaluation", domain: str, spec: "FaultSpec") -> None:
     n = len(result.episodes)
     level = round(100 * result.success_interval().confidence)
     mean_steps = sum(e.steps for e in result.episodes) / n
@@ -164,7 +192,7 @@ def _print(result: Evaluation, domain: str, spec: FaultSpec) -> None:
         echo(f"gave up (no plan under the known faults) in {gave_up} episodes")
 
 
-def _as_json(result: Evaluation, domain: str) -> dict[str, Any]:
+def _as_json(result: "Evaluation", domain: str) -> dict[str, Any]:
     success, ret = result.success_interval(), result.return_interval()
     return {
         "policy": result.policy,

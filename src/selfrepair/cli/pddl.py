@@ -3,56 +3,71 @@
 The encoding is :mod:`selfrepair.baselines.pddl`'s: all 81 actions as schemas, known faults as
 missing ``(healthy W M)`` facts, durations as action costs in thirds of a tick. With ``--plan`` the
 lattice planner's plan is written next to them as ``plan.pddl`` (exit 1 if there is none), for a
-PDDL validator such as VAL. Bad input is exit code 2 (see :func:`selfrepair.cli.main`).
+PDDL validator such as VAL. Bad input is exit code 2 (see :func:`selfrepair.cli.main`). The
+library is imported inside the command (start-up, see :mod:`selfrepair.cli._app`).
 """
-
-from __future__ import annotations
 
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from selfrepair.baselines.pddl import MAX_PDDL_CELLS, export_pddl, plan_to_pddl, write_pddl
 from selfrepair.cli._app import app, echo
-from selfrepair.cli.planning import parse_goal
-from selfrepair.geometry import parse_pose
-from selfrepair.robots import four_wheel
-from selfrepair.search.astar import PlanStatus
-from selfrepair.search.lattice import plan
-from selfrepair.search.problem import PlanningProblem
-from selfrepair.world.bundled import resolve_maze
+from selfrepair.cli._inputs import Faults, MazeArg, Start, find_input
 
-__all__ = ["pddl_command"]
+__all__ = ["PDDL_CELLS_DEFAULT", "pddl_command"]
+
+PDDL_CELLS_DEFAULT = 4096
+"""Default of this command's ``--max-cells``:
+:data:`selfrepair.baselines.pddl.MAX_PDDL_CELLS` (a test keeps them equal; the CLI does not import
+the exporter to start)."""
 
 
 @app.command("pddl")
 def pddl_command(
-    maze_spec: Annotated[
-        str,
-        typer.Argument(metavar="MAZE", help="Bundled maze name, maze file or MovingAI .map."),
+    maze_spec: MazeArg,
+    start: Start,
+    goal: Annotated[
+        str, typer.Option("--goal", metavar="X,Y[,H]", help="Goal cell, or goal pose X,Y,H.")
     ],
-    start: Annotated[str, typer.Option("--start", help="Start pose X,Y,H (H in N, E, S, W).")],
-    goal: Annotated[str, typer.Option("--goal", help="Goal cell X,Y or pose X,Y,H.")],
     output: Annotated[
         Path, typer.Option("-o", "--output", metavar="DIR", help="Directory for the files.")
     ],
-    faults: Annotated[str, typer.Option("--faults", help="Known faults, e.g. FL:F,RR:B.")] = "",
+    faults: Faults = "",
     name: Annotated[
-        str, typer.Option("--name", help="PDDL problem name (default: the maze's name).")
+        str,
+        typer.Option(
+            "--name", metavar="NAME", help="PDDL problem name (default: the maze's name)."
+        ),
     ] = "",
     max_cells: Annotated[
         int,
         typer.Option(
-            "--max-cells", min=1, help="Largest maze (width x height) to export; raise with care."
+            "--max-cells",
+            metavar="N",
+            min=1,
+            help="Largest maze (width x height) to export; raise with care.",
         ),
-    ] = MAX_PDDL_CELLS,
+    ] = PDDL_CELLS_DEFAULT,
     with_plan: Annotated[
         bool, typer.Option("--plan", help="Also write the lattice planner's plan as plan.pddl.")
     ] = False,
 ) -> int:
-    """Write the planning problem from START to GOAL as PDDL files in DIR."""
-    maze = resolve_maze(maze_spec)
+    """Write the planning problem from START to GOAL as PDDL files.
+
+    domain.pddl and problem.pddl go to DIR; with --plan also plan.pddl. Exit 1 when there is no
+    plan to write.
+    """
+    from selfrepair.baselines.pddl import export_pddl, plan_to_pddl, write_pddl
+    from selfrepair.cli.planning import parse_goal
+    from selfrepair.geometry import parse_pose
+    from selfrepair.robots import four_wheel
+    from selfrepair.search.astar import PlanStatus
+    from selfrepair.search.lattice import plan
+    from selfrepair.search.problem import PlanningProblem
+    from selfrepair.world.bundled import resolve_maze
+
+    maze = resolve_maze(find_input(maze_spec))
     goal_cell, goal_heading = parse_goal(goal)
     problem = PlanningProblem(
         maze=maze,

@@ -3,140 +3,152 @@
 Exit codes: ``plan`` and ``path`` return 0 when a plan or path was found and 1 otherwise (no path,
 or the budget ran out); ``check-scen`` returns 1 if any checked line does not match. Bad input is
 exit code 2 (see :func:`selfrepair.cli.main`).
+
+Times: the compiled kernels are loaded (or compiled) before the search starts, and that load is
+reported on its own line (``kernels loaded in ... ms``); the search time is the search alone.
 """
 
-from __future__ import annotations
 
 import time
-from fractions import Fraction
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
-import numpy as np
 import typer
 
-from selfrepair.cli._app import MaxCells, app, echo, echo_json
+from selfrepair.cli._app import MaxCells, app, echo, echo_json, exact_json, number_json
+from selfrepair.cli._inputs import (
+    Backend,
+    ClearanceWeight,
+    Faults,
+    Heuristic,
+    Json,
+    MaxExpansions,
+    MazeArg,
+    Start,
+    TimeLimit,
+    find_input,
+    parse_weight,
+)
 from selfrepair.errors import InputError
-from selfrepair.geometry import Cell, Heading, parse_cell, parse_pose
-from selfrepair.limits import MAX_CELLS, MAX_CLEARANCE_WEIGHT
-from selfrepair.robots import four_wheel
-from selfrepair.search.astar import PlanResult, PlanStatus
-from selfrepair.search.backend import BACKENDS
-from selfrepair.search.grid import grid_astar
-from selfrepair.search.lattice import HEURISTICS, plan
-from selfrepair.search.problem import CONNECTIVITIES, GridResult, PlanningProblem
-from selfrepair.world.bundled import resolve_maze
-from selfrepair.world.maze import Maze
-from selfrepair.world.movingai import ScenarioQuery, load_map, load_scenario
-from selfrepair.world.render import GOAL_CHAR, path_layer, pose_layer, render_ascii
+from selfrepair.limits import MAX_CELLS
 
-__all__ = [
-    "SCEN_TOLERANCE",
-    "check_scenarios",
-    "fraction_json",
-    "parse_goal",
-    "parse_weight",
-    "path_json",
-    "plan_json",
-    "sample_indices",
-]
+if TYPE_CHECKING:
+    from selfrepair.geometry import Cell, Heading
+    from selfrepair.search.astar import PlanResult
+    from selfrepair.search.problem import GridResult, PlanningProblem
+    from selfrepair.world.maze import Maze
 
-SCEN_TOLERANCE = 0.01
-"""Absolute tolerance against MovingAI ``optimal_length`` (hog2-era files round sqrt(2))."""
+__all__ = ["kernel_load_ns", "parse_goal", "path_json", "plan_json"]
 
-_Backend = Annotated[str, typer.Option("--backend", help=f"Search backend: {', '.join(BACKENDS)}.")]
-_Json = Annotated[bool, typer.Option("--json", help="Print a JSON object instead of a picture.")]
-_MaxExpansions = Annotated[
-    int | None, typer.Option("--max-expansions", help="Node budget (expansions).")
-]
-_TimeLimit = Annotated[float | None, typer.Option("--time-limit", help="Time budget in seconds.")]
+MAX_PICTURE_CELLS = 100 * 100
+"""``path`` draws its picture by default only for mazes up to this many cells (``--picture``
+draws any size)."""
 
 
-def parse_goal(text: str) -> tuple[Cell, Heading | None]:
+def parse_goal(text: str) -> "tuple[Cell, Heading | None]":
     """Parse ``X,Y`` (any heading) or ``X,Y,H`` into a goal cell and optional heading."""
+    from selfrepair.geometry import parse_cell, parse_pose
+
     if text.count(",") == 2:
         pose = parse_pose(text, source="--goal")
         return pose.cell, pose.heading
     return parse_cell(text, source="--goal"), None
 
 
-def parse_weight(text: str) -> Fraction:
-    """Parse an exact weight such as ``2``, ``1/3`` or ``0.25``, from 0 to
-    :data:`~selfrepair.limits.MAX_CLEARANCE_WEIGHT`."""
-    try:
-        weight = Fraction(text.strip())
-    except (ValueError, ZeroDivisionError) as exc:
+def kernel_load_ns(backend: str, *kinds: str) -> int:
+    """Load the compiled kernels of ``kinds`` (default: all; see
+    :data:`selfrepair.search.warmup.KERNELS`) if ``backend`` uses them; the nanoseconds it took
+    (0 when they were loaded already in this process or are not used)."""
+    from selfrepair.search.astar import BACKENDS
+    from selfrepair.search.backend import use_numba
+
+    if backend not in BACKENDS:
         raise InputError(
-            f"expected a number such as 2, 1/3 or 0.25, got {text[:40]!r}",
-            source="--clearance-weight",
-        ) from exc
-    if not 0 <= weight <= MAX_CLEARANCE_WEIGHT:
-        raise InputError(
-            f"expected a weight from 0 to {MAX_CLEARANCE_WEIGHT:,}, got {text[:40]!r}",
-            source="--clearance-weight",
+            f"expected one of {', '.join(BACKENDS)}, got {backend!r}", source="--backend"
         )
-    return weight
+    if not use_numba(backend):
+        return 0
+    from selfrepair.search.warmup import ensure_warm
+
+    return ensure_warm(*kinds)
 
 
-def fraction_json(value: Fraction) -> int | str:
-    """An exact number for JSON: an integer when whole, else a string such as ``"31/3"``."""
-    return value.numerator if value.denominator == 1 else str(value)
+def _ms(ns: int) -> float:
+    return round(ns / 1e6, 3)
 
 
-def plan_json(result: PlanResult) -> dict[str, Any]:
-    """The ``plan --json`` object."""
+def plan_json(result: "PlanResult", load_ns: int = 0) -> dict[str, Any]:
+    """The ``plan --json`` object: ``cost`` and ``duration`` as numbers with exact ``_exact``
+    strings; ``search_ms`` is the search alone, ``kernel_load_ms`` the one-off kernel load."""
     return {
         "status": result.status.value,
-        "cost": None if result.cost is None else fraction_json(result.cost),
-        "duration": fraction_json(result.duration),
+        "cost": number_json(result.cost),
+        "cost_exact": exact_json(result.cost),
+        "duration": number_json(result.duration),
+        "duration_exact": exact_json(result.duration),
         "actions": [a.code for a in result.actions],
         "poses": [[p.x, p.y, p.heading.name] for p in result.poses],
         "expansions": result.expansions,
-        "wall_time_ms": result.wall_time_ns / 1e6,
+        "search_ms": _ms(result.wall_time_ns),
+        "kernel_load_ms": _ms(load_ns),
     }
 
 
-def path_json(result: GridResult) -> dict[str, Any]:
+def path_json(result: "GridResult", load_ns: int = 0) -> dict[str, Any]:
     """The ``path --json`` object; ``cost`` is a float, ``cost_exact`` its exact form."""
     cost = result.cost
     return {
         "status": result.status.value,
-        "cost": None if cost is None else cost.value,
+        "cost": None if cost is None else number_json(cost.value),
         "cost_exact": None
         if cost is None
         else {"straight": cost.straight, "diagonal": cost.diagonal, "text": str(cost)},
         "path": [[x, y] for x, y in result.path],
         "expansions": result.expansions,
-        "wall_time_ms": result.wall_time_ns / 1e6,
+        "search_ms": _ms(result.wall_time_ns),
+        "kernel_load_ms": _ms(load_ns),
     }
+
+
+def _times(result_ns: int, load_ns: int) -> str:
+    load = f"  (kernels loaded in {load_ns / 1e6:.0f} ms before, not counted)" if load_ns else ""
+    return f"search: {result_ns / 1e6:.2f} ms{load}"
 
 
 @app.command("plan")
 def plan_command(
-    maze_spec: Annotated[
-        str,
-        typer.Argument(metavar="MAZE", help="Bundled maze name, maze file or MovingAI .map."),
+    maze_spec: MazeArg,
+    start: Start,
+    goal: Annotated[
+        str, typer.Option("--goal", metavar="X,Y[,H]", help="Goal cell, or goal pose X,Y,H.")
     ],
-    start: Annotated[str, typer.Option("--start", help="Start pose X,Y,H (H in N, E, S, W).")],
-    goal: Annotated[str, typer.Option("--goal", help="Goal cell X,Y or pose X,Y,H.")],
-    faults: Annotated[str, typer.Option("--faults", help="Known faults, e.g. FL:F,RR:B.")] = "",
-    clearance_weight: Annotated[
-        str, typer.Option("--clearance-weight", help="Weight of the wall-clearance term.")
-    ] = "0",
+    faults: Faults = "",
+    clearance_weight: ClearanceWeight = "0",
     clearance_radius: Annotated[
-        int, typer.Option("--clearance-radius", help="Clearance below which cells cost extra.")
+        int,
+        typer.Option(
+            "--clearance-radius", metavar="N", help="Clearance below which cells cost extra."
+        ),
     ] = 2,
-    heuristic: Annotated[
-        str, typer.Option("--heuristic", help=f"One of {', '.join(HEURISTICS)}.")
-    ] = "grid-distance",
-    max_expansions: _MaxExpansions = None,
-    time_limit: _TimeLimit = None,
-    backend: _Backend = "auto",
-    as_json: _Json = False,
+    heuristic: Heuristic = "grid-distance",
+    max_expansions: MaxExpansions = None,
+    time_limit: TimeLimit = None,
+    backend: Backend = "auto",
+    as_json: Json = False,
     max_cells: MaxCells = MAX_CELLS,
 ) -> int:
-    """Plan the robot's actions from START to GOAL with exact A* (exit 1 if no plan)."""
-    maze = resolve_maze(maze_spec, max_cells=max_cells)
+    """Plan the robot's actions with exact A*.
+
+    Exit 1 when there is no plan (or the budget ran out).
+    """
+    from selfrepair.geometry import parse_pose
+    from selfrepair.robots import four_wheel
+    from selfrepair.search.astar import PlanStatus
+    from selfrepair.search.lattice import plan
+    from selfrepair.search.problem import PlanningProblem
+    from selfrepair.world.bundled import resolve_maze
+
+    maze = resolve_maze(find_input(maze_spec), max_cells=max_cells)
     goal_cell, goal_heading = parse_goal(goal)
     problem = PlanningProblem(
         maze=maze,
@@ -147,6 +159,7 @@ def plan_command(
         clearance_weight=parse_weight(clearance_weight),
         clearance_radius=clearance_radius,
     )
+    load_ns = kernel_load_ns(backend, "lattice")
     result = plan(
         problem,
         heuristic=heuristic,
@@ -155,13 +168,16 @@ def plan_command(
         backend=backend,
     )
     if as_json:
-        echo_json(plan_json(result))
+        echo_json(plan_json(result, load_ns))
     else:
-        _print_plan(problem, result)
+        _print_plan(problem, result, load_ns)
     return 0 if result.status is PlanStatus.SOLVED else 1
 
 
-def _print_plan(problem: PlanningProblem, result: PlanResult) -> None:
+def _print_plan(problem: "PlanningProblem", result: "PlanResult", load_ns: int) -> None:
+    from selfrepair.robots import four_wheel
+    from selfrepair.world.render import GOAL_CHAR, path_layer, pose_layer, render_ascii
+
     swept = [
         cell
         for pose, action in zip(result.poses, result.actions, strict=False)
@@ -175,31 +191,53 @@ def _print_plan(problem: PlanningProblem, result: PlanResult) -> None:
             f"cost: {result.cost}  duration: {result.duration} ticks  steps: {len(result.actions)}"
         )
         echo("actions: " + " ".join(a.code for a in result.actions))
-    echo(f"expansions: {result.expansions}  time: {result.wall_time_ns / 1e6:.2f} ms")
+    echo(f"expansions: {result.expansions}  {_times(result.wall_time_ns, load_ns)}")
 
 
 @app.command("path")
 def path_command(
-    map_spec: Annotated[
-        str, typer.Argument(metavar="MAP", help="Bundled maze name, MovingAI .map or maze file.")
-    ],
-    source: Annotated[str, typer.Option("--from", help="Start cell X,Y.")],
-    target: Annotated[str, typer.Option("--to", help="Goal cell X,Y.")],
+    maze_spec: MazeArg,
+    source: Annotated[str, typer.Option("--from", metavar="X,Y", help="Start cell.")],
+    target: Annotated[str, typer.Option("--to", metavar="X,Y", help="Goal cell.")],
     connectivity: Annotated[
-        int, typer.Option("--connectivity", help="4 or 8 (8: diagonal sqrt2, no corner cutting).")
+        int,
+        typer.Option(
+            "--connectivity",
+            metavar="4|8",
+            help="4 or 8 neighbours (8: diagonals cost sqrt 2, no corner cutting).",
+        ),
     ] = 8,
-    max_expansions: _MaxExpansions = None,
-    time_limit: _TimeLimit = None,
-    backend: _Backend = "auto",
-    as_json: _Json = False,
+    picture: Annotated[
+        bool | None,
+        typer.Option(
+            "--picture/--no-picture",
+            help=f"Draw the maze with the path (default: only up to {MAX_PICTURE_CELLS} cells).",
+            show_default=False,
+        ),
+    ] = None,
+    max_expansions: MaxExpansions = None,
+    time_limit: TimeLimit = None,
+    backend: Backend = "auto",
+    as_json: Json = False,
     max_cells: MaxCells = MAX_CELLS,
 ) -> int:
-    """Shortest grid path under MovingAI rules (exit 1 if none)."""
+    """Shortest grid path under MovingAI rules.
+
+    Exit 1 when there is no path (or the budget ran out). Large mazes are not drawn unless
+    --picture is given.
+    """
+    from selfrepair.geometry import parse_cell
+    from selfrepair.search.astar import PlanStatus
+    from selfrepair.search.grid import grid_astar
+    from selfrepair.search.problem import CONNECTIVITIES
+    from selfrepair.world.bundled import resolve_maze
+
     if connectivity not in CONNECTIVITIES:
         raise InputError(f"expected 4 or 8, got {connectivity}", source="--connectivity")
-    maze = resolve_maze(map_spec, max_cells=max_cells)
+    maze = resolve_maze(find_input(maze_spec), max_cells=max_cells)
     start = parse_cell(source, source="--from")
     goal = parse_cell(target, source="--to")
+    load_ns = kernel_load_ns(backend, "grid")
     result = grid_astar(
         maze,
         start,
@@ -210,139 +248,81 @@ def path_command(
         backend=backend,
     )
     if as_json:
-        echo_json(path_json(result))
-    else:
-        layers = [path_layer(result.path), {goal: GOAL_CHAR, start: "S"}]
-        echo(render_ascii(maze, layers).rstrip("\n"))
-        echo(f"status: {result.status.value}")
-        if result.cost is not None:
-            echo(f"cost: {result.cost.value:.8f} ({result.cost})  steps: {len(result.path) - 1}")
-        echo(f"expansions: {result.expansions}  time: {result.wall_time_ns / 1e6:.2f} ms")
+        echo_json(path_json(result, load_ns))
+        return 0 if result.status is PlanStatus.SOLVED else 1
+    draw = picture if picture is not None else maze.width * maze.height <= MAX_PICTURE_CELLS
+    if draw:
+        _print_path_picture(maze, result.path, start, goal)
+    echo(f"status: {result.status.value}")
+    if result.cost is not None:
+        echo(f"cost: {result.cost.value:.8f} ({result.cost})  steps: {len(result.path) - 1}")
+    echo(f"expansions: {result.expansions}  {_times(result.wall_time_ns, load_ns)}")
+    if not draw:
+        echo(f"(no picture of the {maze.width}x{maze.height} maze: --picture draws it)")
     return 0 if result.status is PlanStatus.SOLVED else 1
 
 
-def sample_indices(total: int, sample: int | None, seed: int) -> list[int]:
-    """``sample`` indices spread evenly over ``range(total)`` (all when ``sample`` is None or
-    not smaller), one per equal stretch at the same seeded offset within each stretch."""
-    if sample is None or sample >= total:
-        return list(range(total))
-    offset = float(np.random.default_rng(seed).random())
-    return [int((i + offset) * total / sample) for i in range(sample)]
+def _print_path_picture(maze: "Maze", path: Any, start: "Cell", goal: "Cell") -> None:
+    from selfrepair.world.render import GOAL_CHAR, path_layer, render_ascii
 
-
-def check_scenarios(
-    scen_path: Path,
-    *,
-    sample: int | None = None,
-    seed: int = 0,
-    backend: str = "auto",
-    max_cells: int | None = MAX_CELLS,
-) -> tuple[int, list[dict[str, Any]]]:
-    """Run the scenario lines (all, or ``sample`` spread evenly) with 8-connected grid A*.
-
-    The map is the file next to ``scen_path`` named by the basename of the map column (checked
-    against ``max_cells``). Returns the number of lines in the file and one record per checked
-    line (``ok`` false on a mismatch). Every number in a record is finite: the reader refuses a
-    non-finite ``optimal_length`` and a path cost is a sum of finite steps.
-    """
-    queries = load_scenario(scen_path)
-    chosen = [queries[i] for i in sample_indices(len(queries), sample, seed)]
-    maps: dict[str, Maze] = {}
-    records = []
-    for query in chosen:
-        maze = _scenario_map(scen_path, query, maps, max_cells)
-        result = grid_astar(maze, query.start, query.goal, connectivity=8, backend=backend)
-        got = None if result.cost is None else result.cost.value
-        ok = got is not None and abs(got - query.optimal_length) <= SCEN_TOLERANCE
-        records.append(
-            {
-                "line": query.line,
-                "start": list(query.start),
-                "goal": list(query.goal),
-                "expected": query.optimal_length,
-                "got": got,
-                "ok": ok,
-            }
-        )
-    return len(queries), records
-
-
-def _scenario_map(
-    scen_path: Path, query: ScenarioQuery, maps: dict[str, Maze], max_cells: int | None
-) -> Maze:
-    name = query.map_name.replace("\\", "/").rsplit("/", 1)[-1]
-    if name not in maps:
-        map_path = scen_path.parent / name
-        if not map_path.is_file():
-            raise InputError(
-                f"expected the map {name!r} next to the scenario file (at {map_path})",
-                source=str(scen_path),
-                line=query.line,
-            )
-        maze = load_map(map_path, max_cells=max_cells)
-        if (maze.width, maze.height) != (query.width, query.height):
-            raise InputError(
-                f"expected the map size {maze.width}x{maze.height}, "
-                f"got {query.width}x{query.height}",
-                source=str(scen_path),
-                line=query.line,
-            )
-        maps[name] = maze
-    maze = maps[name]
-    for label, (x, y) in (("start", query.start), ("goal", query.goal)):
-        if not maze.is_free(x, y):
-            raise InputError(
-                f"expected the {label} ({x},{y}) on a free cell of {name}",
-                source=str(scen_path),
-                line=query.line,
-            )
-    return maze
+    layers = [path_layer(path), {goal: GOAL_CHAR, start: "S"}]
+    echo(render_ascii(maze, layers).rstrip("\n"))
 
 
 @app.command("check-scen")
 def check_scen_command(
-    scen_path: Annotated[Path, typer.Argument(metavar="SCEN", help="MovingAI .map.scen file.")],
+    scen_path: Annotated[
+        Path,
+        typer.Argument(
+            metavar="SCEN", help="MovingAI .map.scen file (its map must lie next to it)."
+        ),
+    ],
     sample: Annotated[
-        int | None, typer.Option("--sample", min=1, help="Check N lines spread evenly.")
+        int | None,
+        typer.Option("--sample", metavar="N", min=1, help="Check N lines spread evenly."),
     ] = None,
     seed: Annotated[
-        int, typer.Option("--seed", min=0, help="Offset of the evenly spread sample.")
+        int, typer.Option("--seed", metavar="S", min=0, help="Offset of the evenly spread sample.")
     ] = 0,
-    backend: _Backend = "auto",
-    as_json: _Json = False,
+    backend: Backend = "auto",
+    as_json: Json = False,
     max_cells: MaxCells = MAX_CELLS,
 ) -> int:
-    """Check grid A* against a scenario file's optimal lengths (abs tolerance 0.01; exit 1 on any
-    mismatch)."""
-    if backend not in BACKENDS:
-        raise InputError(
-            f"expected one of {', '.join(BACKENDS)}, got {backend!r}", source="--backend"
-        )
+    """Check grid A* against a MovingAI scenario file.
+
+    Each checked line's cost must match its optimal length.
+    Tolerance: 0.01 absolute; exit 1 on any mismatch.
+    """
+    from selfrepair.search.scenarios import SCEN_TOLERANCE, check_scenarios
+
+    scen = Path(find_input(str(scen_path)))
+    load_ns = kernel_load_ns(backend, "grid")
     t0 = time.perf_counter()
-    total, records = check_scenarios(
-        scen_path, sample=sample, seed=seed, backend=backend, max_cells=max_cells
+    report = check_scenarios(
+        scen, sample=sample, seed=seed, backend=backend, max_cells=max_cells
     )
     seconds = time.perf_counter() - t0
-    bad = [r for r in records if not r["ok"]]
+    bad = report.mismatches
     if as_json:
         echo_json(
             {
                 "file": str(scen_path),
-                "lines": total,
-                "checked": len(records),
-                "mismatches": bad,
+                "lines": report.lines,
+                "checked": len(report.checks),
+                "mismatches": [c.to_json() for c in bad],
                 "tolerance": SCEN_TOLERANCE,
-                "seconds": seconds,
+                "seconds": round(seconds, 3),
+                "kernel_load_ms": _ms(load_ns),
             }
         )
     else:
-        for r in bad:
+        for c in bad:
             echo(
-                f"{scen_path}:{r['line']}: start {r['start'][0]},{r['start'][1]} goal "
-                f"{r['goal'][0]},{r['goal'][1]}: expected {r['expected']}, got {r['got']}"
+                f"{scen_path}:{c.line}: start {c.start[0]},{c.start[1]} goal "
+                f"{c.goal[0]},{c.goal[1]}: expected {c.expected}, got {c.got}"
             )
         echo(
-            f"checked {len(records)} of {total} lines of {scen_path}: {len(bad)} mismatches "
-            f"({seconds:.2f} s)"
+            f"checked {len(report.checks)} of {report.lines} lines of {scen_path}: {len(bad)} "
+            f"mismatches ({seconds:.2f} s)"
         )
     return 1 if bad else 0

@@ -1,15 +1,13 @@
 """Commands that make and measure replacement tables: ``selfrepair table generate|coverage``."""
 
-from __future__ import annotations
 
 import json
 import time
 from collections.abc import Iterable
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
-from rich.table import Table
 
 from selfrepair.cli._app import (
     MaxCells,
@@ -20,18 +18,18 @@ from selfrepair.cli._app import (
     echo_json,
     table_app,
 )
+from selfrepair.cli._inputs import find_input
+from selfrepair.cli._mission import domain_named
 from selfrepair.errors import InputError
 from selfrepair.limits import MAX_CELLS, MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES
-from selfrepair.repair.coverage import CoverageReport, coverage_report
-from selfrepair.repair.replacement import RecursionMode
-from selfrepair.robots.domain import Domain
-from selfrepair.robots.registry import get_domain
-from selfrepair.tables.enumerate import FaultScope, Objective
-from selfrepair.tables.fileformat import dump_table, resolve_table
-from selfrepair.tables.generate import generate_table
-from selfrepair.tables.model import GenerateOptions, Priority, TableShape
-from selfrepair.world.bundled import load_bundled, maze_names, resolve_maze
-from selfrepair.world.maze import Maze
+
+if TYPE_CHECKING:
+    from rich.table import Table
+
+    from selfrepair.repair.coverage import CoverageReport
+    from selfrepair.world.maze import Maze
+
+__all__ = ["table_coverage", "table_generate"]
 
 
 def _choice(value: str, allowed: Iterable[str], option: str) -> str:
@@ -41,36 +39,60 @@ def _choice(value: str, allowed: Iterable[str], option: str) -> str:
     return value
 
 
-def _domain(name: str) -> Domain[Any, Any]:
-    try:
-        return get_domain(name)
-    except InputError as exc:
-        raise InputError(exc.reason, source="--domain") from None
-
-
 @table_app.command("generate")
 def table_generate(
-    output: Annotated[Path, typer.Option("-o", "--output", help="Where to write the table.")],
+    output: Annotated[
+        Path, typer.Option("-o", "--output", metavar="FILE", help="Where to write the table.")
+    ],
     domain: Annotated[
-        str, typer.Option(help="The robot: a registered domain name (four-wheel, three-action).")
+        str,
+        typer.Option(
+            "--domain",
+            metavar="NAME",
+            help="The robot: a registered domain name (four-wheel, three-action).",
+        ),
     ] = "four-wheel",
-    max_length: Annotated[int, typer.Option(help="Longest candidate, in actions.")] = 5,
-    per_action: Annotated[int, typer.Option(help="Candidates per entry (K).")] = 5,
-    faults: Annotated[str, typer.Option(help="Fault sets: all, singles, doubles or none.")] = (
-        "all"
-    ),
-    objective: Annotated[str, typer.Option(help="Cost: duration (ticks) or length.")] = (
-        "duration"
-    ),
-    shape: Annotated[str, typer.Option(help="fault-agnostic or fault-indexed.")] = (
-        "fault-agnostic"
-    ),
+    max_length: Annotated[
+        int, typer.Option("--max-length", metavar="N", help="Longest candidate, in actions.")
+    ] = 5,
+    per_action: Annotated[
+        int, typer.Option("--per-action", metavar="K", help="Candidates per entry.")
+    ] = 5,
+    faults: Annotated[
+        str,
+        typer.Option(
+            "--faults", metavar="SCOPE", help="Fault sets: all, singles, doubles or none."
+        ),
+    ] = "all",
+    objective: Annotated[
+        str,
+        typer.Option("--objective", metavar="NAME", help="Cost: duration (ticks) or length."),
+    ] = "duration",
+    shape: Annotated[
+        str,
+        typer.Option(
+            "--shape", metavar="NAME", help="Table shape: fault-agnostic or fault-indexed."
+        ),
+    ] = "fault-agnostic",
     priority: Annotated[
-        str, typer.Option(help="Fault-agnostic tie-break after coverage: cost or walls.")
+        str,
+        typer.Option(
+            "--priority",
+            metavar="NAME",
+            help="Fault-agnostic tie-break after coverage: cost or walls.",
+        ),
     ] = "cost",
 ) -> int:
-    """Generate a replacement table from the robot model and write it as JSON."""
-    robot = _domain(domain)
+    """Generate a replacement table as JSON.
+
+    The candidates come from the robot model.
+    """
+    from selfrepair.tables.enumerate import FaultScope, Objective
+    from selfrepair.tables.fileformat import dump_table
+    from selfrepair.tables.generate import generate_table
+    from selfrepair.tables.model import GenerateOptions, Priority, TableShape
+
+    robot = domain_named(domain)
     options = GenerateOptions(
         shape=TableShape(_choice(shape, TableShape, "--shape")),
         max_length=max_length,
@@ -92,47 +114,75 @@ def table_generate(
     return 0
 
 
-def _mazes(names: list[str] | None, no_walls: bool, max_cells: int) -> list[tuple[str, Maze]]:
+def _mazes(names: list[str] | None, no_walls: bool, max_cells: int) -> "list[tuple[str, Maze]]":
+    from selfrepair.world.bundled import load_bundled, maze_names, resolve_maze
+
     if no_walls:
         return []
     if not names:
         return [(name, load_bundled(name)) for name in maze_names()]
-    return [(name, resolve_maze(name, max_cells=max_cells)) for name in names]
+    return [(name, resolve_maze(find_input(name), max_cells=max_cells)) for name in names]
 
 
 @table_app.command("coverage")
 def table_coverage(
-    spec: Annotated[str, typer.Argument(help="Table file or bundled table name.")],
-    faults: Annotated[str, typer.Option(help="Fault sets: all, singles, doubles or none.")] = (
-        "all"
-    ),
+    spec: Annotated[
+        str, typer.Argument(metavar="TABLE", help="Table file or bundled table name.")
+    ],
+    faults: Annotated[
+        str,
+        typer.Option(
+            "--faults", metavar="SCOPE", help="Fault sets: all, singles, doubles or none."
+        ),
+    ] = "all",
     objective: Annotated[
         str | None,
-        typer.Option(help="Cost for optimality: duration or length (default: the table's own)."),
+        typer.Option(
+            "--objective",
+            metavar="NAME",
+            help="Cost for optimality: duration or length (default: the table's own).",
+        ),
     ] = None,
     recursion: Annotated[
-        str, typer.Option(help="Recursion mode for free-space coverage: flat, guarded or layered.")
+        str,
+        typer.Option(
+            "--recursion",
+            metavar="MODE",
+            help="Recursion mode for free-space coverage: flat, guarded or layered.",
+        ),
     ] = "flat",
     maze: Annotated[
         list[str] | None,
         typer.Option(
-            "--maze", help="Maze for wall coverage (repeatable; default: every bundled maze)."
+            "--maze",
+            metavar="MAZE",
+            help="Maze for wall coverage (repeatable; default: every bundled maze).",
         ),
     ] = None,
     no_walls: Annotated[bool, typer.Option("--no-walls", help="Skip wall coverage.")] = False,
     per_fault: Annotated[
         bool, typer.Option("--per-fault", help="Also print one row per fault set.")
     ] = False,
-    json_out: Annotated[Path | None, typer.Option(help="Write the full report as JSON.")] = None,
+    json_out: Annotated[
+        Path | None,
+        typer.Option("--json-out", metavar="FILE", help="Write the full report as JSON."),
+    ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of tables.")] = False,
     max_cells: MaxCells = MAX_CELLS,
     max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
     max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
-    """Coverage and optimality of a table against the exact optimum, in free space and next to
-    the walls of mazes."""
+    """Measure a table's coverage and optimality.
+
+    Against the exact optimum, in free space and next to the walls of mazes.
+    """
+    from selfrepair.repair.coverage import coverage_report
+    from selfrepair.repair.replacement import RecursionMode
+    from selfrepair.tables.enumerate import FaultScope, Objective
+    from selfrepair.tables.fileformat import resolve_table
+
     table = resolve_table(
-        spec, max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
+        find_input(spec), max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
     )
     _choice(faults, FaultScope, "--faults")
     _choice(recursion, RecursionMode, "--recursion")
@@ -164,7 +214,8 @@ def _percent(value: float | None) -> str:
     return "n/a" if value is None else f"{100 * value:.1f}%"
 
 
-def _summary_table(report: CoverageReport) -> Table:
+def _summary_table(report: "CoverageReport") -> "Table":
+    from rich.table import Table
     t: dict[str, Any] = report.totals()
     view = Table(
         title=f"{report.table}: {report.shape}, made by {report.made_by} "
@@ -200,7 +251,8 @@ def _summary_table(report: CoverageReport) -> Table:
     return view
 
 
-def _fault_table(report: CoverageReport) -> Table:
+def _fault_table(report: "CoverageReport") -> "Table":
+    from rich.table import Table
     view = Table(title="Per fault set (free space)")
     for column in ("faults", "disabled", "replaceable", "covered", "optimal", "max excess"):
         view.add_column(column, justify="left" if column == "faults" else "right")
@@ -216,7 +268,8 @@ def _fault_table(report: CoverageReport) -> Table:
     return view
 
 
-def _wall_table(report: CoverageReport) -> Table:
+def _wall_table(report: "CoverageReport") -> "Table":
+    from rich.table import Table
     view = Table(
         title="Next to walls (flat): executable (pose, fault set, action) triples with "
         "no fitting usable candidate"

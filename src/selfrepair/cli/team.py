@@ -7,14 +7,12 @@ trace re-simulates with no conflict and no teleport, 1 otherwise; bad input is e
 are imported inside the commands, so ``selfrepair --help`` stays cheap.
 """
 
-from __future__ import annotations
-
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from selfrepair.cli._app import MaxCells, app, console, echo, echo_json
+from selfrepair.cli._app import MaxCells, app, command_group, console, echo, echo_json
 from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, MAX_ROBOTS, MAX_TASKS
 
 if TYPE_CHECKING:
@@ -23,30 +21,29 @@ if TYPE_CHECKING:
 
 __all__ = ["run_team_experiment", "team_app"]
 
-team_app = typer.Typer(
-    help="Team missions: several robots, teammates replacing a faulty robot's actions.",
-    no_args_is_help=True,
-)
+team_app = command_group(help="Team missions: several robots that repair each other.")
 app.add_typer(team_app, name="team")
 
 _STRATEGY_HELP = "team-replacement, reallocation or alone."
 
 MaxRobots = Annotated[
-    int, typer.Option("--max-robots", min=1, help="Refuse a scenario of more robots than this.")
+    int,
+    typer.Option(
+        "--max-robots", metavar="N", min=1, help="Refuse a scenario of more robots than this."
+    ),
 ]
 MaxTasks = Annotated[
-    int, typer.Option("--max-tasks", min=0, help="Refuse a scenario of more tasks than this.")
+    int,
+    typer.Option(
+        "--max-tasks", metavar="N", min=0, help="Refuse a scenario of more tasks than this."
+    ),
 ]
 
 
 def _out() -> Any:
     """A rich console on stdout: the terminal's width on a terminal, wide when piped (tables
-    keep every name and number on one line in logs)."""
-    import sys
-
-    from rich.console import Console
-
-    return console() if sys.stdout.isatty() else Console(file=sys.stdout, width=220)
+    keep every name and number on one line in logs; see :func:`selfrepair.cli._app.console`)."""
+    return console()
 
 
 def _options(strategy: str, table: str, max_ticks: int | None, backend: str) -> Any:
@@ -57,24 +54,43 @@ def _options(strategy: str, table: str, max_ticks: int | None, backend: str) -> 
 
 @team_app.command("run")
 def team_run(
-    scenario: Annotated[str, typer.Argument(help="Bundled scenario (three-robots) or FILE.toml.")],
-    strategy: Annotated[str, typer.Option(help=_STRATEGY_HELP)] = "team-replacement",
-    table: Annotated[str, typer.Option(help="Team table: handwritten or generated.")] = (
-        "handwritten"
-    ),
+    scenario: Annotated[
+        str,
+        typer.Argument(metavar="SCENARIO", help="Bundled scenario (three-robots) or FILE.toml."),
+    ],
+    strategy: Annotated[
+        str, typer.Option("--strategy", metavar="NAME", help=_STRATEGY_HELP)
+    ] = "team-replacement",
+    table: Annotated[
+        str,
+        typer.Option("--table", metavar="TABLE", help="Team table: handwritten or generated."),
+    ] = "handwritten",
     trace: Annotated[
-        Path | None, typer.Option("--trace", help="Write the team trace (JSON Lines) here.")
+        Path | None,
+        typer.Option("--trace", metavar="FILE", help="Write the team trace (JSON Lines) here."),
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the metrics row as JSON.")] = False,
     max_ticks: Annotated[
-        int | None, typer.Option(help="End the mission after this many ticks (default: generous).")
+        int | None,
+        typer.Option(
+            "--max-ticks",
+            metavar="N",
+            help="End the mission after this many ticks (default: generous).",
+        ),
     ] = None,
-    backend: Annotated[str, typer.Option(help="Planner backend: auto, python or numba.")] = "auto",
+    backend: Annotated[
+        str,
+        typer.Option("--backend", metavar="NAME", help="Planner backend: auto, python or numba."),
+    ] = "auto",
     max_robots: MaxRobots = MAX_ROBOTS,
     max_tasks: MaxTasks = MAX_TASKS,
     max_cells: MaxCells = MAX_CELLS,
 ) -> int:
-    """Run one team mission: allocation, team plan, execution with faults and repairs."""
+    """Run one team mission.
+
+    Allocation, team plan, execution with faults and repairs. Exit 1 when an item is not
+    delivered.
+    """
     from selfrepair.team.engine import run_team
     from selfrepair.team.metrics import team_row
     from selfrepair.team.scenario import Limits, resolve_scenario
@@ -93,7 +109,7 @@ def team_run(
     return 0 if result.all_delivered else 1
 
 
-def _print_result(result: TeamResult, baseline: Any) -> None:
+def _print_result(result: "TeamResult", baseline: Any) -> None:
     scenario = result.scenario
     echo(
         f"{scenario.name}: {len(scenario.robots)} robots, {len(scenario.tasks)} tasks on "
@@ -123,17 +139,32 @@ def _print_result(result: TeamResult, baseline: Any) -> None:
 
 @team_app.command("compare")
 def team_compare(
-    scenario: Annotated[str, typer.Argument(help="Bundled scenario (three-robots) or FILE.toml.")],
+    scenario: Annotated[
+        str,
+        typer.Argument(metavar="SCENARIO", help="Bundled scenario (three-robots) or FILE.toml."),
+    ],
     repeats: Annotated[
-        int, typer.Option(help="Runs per strategy; latencies are medians.", min=1, max=1000)
+        int,
+        typer.Option(
+            "--repeats",
+            metavar="N",
+            help="Runs per strategy; latencies are medians.",
+            min=1,
+            max=1000,
+        ),
     ] = 5,
-    backend: Annotated[str, typer.Option(help="Planner backend: auto, python or numba.")] = "auto",
+    backend: Annotated[
+        str,
+        typer.Option("--backend", metavar="NAME", help="Planner backend: auto, python or numba."),
+    ] = "auto",
     max_robots: MaxRobots = MAX_ROBOTS,
     max_tasks: MaxTasks = MAX_TASKS,
     max_cells: MaxCells = MAX_CELLS,
 ) -> int:
-    """Run the scenario with every team strategy and print their outcome side by side (the
-    first repair's latency is the median over the repeats)."""
+    """Run a scenario with every team strategy, side by side.
+
+    The first repair's latency is the median over the repeats, after a warm-up run.
+    """
     import statistics
 
     from rich.table import Table
@@ -180,12 +211,21 @@ def team_compare(
 
 @team_app.command("replay")
 def team_replay(
-    trace: Annotated[Path, typer.Argument(help="A team trace written by team run --trace.")],
+    trace: Annotated[
+        Path,
+        typer.Argument(metavar="TRACE", help="A team trace written by team run --trace."),
+    ],
     max_bytes: Annotated[
-        int, typer.Option(help="Refuse larger trace files (default 256 MiB).", min=1)
+        int,
+        typer.Option(
+            "--max-bytes", metavar="N", help="Refuse larger trace files (default 256 MiB).", min=1
+        ),
     ] = 256 * 1024 * 1024,
 ) -> int:
-    """Re-simulate a team trace: no teleport, no conflict, every act possible."""
+    """Re-simulate a team trace; report what does not hold.
+
+    No teleport, no conflict, every act possible. Exit 1 otherwise.
+    """
     from selfrepair.team.trace import read_team_trace, replay_team
 
     report = replay_team(read_team_trace(trace, max_bytes=max_bytes))
@@ -195,10 +235,15 @@ def team_replay(
 
 @team_app.command("table")
 def team_table(
-    name: Annotated[str, typer.Argument(help="handwritten or generated.")] = "handwritten",
+    name: Annotated[
+        str, typer.Argument(metavar="TABLE", help="handwritten or generated.")
+    ] = "handwritten",
     as_json: Annotated[bool, typer.Option("--json", help="Print the table as JSON.")] = False,
 ) -> int:
-    """Print a team replacement table: per situation, its candidates in order."""
+    """Print a team replacement table.
+
+    Per situation, its candidates in order.
+    """
     from rich.table import Table
 
     from selfrepair.team.table import get_team_table
@@ -231,13 +276,24 @@ def team_table(
 
 @team_app.command("frame")
 def team_frame(
-    trace: Annotated[Path, typer.Argument(help="A team trace written by team run --trace.")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="PNG file to write.")],
+    trace: Annotated[
+        Path,
+        typer.Argument(metavar="TRACE", help="A team trace written by team run --trace."),
+    ],
+    out: Annotated[Path, typer.Option("--out", "-o", metavar="FILE", help="PNG file to write.")],
     tick: Annotated[
-        float | None, typer.Option(help="The moment to draw, in ticks (default: the first repair).")
+        float | None,
+        typer.Option(
+            "--tick",
+            metavar="T",
+            help="The moment to draw, in ticks (default: the first repair).",
+        ),
     ] = None,
 ) -> int:
-    """Draw one moment of a team trace as a PNG: robots, their paths, items and faults."""
+    """Draw one moment of a team trace as a PNG.
+
+    Shows the robots, their paths, the items and the faults.
+    """
     from selfrepair.team.draw import draw_team_frame
 
     written = draw_team_frame(trace, out, tick=tick)
@@ -246,7 +302,7 @@ def team_frame(
 
 
 def run_team_experiment(
-    config: TeamExperimentConfig,
+    config: "TeamExperimentConfig",
     db: Path | None,
     *,
     jobs: int,
@@ -280,9 +336,10 @@ def run_team_experiment(
                 execute=execute_team_mission,
                 on_progress=on_progress,
             )
+        elsewhere = f", {summary.elsewhere} by another writer" if summary.elsewhere else ""
         echo(
             f"{config.name}: {summary.total} missions, {summary.skipped} already stored, "
-            f"{summary.ran} run in {summary.seconds:.1f} s -> {db_path}"
+            f"{summary.ran} run{elsewhere} in {summary.seconds:.1f} s -> {db_path}"
         )
         keys = {m.key for m in missions}
         rows = [r for r in store.rows() if r["key"] in keys]

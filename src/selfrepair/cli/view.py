@@ -6,7 +6,6 @@ starts with ``K`` and views it. Bad input (a missing file, a file that is neithe
 ambiguous key) is one line on stderr and exit code 2 (see :func:`selfrepair.cli.main`).
 """
 
-from __future__ import annotations
 
 from pathlib import Path
 from typing import Annotated
@@ -15,9 +14,12 @@ import typer
 
 from selfrepair.cli._app import app, echo
 from selfrepair.errors import InputError
-from selfrepair.experiment.viewer import MAX_VIEW_STEPS, view_results, view_trace
 
-__all__ = ["view"]
+__all__ = ["VIEW_STEPS_DEFAULT", "view"]
+
+VIEW_STEPS_DEFAULT = 50_000
+"""Default of ``--max-steps``: :data:`selfrepair.experiment.viewer.MAX_VIEW_STEPS` (a test keeps
+them equal; the CLI does not import the viewer to start)."""
 
 _SQLITE_MAGIC = b"SQLite format 3\x00"
 
@@ -30,18 +32,30 @@ def _is_sqlite(path: Path) -> bool:
 @app.command()
 def view(
     source: Annotated[
-        Path, typer.Argument(help="A trace (run --trace) or a results database (with --key).")
+        Path,
+        typer.Argument(
+            metavar="SOURCE",
+            help="A trace (run --trace) or a results database (with --key).",
+        ),
     ],
-    out: Annotated[Path, typer.Option("--out", "-o", help="HTML file to write.")],
+    out: Annotated[Path, typer.Option("--out", "-o", metavar="FILE", help="HTML file to write.")],
     key: Annotated[
         str | None,
-        typer.Option("--key", help="Key (or unique key prefix) of a mission in the database."),
+        typer.Option(
+            "--key", metavar="KEY", help="Key (or unique key prefix) of a mission in the database."
+        ),
     ] = None,
     max_steps: Annotated[
-        int, typer.Option("--max-steps", min=1, help="Refuse missions with more steps.")
-    ] = MAX_VIEW_STEPS,
+        int,
+        typer.Option("--max-steps", metavar="N", min=1, help="Refuse missions with more steps."),
+    ] = VIEW_STEPS_DEFAULT,
 ) -> int:
-    """Write an HTML page that replays a mission: maze, plan, path, faults and repairs."""
+    """Write a mission as a self-contained HTML page.
+
+    The page replays the mission: maze, plan, path, faults and repairs.
+    """
+    from selfrepair.experiment.viewer import view_results, view_trace
+
     if not source.is_file():
         raise InputError("expected a trace file or a results database", source=str(source))
     if _is_sqlite(source):
@@ -49,6 +63,8 @@ def view(
             raise InputError(
                 "a results database holds many missions: choose one with --key", source=str(source)
             )
+        if not key:
+            raise InputError("expected a non-empty mission key or key prefix", source="--key")
         written = view_results(source, key, out, max_steps=max_steps)
     else:
         if key is not None:

@@ -3,32 +3,43 @@
 A team trace (:mod:`selfrepair.team.trace`) is drawn by
 :func:`selfrepair.team.draw.animate_team_trace`.
 
-Each frame shows the maze, the initial plan (grey dashes), the steps executed so far coloured by
-where their action came from (plan, table replacement, lookahead, replan, failed attempt), the
-robot as a triangle pointing along its heading, and the step, its source and the faults known at
-that moment in the title. The last frame is held for a second.
+Each frame shows the maze, the initial plan (dark dashes, over the executed path), the steps
+executed so far coloured by where their action came from (plan, table replacement, lookahead,
+replan, failed attempt), an X for each repair, the robot as a triangle pointing along its
+heading, and the step, its source and the faults known at that moment in the title. The last
+frame is held for a second.
 
 Frames are drawn incrementally (the maze and plan once, then only the new steps), and long
-traces are subsampled to at most ``max_frames`` frames; every step is still drawn.
+traces are subsampled to at most ``max_frames`` frames; every step is still drawn. The GIF writer
+merges identical consecutive frames (the held last frame becomes one longer frame), so
+:func:`animate_trace` counts the frames in the file it wrote. ``on_frame(done, total)`` is called
+after each frame is drawn, for a progress bar.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from selfrepair.errors import TraceError
 
-__all__ = ["MAX_FRAMES", "animate_trace"]
+__all__ = ["MAX_FRAMES", "animate_trace", "gif_frames"]
 
 MAX_FRAMES = 120
 """Default bound on the number of frames (before the held last frame)."""
 
 
 def animate_trace(
-    trace: str | Path, out: str | Path, *, fps: int = 4, max_frames: int = MAX_FRAMES
+    trace: str | Path,
+    out: str | Path,
+    *,
+    fps: int = 4,
+    max_frames: int = MAX_FRAMES,
+    on_frame: Callable[[int, int], None] | None = None,
 ) -> int:
-    """Write a GIF of the mission in ``trace`` to ``out``; returns the number of frames."""
+    """Write a GIF of the mission in ``trace`` to ``out``; returns the number of frames in the
+    file written."""
     from selfrepair.execution.trace import read_trace, replay
     from selfrepair.experiment import plots
     from selfrepair.team.trace import is_team_trace
@@ -98,6 +109,19 @@ def animate_trace(
 
         animation = FuncAnimation(fig, draw, frames=frames, blit=False, repeat=False)
         animation.save(
-            str(out), writer=PillowWriter(fps=fps), savefig_kwargs={"facecolor": "white"}
+            str(out),
+            writer=PillowWriter(fps=fps),
+            savefig_kwargs={"facecolor": "white"},
+            progress_callback=(
+                None if on_frame is None else lambda done, total: on_frame(done + 1, total)
+            ),
         )
-    return len(frames)
+    return gif_frames(out)
+
+
+def gif_frames(path: str | Path) -> int:
+    """The number of frames in the GIF file ``path``."""
+    from PIL import Image
+
+    with Image.open(path) as image:
+        return int(getattr(image, "n_frames", 1))

@@ -62,6 +62,7 @@ from selfrepair.repair.replacement import RecursionMode
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import get_domain, load_plugin
 from selfrepair.textio import read_text, strip_bom, text_lines
+from selfrepair.world.routes import MAX_ROUTES
 
 __all__ = [
     "FAULT_PROFILES",
@@ -142,7 +143,7 @@ class MazeConfig(_Frozen):
     generate: GeneratedMaze | None = None
     routes: (
         Literal["bundled"]
-        | Annotated[Int, Field(ge=1, le=10_000)]
+        | Annotated[Int, Field(ge=1, le=MAX_ROUTES)]
         | Annotated[tuple[RouteConfig, ...], Field(min_length=1)]
     ) = "bundled"
 

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import hashlib
 import json
-from collections import Counter, deque
+from collections import Counter
 from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
@@ -33,9 +33,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from selfrepair.errors import ConfigError, InputError, LimitError
+from selfrepair.errors import ConfigError, LimitError
 from selfrepair.execution.faults import FaultEvent, FaultSchedule, canonical_order
 from selfrepair.execution.result import MissionSpec
 from selfrepair.experiment.config import (
@@ -44,7 +42,7 @@ from selfrepair.experiment.config import (
     MazeConfig,
     ReplacementStrategy,
 )
-from selfrepair.geometry import Heading, Pose, parse_cell, parse_pose
+from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, check_limit, maze_file_bytes
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import StrategyOptions
@@ -52,7 +50,7 @@ from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.robots.registry import get_domain, load_plugin
 from selfrepair.world.maze import Maze
-from selfrepair.world.routes import Route
+from selfrepair.world.routes import Route, random_routes
 
 __all__ = [
     "BUNDLED_TABLES",
@@ -271,41 +269,6 @@ def _maze_cached(identity_json: str, max_cells: int | None) -> Maze:
         name=maze_label(identity),
         max_cells=max_cells,
     )
-
-
-def random_routes(maze: Maze, count: int, seed: int) -> tuple[Route, ...]:
-    """``count`` seeded routes: a random free start cell and heading, and a goal drawn among the
-    reachable cells at least half the largest 4-connected distance away (so routes are long)."""
-    rng = np.random.default_rng(seed)
-    free = maze.free_cells()
-    if len(free) < 2:
-        raise InputError("expected a maze with at least two free cells for random routes")
-    routes = []
-    for n in range(count):
-        start = free[int(rng.integers(len(free)))]
-        distances = _bfs(maze, start)
-        far = max(distances.values())
-        candidates = sorted(c for c, d in distances.items() if d * 2 >= far and d > 0)
-        if not candidates:
-            candidates = sorted(c for c in distances if c != start) or [start]
-        goal = candidates[int(rng.integers(len(candidates)))]
-        heading = Heading(int(rng.integers(4)))
-        routes.append(Route(f"q{n + 1}", Pose(start[0], start[1], heading), goal))
-    return tuple(routes)
-
-
-def _bfs(maze: Maze, start: tuple[int, int]) -> dict[tuple[int, int], int]:
-    """4-connected distances from ``start`` (a turn in place needs only the robot's own cell, so
-    4-connectivity is exactly what the robot can reach)."""
-    distances = {start: 0}
-    queue = deque([start])
-    while queue:
-        x, y = queue.popleft()
-        for nx, ny in ((x + 1, y), (x - 1, y), (x, y + 1), (x, y - 1)):
-            if (nx, ny) not in distances and maze.is_free(nx, ny):
-                distances[(nx, ny)] = distances[(x, y)] + 1
-                queue.append((nx, ny))
-    return distances
 
 
 def routes_of(

@@ -204,14 +204,17 @@ def figure_latency_vs_size(rows: Sequence[Row], path: Path) -> Path:
 # --- clearance -----------------------------------------------------------------------------------
 
 
-def figure_clearance(rows: Sequence[Row], path: Path) -> Path:
+def figure_clearance(rows: Sequence[Row], path: Path) -> Path | None:
     """Share of faulty encounters resolved by replacement, and mean extra ticks, against the
-    clearance weight, one line per table and recursion mode."""
+    clearance weight, one line per table and recursion mode. ``None`` (nothing written) when no
+    replacement variant ran at two weights or more: there would be nothing to draw."""
     groups: dict[str, dict[Fraction, list[Row]]] = defaultdict(lambda: defaultdict(list))
     for row in rows:
         if row.get("strategy") == "replacement":
             groups[str(row.get("variant"))][_weight(row)].append(row)
     groups = {k: v for k, v in groups.items() if len(v) > 1}
+    if not groups:
+        return None
     with _figure(10.0, 4.0, ncols=2) as (fig, (left, right)):
         weights = sorted({w for g in groups.values() for w in g})
         positions = {w: i for i, w in enumerate(weights)}
@@ -238,17 +241,8 @@ def figure_clearance(rows: Sequence[Row], path: Path) -> Path:
         left.set_title("Replacement success vs clearance weight")
         right.set_ylabel("mean extra ticks vs fault-free plan")
         right.set_title("Price paid in execution time")
-        if not groups:
-            left.text(
-                0.5,
-                0.5,
-                "needs replacement runs at several weights",
-                ha="center",
-                transform=left.transAxes,
-            )
-        else:
-            # Below the axes, never on top of a data point.
-            fig.legend(*left.get_legend_handles_labels(), loc="outside lower center", ncols=2)
+        # Below the axes, never on top of a data point.
+        fig.legend(*left.get_legend_handles_labels(), loc="outside lower center", ncols=2)
         return _save(fig, path)
 
 
@@ -287,8 +281,10 @@ def figure_heatmap(rows: Sequence[Row], path: Path, variant: str | None = None) 
             ticks = [float(v) for r in cell if isinstance(v := r.get("extra_ticks"), int | float)]
             if ticks:
                 extra[i, j] = sum(ticks) / len(ticks)
+    numbers = len(faults) <= HEATMAP_NUMBERED_ROWS
+    row_height = 0.32 if numbers else 0.13
     with _figure(
-        3.0 + 1.35 * max(2, len(mazes)) * 2, 1.6 + 0.32 * max(4, len(faults)), ncols=2
+        3.0 + 1.35 * max(2, len(mazes)) * 2, 1.6 + row_height * max(4, len(faults)), ncols=2
     ) as (fig, (left, right)):
         _heat(
             fig,
@@ -299,7 +295,7 @@ def figure_heatmap(rows: Sequence[Row], path: Path, variant: str | None = None) 
             "encounters resolved locally (%)",
             "viridis",
             (0, 100),
-            "{:.0f}",
+            "{:.0f}" if numbers else None,
         )
         _heat(
             fig,
@@ -310,11 +306,17 @@ def figure_heatmap(rows: Sequence[Row], path: Path, variant: str | None = None) 
             "mean extra ticks vs fault-free plan",
             "magma_r",
             None,
-            "{:.1f}",
+            "{:.1f}" if numbers else None,
         )
         right.set_yticks(range(len(faults)), [""] * len(faults))
         fig.suptitle(f"{variant}, clearance weight 0 (grey: no faulty encounter)")
         return _save(fig, path)
+
+
+HEATMAP_NUMBERED_ROWS = 30
+"""Up to this many fault sets the heat map prints each cell's value; with more (the 78 fault sets
+of the full study) the rows are drawn thinner, with smaller labels and colour alone, so the
+figure stays a readable size."""
 
 
 def _first_int(rows: Sequence[Row], maze: str) -> int:
@@ -333,7 +335,7 @@ def _heat(
     label: str,
     cmap_name: str,
     limits: tuple[float, float] | None,
-    fmt: str,
+    fmt: str | None,
 ) -> None:
     mpl = _matplotlib()
     cmap = mpl.colormaps[cmap_name].with_extremes(bad="#cccccc")
@@ -348,7 +350,10 @@ def _heat(
     image = ax.imshow(np.ma.masked_invalid(data), cmap=cmap, vmin=lo, vmax=hi, aspect="auto")
     ax.grid(False)
     ax.set_xticks(range(len(mazes)), mazes, rotation=20, ha="right")
-    ax.set_yticks(range(len(faults)), faults)
+    ax.set_yticks(range(len(faults)), faults, fontsize=None if fmt is not None else 6)
+    fig.colorbar(image, ax=ax, label=label, shrink=0.9)
+    if fmt is None:
+        return
     for (i, j), value in np.ndenumerate(data):
         if math.isfinite(value):
             r, g, b, _ = cmap((value - lo) / (hi - lo))
@@ -364,7 +369,6 @@ def _heat(
             )
         else:
             ax.text(j, i, "-", ha="center", va="center", fontsize=7, color="#555555")
-    fig.colorbar(image, ax=ax, label=label, shrink=0.9)
 
 
 # --- one mission ---------------------------------------------------------------------------------
@@ -372,8 +376,10 @@ def _heat(
 
 @dataclass(frozen=True, slots=True)
 class MissionPicture:
-    """What a mission drawing needs: the maze, the route, the initial plan's poses and every
-    executed step as ``(from, to, source)``."""
+    """What a mission drawing needs: the maze, the route, the initial plan's poses, every
+    executed step as ``(from, to, source)`` and every repair as ``(step index, pose, source)``
+    (the repair happened before step ``index`` of :attr:`steps`; its source is what resolved it,
+    or ``"failed"``)."""
 
     maze: Maze
     start: Pose
@@ -382,6 +388,7 @@ class MissionPicture:
     steps: tuple[tuple[Pose, Pose, str], ...]
     faults: str
     title: str
+    repairs: tuple[tuple[int, Pose, str], ...] = ()
 
 
 def picture_from_trace(trace: Any) -> MissionPicture:
@@ -404,7 +411,18 @@ def picture_from_trace(trace: Any) -> MissionPicture:
         f"faults {faults}\n{strategy}, clearance weight {spec.clearance_weight}: {status}"
     )
     steps = tuple((s.start, s.end, s.source) for s in trace.steps)
-    return MissionPicture(spec.maze, spec.start, spec.goal, tuple(poses), steps, faults, title)
+    index = {s.step: i for i, s in enumerate(trace.steps)}
+    repairs = tuple(
+        (
+            index.get(r.step, len(steps)),
+            r.pose,
+            str(r.source) if r.status == "repaired" else "failed",
+        )
+        for r in trace.repairs
+    )
+    return MissionPicture(
+        spec.maze, spec.start, spec.goal, tuple(poses), steps, faults, title, repairs
+    )
 
 
 def draw_background(ax: Any, picture: MissionPicture) -> None:
@@ -423,13 +441,16 @@ def draw_background(ax: Any, picture: MissionPicture) -> None:
     ax.grid(False)
     ax.set_xticks([])
     ax.set_yticks([])
+    # The initial plan is drawn thin and dashed ABOVE the executed path (which is wider), so
+    # both stay visible where they coincide.
     ax.plot(
         [p.x for p in picture.planned],
         [p.y for p in picture.planned],
-        color="#7f7f7f",
+        color=PLAN_COLOUR,
         linestyle=(0, (3, 2)),
-        linewidth=1.6,
-        zorder=2,
+        linewidth=1.3,
+        zorder=PLAN_ZORDER,
+        gid="initial-plan",
     )
     ax.plot(picture.start.x, picture.start.y, marker="o", color="#111111", markersize=9, zorder=7)
     ax.plot(
@@ -442,15 +463,25 @@ def draw_background(ax: Any, picture: MissionPicture) -> None:
     )
 
 
+PLAN_COLOUR = "#222222"
+PLAN_ZORDER = 5
+"""The initial plan is drawn above the executed steps (z-order 3 and 4)."""
+REPAIR_ZORDER = 6
+
+
 def draw_steps(ax: Any, picture: MissionPicture, first: int, stop: int) -> None:
-    """Executed steps ``first .. stop - 1``, coloured by source; an X where a repair begins."""
+    """Executed steps ``first .. stop - 1``, coloured by source, and one X per repair made
+    before them (coloured by what resolved it; red when it failed)."""
+    if first >= stop and first > 0:
+        return  # nothing new since the previous call (an animation's held last frame)
     maze = picture.maze
     width = max(1.8, 90 / max(maze.width, maze.height))
-    previous = picture.steps[first - 1][2] if first > 0 else "plan"
     for start, end, source in picture.steps[first:stop]:
         colour = SOURCE_COLOURS.get(source, "#000000")
         if source == "failed-attempt":
-            ax.plot(start.x, start.y, marker="x", color=colour, markersize=7, zorder=5)
+            ax.plot(
+                start.x, start.y, marker="x", color=colour, markersize=7, zorder=4, gid="step"
+            )
         elif start.cell == end.cell:
             ax.plot(
                 start.x,
@@ -460,6 +491,7 @@ def draw_steps(ax: Any, picture: MissionPicture, first: int, stop: int) -> None:
                 markersize=width * 1.6,
                 zorder=3,
                 alpha=0.9,
+                gid="step",
             )
         else:
             ax.plot(
@@ -469,18 +501,23 @@ def draw_steps(ax: Any, picture: MissionPicture, first: int, stop: int) -> None:
                 linewidth=width,
                 solid_capstyle="round",
                 zorder=3 if source == "plan" else 4,
+                gid="step",
             )
-        if source in ("replacement", "lookahead", "replan") and previous != source:
+    last = stop >= len(picture.steps)
+    for index, pose, source in picture.repairs:
+        if first <= index < stop or (last and index >= len(picture.steps)):
             ax.plot(
-                start.x,
-                start.y,
+                pose.x,
+                pose.y,
                 marker="X",
-                color="#D55E00",
-                markersize=9,
-                markeredgecolor="white",
-                zorder=6,
+                color=SOURCE_COLOURS.get(source, "#D55E00"),
+                markersize=8,
+                markeredgecolor="#111111",
+                markeredgewidth=0.8,
+                linestyle="",
+                zorder=REPAIR_ZORDER,
+                gid="repair",
             )
-        previous = source
 
 
 def robot_marker(pose: Pose) -> tuple[int, int, int]:
@@ -499,7 +536,7 @@ def mission_legend(fig: Any, picture: MissionPicture, *, with_robot: bool = Fals
     from matplotlib.lines import Line2D
 
     used = {s for _, _, s in picture.steps}
-    handles = [Line2D([], [], color="#7f7f7f", linestyle=(0, (3, 2)), label="initial plan")]
+    handles = [Line2D([], [], color=PLAN_COLOUR, linestyle=(0, (3, 2)), label="initial plan")]
     names = {
         "plan": "executed: plan",
         "replacement": "executed: table replacement",
@@ -514,17 +551,20 @@ def mission_legend(fig: Any, picture: MissionPicture, *, with_robot: bool = Fals
             )
         elif source in used:
             handles.append(Line2D([], [], color=SOURCE_COLOURS[source], linewidth=3, label=label))
+    if picture.repairs:
+        handles.append(
+            Line2D(
+                [],
+                [],
+                marker="X",
+                color="#bbbbbb",
+                linestyle="",
+                markeredgecolor="#111111",
+                markersize=8,
+                label=f"repair ({len(picture.repairs)}; colour: what resolved it)",
+            )
+        )
     handles += [
-        Line2D(
-            [],
-            [],
-            marker="X",
-            color="#D55E00",
-            linestyle="",
-            markeredgecolor="white",
-            markersize=9,
-            label="repair begins",
-        ),
         Line2D([], [], marker="o", color="#111111", linestyle="", label="start"),
         Line2D(
             [],

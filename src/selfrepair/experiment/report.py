@@ -41,6 +41,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "choose_mission",
+    "counted",
     "markdown_table",
     "pick_mission",
     "read_results",
@@ -197,10 +198,13 @@ def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = N
         return write_team_report(rows, out_dir, str(db), mission_key=mission_key)
     rows = _checked(columns, rows, str(db))
     out_dir.mkdir(parents=True, exist_ok=True)
+    clearance = plots.figure_clearance(rows, out_dir / "clearance.png")
+    if clearance is None:  # one clearance weight: no figure (and no stale one from before)
+        (out_dir / "clearance.png").unlink(missing_ok=True)
     written = [
         plots.figure_latency(rows, out_dir / "latency.png"),
         plots.figure_latency_vs_size(rows, out_dir / "latency-vs-size.png"),
-        plots.figure_clearance(rows, out_dir / "clearance.png"),
+        *([clearance] if clearance is not None else []),
         plots.figure_heatmap(rows, out_dir / "heatmap.png"),
     ]
     if mission_key is None:
@@ -218,23 +222,22 @@ def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = N
             chosen,
             str(db),
             heatmap_variant=plots.heatmap_variant(rows),
+            clearance=clearance is not None,
         ),
         encoding="utf-8",
     )
     return [report, *written]
 
 
-def pick_mission(
-    rows: Sequence[Row], key_prefix: str, source: str, *, option: str = "--mission"
-) -> Row:
+def pick_mission(rows: Sequence[Row], key_prefix: str, source: str) -> Row:
     """The row whose key starts with ``key_prefix``; none or several is an
-    :class:`~selfrepair.errors.InputError` naming ``option`` (the flag the prefix came from)."""
+    :class:`~selfrepair.errors.InputError` naming ``source`` (the results database)."""
     hits = [r for r in rows if key_prefix and str(r["key"]).startswith(key_prefix)]
     if len(hits) != 1:
         examples = ", ".join(str(r["key"])[:12] for r in hits[:3])
         raise InputError(
-            f"expected {option} to match exactly one stored key, {len(hits)} match "
-            f"{key_prefix!r}" + (f" (e.g. {examples}); give more characters" if hits else ""),
+            f"expected the mission key prefix to match exactly one stored mission, {len(hits)} "
+            f"match {key_prefix!r}" + (f" (e.g. {examples}); give more characters" if hits else ""),
             source=source,
         )
     return hits[0]
@@ -302,6 +305,12 @@ def _mission_files(row: Row, out_dir: Path, source: str) -> list[Path]:
     return [trace_path, png, gif]
 
 
+def counted(value: object, noun: str) -> str:
+    """``"1 replan"``, ``"13 replans"`` (``value`` as stored: a number, or ``None`` for 0)."""
+    number = int(str(value or 0))
+    return f"{number} {noun}" if number == 1 else f"{number} {noun}s"
+
+
 def markdown_table(headers: Sequence[str], body: Sequence[Sequence[str]]) -> str:
     """A GitHub-flavoured Markdown table (first column left-aligned, the rest right-aligned)."""
     lines = ["| " + " | ".join(headers) + " |"]
@@ -318,8 +327,10 @@ def render_markdown(
     source: str,
     *,
     heatmap_variant: str | None,
+    clearance: bool = True,
 ) -> str:
-    """The text of ``report.md``."""
+    """The text of ``report.md`` (``clearance``: whether the clearance figure was drawn; it is
+    not when the sweep has a single clearance weight)."""
     experiments = Counter(str(r["experiment"]) for r in rows)
     versions = sorted({str(r["version"]) for r in rows})
     mazes = sorted({str(r["maze"]) for r in rows})
@@ -391,11 +402,17 @@ def render_markdown(
         "*Median repair latency (bar up to the 99th percentile) against maze size: replans of "
         "the replanning robot versus table hits of the replacing robot.*",
         "",
-        "![Replacement success versus clearance weight](clearance.png)",
-        "",
-        "*Left: share of faulty encounters resolved by a table replacement for each clearance "
-        "weight. Right: what keeping away from walls costs in execution time.*",
-        "",
+        *(
+            [
+                "![Replacement success versus clearance weight](clearance.png)",
+                "",
+                "*Left: share of faulty encounters resolved by a table replacement for each "
+                "clearance weight. Right: what keeping away from walls costs in execution time.*",
+                "",
+            ]
+            if clearance
+            else []
+        ),
         "![Fault set by maze](heatmap.png)",
         "",
         f"*{heatmap_variant}: share of encounters resolved locally (left) and mean extra ticks "
@@ -405,10 +422,12 @@ def render_markdown(
         "",
         f"*Mission `{str(chosen['key'])[:12]}`: maze {chosen['maze']}, route {chosen['route']}, "
         f"faults {config['faults'] or 'none'}, {chosen['variant']}, clearance weight "
-        f"{chosen['clearance_weight']}; {chosen.get('replacements')} table replacements, "
-        f"{chosen.get('replans')} replans. Grey dashes: the initial plan; coloured: executed steps "
-        "by source (dots: turns in place). Animation: [mission.gif](mission.gif); trace: "
-        "[mission.jsonl](mission.jsonl) (`selfrepair replay mission.jsonl`).*",
+        f"{chosen['clearance_weight']}; "
+        f"{counted(chosen.get('replacements'), 'table replacement')}, "
+        f"{counted(chosen.get('replans'), 'replan')}. Dark dashes: the initial plan (drawn over "
+        "the executed path); coloured: executed steps by source (dots: turns in place); an X "
+        "for each repair, coloured by what resolved it. Animation: [mission.gif](mission.gif); "
+        "trace: [mission.jsonl](mission.jsonl) (`selfrepair replay mission.jsonl`).*",
         "",
     ]
     return "\n".join(parts)

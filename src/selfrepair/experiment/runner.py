@@ -389,9 +389,9 @@ def check_backend(backend: str, *, jobs: int = 1, scheduler: str | None = None) 
     if backend not in BACKENDS:
         raise ProblemError(f"unknown backend {backend!r}: expected one of {', '.join(BACKENDS)}")
     if jobs < 1 and jobs != -1:
-        raise ProblemError(f"--jobs must be a positive number or -1 (all cores), got {jobs}")
+        raise ProblemError(f"expected jobs >= 1 or -1 (all cores), got {jobs}")
     if backend == "dask" and not scheduler:
-        raise ProblemError("--backend dask needs --scheduler ADDRESS (e.g. tcp://host:8786)")
+        raise ProblemError("the dask backend needs a scheduler address (e.g. tcp://host:8786)")
 
 
 # --- where chunks run ----------------------------------------------------------------------------
@@ -554,12 +554,12 @@ PARENT_POLL_SECONDS = 0.2
 @contextmanager
 def _dask_client(scheduler: str | None) -> Iterator[object]:
     if not scheduler:
-        raise ProblemError("--backend dask needs --scheduler ADDRESS (e.g. tcp://host:8786)")
+        raise ProblemError("the dask backend needs a scheduler address (e.g. tcp://host:8786)")
     try:
         from distributed import Client
     except ImportError:
         raise ProblemError(
-            "--backend dask needs dask[distributed]: pip install 'selfrepair[dask]'"
+            "the dask backend needs dask[distributed]: pip install 'selfrepair[dask]'"
         ) from None
     try:
         client = Client(scheduler, set_as_default=False, timeout="20s")  # type: ignore[no-untyped-call]
@@ -576,7 +576,7 @@ def _start_ray(address: str | None) -> int:
     try:
         import ray
     except ImportError:
-        raise ProblemError("--backend ray needs ray: pip install 'selfrepair[ray]'") from None
+        raise ProblemError("the ray backend needs ray: pip install 'selfrepair[ray]'") from None
     if not ray.is_initialized():
         try:
             ray.init(

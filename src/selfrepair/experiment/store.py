@@ -500,8 +500,8 @@ def require_pyarrow() -> None:
         import pyarrow  # noqa: F401
     except ImportError:
         raise ProblemError(
-            "Parquet export needs pyarrow, which is not installed: pip install pyarrow "
-            "(or use --export-csv)"
+            "Parquet export needs pyarrow, which is not installed: pip install "
+            "'selfrepair[parquet]' (or export CSV instead)"
         ) from None
 
 

@@ -411,8 +411,8 @@ def _choose(
         hits = [r for r in rows if key_prefix and str(r["key"]).startswith(key_prefix)]
         if len(hits) != 1:
             raise ConfigError(
-                f"expected --mission to match exactly one stored key, {len(hits)} match "
-                f"{key_prefix!r}",
+                f"expected the mission key prefix to match exactly one stored mission, "
+                f"{len(hits)} match {key_prefix!r}",
                 source=source,
             )
         return hits[0]

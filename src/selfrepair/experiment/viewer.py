@@ -461,10 +461,10 @@ def trace_from_results(db: str | Path, key_prefix: str) -> tuple[Trace, dict[str
     from selfrepair.experiment.store import ResultStore
 
     if not key_prefix:
-        raise InputError("expected a non-empty mission key or key prefix", source="--key")
+        raise InputError("expected a non-empty mission key or key prefix", source=str(db))
     with ResultStore(db, read_only=True) as store:
         rows = store.rows("WHERE substr(key, 1, ?) = ?", (len(key_prefix), key_prefix))
-    row = pick_mission(rows, key_prefix, str(db), option="--key")
+    row = pick_mission(rows, key_prefix, str(db))
     result = rerun_mission(row)
     key = str(row["key"])
     trace = parse_trace("\n".join(trace_lines(result)), source=f"{db} (mission {key[:12]})")

@@ -349,7 +349,8 @@ def read_team_trace(
         size = file.stat().st_size
         if size > max_bytes:
             raise TraceError(
-                f"the trace has {size} bytes, more than the limit of {max_bytes} (--max-bytes)",
+                f"the trace has {size} bytes, more than the limit of {max_bytes} "
+                "(raise it with --max-bytes)",
                 source=str(file),
             )
         text = file.read_text(encoding="utf-8")

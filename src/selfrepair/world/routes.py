@@ -16,28 +16,39 @@ follow the maze: ``x`` is the column, ``y`` the row, origin top-left. Example::
 A route only asks for the robot's cell to reach the goal; the heading at the goal is free.
 Parse errors name the file, the line and the column of the offending field, and what was expected.
 Lines end at ``\\n`` or ``\\r\\n`` only, and a leading UTF-8 byte-order mark is ignored.
+
+:func:`random_routes` draws seeded routes for any maze (``selfrepair maze routes``, ``maze generate
+--routes`` and the experiments' ``routes = N`` use it).
 """
 
 from __future__ import annotations
 
 import re
+from collections import deque
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from selfrepair.errors import InputError
-from selfrepair.geometry import Cell, Pose, parse_cell, parse_pose
+from selfrepair.geometry import Cell, Heading, Pose, parse_cell, parse_pose
 from selfrepair.textio import read_text, strip_bom, text_lines
 from selfrepair.world.maze import Maze
 
 __all__ = [
+    "MAX_ROUTES",
     "Route",
     "check_route",
     "format_routes",
     "load_routes",
     "parse_routes",
+    "random_routes",
     "save_routes",
 ]
+
+MAX_ROUTES = 10_000
+"""Most routes :func:`random_routes` draws in one call (each costs a search over the maze)."""
 
 _FIELD = re.compile(r"\S+")
 
@@ -158,3 +169,45 @@ def save_routes(
 ) -> None:
     """Write ``routes`` to ``path`` in the route-file format."""
     Path(path).write_text(format_routes(routes, comments=comments), encoding="utf-8")
+
+
+def random_routes(maze: Maze, count: int, seed: int) -> tuple[Route, ...]:
+    """``count`` seeded routes named ``q1``, ``q2``, ...: a random free start cell and heading,
+    and a goal drawn among the reachable cells at least half the largest 4-connected distance away
+    (so routes are long). The same maze, count and seed give the same routes."""
+    if not 1 <= count <= MAX_ROUTES:
+        raise InputError(
+            f"expected a route count from 1 to {MAX_ROUTES}, got {count}", source="<routes>"
+        )
+    if seed < 0:
+        raise InputError(f"expected a non-negative seed, got {seed}", source="<routes>")
+    rng = np.random.default_rng(seed)
+    free = maze.free_cells()
+    if len(free) < 2:
+        raise InputError("expected a maze with at least two free cells for random routes")
+    routes = []
+    for n in range(count):
+        start = free[int(rng.integers(len(free)))]
+        distances = _bfs(maze, start)
+        far = max(distances.values())
+        candidates = sorted(c for c, d in distances.items() if d * 2 >= far and d > 0)
+        if not candidates:
+            candidates = sorted(c for c in distances if c != start) or [start]
+        goal = candidates[int(rng.integers(len(candidates)))]
+        heading = Heading(int(rng.integers(4)))
+        routes.append(Route(f"q{n + 1}", Pose(start[0], start[1], heading), goal))
+    return tuple(routes)
+
+
+def _bfs(maze: Maze, start: Cell) -> dict[Cell, int]:
+    """4-connected distances from ``start`` (a turn in place needs only the robot's own cell, so
+    4-connectivity is exactly what the robot can reach)."""
+    distances = {start: 0}
+    queue = deque([start])
+    while queue:
+        x, y = queue.popleft()
+        for nx, ny in ((x + 1, y), (x - 1, y), (x, y + 1), (x, y - 1)):
+            if (nx, ny) not in distances and maze.is_free(nx, ny):
+                distances[(nx, ny)] = distances[(x, y)] + 1
+                queue.append((nx, ny))
+    return distances

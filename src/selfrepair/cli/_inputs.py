@@ -1,0 +1,134 @@
+"""What several commands take: the maze argument, the shared options, and finding input files.
+
+Argument and option names are the same in every command (``MAZE``, ``--start X,Y,H``,
+``--goal X,Y``, ``--faults FAULTS``, ``--backend NAME``, ``--json``), and every option has help.
+
+:func:`find_input` lets a command run from anywhere inside a source checkout with the paths the
+README shows (``tests/data/movingai/maze512-1-0.map``): a relative path that does not exist in the
+working directory is looked up relative to the checkout the package was installed from (an
+editable install; an installed wheel has no checkout and the path is taken as given).
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from selfrepair.errors import InputError
+
+__all__ = [
+    "Backend",
+    "ClearanceWeight",
+    "Faults",
+    "Heuristic",
+    "Json",
+    "MaxExpansions",
+    "MazeArg",
+    "Start",
+    "TimeLimit",
+    "checkout_root",
+    "find_input",
+    "parse_weight",
+]
+
+MazeArg = Annotated[
+    str,
+    typer.Argument(
+        metavar="MAZE",
+        help="A bundled maze name (see `maze list`), a .maze text file or a MovingAI .map file.",
+        show_default=False,
+    ),
+]
+Start = Annotated[
+    str, typer.Option("--start", metavar="X,Y,H", help="Start pose (heading H: N, E, S or W).")
+]
+Faults = Annotated[
+    str,
+    typer.Option(
+        "--faults", metavar="FAULTS", help="Faults, comma-separated, e.g. FL:F,RR:B (none: '')."
+    ),
+]
+ClearanceWeight = Annotated[
+    str,
+    typer.Option(
+        "--clearance-weight",
+        metavar="W",
+        help="Exact weight of the wall-clearance cost term, e.g. 1, 1/2 or 0.25.",
+    ),
+]
+Heuristic = Annotated[
+    str,
+    typer.Option(
+        "--heuristic", metavar="NAME", help="A* heuristic: grid-distance, manhattan or zero."
+    ),
+]
+Backend = Annotated[
+    str,
+    typer.Option(
+        "--backend",
+        metavar="NAME",
+        help="Search backend: auto (numba when installed), numba or python.",
+    ),
+]
+Json = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
+MaxExpansions = Annotated[
+    int | None,
+    typer.Option("--max-expansions", metavar="N", help="Node budget of the search (expansions)."),
+]
+TimeLimit = Annotated[
+    float | None,
+    typer.Option("--time-limit", metavar="SECONDS", help="Time budget of the search."),
+]
+
+
+def checkout_root() -> Path | None:
+    """The source checkout this package runs from (``src/selfrepair`` under a folder with
+    ``pyproject.toml``), or ``None`` for an installed package."""
+    import selfrepair
+
+    package = Path(selfrepair.__file__).resolve().parent
+    root = package.parent.parent
+    if package.parent.name == "src" and (root / "pyproject.toml").is_file():
+        return root
+    return None
+
+
+def find_input(spec: str) -> str:
+    """``spec`` itself when it exists here (or is not a path at all), else the same relative
+    path inside the source checkout when it exists there."""
+    path = Path(spec)
+    if path.exists() or path.is_absolute():
+        return spec
+    root = checkout_root()
+    if root is not None and (root / path).exists():
+        return str(root / path)
+    if root is not None and path.suffix in (".map", ".scen"):
+        hits = sorted(root.glob(f"tests/data/*/{path.name}"))
+        if hits:
+            raise InputError(
+                f"no such file; the source checkout has it as {hits[0].relative_to(root)}",
+                source=spec,
+            )
+    return spec
+
+
+def parse_weight(text: str, option: str = "--clearance-weight") -> Fraction:
+    """Parse an exact weight such as ``2``, ``1/3`` or ``0.25``, from 0 to
+    :data:`~selfrepair.limits.MAX_CLEARANCE_WEIGHT`."""
+    from selfrepair.limits import MAX_CLEARANCE_WEIGHT
+
+    try:
+        weight = Fraction(text.strip())
+    except (ValueError, ZeroDivisionError) as exc:
+        raise InputError(
+            f"expected a number such as 2, 1/3 or 0.25, got {text[:40]!r}", source=option
+        ) from exc
+    if not 0 <= weight <= MAX_CLEARANCE_WEIGHT:
+        raise InputError(
+            f"expected a weight from 0 to {MAX_CLEARANCE_WEIGHT:,}, got {text[:40]!r}",
+            source=option,
+        )
+    return weight
