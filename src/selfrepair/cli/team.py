@@ -228,7 +228,7 @@ def team_replay(
     """
     from selfrepair.team.trace import read_team_trace, replay_team
 
-    report = replay_team(read_team_trace(trace, max_bytes=max_bytes))
+    report = replay_team(read_team_trace(trace, max_trace_bytes=max_bytes))
     echo(f"{trace}: {report}")
     return 0 if report.ok else 1
 
