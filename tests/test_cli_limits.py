@@ -3,6 +3,7 @@ limit and the flag (exit 2), and a value that fits lets the same command run."""
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 import pytest
@@ -130,3 +131,68 @@ def test_limit_flags_of_the_newer_commands(
     command,  # type: ignore[no-untyped-def]
 ) -> None:
     test_limit_flag_refuses_then_admits(files, capsys, flag, low, fits, command)
+
+
+@pytest.fixture
+def text_files(files: dict[str, str], tmp_path: Path) -> dict[str, str]:
+    """Inputs guarded by byte limits: a route file, a MovingAI scenario with its map, a team
+    scenario, a mission trace and a team trace."""
+    data = Path(__file__).parent / "data" / "movingai"
+    for name in ("maze512-1-0.map", "maze512-1-0.map.scen"):
+        shutil.copy(data / name, tmp_path / name)
+    package = Path(__file__).parents[1] / "src" / "selfrepair" / "data"
+    shutil.copy(package / "team" / "three-robots.toml", tmp_path / "team.toml")
+    routes = Path(files["maze"]).with_suffix(".routes")
+    assert main(["maze", "routes", files["maze"], "-n", "2", "--seed", "0", "-o", str(routes)]) == 0
+    trace = tmp_path / "t.jsonl"
+    assert main(["run", "narrow-short", *ROUTE, "--faults", "FL:F", "--strategy", "replan",
+                 "--no-warm-up", "--trace", str(trace)]) == 0
+    team_trace = tmp_path / "team.jsonl"
+    assert main(["team", "run", "three-robots", "--trace", str(team_trace)]) == 0
+    return {
+        **files,
+        "routes": str(routes),
+        "scen": str(tmp_path / "maze512-1-0.map.scen"),
+        "team": str(tmp_path / "team.toml"),
+        "trace": str(trace),
+        "team_trace": str(team_trace),
+        "out": str(tmp_path),
+    }
+
+
+# (flag, file whose size is the limit that fits, command)
+BYTE_CASES = [
+    ("--max-file-bytes", "routes", lambda f: ["maze", "show", f["maze"], "--routes"]),
+    ("--max-file-bytes", "scen", lambda f: ["check-scen", f["scen"], "--sample", "1"]),
+    ("--max-file-bytes", "toml", lambda f: ["experiment", f["toml"], "--jobs", "1", "--db",
+                                             f["db"] + "/c.sqlite"]),
+    ("--max-file-bytes", "team", lambda f: ["team", "run", f["team"]]),
+    ("--max-file-bytes", "team", lambda f: ["team", "compare", f["team"]]),
+    ("--max-trace-bytes", "trace", lambda f: ["replay", f["trace"]]),
+    ("--max-trace-bytes", "trace", lambda f: ["view", f["trace"], "-o", f["out"] + "/v.html"]),
+    ("--max-trace-bytes", "trace", lambda f: ["animate", f["trace"], "-o", f["out"] + "/a.gif",
+                                              "--max-frames", "2"]),
+    ("--max-trace-bytes", "team_trace", lambda f: ["team", "replay", f["team_trace"]]),
+    ("--max-trace-bytes", "team_trace", lambda f: ["team", "frame", f["team_trace"], "-o",
+                                                   f["out"] + "/f.png"]),
+]
+
+
+@pytest.mark.parametrize(("flag", "file", "command"), BYTE_CASES)
+def test_byte_limit_flags_refuse_then_admit(
+    text_files: dict[str, str],
+    capsys: pytest.CaptureFixture[str],
+    flag: str,
+    file: str,
+    command,  # type: ignore[no-untyped-def]
+) -> None:
+    size = Path(text_files[file]).stat().st_size
+    args = command(text_files)
+    capsys.readouterr()
+    assert main([*args, flag, str(size - 1)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("selfrepair: error: ") and err.count("\n") == 1, err
+    assert f"at most {size - 1:,} bytes" in err
+    assert f"limit {flag[2:].replace('-', '_')}; raise it with {flag})" in err
+    assert main([*args, flag, str(size)]) == 0, capsys.readouterr().err
+    capsys.readouterr()

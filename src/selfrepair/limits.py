@@ -21,11 +21,13 @@ from selfrepair.errors import LimitError
 __all__ = [
     "MAX_CELLS",
     "MAX_CLEARANCE_WEIGHT",
+    "MAX_FILE_BYTES",
     "MAX_MISSIONS",
     "MAX_ROBOTS",
     "MAX_TABLE_BYTES",
     "MAX_TABLE_CANDIDATES",
     "MAX_TASKS",
+    "MAX_TRACE_BYTES",
     "check_limit",
     "maze_file_bytes",
 ]
@@ -56,6 +58,20 @@ MAX_TABLE_CANDIDATES = 1_000_000
 
 Parsing and re-simulation take about 7 µs and 220 bytes per candidate (measured with a million
 candidates: 6.7 s, 220 MB); the bundled generated-indexed table has 3,402."""
+
+MAX_FILE_BYTES = 64 * 1024 * 1024
+"""Size of any other text input (64 MiB): MovingAI scenario files, route files, experiment files
+and team scenario files, checked before the file is read.
+
+The largest file of these kinds that selfrepair ships or reads in its tests is a MovingAI
+scenario of about 250 kB (a few thousand queries); reading takes a few times the file size in
+memory, and the parsed rows more."""
+
+MAX_TRACE_BYTES = 256 * 1024 * 1024
+"""Size of a mission trace or team trace (256 MiB), checked before the file is read.
+
+A trace takes about 200 bytes per simulated step, so this holds over a million steps; parsing and
+replaying take several times the file size in memory."""
 
 MAX_ROBOTS = 64
 """Robots of one team scenario.

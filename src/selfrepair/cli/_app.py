@@ -202,6 +202,24 @@ MaxTableCandidates = Annotated[
         help="Refuse a table of more candidates than this, before re-simulating any.",
     ),
 ]
+MaxFileBytes = Annotated[
+    int,
+    typer.Option(
+        "--max-file-bytes",
+        metavar="N",
+        min=1,
+        help="Refuse a scenario, route, experiment or team file larger than this, unread.",
+    ),
+]
+MaxTraceBytes = Annotated[
+    int,
+    typer.Option(
+        "--max-trace-bytes",
+        metavar="N",
+        min=1,
+        help="Refuse a trace file larger than this, unread.",
+    ),
+]
 
 
 def number_json(value: Fraction | float | int | None) -> int | float | None:

@@ -9,10 +9,10 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from selfrepair.cli._app import MaxCells, app, echo, echo_json, maze_app, text_table
+from selfrepair.cli._app import MaxCells, MaxFileBytes, app, echo, echo_json, maze_app, text_table
 from selfrepair.cli._inputs import MazeArg, find_input
 from selfrepair.errors import InputError
-from selfrepair.limits import MAX_CELLS
+from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES
 
 if TYPE_CHECKING:
     from selfrepair.world.maze import Maze
@@ -56,13 +56,15 @@ def actions(
 # --- mazes ------------------------------------------------------------------------------------
 
 
-def _routes_for(spec: str, maze: "Maze", routes_file: Path | None) -> "tuple[Route, ...]":
+def _routes_for(
+    spec: str, maze: "Maze", routes_file: Path | None, max_file_bytes: int
+) -> "tuple[Route, ...]":
     """The routes to overlay: an explicit file, a bundled maze's own routes, or ``FILE.routes``."""
     from selfrepair.world import bundled
     from selfrepair.world.routes import load_routes
 
     if routes_file is not None:
-        return load_routes(routes_file, maze=maze)
+        return load_routes(routes_file, maze=maze, max_file_bytes=max_file_bytes)
     if spec in bundled.maze_names():
         return bundled.bundled_routes(spec)
     sibling = Path(find_input(spec)).with_suffix(".routes")
@@ -72,7 +74,7 @@ def _routes_for(spec: str, maze: "Maze", routes_file: Path | None) -> "tuple[Rou
             f"with: selfrepair maze routes {spec} -n 4 --seed 0 -o {sibling})",
             source=spec,
         )
-    return load_routes(sibling, maze=maze)
+    return load_routes(sibling, maze=maze, max_file_bytes=max_file_bytes)
 
 
 def route_picture(maze: "Maze", routes: "Sequence[Route]") -> str:
@@ -112,6 +114,7 @@ def maze_show(
         typer.Option("--route", metavar="NAME", help="Overlay only the route with this name."),
     ] = None,
     max_cells: MaxCells = MAX_CELLS,
+    max_file_bytes: MaxFileBytes = MAX_FILE_BYTES,
 ) -> int:
     """Print a maze as text, optionally with its routes.
 
@@ -124,7 +127,7 @@ def maze_show(
     if not (routes or routes_file is not None or route is not None):
         sys.stdout.write(render_ascii(maze))
         return 0
-    chosen = _routes_for(spec, maze, routes_file)
+    chosen = _routes_for(spec, maze, routes_file, max_file_bytes)
     if route is not None:
         chosen = tuple(r for r in chosen if r.name == route)
         if not chosen:

@@ -20,6 +20,7 @@ from selfrepair.cli._app import (
     MaxCells,
     MaxTableBytes,
     MaxTableCandidates,
+    MaxTraceBytes,
     app,
     console,
     echo,
@@ -56,7 +57,7 @@ from selfrepair.cli._mission import (
     row_json,
 )
 from selfrepair.cli.planning import kernel_load_ns
-from selfrepair.limits import MAX_CELLS, MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES
+from selfrepair.limits import MAX_CELLS, MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES, MAX_TRACE_BYTES
 
 if TYPE_CHECKING:
     from selfrepair.execution.result import MissionResult
@@ -412,43 +413,24 @@ _Partial = Annotated[
 ]
 
 
-MaxTraceBytes = Annotated[
-    int | None,
-    typer.Option(
-        "--max-trace-bytes",
-        metavar="N",
-        min=1,
-        help="Refuse trace files larger than N bytes (default: 256 MiB).",
-        show_default=False,
-    ),
-]
-
-
-def read_trace_file(path: Path, *, partial: bool = False, max_bytes: int | None = None) -> Any:
-    """The parsed trace at ``path`` (``max_bytes``: the ``--max-trace-bytes`` limit, if given)."""
-    from selfrepair.execution.trace import read_trace
-
-    if max_bytes is None:
-        return read_trace(path, partial=partial)
-    return read_trace(path, partial=partial, max_bytes=max_bytes)
-
-
 @app.command()
 def replay(
     trace: Annotated[
         Path, typer.Argument(metavar="TRACE", help="A JSON Lines trace written by run --trace.")
     ],
     partial: _Partial = False,
-    max_trace_bytes: MaxTraceBytes = None,
+    max_trace_bytes: MaxTraceBytes = MAX_TRACE_BYTES,
 ) -> int:
     """Re-simulate a trace; report the first bad step.
 
     Every step is checked against the robot model and the fault schedule. Exit 1 when a step
     does not hold.
     """
+    from selfrepair.execution.trace import read_trace
     from selfrepair.execution.trace import replay as replay_trace
 
-    report = replay_trace(read_trace_file(trace, partial=partial, max_bytes=max_trace_bytes))
+    parsed = read_trace(trace, partial=partial, max_trace_bytes=max_trace_bytes)
+    report = replay_trace(parsed)
     if report.ok:
         cut = " (a partial trace: no summary line)" if report.partial else ""
         echo(f"{trace}: ok: all {report.steps_checked} steps hold under the robot model{cut}")

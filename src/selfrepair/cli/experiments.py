@@ -1,6 +1,5 @@
 """Experiment commands: ``selfrepair experiment``, ``selfrepair report``, ``selfrepair animate``."""
 
-
 import sys
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -10,9 +9,17 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from selfrepair.cli._app import MaxCells, MaxMissions, app, console, echo
+from selfrepair.cli._app import (
+    MaxCells,
+    MaxFileBytes,
+    MaxMissions,
+    MaxTraceBytes,
+    app,
+    console,
+    echo,
+)
 from selfrepair.errors import InputError, ProblemError
-from selfrepair.limits import MAX_CELLS, MAX_MISSIONS
+from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES, MAX_MISSIONS, MAX_TRACE_BYTES
 
 if TYPE_CHECKING:
     from rich.table import Table
@@ -109,6 +116,7 @@ def experiment(
     ] = None,
     max_missions: MaxMissions = MAX_MISSIONS,
     max_cells: MaxCells = MAX_CELLS,
+    max_file_bytes: MaxFileBytes = MAX_FILE_BYTES,
     repeats: Annotated[
         int | None,
         typer.Option(
@@ -144,7 +152,7 @@ def experiment(
         check_backend(backend, jobs=jobs, scheduler=scheduler)
         if export_parquet is not None:
             _require_pyarrow()  # before the sweep, not after it
-        loaded = load_experiment(resolve_experiment(config))
+        loaded = load_experiment(resolve_experiment(config), max_file_bytes=max_file_bytes)
         if isinstance(loaded, TeamExperimentConfig):
             from selfrepair.cli.team import run_team_experiment
 
@@ -439,9 +447,7 @@ def animate(
         Path,
         typer.Argument(metavar="TRACE", help="Trace file (JSON Lines) written by `run --trace`."),
     ],
-    out: Annotated[
-        Path, typer.Option("--out", "-o", metavar="FILE", help="GIF file to write.")
-    ],
+    out: Annotated[Path, typer.Option("--out", "-o", metavar="FILE", help="GIF file to write.")],
     fps: Annotated[
         int, typer.Option("--fps", metavar="N", help="Frames per second.", min=1, max=60)
     ] = 4,
@@ -454,6 +460,7 @@ def animate(
             min=1,
         ),
     ] = 120,
+    max_trace_bytes: MaxTraceBytes = MAX_TRACE_BYTES,
 ) -> int:
     """Animate a mission trace as a GIF.
 
@@ -462,7 +469,14 @@ def animate(
     from selfrepair.experiment.animate import animate_trace
 
     with _frames_progress(f"drawing {out.name}") as on_frame:
-        frames = animate_trace(trace, out, fps=fps, max_frames=max_frames, on_frame=on_frame)
+        frames = animate_trace(
+            trace,
+            out,
+            fps=fps,
+            max_frames=max_frames,
+            on_frame=on_frame,
+            max_trace_bytes=max_trace_bytes,
+        )
     echo(f"wrote {out} ({frames} frames)")
     return 0
 

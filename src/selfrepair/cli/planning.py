@@ -15,7 +15,15 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from selfrepair.cli._app import MaxCells, app, echo, echo_json, exact_json, number_json
+from selfrepair.cli._app import (
+    MaxCells,
+    MaxFileBytes,
+    app,
+    echo,
+    echo_json,
+    exact_json,
+    number_json,
+)
 from selfrepair.cli._inputs import (
     Backend,
     ClearanceWeight,
@@ -30,7 +38,7 @@ from selfrepair.cli._inputs import (
     parse_weight,
 )
 from selfrepair.errors import InputError
-from selfrepair.limits import MAX_CELLS
+from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES
 
 if TYPE_CHECKING:
     from selfrepair.geometry import Cell, Heading
@@ -287,6 +295,7 @@ def check_scen_command(
     backend: Backend = "auto",
     as_json: Json = False,
     max_cells: MaxCells = MAX_CELLS,
+    max_file_bytes: MaxFileBytes = MAX_FILE_BYTES,
 ) -> int:
     """Check grid A* against a MovingAI scenario file.
 
@@ -299,7 +308,12 @@ def check_scen_command(
     load_ns = kernel_load_ns(backend, "grid")
     t0 = time.perf_counter()
     report = check_scenarios(
-        scen, sample=sample, seed=seed, backend=backend, max_cells=max_cells
+        scen,
+        sample=sample,
+        seed=seed,
+        backend=backend,
+        max_cells=max_cells,
+        max_file_bytes=max_file_bytes,
     )
     seconds = time.perf_counter() - t0
     bad = report.mismatches

@@ -12,8 +12,24 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from selfrepair.cli._app import MaxCells, app, command_group, console, echo, echo_json
-from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, MAX_ROBOTS, MAX_TASKS
+from selfrepair.cli._app import (
+    MaxCells,
+    MaxFileBytes,
+    MaxTraceBytes,
+    app,
+    command_group,
+    console,
+    echo,
+    echo_json,
+)
+from selfrepair.limits import (
+    MAX_CELLS,
+    MAX_FILE_BYTES,
+    MAX_MISSIONS,
+    MAX_ROBOTS,
+    MAX_TASKS,
+    MAX_TRACE_BYTES,
+)
 
 if TYPE_CHECKING:
     from selfrepair.experiment.teams import TeamExperimentConfig
@@ -85,6 +101,7 @@ def team_run(
     max_robots: MaxRobots = MAX_ROBOTS,
     max_tasks: MaxTasks = MAX_TASKS,
     max_cells: MaxCells = MAX_CELLS,
+    max_file_bytes: MaxFileBytes = MAX_FILE_BYTES,
 ) -> int:
     """Run one team mission.
 
@@ -96,7 +113,9 @@ def team_run(
     from selfrepair.team.scenario import Limits, resolve_scenario
     from selfrepair.team.trace import write_team_trace
 
-    parsed = resolve_scenario(scenario, limits=Limits(max_robots, max_tasks, max_cells))
+    parsed = resolve_scenario(
+        scenario, limits=Limits(max_robots, max_tasks, max_cells, max_file_bytes)
+    )
     options = _options(strategy, table, max_ticks, backend)
     result = run_team(parsed, options)
     baseline = run_team(parsed.without_faults(), options).makespan if parsed.faults else None
@@ -160,6 +179,7 @@ def team_compare(
     max_robots: MaxRobots = MAX_ROBOTS,
     max_tasks: MaxTasks = MAX_TASKS,
     max_cells: MaxCells = MAX_CELLS,
+    max_file_bytes: MaxFileBytes = MAX_FILE_BYTES,
 ) -> int:
     """Run a scenario with every team strategy, side by side.
 
@@ -174,7 +194,9 @@ def team_compare(
     from selfrepair.team.model import TeamStrategyName, TeamTableName
     from selfrepair.team.scenario import Limits, resolve_scenario
 
-    parsed = resolve_scenario(scenario, limits=Limits(max_robots, max_tasks, max_cells))
+    parsed = resolve_scenario(
+        scenario, limits=Limits(max_robots, max_tasks, max_cells, max_file_bytes)
+    )
     variants = [
         (TeamStrategyName.TEAM_REPLACEMENT, TeamTableName.HANDWRITTEN),
         (TeamStrategyName.TEAM_REPLACEMENT, TeamTableName.GENERATED),
@@ -215,12 +237,7 @@ def team_replay(
         Path,
         typer.Argument(metavar="TRACE", help="A team trace written by team run --trace."),
     ],
-    max_bytes: Annotated[
-        int,
-        typer.Option(
-            "--max-bytes", metavar="N", help="Refuse larger trace files (default 256 MiB).", min=1
-        ),
-    ] = 256 * 1024 * 1024,
+    max_trace_bytes: MaxTraceBytes = MAX_TRACE_BYTES,
 ) -> int:
     """Re-simulate a team trace; report what does not hold.
 
@@ -228,7 +245,7 @@ def team_replay(
     """
     from selfrepair.team.trace import read_team_trace, replay_team
 
-    report = replay_team(read_team_trace(trace, max_bytes=max_bytes))
+    report = replay_team(read_team_trace(trace, max_trace_bytes=max_trace_bytes))
     echo(f"{trace}: {report}")
     return 0 if report.ok else 1
 
@@ -289,6 +306,7 @@ def team_frame(
             help="The moment to draw, in ticks (default: the first repair).",
         ),
     ] = None,
+    max_trace_bytes: MaxTraceBytes = MAX_TRACE_BYTES,
 ) -> int:
     """Draw one moment of a team trace as a PNG.
 
@@ -296,7 +314,7 @@ def team_frame(
     """
     from selfrepair.team.draw import draw_team_frame
 
-    written = draw_team_frame(trace, out, tick=tick)
+    written = draw_team_frame(trace, out, tick=tick, max_trace_bytes=max_trace_bytes)
     echo(f"wrote {written}")
     return 0
 

@@ -6,14 +6,14 @@ starts with ``K`` and views it. Bad input (a missing file, a file that is neithe
 ambiguous key) is one line on stderr and exit code 2 (see :func:`selfrepair.cli.main`).
 """
 
-
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from selfrepair.cli._app import app, echo
+from selfrepair.cli._app import MaxTraceBytes, app, echo
 from selfrepair.errors import InputError
+from selfrepair.limits import MAX_TRACE_BYTES
 
 __all__ = ["VIEW_STEPS_DEFAULT", "view"]
 
@@ -49,6 +49,7 @@ def view(
         int,
         typer.Option("--max-steps", metavar="N", min=1, help="Refuse missions with more steps."),
     ] = VIEW_STEPS_DEFAULT,
+    max_trace_bytes: MaxTraceBytes = MAX_TRACE_BYTES,
 ) -> int:
     """Write a mission as a self-contained HTML page.
 
@@ -72,6 +73,6 @@ def view(
                 "--key chooses a mission in a results database, but this is not one",
                 source=str(source),
             )
-        written = view_trace(source, out, max_steps=max_steps)
+        written = view_trace(source, out, max_steps=max_steps, max_trace_bytes=max_trace_bytes)
     echo(f"wrote {written}")
     return 0

@@ -47,13 +47,14 @@ from selfrepair.execution.result import (
 )
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS
 from selfrepair.geometry import Heading, Pose
+from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.strategies import RepairSource, RepairStatus, StrategyOptions
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import get_domain
+from selfrepair.textio import read_text
 from selfrepair.world.maze import format_maze, parse_maze
 
 __all__ = [
-    "MAX_TRACE_BYTES",
     "TRACE_FORMAT",
     "TRACE_VERSION",
     "ReplayReport",
@@ -72,9 +73,6 @@ TRACE_FORMAT = "selfrepair-trace"
 TRACE_VERSION = 1
 DEFAULT_DOMAIN = "four-wheel"
 """The robot of a trace whose header names none (traces written before domains were named)."""
-
-MAX_TRACE_BYTES = 256 * 1024 * 1024
-"""The largest trace file :func:`read_trace` reads unless told otherwise (``max_bytes``)."""
 
 
 def _pose_json(pose: Pose) -> list[Any]:
@@ -398,23 +396,18 @@ def parse_trace(text: str, source: str = "<trace>", *, partial: bool = False) ->
 
 
 def read_trace(
-    path: str | Path, *, partial: bool = False, max_bytes: int = MAX_TRACE_BYTES
+    path: str | Path, *, partial: bool = False, max_trace_bytes: int | None = MAX_TRACE_BYTES
 ) -> Trace:
-    """Read and parse a trace file (at most ``max_bytes``; see :func:`parse_trace`)."""
+    """Read and parse a trace file (see :func:`parse_trace`); a file over ``max_trace_bytes``
+    (:data:`selfrepair.limits.MAX_TRACE_BYTES`; ``None``: no limit) is refused unread."""
     path = Path(path)
-    try:
-        size = path.stat().st_size
-        if size > max_bytes:
-            raise TraceError(
-                f"the file has {size} bytes, more than the limit of {max_bytes} "
-                "(raise it with --max-trace-bytes)",
-                source=str(path),
-            )
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise TraceError(f"cannot read trace file: {exc.strerror}", source=str(path)) from None
-    except UnicodeDecodeError:
-        raise TraceError("expected a UTF-8 JSON Lines trace", source=str(path)) from None
+    text = read_text(
+        path,
+        what="JSON Lines trace",
+        error=TraceError,
+        max_bytes=max_trace_bytes,
+        limit="max_trace_bytes",
+    )
     return parse_trace(text, source=str(path), partial=partial)
 
 

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from selfrepair.errors import TraceError
+from selfrepair.limits import MAX_TRACE_BYTES
 
 __all__ = ["MAX_FRAMES", "animate_trace", "gif_frames"]
 
@@ -37,9 +38,10 @@ def animate_trace(
     fps: int = 4,
     max_frames: int = MAX_FRAMES,
     on_frame: Callable[[int, int], None] | None = None,
+    max_trace_bytes: int | None = MAX_TRACE_BYTES,
 ) -> int:
     """Write a GIF of the mission in ``trace`` to ``out``; returns the number of frames in the
-    file written."""
+    file written. A trace file over ``max_trace_bytes`` is refused unread."""
     from selfrepair.execution.trace import read_trace, replay
     from selfrepair.experiment import plots
     from selfrepair.team.trace import is_team_trace
@@ -47,7 +49,9 @@ def animate_trace(
     if is_team_trace(trace):  # several robots: one colour each, items drawn
         from selfrepair.team.draw import animate_team_trace
 
-        return animate_team_trace(trace, out, fps=fps, max_frames=max_frames)
+        return animate_team_trace(
+            trace, out, fps=fps, max_frames=max_frames, max_trace_bytes=max_trace_bytes
+        )
     if not str(out).lower().endswith(".gif"):
         raise TraceError("expected an output file ending in .gif", source=str(out))
     mpl = plots._matplotlib()
@@ -55,7 +59,7 @@ def animate_trace(
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    parsed = read_trace(trace)
+    parsed = read_trace(trace, max_trace_bytes=max_trace_bytes)
     check = replay(parsed)  # draw only what the robot model says happened
     if not check.ok:
         raise TraceError(f"the trace does not replay: {check}", source=str(trace))

@@ -57,7 +57,7 @@ from pydantic import (
 from selfrepair.errors import ConfigError, InputError
 from selfrepair.execution.faults import Clock, Detection, Persistence
 from selfrepair.geometry import parse_cell, parse_pose
-from selfrepair.limits import MAX_CLEARANCE_WEIGHT
+from selfrepair.limits import MAX_CLEARANCE_WEIGHT, MAX_FILE_BYTES
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import get_domain, load_plugin
@@ -314,9 +314,7 @@ def _weights(value: Any) -> Any:
         if weight < 0:
             raise ValueError(f"expected a non-negative number, got {item!r}")
         if weight > MAX_CLEARANCE_WEIGHT:
-            raise ValueError(
-                f"expected a weight of at most {MAX_CLEARANCE_WEIGHT:,}, got {item!r}"
-            )
+            raise ValueError(f"expected a weight of at most {MAX_CLEARANCE_WEIGHT:,}, got {item!r}")
         out.append(str(weight))
     return tuple(out)
 
@@ -338,10 +336,18 @@ def _reraise(parser: Any, text: str) -> Any:
 # --- loading -----------------------------------------------------------------------------------
 
 
-def load_config(path: str | Path) -> ExperimentConfig:
-    """Read and validate an experiment TOML file."""
+def load_config(
+    path: str | Path, *, max_file_bytes: int | None = MAX_FILE_BYTES
+) -> ExperimentConfig:
+    """Read and validate an experiment TOML file (refused unread if over ``max_file_bytes``)."""
     file = Path(path)
-    text = read_text(file, what="experiment file", error=ConfigError)
+    text = read_text(
+        file,
+        what="experiment file",
+        error=ConfigError,
+        max_bytes=max_file_bytes,
+        limit="max_file_bytes",
+    )
     return parse_config(text, source=str(file.resolve()))
 
 

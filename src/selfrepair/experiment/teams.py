@@ -71,7 +71,7 @@ from selfrepair.experiment.missions import (
     portable,
 )
 from selfrepair.experiment.store import Value
-from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, MAX_ROBOTS, check_limit
+from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES, MAX_MISSIONS, MAX_ROBOTS, check_limit
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.team.experiment import FaultCase, TeamCase, case_row
 from selfrepair.team.model import TeamStrategyName, TeamTableName
@@ -190,10 +190,19 @@ class TeamExperimentConfig(_Frozen):
         return Path(self.source).parent if not self.source.startswith("<") else Path.cwd()
 
 
-def load_experiment(path: str | Path) -> ExperimentConfig | TeamExperimentConfig:
-    """Read an experiment file of either kind (``kind = "team"`` or none)."""
+def load_experiment(
+    path: str | Path, *, max_file_bytes: int | None = MAX_FILE_BYTES
+) -> ExperimentConfig | TeamExperimentConfig:
+    """Read an experiment file of either kind (``kind = "team"`` or none); a file over
+    ``max_file_bytes`` is refused unread."""
     file = Path(path)
-    text = read_text(file, what="experiment file", error=ConfigError)
+    text = read_text(
+        file,
+        what="experiment file",
+        error=ConfigError,
+        max_bytes=max_file_bytes,
+        limit="max_file_bytes",
+    )
     source = str(file.resolve())
     data = read_toml(text, source=source)
     if data.get("kind") != TEAM_KIND:

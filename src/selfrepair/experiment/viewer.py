@@ -34,6 +34,7 @@ from selfrepair.execution.faults import Detection, canonical_order
 from selfrepair.execution.result import MissionSpec, StepSource, TraceStep
 from selfrepair.execution.trace import Trace, TraceRepair, parse_trace, replay, spec_from_header
 from selfrepair.geometry import Cell, Pose
+from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.strategies import uses_table
 from selfrepair.robots.domain import Domain
 from selfrepair.world.maze import Maze
@@ -444,11 +445,18 @@ def _write(payload: Mapping[str, Any], out: str | Path) -> Path:
 # --- entry points -------------------------------------------------------------------------------
 
 
-def view_trace(trace: str | Path, out: str | Path, *, max_steps: int = MAX_VIEW_STEPS) -> Path:
-    """Write the viewer page of the trace file ``trace`` to ``out``; returns ``out``."""
+def view_trace(
+    trace: str | Path,
+    out: str | Path,
+    *,
+    max_steps: int = MAX_VIEW_STEPS,
+    max_trace_bytes: int | None = MAX_TRACE_BYTES,
+) -> Path:
+    """Write the viewer page of the trace file ``trace`` to ``out``; returns ``out``. A trace
+    file over ``max_trace_bytes`` is refused unread."""
     from selfrepair.execution.trace import read_trace
 
-    parsed = read_trace(trace)
+    parsed = read_trace(trace, max_trace_bytes=max_trace_bytes)
     return _write(mission_payload(parsed, max_steps=max_steps), out)
 
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from selfrepair.errors import InputError
 from selfrepair.geometry import Cell
-from selfrepair.limits import MAX_CELLS
+from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES
 from selfrepair.search.grid import grid_astar
 from selfrepair.world.maze import Maze
 from selfrepair.world.movingai import ScenarioQuery, load_map, load_scenario
@@ -90,16 +90,18 @@ def check_scenarios(
     seed: int = 0,
     backend: str = "auto",
     max_cells: int | None = MAX_CELLS,
+    max_file_bytes: int | None = MAX_FILE_BYTES,
 ) -> ScenarioReport:
     """Run the scenario lines (all, or ``sample`` spread evenly) with 8-connected grid A*.
 
-    Bad input (an unreadable file, a missing map, a map over ``max_cells``, a size that disagrees
+    Bad input (an unreadable file, a scenario file over ``max_file_bytes``, a missing map, a map
+    over ``max_cells``, a size that disagrees
     with the map, a start or goal on a wall) raises :class:`~selfrepair.errors.InputError` naming
     the scenario line. Every number in a check is finite: the reader refuses a non-finite
     ``optimal_length`` and a path cost is a sum of finite steps.
     """
     path = Path(scen_path)
-    queries = load_scenario(path)
+    queries = load_scenario(path, max_file_bytes=max_file_bytes)
     chosen = [queries[i] for i in sample_indices(len(queries), sample, seed)]
     maps: dict[str, Maze] = {}  # the maps of this one file, dropped on return
     checks = []

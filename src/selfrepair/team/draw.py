@@ -20,6 +20,7 @@ from typing import Any
 
 from selfrepair.errors import ProblemError, TraceError
 from selfrepair.geometry import Cell, Heading, Pose
+from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.team.model import ActionKind, TeamFaultKind
 from selfrepair.team.trace import TeamTrace, read_team_trace, replay_team
 
@@ -53,8 +54,8 @@ def _matplotlib() -> Any:
     return matplotlib
 
 
-def _load(path: str | Path) -> TeamTrace:
-    trace = read_team_trace(path)
+def _load(path: str | Path, max_trace_bytes: int | None = MAX_TRACE_BYTES) -> TeamTrace:
+    trace = read_team_trace(path, max_trace_bytes=max_trace_bytes)
     report = replay_team(trace)
     if not report.ok:
         raise TraceError(f"the trace does not re-simulate: {report}", source=str(path))
@@ -215,7 +216,13 @@ def _default_tick(trace: TeamTrace) -> int:
     return max((m.end for m in trace.moves), default=0)
 
 
-def draw_team_frame(trace_path: str | Path, out: str | Path, *, tick: float | None = None) -> Path:
+def draw_team_frame(
+    trace_path: str | Path,
+    out: str | Path,
+    *,
+    tick: float | None = None,
+    max_trace_bytes: int | None = MAX_TRACE_BYTES,
+) -> Path:
     """Draw one moment of a team trace (default: the first handover, else the first repair)."""
     if not str(out).lower().endswith(".png"):
         raise TraceError("expected an output file ending in .png", source=str(out))
@@ -223,7 +230,7 @@ def draw_team_frame(trace_path: str | Path, out: str | Path, *, tick: float | No
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    trace = _load(trace_path)
+    trace = _load(trace_path, max_trace_bytes)
     t = _default_tick(trace) if tick is None else round(tick * trace.scale)
     if t < 0:
         raise TraceError(f"expected a tick >= 0, got {tick}", source=str(trace_path))
@@ -238,7 +245,12 @@ def draw_team_frame(trace_path: str | Path, out: str | Path, *, tick: float | No
 
 
 def animate_team_trace(
-    trace_path: str | Path, out: str | Path, *, fps: int = 4, max_frames: int = 120
+    trace_path: str | Path,
+    out: str | Path,
+    *,
+    fps: int = 4,
+    max_frames: int = 120,
+    max_trace_bytes: int | None = MAX_TRACE_BYTES,
 ) -> int:
     """Write a GIF of a team trace; returns the number of frames (the last one held)."""
     if not str(out).lower().endswith(".gif"):
@@ -247,7 +259,7 @@ def animate_team_trace(
     from matplotlib.animation import FuncAnimation, PillowWriter
     from matplotlib.figure import Figure
 
-    trace = _load(trace_path)
+    trace = _load(trace_path, max_trace_bytes)
     end = max([m.end for m in trace.moves] + [a.end for a in trace.acts] + [1])
     step = max(trace.scale, -(-end // max(1, max_frames)))
     frames = [*range(0, end + 1, step)]

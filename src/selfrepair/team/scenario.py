@@ -48,7 +48,7 @@ import numpy as np
 from selfrepair.errors import InputError
 from selfrepair.execution.faults import Persistence
 from selfrepair.geometry import Cell, Heading, Pose, parse_cell, parse_pose
-from selfrepair.limits import MAX_CELLS, MAX_ROBOTS, MAX_TASKS, check_limit
+from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES, MAX_ROBOTS, MAX_TASKS, check_limit
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import get_domain
 from selfrepair.team.model import (
@@ -79,13 +79,14 @@ __all__ = [
 
 @dataclass(frozen=True, slots=True)
 class Limits:
-    """How many robots, tasks and maze cells a scenario may have (:mod:`selfrepair.limits`;
-    ``None`` turns a check off). The commands set them with ``--max-robots``, ``--max-tasks``
-    and ``--max-cells``."""
+    """How many robots, tasks and maze cells a scenario may have, and how big its file may be
+    (:mod:`selfrepair.limits`; ``None`` turns a check off). The commands set them with
+    ``--max-robots``, ``--max-tasks``, ``--max-cells`` and ``--max-file-bytes``."""
 
     max_robots: int | None = MAX_ROBOTS
     max_tasks: int | None = MAX_TASKS
     max_cells: int | None = MAX_CELLS
+    max_file_bytes: int | None = MAX_FILE_BYTES
 
 
 class GripperMix(StrEnum):
@@ -126,7 +127,9 @@ def resolve_scenario(spec: str, *, limits: Limits = Limits()) -> TeamScenario:
 def load_scenario(path: str | Path, *, limits: Limits = Limits()) -> TeamScenario:
     """Read and check a scenario file."""
     file = Path(path)
-    text = read_text(file, what="scenario file")
+    text = read_text(
+        file, what="scenario file", max_bytes=limits.max_file_bytes, limit="max_file_bytes"
+    )
     return parse_scenario(text, source=str(file), base_dir=file.parent, limits=limits)
 
 

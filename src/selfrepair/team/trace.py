@@ -38,6 +38,7 @@ from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.faults import Persistence
 from selfrepair.execution.result import StepSource
 from selfrepair.geometry import Cell, Heading, Pose
+from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import get_domain
@@ -56,6 +57,7 @@ from selfrepair.team.model import (
 )
 from selfrepair.team.result import MoveRecord, TeamOptions, TeamResult
 from selfrepair.team.spacetime import units
+from selfrepair.textio import read_text
 from selfrepair.world.maze import format_maze, parse_maze
 
 __all__ = [
@@ -72,8 +74,6 @@ __all__ = [
 
 TEAM_TRACE_FORMAT = "selfrepair-team-trace"
 TEAM_TRACE_VERSION = 1
-MAX_TEAM_TRACE_BYTES = 256 * 1024 * 1024
-"""The largest team trace :func:`read_team_trace` reads unless told otherwise."""
 
 
 def _pose(pose: Pose) -> list[Any]:
@@ -340,24 +340,18 @@ def is_team_trace(path: str | Path) -> bool:
 
 
 def read_team_trace(
-    path: str | Path, *, partial: bool = False, max_bytes: int = MAX_TEAM_TRACE_BYTES
+    path: str | Path, *, partial: bool = False, max_trace_bytes: int | None = MAX_TRACE_BYTES
 ) -> TeamTrace:
     """Read and type-check a team trace; a trace without its summary is refused unless
-    ``partial`` (it was cut short)."""
+    ``partial`` (it was cut short), a file over ``max_trace_bytes`` before it is read."""
     file = Path(path)
-    try:
-        size = file.stat().st_size
-        if size > max_bytes:
-            raise TraceError(
-                f"the trace has {size} bytes, more than the limit of {max_bytes} "
-                "(raise it with --max-bytes)",
-                source=str(file),
-            )
-        text = file.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise TraceError(f"cannot read trace: {exc.strerror}", source=str(file)) from None
-    except UnicodeDecodeError:
-        raise TraceError("expected UTF-8 text", source=str(file)) from None
+    text = read_text(
+        file,
+        what="team trace",
+        error=TraceError,
+        max_bytes=max_trace_bytes,
+        limit="max_trace_bytes",
+    )
     return parse_team_trace(text, source=str(file), partial=partial)
 
 

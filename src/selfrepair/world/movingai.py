@@ -23,7 +23,7 @@ import numpy as np
 
 from selfrepair.errors import InputError
 from selfrepair.geometry import Cell
-from selfrepair.limits import MAX_CELLS, check_limit, maze_file_bytes
+from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES, check_limit, maze_file_bytes
 from selfrepair.textio import read_text, strip_bom, text_lines
 from selfrepair.world.maze import Maze
 
@@ -306,7 +306,13 @@ def _check_query(query: ScenarioQuery, source: str, maze: Maze | None, columns: 
             )
 
 
-def load_scenario(path: str | Path, *, maze: Maze | None = None) -> tuple[ScenarioQuery, ...]:
-    """Read a ``.map.scen`` file (see :func:`parse_scenario`)."""
+def load_scenario(
+    path: str | Path, *, maze: Maze | None = None, max_file_bytes: int | None = MAX_FILE_BYTES
+) -> tuple[ScenarioQuery, ...]:
+    """Read a ``.map.scen`` file (see :func:`parse_scenario`); a file over ``max_file_bytes``
+    (:data:`selfrepair.limits.MAX_FILE_BYTES`; ``None``: no limit) is refused unread."""
     path = Path(path)
-    return parse_scenario(_read_text(path, "MovingAI scenario file"), source=str(path), maze=maze)
+    text = read_text(
+        path, what="MovingAI scenario file", max_bytes=max_file_bytes, limit="max_file_bytes"
+    )
+    return parse_scenario(text, source=str(path), maze=maze)

@@ -33,6 +33,7 @@ import numpy as np
 
 from selfrepair.errors import InputError
 from selfrepair.geometry import Cell, Heading, Pose, parse_cell, parse_pose
+from selfrepair.limits import MAX_FILE_BYTES
 from selfrepair.textio import read_text, strip_bom, text_lines
 from selfrepair.world.maze import Maze
 
@@ -158,10 +159,15 @@ def format_routes(routes: Iterable[Route], *, comments: Sequence[str] = ()) -> s
     return "".join(line + "\n" for line in lines)
 
 
-def load_routes(path: str | Path, *, maze: Maze | None = None) -> tuple[Route, ...]:
-    """Read a route file (see the module docstring); with ``maze``, check starts and goals."""
+def load_routes(
+    path: str | Path, *, maze: Maze | None = None, max_file_bytes: int | None = MAX_FILE_BYTES
+) -> tuple[Route, ...]:
+    """Read a route file (see the module docstring); with ``maze``, check starts and goals. A
+    file over ``max_file_bytes`` (:data:`selfrepair.limits.MAX_FILE_BYTES`; ``None``: no
+    limit) is refused unread."""
     path = Path(path)
-    return parse_routes(read_text(path, what="route file"), source=str(path), maze=maze)
+    text = read_text(path, what="route file", max_bytes=max_file_bytes, limit="max_file_bytes")
+    return parse_routes(text, source=str(path), maze=maze)
 
 
 def save_routes(
