@@ -50,6 +50,7 @@ SOURCE_COLOURS = {
     "replacement": "#009E73",
     "lookahead": "#CC79A7",
     "replan": "#E69F00",
+    "plan-repair": "#56B4E9",
     "failed-attempt": "#D55E00",
 }
 WALL = "#3b3b3b"
