@@ -32,6 +32,7 @@ if TYPE_CHECKING:
 __all__ = [
     "animate",
     "experiment",
+    "print_baselines",
     "print_fault_sets",
     "print_findings",
     "print_summary",
@@ -40,7 +41,8 @@ __all__ = [
 
 
 def resolve_experiment(spec: str) -> Path:
-    """A bundled experiment name (``paper``, ``scale``, ``full``) or a path to a TOML file."""
+    """A bundled experiment name (``paper``, ``scale``, ``baselines``, ``full``, ``team``) or a
+    path to a TOML file."""
     from importlib import resources
 
     folder = resources.files("selfrepair").joinpath("data", "experiments")
@@ -74,7 +76,8 @@ def experiment(
     config: Annotated[
         str,
         typer.Argument(
-            metavar="CONFIG", help="Bundled experiment (paper, scale, full, team) or FILE.toml."
+            metavar="CONFIG",
+            help="Bundled experiment (paper, scale, baselines, full, team) or FILE.toml.",
         ),
     ],
     db: Annotated[
@@ -200,6 +203,7 @@ def experiment(
             print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
             print_fault_sets(fault_set_bite(rows))
             print_findings(check_findings(rows))
+            print_baselines(rows)
             if cfg.crossover:
                 _print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
             if export_csv is not None:
@@ -392,6 +396,34 @@ def _print_crossover(rows: "list[dict[str, Value]]", figure: Path) -> None:
     from selfrepair.experiment.plots import figure_crossover
 
     echo(f"wrote {figure_crossover(results, figure)}")
+
+
+def print_baselines(rows: "list[dict[str, Value]]") -> None:
+    """When the rows hold D* Lite or LPG-adapt missions: the comparison on the missions every
+    strategy ran, with 95% intervals, and repair time by maze (see docs/baselines.md)."""
+    from selfrepair.experiment.comparison import (
+        FIRST_REPAIR,
+        REPAIR_COMPUTE,
+        BaselineLine,
+        common_rows,
+        compare_baselines,
+        has_baselines,
+        maze_table,
+    )
+
+    if not has_baselines(rows):
+        return
+    lines = compare_baselines(rows)
+    mazes = ", ".join(sorted({str(r.get("maze")) for r in common_rows(rows)}))
+    title = f"Baselines on the same missions ({mazes}): medians [95% intervals]"
+    out = console()  # piped: as wide as the table needs (see console())
+    headers = BaselineLine.HEADERS
+    body = [line.cells() for line in lines]
+    out.print(_table(title, headers, body, range(1, len(headers)), short=False))
+    for column, what in ((FIRST_REPAIR, "First repair ms"), (REPAIR_COMPUTE, "Repair ms/mission")):
+        headers, body = maze_table(rows, column)
+        title = f"{what} by maze: medians [95% intervals]"
+        out.print(_table(title, headers, body, range(1, len(headers)), short=False))
 
 
 def print_fault_sets(bites: "list[FaultSetBite]") -> None:

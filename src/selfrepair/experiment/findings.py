@@ -46,6 +46,7 @@ from selfrepair.experiment.summary import (
     Row,
     StrategySummary,
     group_label,
+    is_reference_replan,
     local_share,
     median,
     met_fault,
@@ -220,7 +221,7 @@ def ratio_outcome(interval: Interval | None, threshold: float) -> Outcome:
 
 
 def _finding_1(rows: Sequence[Row]) -> Finding:
-    replan = _by_situation(rows, lambda r: r.get("strategy") == "replan")
+    replan = _by_situation(rows, is_reference_replan)
     variants: dict[str, list[Row]] = defaultdict(list)
     for r in rows:
         if _is_replacement(r) and _weight(r) == 0 and met_fault(r) and num(r, "replans") == 0:
@@ -264,7 +265,7 @@ def _ratio_line(
 
 
 def _finding_1b(rows: Sequence[Row]) -> Finding:
-    replan = _by_situation(rows, lambda r: r.get("strategy") == "replan")
+    replan = _by_situation(rows, is_reference_replan)
     if not replan:
         return Finding("1b", CLAIMS["1b"], Outcome.INCONCLUSIVE, (_NEEDS_BOTH,))
     variants: dict[str, list[float]] = defaultdict(list)

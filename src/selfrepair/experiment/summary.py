@@ -45,6 +45,7 @@ __all__ = [
     "StrategySummary",
     "fault_set_bite",
     "group_label",
+    "is_reference_replan",
     "local_share",
     "median",
     "met_fault",
@@ -85,6 +86,13 @@ def num(row: Row, column: str) -> float:
     """A numeric column as a float (0 when missing or not a number)."""
     value = row.get(column)
     return float(value) if isinstance(value, int | float) else 0.0
+
+
+def is_reference_replan(row: Row) -> bool:
+    """Whether ``row`` is a mission of the replanning robot the findings compare with: strategy
+    ``replan`` with the default planner backend (variant ``replan``; an experiment may also run
+    ``replan[python]``, the pure-Python search, which is not the reference)."""
+    return row.get("strategy") == "replan" and row.get("variant", "replan") == "replan"
 
 
 def met_fault(row: Row) -> bool:
@@ -249,7 +257,7 @@ def fault_set_bite(rows: Iterable[Row]) -> list[FaultSetBite]:
         faults = str(r.get("faults") or "")
         missions[faults] += 1
         met[faults] += met_fault(r)
-        if r.get("strategy") == "replan":
+        if is_reference_replan(r):
             replan[faults] += 1
             replan_met[faults] += met_fault(r)
     return [FaultSetBite(f, missions[f], met[f], replan[f], replan_met[f]) for f in missions]
