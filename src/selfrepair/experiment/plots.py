@@ -671,6 +671,7 @@ def figure_baselines(rows: Sequence[Row], path: Path) -> Path:
     )
     labels = list(dict.fromkeys(m.label for cells, _ in panels for m in cells))
     markers = "osD^v<>Ph"
+    colours = [c for c in OKABE_ITO if c != "#F0E442"] + ["#999999"]  # yellow is too pale
     with _figure(12.0, 5.0, ncols=2) as (fig, axes):
         for ax, (cells, ylabel) in zip(axes, panels, strict=True):
             mazes = list(dict.fromkeys((m.maze, m.free_cells) for m in cells))
@@ -689,7 +690,7 @@ def figure_baselines(rows: Sequence[Row], path: Path) -> Path:
                     mid,
                     yerr=[mid - low, high - mid],
                     fmt=markers[k % len(markers)],
-                    color=OKABE_ITO[k % len(OKABE_ITO)],
+                    color=colours[k % len(colours)],
                     capsize=3,
                     label=label if ax is axes[0] else None,
                 )
