@@ -276,9 +276,16 @@ def test_experiment_prints_the_comparison_and_the_report_has_its_section(
     out = capsys.readouterr().out
     assert "Baselines on the same missions (narrow-short" in out
     assert "First repair ms by maze" in out and "dstar-lite" in out
+    assert "The replanner in these findings is variant replan only" in out
+    summary = out[: out.index("Fault sets:")]
+    order = [summary.index(f"│ {label} ") for label in ("replan", "dstar-lite", "replacement")]
+    assert order == sorted(order)
     report = tmp_path / "report"
     assert main(["report", str(db), "-o", str(report)]) == 0
     text = (report / "report.md").read_text(encoding="utf-8")
     assert "## Baselines: D* Lite, LPG-adapt and A* replanning" in text
     assert "| replan[python] |" in text and "(baselines.png)" in text
+    findings = text[text.index("## The original study's findings") : text.index("## Figures")]
+    assert "*The replanner in these findings is variant replan only" in findings
+    assert "dstar-lite" in findings and "replan[python]" in findings
     assert (report / "baselines.png").stat().st_size > 0

@@ -1,6 +1,7 @@
 """Experiment commands: ``selfrepair experiment``, ``selfrepair report``, ``selfrepair animate``."""
 
 import sys
+import textwrap
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from functools import partial
@@ -141,7 +142,7 @@ def experiment(
     """
     import joblib
 
-    from selfrepair.experiment.findings import check_findings, summarize
+    from selfrepair.experiment.findings import check_findings, reference_note, summarize
     from selfrepair.experiment.missions import expand
     from selfrepair.experiment.runner import check_backend, execute_mission, run_missions
     from selfrepair.experiment.store import ResultStore
@@ -202,7 +203,7 @@ def experiment(
             rows = [r for r in store.rows() if r["key"] in keys]
             print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
             print_fault_sets(fault_set_bite(rows))
-            print_findings(check_findings(rows))
+            print_findings(check_findings(rows), reference_note(rows))
             print_baselines(rows)
             if cfg.crossover:
                 _print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
@@ -368,8 +369,11 @@ def _table(
     return table
 
 
-def print_findings(findings: "list[Finding]") -> None:
-    """Each finding as a short paragraph: its outcome and claim, then the evidence (wrapped)."""
+def print_findings(findings: "list[Finding]", note: str | None = None) -> None:
+    """Each finding as a short paragraph: its outcome and claim, then the evidence (wrapped);
+    ``note`` (:func:`~selfrepair.experiment.findings.reference_note`) first, when given."""
+    if note is not None:
+        echo(textwrap.fill(note, 96, subsequent_indent="  "))
     for f in findings:
         echo(f.paragraph())
 
@@ -427,8 +431,9 @@ def print_baselines(rows: "list[dict[str, Value]]") -> None:
 
 
 def print_fault_sets(bites: "list[FaultSetBite]") -> None:
-    """Per fault set: missions that met a faulty action, of all missions and of the replanner's."""
-    echo("Fault sets: missions that met a faulty action (all strategies; replanning robot)")
+    """Per fault set: missions that met a faulty action, of all missions and of variant
+    ``replan``'s (the A* replanner the findings compare with)."""
+    echo("Fault sets: missions that met a faulty action (all strategies; variant replan)")
     for b in bites:
         echo(
             f"  {b.faults or '(none)':<12} {b.met:>5}/{b.missions:<5} "

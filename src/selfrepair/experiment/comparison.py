@@ -44,7 +44,7 @@ from typing import ClassVar
 from selfrepair.experiment.findings import situation
 from selfrepair.experiment.stats import Interval, bootstrap_interval
 from selfrepair.experiment.store import Value
-from selfrepair.experiment.summary import Row, group_label, met_fault, num
+from selfrepair.experiment.summary import Row, group_label, met_fault, num, strategy_order
 
 __all__ = [
     "BASELINE_STRATEGIES",
@@ -73,7 +73,6 @@ REPAIR_COMPUTE = "repair_compute_ns"
 """Column of every repair of a mission added up."""
 
 
-_RANK = {"replan": 0, "dstar-lite": 1, "lpg-adapt": 2, "replacement": 3, "lookahead": 4}
 _TIMEOUT = "lpg-adapt:timeout"
 _NO_EFFORT = frozenset({"lpg-adapt"})
 """Strategies whose own search effort is not counted in expansions."""
@@ -82,10 +81,6 @@ _NO_EFFORT = frozenset({"lpg-adapt"})
 def has_baselines(rows: Iterable[Row]) -> bool:
     """Whether ``rows`` hold missions of a baseline strategy (D* Lite or LPG-adapt)."""
     return any(r.get("strategy") in BASELINE_STRATEGIES for r in rows)
-
-
-def _order(label: str) -> tuple[int, str]:
-    return _RANK.get(label.split("[")[0].split(" ")[0], len(_RANK)), label
 
 
 def _weight_zero(rows: Iterable[Row]) -> list[Row]:
@@ -168,7 +163,7 @@ def compare_baselines(rows: Iterable[Row], *, same_missions: bool = True) -> lis
     groups: dict[str, list[Row]] = defaultdict(list)
     for r in kept:
         groups[group_label(r)].append(r)
-    return [_line(label, groups[label], reference) for label in sorted(groups, key=_order)]
+    return [_line(label, groups[label], reference) for label in sorted(groups, key=strategy_order)]
 
 
 def _line(label: str, rows: list[Row], reference: dict[tuple[Value, ...], Row]) -> BaselineLine:
@@ -234,7 +229,7 @@ def per_maze(rows: Iterable[Row], column: str = FIRST_REPAIR) -> list[MazeLatenc
         interval = bootstrap_interval(values)
         assert interval is not None  # every group has a value
         out.append(MazeLatency(label, maze, cells[maze], interval))
-    return sorted(out, key=lambda m: (m.free_cells, m.maze, _order(m.label)))
+    return sorted(out, key=lambda m: (m.free_cells, m.maze, strategy_order(m.label)))
 
 
 def maze_table(
@@ -244,7 +239,7 @@ def maze_table(
     table, as display strings."""
     cells = per_maze(rows, column)
     mazes = list(dict.fromkeys((m.maze, m.free_cells) for m in cells))
-    labels = sorted({m.label for m in cells}, key=_order)
+    labels = sorted({m.label for m in cells}, key=strategy_order)
     found = {(m.label, m.maze): m.ms for m in cells}
     headers = ("strategy", *(f"{maze} ({free} free cells)" for maze, free in mazes))
     body = [(label, *(_text(found.get((label, maze)), 2) for maze, _ in mazes)) for label in labels]

@@ -39,6 +39,7 @@ from selfrepair.experiment.findings import (
     Row,
     StrategySummary,
     check_findings,
+    reference_note,
     summarize,
 )
 from selfrepair.experiment.missions import Mission
@@ -417,7 +418,7 @@ def render_markdown(
         "### Fault sets",
         "",
         markdown_table(
-            ("fault set", "missions", "met a faulty action", "replanning robot: met"),
+            ("fault set", "missions", "met a faulty action", "variant replan: met"),
             [
                 (
                     b.faults or "(none)",
@@ -432,6 +433,9 @@ def render_markdown(
         "## The original study's findings on these results",
         "",
     ]
+    note = reference_note(rows)
+    if note is not None:
+        parts += [f"*{note}*", ""]
     for f in findings:
         parts.append(
             f"**Finding {f.number}: {f.verdict.upper()}.** {f.claim[:1].upper()}{f.claim[1:]}."
@@ -452,7 +456,7 @@ def render_markdown(
         "![Latency versus maze size](latency-vs-size.png)",
         "",
         "*Median repair latency (bar up to the 99th percentile) against maze size: replans of "
-        "the replanning robot versus table hits of the replacing robot.*",
+        "the A* replanner (variant replan) versus table hits of the replacing robot.*",
         "",
         *(
             [
