@@ -27,6 +27,8 @@ from selfrepair.experiment.missions import count_missions, expand, to_spec
 from selfrepair.experiment.store import Value
 from selfrepair.experiment.summary import is_reference_replan
 
+DOCS = Path(__file__).parent.parent / "docs"
+
 needs_lpg = pytest.mark.skipif(
     not lpg_available(), reason="needs the pddl extra: pip install 'selfrepair[pddl]'"
 )
@@ -162,6 +164,11 @@ def test_bundled_baselines_experiment_expands_as_documented() -> None:
     missions = expand(config)
     labels = [dict(m.labels) for m in missions]
     assert len(missions) == count_missions(config) == 7 * 96 + 72
+    for text in (
+        resolve_experiment("baselines").read_text(encoding="utf-8"),
+        (DOCS / "baselines.md").read_text(encoding="utf-8"),
+    ):
+        assert f"{len(missions)} missions" in text
     lpg = {lab["maze"] for lab in labels if lab["strategy"] == "lpg-adapt"}
     assert lpg == {"narrow-short", "wide-short", "narrow-long"}
     assert {lab["maze"] for lab in labels if lab["strategy"] == "dstar-lite"} == lpg | {"wide-long"}
@@ -278,7 +285,7 @@ def test_experiment_prints_the_comparison_and_the_report_has_its_section(
     assert "First repair ms by maze" in out and "dstar-lite" in out
     assert "The replanner in these findings is variant replan only" in out
     summary = out[: out.index("Fault sets:")]
-    order = [summary.index(f"│ {label} ") for label in ("replan", "dstar-lite", "replacement")]
+    order = [summary.index(f"│ {start}") for start in ("replan ", "dstar-lite ", "replacement[")]
     assert order == sorted(order)
     report = tmp_path / "report"
     assert main(["report", str(db), "-o", str(report)]) == 0
