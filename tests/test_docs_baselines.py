@@ -41,3 +41,17 @@ def test_size_table_is_that_of_the_bundled_mazes() -> None:
         assert row is not None, name
         numbers = [int(n.replace(",", "")) for n in row.groups()]
         assert numbers == [len(task.cells), task.static_facts, task.ground_actions], name
+
+
+def test_readme_baselines_figures_are_those_of_the_documented_run() -> None:
+    """Every median with its interval in the README's baselines paragraph is in the full tables
+    of docs/baselines.md (the one run both come from)."""
+    readme = (DOC.parent.parent / "README.md").read_text(encoding="utf-8")
+    match = re.search(r"^## Against D\* Lite and LPG-adapt\n(.*?)^## ", readme, re.S | re.M)
+    assert match is not None, "README has no baselines section"
+    figures = re.findall(r"[\d,.]+ \[[\d,.]+, [\d,.]+\]", match.group(1))
+    assert len(figures) >= 10
+    tables = DOC.read_text(encoding="utf-8")
+    results = tables[tables.index("### Results") :]
+    for figure in figures:
+        assert f"| {figure} |" in results, figure

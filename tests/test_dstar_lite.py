@@ -3,6 +3,7 @@ scratch (a property test over random mazes, moving starts and fault sets that co
 
 from __future__ import annotations
 
+import dataclasses
 from fractions import Fraction
 from typing import Any
 
@@ -147,3 +148,19 @@ def test_a_budget_is_respected(budget: int) -> None:
     repairer = start_dstar_lite(mission_context(spec, None))
     repair = repairer.repair(RepairRequest(spec.start, (), frozenset()))
     assert repair.status is RepairStatus.BUDGET_EXHAUSTED and repair.expansions <= budget
+
+
+def test_the_search_from_the_mission_start_is_kept_for_the_first_repair() -> None:
+    """With the mission's start in the context, D* Lite's first search runs when the mission
+    starts (no fault known, like the initial plan): a repair that changes nothing then expands
+    nothing, where a repairer without the start searches from scratch; both give the same plan."""
+    route = bundled_routes("wide-short")[0]
+    spec = MissionSpec(load_bundled("wide-short"), route.start, route.goal, strategy="dstar-lite")
+    context = mission_context(spec, None)
+    assert context.start == spec.start
+    request = RepairRequest(spec.start, (), frozenset())
+    kept = start_dstar_lite(context).repair(request)
+    fresh = start_dstar_lite(dataclasses.replace(context, start=None)).repair(request)
+    assert kept.status is fresh.status is RepairStatus.REPAIRED
+    assert kept.expansions == 0 < fresh.expansions
+    assert kept.actions == fresh.actions

@@ -12,6 +12,7 @@ from selfrepair.experiment.findings import (
     Outcome,
     check_findings,
     percentile,
+    reference_note,
     summarize,
 )
 from selfrepair.experiment.summary import fault_set_bite
@@ -151,6 +152,37 @@ def test_finding_1_compares_repair_compute_per_mission(table_ns: int, outcome: O
         for i, r in enumerate(routes)
     ]
     assert _outcome(rows, "1") is outcome
+
+
+def test_findings_compare_with_variant_replan_only() -> None:
+    """Faster replanners of other variants in the same situations (stored after the reference,
+    so a looser choice of reference would pick them) change no finding; the note names them."""
+    routes = _situations(20)
+    table = [
+        row(
+            "replacement",
+            table="handwritten",
+            recursion="flat",
+            route=r,
+            encounters=1,
+            replacements=1,
+            latencies=(("replacement", 5_000),),
+        )
+        for r in routes
+    ]
+    others = []
+    for strategy, variant in (("replan", "replan[python]"), ("dstar-lite", "dstar-lite")):
+        for r in routes:
+            other = row(strategy, route=r, encounters=1, replans=1, latencies=(("replan", 9_000),))
+            other["variant"] = variant
+            others.append(other)
+    rows = _replan_rows(routes) + table
+    assert _outcome(rows, "1") is Outcome.HELD and reference_note(rows) is None  # type: ignore[arg-type]
+    assert _outcome(rows + others, "1") is Outcome.HELD
+    assert _outcome(rows + others, "1b") is _outcome(rows, "1b")
+    note = reference_note(rows + others)  # type: ignore[arg-type]
+    assert note is not None and "variant replan only" in note
+    assert "dstar-lite, replan[python] do not enter them" in note
 
 
 def test_finding_1b_replanning_time() -> None:

@@ -67,6 +67,15 @@ MaxDepth = Annotated[
 Window = Annotated[
     int, typer.Option("--window", metavar="K", help="Lookahead: actions after the faulty one.")
 ]
+LpgTimeLimit = Annotated[
+    float,
+    typer.Option(
+        "--lpg-time-limit",
+        metavar="SECONDS",
+        min=0.001,
+        help="lpg-adapt: wall-clock limit of each LPG-adapt call (a time-out falls back to A*).",
+    ),
+]
 PlanWithFaults = Annotated[
     bool,
     typer.Option(
@@ -179,6 +188,7 @@ def mission_spec(
     max_table_bytes: int,
     max_table_candidates: int,
     strategies: Sequence[str] = (),
+    lpg_time_limit: float = 5.0,
 ) -> MissionSpec:
     """The mission the options describe; every option is checked here, so bad input is exit 2
     before anything runs (``strategies``: every strategy that will run). The table is loaded
@@ -221,6 +231,7 @@ def mission_spec(
             recursion=RecursionMode(recursion),
             max_depth=max_depth,
             window=window,
+            lpg_time_limit_s=lpg_time_limit,
         ),
         clearance_weight=parse_weight(clearance_weight),
         seed=seed,

@@ -45,6 +45,7 @@ from selfrepair.cli._mission import (
     DomainOpt,
     Goal,
     Intermittent,
+    LpgTimeLimit,
     MaxDepth,
     PlanWithFaults,
     Recursion,
@@ -67,7 +68,7 @@ __all__ = ["compare", "mission_picture", "replay", "run", "table_check", "table_
 
 PLANNED_CHAR = "+"
 EXECUTED_CHAR = "*"
-SITE_CHARS = {"replacement": "R", "lookahead": "L", "replan": "P"}
+SITE_CHARS = {"replacement": "R", "lookahead": "L", "replan": "P", "plan-repair": "A"}
 FAILED_CHAR = "x"
 
 _SHOWN = (
@@ -91,6 +92,8 @@ _SHOWN = (
     "replacement_depths",
     "lookaheads",
     "replans",
+    "plan_repairs",
+    "fallbacks",
     "initial_planning_ns",
     "repair_latency_median_ns",
     "repair_latency_p99_ns",
@@ -133,7 +136,7 @@ def _picture_legend() -> str:
         (GOAL_CHAR, "goal"),
         (PLANNED_CHAR, "planned path (initial plan), not executed"),
         (EXECUTED_CHAR, "executed path"),
-        ("R L P", "repair site: table replacement, lookahead window, replan"),
+        ("R L P A", "repair site: table replacement, lookahead window, replan, plan repair (LPG)"),
         (FAILED_CHAR, "failed attempt (fault learned on use)"),
     )
     width = max(len(char) for char, _ in legend)
@@ -162,13 +165,17 @@ def run(
     strategy: Annotated[
         str,
         typer.Option(
-            "--strategy", metavar="NAME", help="Repair strategy: replan, replacement or lookahead."
+            "--strategy",
+            metavar="NAME",
+            help="Repair strategy: replan, replacement, lookahead, dstar-lite or lpg-adapt "
+            "(pddl extra).",
         ),
     ] = "replacement",
     table: TableOpt = "handwritten",
     recursion: Recursion = "flat",
     max_depth: MaxDepth = 2,
     window: Window = 3,
+    lpg_time_limit: LpgTimeLimit = 5.0,
     clearance_weight: ClearanceWeight = "0",
     heuristic: Heuristic = "grid-distance",
     backend: Backend = "auto",
@@ -218,6 +225,7 @@ def run(
         max_cells=max_cells,
         max_table_bytes=max_table_bytes,
         max_table_candidates=max_table_candidates,
+        lpg_time_limit=lpg_time_limit,
     )
     load_ns = kernel_load_ns(backend)
     if warm_up:

@@ -1,6 +1,7 @@
 """Experiment commands: ``selfrepair experiment``, ``selfrepair report``, ``selfrepair animate``."""
 
 import sys
+import textwrap
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from functools import partial
@@ -32,6 +33,7 @@ if TYPE_CHECKING:
 __all__ = [
     "animate",
     "experiment",
+    "print_baselines",
     "print_fault_sets",
     "print_findings",
     "print_summary",
@@ -40,7 +42,8 @@ __all__ = [
 
 
 def resolve_experiment(spec: str) -> Path:
-    """A bundled experiment name (``paper``, ``scale``, ``full``) or a path to a TOML file."""
+    """A bundled experiment name (``paper``, ``scale``, ``baselines``, ``full``, ``team``) or a
+    path to a TOML file."""
     from importlib import resources
 
     folder = resources.files("selfrepair").joinpath("data", "experiments")
@@ -74,7 +77,8 @@ def experiment(
     config: Annotated[
         str,
         typer.Argument(
-            metavar="CONFIG", help="Bundled experiment (paper, scale, full, team) or FILE.toml."
+            metavar="CONFIG",
+            help="Bundled experiment (paper, scale, baselines, full, team) or FILE.toml.",
         ),
     ],
     db: Annotated[
@@ -138,7 +142,7 @@ def experiment(
     """
     import joblib
 
-    from selfrepair.experiment.findings import check_findings, summarize
+    from selfrepair.experiment.findings import check_findings, reference_note, summarize
     from selfrepair.experiment.missions import expand
     from selfrepair.experiment.runner import check_backend, execute_mission, run_missions
     from selfrepair.experiment.store import ResultStore
@@ -199,7 +203,8 @@ def experiment(
             rows = [r for r in store.rows() if r["key"] in keys]
             print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
             print_fault_sets(fault_set_bite(rows))
-            print_findings(check_findings(rows))
+            print_findings(check_findings(rows), reference_note(rows))
+            print_baselines(rows)
             if cfg.crossover:
                 _print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
             if export_csv is not None:
@@ -364,8 +369,11 @@ def _table(
     return table
 
 
-def print_findings(findings: "list[Finding]") -> None:
-    """Each finding as a short paragraph: its outcome and claim, then the evidence (wrapped)."""
+def print_findings(findings: "list[Finding]", note: str | None = None) -> None:
+    """Each finding as a short paragraph: its outcome and claim, then the evidence (wrapped);
+    ``note`` (:func:`~selfrepair.experiment.findings.reference_note`) first, when given."""
+    if note is not None:
+        echo(textwrap.fill(note, 96, subsequent_indent="  "))
     for f in findings:
         echo(f.paragraph())
 
@@ -394,9 +402,38 @@ def _print_crossover(rows: "list[dict[str, Value]]", figure: Path) -> None:
     echo(f"wrote {figure_crossover(results, figure)}")
 
 
+def print_baselines(rows: "list[dict[str, Value]]") -> None:
+    """When the rows hold D* Lite or LPG-adapt missions: the comparison on the missions every
+    strategy ran, with 95% intervals, and repair time by maze (see docs/baselines.md)."""
+    from selfrepair.experiment.comparison import (
+        FIRST_REPAIR,
+        REPAIR_COMPUTE,
+        BaselineLine,
+        common_rows,
+        compare_baselines,
+        has_baselines,
+        maze_table,
+    )
+
+    if not has_baselines(rows):
+        return
+    lines = compare_baselines(rows)
+    mazes = ", ".join(sorted({str(r.get("maze")) for r in common_rows(rows)}))
+    title = f"Baselines on the same missions ({mazes}): medians [95% intervals]"
+    out = console()  # piped: as wide as the table needs (see console())
+    headers = BaselineLine.HEADERS
+    body = [line.cells() for line in lines]
+    out.print(_table(title, headers, body, range(1, len(headers)), short=False))
+    for column, what in ((FIRST_REPAIR, "First repair ms"), (REPAIR_COMPUTE, "Repair ms/mission")):
+        headers, body = maze_table(rows, column)
+        title = f"{what} by maze: medians [95% intervals]"
+        out.print(_table(title, headers, body, range(1, len(headers)), short=False))
+
+
 def print_fault_sets(bites: "list[FaultSetBite]") -> None:
-    """Per fault set: missions that met a faulty action, of all missions and of the replanner's."""
-    echo("Fault sets: missions that met a faulty action (all strategies; replanning robot)")
+    """Per fault set: missions that met a faulty action, of all missions and of variant
+    ``replan``'s (the A* replanner the findings compare with)."""
+    echo("Fault sets: missions that met a faulty action (all strategies; variant replan)")
     for b in bites:
         echo(
             f"  {b.faults or '(none)':<12} {b.met:>5}/{b.missions:<5} "

@@ -138,6 +138,7 @@ def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> Missio
         cost=cost,
         world=spec.maze,
         cost_scale=cost_scale(spec.domain, weight),
+        start=spec.start,
     )
 
 

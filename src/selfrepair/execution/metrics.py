@@ -268,6 +268,17 @@ def mission_row(result: MissionResult, *, optimum: Fraction | None = None) -> Ro
         "ticks_over_optimum": (
             float(result.ticks - optimum) if optimum is not None and result.reached else None
         ),
+        "plan_repairs": sum(
+            1
+            for r in repairs
+            if r.repair.status is RepairStatus.REPAIRED
+            and r.repair.source is RepairSource.PLAN_REPAIR
+        ),
+        "repair_expansions": sum(r.repair.expansions for r in repairs),
+        "fallbacks": sum(1 for r in repairs if len(r.repair.attempts) > 1),
+        "repair_attempts": json.dumps(
+            dict(sorted(Counter(a for r in repairs for a in r.repair.attempts).items()))
+        ),
     }
     return row
 
@@ -333,5 +344,9 @@ ROW_COLUMNS: tuple[str, ...] = (
     "plan_distance_motion",
     "optimum_ticks",
     "ticks_over_optimum",
+    "plan_repairs",
+    "repair_expansions",
+    "fallbacks",
+    "repair_attempts",
 )
 """The row's columns, in order. Stable: the experiments' SQLite schema is built from it."""

@@ -48,13 +48,15 @@ class MissionStatus(StrEnum):
 
 
 class StepSource(StrEnum):
-    """Where an executed step's action came from: the initial plan, a repair (by its source), or
-    a command that a fault the executor did not know yet made fail."""
+    """Where an executed step's action came from: the initial plan, a repair (by its source:
+    ``plan-repair`` is a plan repaired by LPG-adapt), or a command that a fault the executor did
+    not know yet made fail."""
 
     PLAN = "plan"
     REPLACEMENT = "replacement"
     LOOKAHEAD = "lookahead"
     REPLAN = "replan"
+    PLAN_REPAIR = "plan-repair"
     FAILED_ATTEMPT = "failed-attempt"
 
 

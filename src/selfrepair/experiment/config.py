@@ -23,9 +23,19 @@ The file format is described in ``docs/experiments.md``; in short::
     clearance_radius = 2
 
     [[strategies]]
-    name = "replacement"         # replan | replacement | lookahead
+    name = "replacement"         # replan | replacement | lookahead | dstar-lite | lpg-adapt
     tables = ["handwritten"]
     recursion = ["guarded"]
+    mazes = ["narrow-short"]     # optional, any strategy: run it on these mazes only
+
+    [[strategies]]
+    name = "replan"
+    backend = "python"           # the planner backend of its missions: auto | numba | python
+
+    [[strategies]]
+    name = "lpg-adapt"           # needs the pddl extra
+    time_limit = 5               # seconds per LPG-adapt call
+    seed = 0                     # LPG's seed
 
 Validation uses pydantic; every problem becomes a :class:`~selfrepair.errors.ConfigError` that
 names the file, the key (as a dotted path such as ``strategies[1].tables``), its line when it can
@@ -66,10 +76,12 @@ from selfrepair.world.routes import MAX_ROUTES
 
 __all__ = [
     "FAULT_PROFILES",
+    "DStarLiteStrategy",
     "ExperimentConfig",
     "FaultsConfig",
     "GeneratedMaze",
     "LookaheadStrategy",
+    "LpgAdaptStrategy",
     "MazeConfig",
     "PlannerConfig",
     "ReplacementStrategy",
@@ -206,6 +218,10 @@ class FaultsConfig(_Frozen):
         return value
 
 
+MazeNames = Annotated[tuple[str, ...], Field(min_length=1)] | None
+"""A strategy's ``mazes``: the labels of the experiment's mazes it runs on (all when absent)."""
+
+
 class PlannerConfig(_Frozen):
     """Planner options shared by every strategy unless a strategy overrides the weights."""
 
@@ -219,10 +235,14 @@ class PlannerConfig(_Frozen):
 
 
 class ReplanStrategy(_Frozen):
-    """The baseline: replan from scratch at every faulty encounter."""
+    """The baseline: replan from scratch at every faulty encounter, with the planner ``backend``
+    (``auto``: the compiled kernels when numba is installed; ``python``: the pure-Python search,
+    to compare with pure-Python strategies such as D* Lite)."""
 
     name: Literal["replan"]
+    backend: Literal["auto", "numba", "python"] = "auto"
     clearance_weights: tuple[str, ...] | None = None
+    mazes: MazeNames = None
 
     @field_validator("clearance_weights", mode="before")
     @classmethod
@@ -237,6 +257,7 @@ class ReplacementStrategy(_Frozen):
     tables: tuple[str, ...] = ("handwritten",)
     recursion: tuple[RecursionMode, ...] = (RecursionMode.GUARDED,)
     clearance_weights: tuple[str, ...] | None = None
+    mazes: MazeNames = None
 
     @field_validator("clearance_weights", mode="before")
     @classmethod
@@ -260,8 +281,51 @@ class LookaheadStrategy(ReplacementStrategy):
     before: tuple[Annotated[Int, Field(ge=0, le=64)], ...] = (0,)
 
 
+class DStarLiteStrategy(_Frozen):
+    """D* Lite, incremental replanning (pure Python), keeping its search between repairs."""
+
+    name: Literal["dstar-lite"]
+    clearance_weights: tuple[str, ...] | None = None
+    mazes: MazeNames = None
+
+    @field_validator("clearance_weights", mode="before")
+    @classmethod
+    def _weights(cls, value: Any) -> Any:
+        return _weights(value)
+
+
+class LpgAdaptStrategy(_Frozen):
+    """Plan repair with LPG-adapt (``pddl`` extra, four-wheel robot): ``time_limit`` seconds per
+    call, LPG's ``seed``; LPG's failures and time-outs fall back to replanning."""
+
+    name: Literal["lpg-adapt"]
+    time_limit: Annotated[Float, Field(gt=0, le=3600)] = 5.0
+    seed: Annotated[Int, Field(ge=0, lt=2**31)] = 0
+    clearance_weights: tuple[str, ...] | None = None
+    mazes: MazeNames = None
+
+    @field_validator("clearance_weights", mode="before")
+    @classmethod
+    def _weights(cls, value: Any) -> Any:
+        return _weights(value)
+
+    @field_validator("name")
+    @classmethod
+    def _runnable(cls, value: str, info: ValidationInfo) -> str:
+        """Refuse the strategy before any mission runs where it cannot run (extra, robot)."""
+        from selfrepair.baselines.adapt import check_lpg_adapt
+        from selfrepair.errors import ProblemError
+
+        try:
+            check_lpg_adapt(_domain(info).name)
+        except ProblemError as exc:
+            raise ValueError(str(exc)) from None
+        return value
+
+
 StrategyConfig = Annotated[
-    ReplanStrategy | ReplacementStrategy | LookaheadStrategy, Field(discriminator="name")
+    ReplanStrategy | ReplacementStrategy | LookaheadStrategy | DStarLiteStrategy | LpgAdaptStrategy,
+    Field(discriminator="name"),
 ]
 
 
@@ -481,7 +545,7 @@ def _clean_loc(loc: tuple[Any, ...]) -> tuple[str | int, ...]:
     out: list[str | int] = []
     for part in loc:
         if isinstance(part, str) and (
-            part in ("replan", "replacement", "lookahead")
+            part in ("replan", "replacement", "lookahead", "dstar-lite", "lpg-adapt")
             or "[" in part
             or part in ("int", "str", "tuple", "float", "constrained-int", "function-after")
         ):

@@ -1,7 +1,13 @@
 """The original study's findings, judged on stored rows by paired tests over missions.
 
 Each finding compares two robots **in the same situations** (maze, route, faults, timing,
-detection, replicate): the unit is the pair of missions, never the repair. Outcomes
+detection, replicate): the unit is the pair of missions, never the repair. *The replanner* in
+findings 1 and 1b is the original study's baseline only: strategy ``replan`` with the default
+planner backend (variant ``replan``, A* from scratch;
+:func:`~selfrepair.experiment.summary.is_reference_replan`). Other replanning variants an
+experiment may run (``replan[python]``, ``dstar-lite``, ``lpg-adapt``) never enter a finding; they
+are compared on their own by :mod:`selfrepair.experiment.comparison`, and :func:`reference_note`
+says so wherever findings are shown beside them. Outcomes
 (:class:`Outcome`) are HELD, NOT HELD or INCONCLUSIVE; the thresholds are the constants below, and
 docs/experiments.md states them with their reasons.
 
@@ -46,6 +52,7 @@ from selfrepair.experiment.summary import (
     Row,
     StrategySummary,
     group_label,
+    is_reference_replan,
     local_share,
     median,
     met_fault,
@@ -70,6 +77,7 @@ __all__ = [
     "local_share",
     "median",
     "percentile",
+    "reference_note",
     "repairs_of",
     "summarize",
 ]
@@ -161,6 +169,32 @@ CLAIMS = {
 }
 
 
+REPLANNERS = frozenset({"replan", "dstar-lite", "lpg-adapt"})
+"""Strategies that answer a fault with a new plan to the goal (their variants, other than the
+reference ``replan``, are named by :func:`reference_note`)."""
+
+
+def reference_note(rows: Sequence[Row]) -> str | None:
+    """When ``rows`` hold replanning variants besides the reference: one sentence saying that the
+    findings compare with variant ``replan`` only, naming the variants left out (``None``
+    otherwise)."""
+    others = sorted(
+        {
+            group_label(r)
+            for r in rows
+            if r.get("strategy") in REPLANNERS and not is_reference_replan(r)
+        }
+    )
+    if not others:
+        return None
+    return (
+        "The replanner in these findings is variant replan only (A* from scratch, default "
+        f"backend); {', '.join(others)} "
+        + ("does" if len(others) == 1 else "do")
+        + " not enter them (see the baselines comparison)."
+    )
+
+
 def check_findings(rows: Sequence[Row]) -> list[Finding]:
     """Every finding, each HELD / NOT HELD / INCONCLUSIVE, with the numbers behind it."""
     return [
@@ -220,7 +254,7 @@ def ratio_outcome(interval: Interval | None, threshold: float) -> Outcome:
 
 
 def _finding_1(rows: Sequence[Row]) -> Finding:
-    replan = _by_situation(rows, lambda r: r.get("strategy") == "replan")
+    replan = _by_situation(rows, is_reference_replan)
     variants: dict[str, list[Row]] = defaultdict(list)
     for r in rows:
         if _is_replacement(r) and _weight(r) == 0 and met_fault(r) and num(r, "replans") == 0:
@@ -243,10 +277,10 @@ def _finding_1(rows: Sequence[Row]) -> Finding:
     return Finding("1", CLAIMS["1"], _combine(outcomes), (_ONE_INTRO, *lines))
 
 
-_NEEDS_BOTH = "Needs replanning and replacing missions in the same situations."
+_NEEDS_BOTH = "Needs replan (variant replan) and replacing missions in the same situations."
 _ONE_INTRO = (
     "Paired missions that met a fault, the replacing robot without any replan; "
-    "median of (its repair compute / the replanner's), 95% interval:"
+    "median of (its repair compute / that of variant replan), 95% interval:"
 )
 
 
@@ -264,7 +298,7 @@ def _ratio_line(
 
 
 def _finding_1b(rows: Sequence[Row]) -> Finding:
-    replan = _by_situation(rows, lambda r: r.get("strategy") == "replan")
+    replan = _by_situation(rows, is_reference_replan)
     if not replan:
         return Finding("1b", CLAIMS["1b"], Outcome.INCONCLUSIVE, (_NEEDS_BOTH,))
     variants: dict[str, list[float]] = defaultdict(list)
@@ -280,7 +314,7 @@ def _finding_1b(rows: Sequence[Row]) -> Finding:
             variants[group_label(r)].append(_replan_ns(r) / _replan_ns(p))
     intro = (
         "Missions where most but not all faulty encounters were replaced: median of (time in "
-        f"replans / the replanner's), 95% interval; falling means at most {FALLS:g}:"
+        f"replans / that of variant replan), 95% interval; falling means at most {FALLS:g}:"
     )
     if not variants:
         return Finding("1b", CLAIMS["1b"], Outcome.INCONCLUSIVE, (intro, "No such mission."))

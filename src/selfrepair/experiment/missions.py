@@ -39,8 +39,11 @@ from selfrepair.execution.result import MissionSpec
 from selfrepair.experiment.config import (
     ExperimentConfig,
     LookaheadStrategy,
+    LpgAdaptStrategy,
     MazeConfig,
     ReplacementStrategy,
+    ReplanStrategy,
+    StrategyConfig,
 )
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, check_limit, maze_file_bytes
@@ -309,27 +312,71 @@ def routes_of(
 def strategy_variants(config: ExperimentConfig) -> Iterator[tuple[dict[str, Any], tuple[str, ...]]]:
     """Every (strategy settings, clearance weights) pair the config asks for."""
     for strategy in config.strategies:
-        weights = strategy.clearance_weights or config.planner.clearance_weights
-        if isinstance(strategy, ReplacementStrategy):
-            windows: tuple[tuple[int | None, int], ...] = (
-                tuple((w, b) for w in strategy.window for b in strategy.before)
-                if isinstance(strategy, LookaheadStrategy)
-                else ((None, 0),)
+        yield from _strategy_variants(strategy, config)
+
+
+def _strategy_variants(
+    strategy: StrategyConfig, config: ExperimentConfig
+) -> Iterator[tuple[dict[str, Any], tuple[str, ...]]]:
+    """The (strategy settings, clearance weights) pairs of one strategy entry."""
+    weights = strategy.clearance_weights or config.planner.clearance_weights
+    if isinstance(strategy, ReplacementStrategy):
+        windows: tuple[tuple[int | None, int], ...] = (
+            tuple((w, b) for w in strategy.window for b in strategy.before)
+            if isinstance(strategy, LookaheadStrategy)
+            else ((None, 0),)
+        )
+        for table in strategy.tables:
+            for recursion in strategy.recursion:
+                for window, before in windows:
+                    options: dict[str, Any] = {
+                        **_table_identity(table, config),
+                        "recursion": recursion,
+                    }
+                    if window is not None:
+                        options["window"] = window
+                    if before:  # absent when 0, so older mission keys stay valid
+                        options["before"] = before
+                    yield {"strategy": strategy.name, "options": options}, weights
+    else:
+        yield {"strategy": strategy.name, "options": _plain_options(strategy)}, weights
+
+
+def _maze_filter(
+    strategy: StrategyConfig, index: int, labels: list[str], source: str
+) -> frozenset[str] | None:
+    """The maze labels strategy ``index`` is limited to (``None``: all), each checked to name a
+    maze of the experiment."""
+    if strategy.mazes is None:
+        return None
+    for name in strategy.mazes:
+        if name not in labels:
+            raise ConfigError(
+                f"key 'strategies[{index}].mazes': expected names of this experiment's mazes "
+                f"({', '.join(dict.fromkeys(labels))}), got {name!r}",
+                source=source,
             )
-            for table in strategy.tables:
-                for recursion in strategy.recursion:
-                    for window, before in windows:
-                        options: dict[str, Any] = {
-                            **_table_identity(table, config),
-                            "recursion": recursion,
-                        }
-                        if window is not None:
-                            options["window"] = window
-                        if before:  # absent when 0, so older mission keys stay valid
-                            options["before"] = before
-                        yield {"strategy": strategy.name, "options": options}, weights
-        else:
-            yield {"strategy": strategy.name, "options": {}}, weights
+    return frozenset(strategy.mazes)
+
+
+def _entry_label(entry: MazeConfig) -> str:
+    """The label :func:`maze_label` gives a maze entry, without reading its file."""
+    if entry.bundled is not None:
+        return entry.bundled
+    if entry.file is not None:
+        return Path(entry.file).stem
+    assert entry.generate is not None
+    return maze_label({"generate": entry.generate.model_dump()})
+
+
+def _plain_options(strategy: StrategyConfig) -> dict[str, Any]:
+    """The options of a strategy without a table, as its missions record them (defaults left
+    out, so that the keys of missions made before an option existed stay valid)."""
+    if isinstance(strategy, ReplanStrategy) and strategy.backend != "auto":
+        return {"backend": strategy.backend}
+    if isinstance(strategy, LpgAdaptStrategy):
+        return {"lpg_time_limit_s": strategy.time_limit, "lpg_seed": strategy.seed}
+    return {}
 
 
 def _table_identity(table: str, config: ExperimentConfig) -> dict[str, str]:
@@ -412,6 +459,12 @@ def variant_label(strategy: str, options: dict[str, Any]) -> str:
         parts.append(f"k={options['window']}")
     if options.get("before"):
         parts.append(f"before={options['before']}")
+    if "backend" in options:
+        parts.append(str(options["backend"]))
+    if "lpg_time_limit_s" in options:
+        parts.append(f"{options['lpg_time_limit_s']:g}s")
+    if options.get("lpg_seed"):
+        parts.append(f"seed={options['lpg_seed']}")
     return f"{strategy}[{','.join(parts)}]"
 
 
@@ -422,41 +475,56 @@ def count_missions(config: ExperimentConfig) -> int:
     """How many missions ``config`` asks for, by arithmetic, before any is built.
 
     The product of routes (summed over the mazes), fault sets, fault times, detections, repeats
-    and strategy variants (tables x recursion modes x windows, each times its clearance weights).
-    Duplicates are not subtracted, so :func:`expand` may give fewer. Bundled maze names must be
-    valid (:func:`expand` checks them first).
+    and strategy variants (tables x recursion modes x windows, each times its clearance weights);
+    a strategy limited to some mazes (``mazes``) counts the routes of those only. Duplicates are
+    not subtracted, so :func:`expand` may give fewer. Bundled maze names must be valid
+    (:func:`expand` checks them first).
     """
     return _mission_factors(config)[0]
 
 
 def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
     """The mission count and how it came about, as text for a message."""
-    routes = 0
+    routes: dict[str, int] = {}
     for entry in config.mazes:
         if entry.routes == "bundled":
             from selfrepair.world.bundled import bundled_routes
 
             assert entry.bundled is not None
-            routes += len(bundled_routes(entry.bundled))
+            count = len(bundled_routes(entry.bundled))
         else:
-            routes += entry.routes if isinstance(entry.routes, int) else len(entry.routes)
-    variants = 0
+            count = entry.routes if isinstance(entry.routes, int) else len(entry.routes)
+        label = _entry_label(entry)
+        routes[label] = routes.get(label, 0) + count
+    all_routes = sum(routes.values())
+    variants = runs = 0
     for strategy in config.strategies:
         weights = len(strategy.clearance_weights or config.planner.clearance_weights)
         if isinstance(strategy, ReplacementStrategy):
-            windows = len(strategy.window) if isinstance(strategy, LookaheadStrategy) else 1
-            variants += len(strategy.tables) * len(strategy.recursion) * windows * weights
+            windows = (
+                len(strategy.window) * len(strategy.before)
+                if isinstance(strategy, LookaheadStrategy)
+                else 1
+            )
+            count = len(strategy.tables) * len(strategy.recursion) * windows * weights
         else:
-            variants += weights
+            count = weights
+        variants += count
+        mazes = strategy.mazes
+        runs += count * (all_routes if mazes is None else sum(routes.get(m, 0) for m in mazes))
     faults = config.faults
-    factors = (
-        (routes, "routes"),
+    filtered = any(s.mazes is not None for s in config.strategies)
+    factors = [
+        (runs, "strategy variants and weights x their routes")
+        if filtered
+        else (all_routes, "routes"),
         (len(fault_profile(faults.sets, get_domain(config.domain))), "fault sets"),
         (len(faults.at), "fault times"),
         (len(faults.detection), "detections"),
         (config.repeats, "repeats"),
-        (variants, "strategy variants and weights"),
-    )
+    ]
+    if not filtered:
+        factors.append((variants, "strategy variants and weights"))
     total = 1
     for count, _ in factors:
         total *= count
@@ -489,7 +557,12 @@ def expand(
         detail=factors,
         source=config.source,
     )
-    variants = list(strategy_variants(config))
+    labels = [maze_label(identity) for identity in identities]
+    variants = [
+        (variant, weights, _maze_filter(strategy, index, labels, config.source))
+        for index, strategy in enumerate(config.strategies)
+        for variant, weights in _strategy_variants(strategy, config)
+    ]
     plugins = _plugin_identities(config)
     domain = get_domain(config.domain)
     fault_sets = fault_profile(config.faults.sets, domain)
@@ -522,7 +595,9 @@ def expand(
                             if plugins:
                                 situation["plugins"] = plugins
                             seed = derive_seed(config.seed, portable(situation))
-                            for variant, weights in variants:
+                            for variant, weights, only in variants:
+                                if only is not None and label not in only:
+                                    continue
                                 for weight in weights:
                                     mission = _mission(
                                         config, situation, seed, variant, weight, label
@@ -612,9 +687,12 @@ def to_spec(mission: Mission) -> MissionSpec:
             recursion=options.get("recursion", RecursionMode.FLAT),
             window=options.get("window", 3),
             before=options.get("before", 0),
+            lpg_time_limit_s=options.get("lpg_time_limit_s", 5.0),
+            lpg_seed=options.get("lpg_seed", 0),
         ),
         clearance_weight=Fraction(s["clearance_weight"]),
         clearance_radius=s["clearance_radius"],
         seed=mission.seed,
+        backend=options.get("backend", "auto"),
         domain=domain,
     )

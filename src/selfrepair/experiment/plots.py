@@ -29,6 +29,7 @@ from selfrepair.experiment.findings import (
     repairs_of,
 )
 from selfrepair.experiment.scale import Crossover
+from selfrepair.experiment.summary import is_reference_replan
 from selfrepair.geometry import Cell, Pose
 from selfrepair.world.maze import Maze
 
@@ -36,6 +37,7 @@ __all__ = [
     "SOURCE_COLOURS",
     "MissionPicture",
     "draw_mission",
+    "figure_baselines",
     "figure_clearance",
     "figure_heatmap",
     "figure_latency",
@@ -50,6 +52,7 @@ SOURCE_COLOURS = {
     "replacement": "#009E73",
     "lookahead": "#CC79A7",
     "replan": "#E69F00",
+    "plan-repair": "#56B4E9",
     "failed-attempt": "#D55E00",
 }
 WALL = "#3b3b3b"
@@ -163,7 +166,7 @@ def figure_latency_vs_size(rows: Sequence[Row], path: Path) -> Path:
         if not isinstance(cells, int):
             continue
         for source, latency in repairs_of(row):
-            if row.get("strategy") == "replan" and source == "replan":
+            if is_reference_replan(row) and source == "replan":
                 series["replan (replanning robot)"][cells].append(latency / 1000)
             elif row.get("strategy") == "replacement" and source == "replacement":
                 series["table hit (replacing robot)"][cells].append(latency / 1000)
@@ -650,4 +653,56 @@ def figure_crossover(results: Sequence[Crossover], path: Path) -> Path:
         ax.set_title("Where replacement's repair compute falls below 1/10 of replanning")
         if ax.get_legend_handles_labels()[0]:
             fig.legend(loc="outside lower center", fontsize=8, ncols=1)
+        return _save(fig, path)
+
+
+# --- baselines -----------------------------------------------------------------------------------
+
+
+def figure_baselines(rows: Sequence[Row], path: Path) -> Path:
+    """Repair latency at the first faulty action (left) and repair time per mission (right) by
+    strategy variant and maze (mazes by size, left to right): median with its 95% bootstrap
+    interval, log scale (:func:`comparison.per_maze`)."""
+    from selfrepair.experiment.comparison import FIRST_REPAIR, REPAIR_COMPUTE, per_maze
+
+    panels = (
+        (per_maze(rows, FIRST_REPAIR), "first repair latency (ms, log scale)"),
+        (per_maze(rows, REPAIR_COMPUTE), "repair time per mission (ms, log scale)"),
+    )
+    labels = list(dict.fromkeys(m.label for cells, _ in panels for m in cells))
+    markers = "osD^v<>Ph"
+    colours = [c for c in OKABE_ITO if c != "#F0E442"] + ["#999999"]  # yellow is too pale
+    with _figure(12.0, 5.0, ncols=2) as (fig, axes):
+        for ax, (cells, ylabel) in zip(axes, panels, strict=True):
+            mazes = list(dict.fromkeys((m.maze, m.free_cells) for m in cells))
+            position = {maze: i for i, (maze, _) in enumerate(mazes)}
+            width = 0.7 / max(1, len(labels))
+            for k, label in enumerate(labels):
+                mine = [m for m in cells if m.label == label]
+                if not mine:
+                    continue
+                x = [position[m.maze] - 0.35 + width * (k + 0.5) for m in mine]
+                mid = np.array([m.ms.estimate for m in mine])
+                low = np.array([m.ms.low for m in mine])
+                high = np.array([m.ms.high for m in mine])
+                ax.errorbar(
+                    x,
+                    mid,
+                    yerr=[mid - low, high - mid],
+                    fmt=markers[k % len(markers)],
+                    color=colours[k % len(colours)],
+                    capsize=3,
+                    label=label if ax is axes[0] else None,
+                )
+            ax.set_yscale("log")
+            ax.set_xticks(range(len(mazes)), [f"{maze}\n{free} free cells" for maze, free in mazes])
+            ax.set_ylabel(ylabel)
+        fig.suptitle(
+            "Repair latency by strategy and maze size: median and 95% bootstrap interval "
+            "over missions that met a fault"
+        )
+        if labels:
+            fig.legend(loc="outside lower center", fontsize=8, ncols=3)
+        else:
+            axes[0].text(0.5, 0.5, "no repairs", ha="center", transform=axes[0].transAxes)
         return _save(fig, path)

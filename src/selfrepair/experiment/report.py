@@ -25,11 +25,21 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from selfrepair.errors import InputError, SelfRepairError
+from selfrepair.experiment.comparison import (
+    FIRST_REPAIR,
+    REPAIR_COMPUTE,
+    BaselineLine,
+    common_rows,
+    compare_baselines,
+    has_baselines,
+    maze_table,
+)
 from selfrepair.experiment.findings import (
     Finding,
     Row,
     StrategySummary,
     check_findings,
+    reference_note,
     summarize,
 )
 from selfrepair.experiment.missions import Mission
@@ -40,6 +50,7 @@ if TYPE_CHECKING:
     from selfrepair.execution.result import MissionResult
 
 __all__ = [
+    "baselines_section",
     "choose_mission",
     "counted",
     "markdown_table",
@@ -207,6 +218,9 @@ def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = N
         *([clearance] if clearance is not None else []),
         plots.figure_heatmap(rows, out_dir / "heatmap.png"),
     ]
+    baselines = has_baselines(rows)
+    if baselines:
+        written.append(plots.figure_baselines(rows, out_dir / "baselines.png"))
     if mission_key is None:
         chosen = choose_mission(rows)
     else:
@@ -223,7 +237,8 @@ def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = N
             str(db),
             heatmap_variant=plots.heatmap_variant(rows),
             clearance=clearance is not None,
-        ),
+        )
+        + (baselines_section(rows, "baselines.png") if baselines else ""),
         encoding="utf-8",
     )
     return [report, *written]
@@ -311,6 +326,44 @@ def counted(value: object, noun: str) -> str:
     return f"{number} {noun}" if number == 1 else f"{number} {noun}s"
 
 
+def baselines_section(rows: Sequence[Row], figure: str | None = None) -> str:
+    """The section on the baselines from neighbouring fields (:mod:`.comparison`): the table on
+    the missions every strategy ran, repair time by maze, and the figure (``figure``: its file
+    name, when drawn)."""
+    lines = compare_baselines(rows)
+    mazes = sorted({str(r.get("maze")) for r in common_rows(rows)})
+    parts = [
+        "",
+        "## Baselines: D* Lite, LPG-adapt and A* replanning",
+        "",
+        f"The same missions for every strategy ({lines[0].missions if lines else 0} each, on "
+        f"{', '.join(mazes) or 'no maze'}). Medians with 95% bootstrap intervals over missions; "
+        "*ticks over A\\**: mean of the differences paired with the A* replanner. Definitions in "
+        "docs/baselines.md.",
+        "",
+        markdown_table(BaselineLine.HEADERS, [line.cells() for line in lines]),
+        "",
+        "Repair latency at the first faulty action (ms) by maze, over every mission that met a "
+        "fault:",
+        "",
+        markdown_table(*maze_table(rows, FIRST_REPAIR)),
+        "",
+        "Repair time per mission (ms, all its repairs added up) by maze:",
+        "",
+        markdown_table(*maze_table(rows, REPAIR_COMPUTE)),
+        "",
+    ]
+    if figure is not None:
+        parts += [
+            f"![Repair latency by strategy and maze size]({figure})",
+            "",
+            "*Repair latency at the first faulty action (left) and repair time per mission "
+            "(right) by strategy and maze, median with 95% bootstrap interval, log scale.*",
+            "",
+        ]
+    return "\n".join(parts)
+
+
 def markdown_table(headers: Sequence[str], body: Sequence[Sequence[str]]) -> str:
     """A GitHub-flavoured Markdown table (first column left-aligned, the rest right-aligned)."""
     lines = ["| " + " | ".join(headers) + " |"]
@@ -365,7 +418,7 @@ def render_markdown(
         "### Fault sets",
         "",
         markdown_table(
-            ("fault set", "missions", "met a faulty action", "replanning robot: met"),
+            ("fault set", "missions", "met a faulty action", "variant replan: met"),
             [
                 (
                     b.faults or "(none)",
@@ -380,6 +433,9 @@ def render_markdown(
         "## The original study's findings on these results",
         "",
     ]
+    note = reference_note(rows)
+    if note is not None:
+        parts += [f"*{note}*", ""]
     for f in findings:
         parts.append(
             f"**Finding {f.number}: {f.verdict.upper()}.** {f.claim[:1].upper()}{f.claim[1:]}."
@@ -400,7 +456,7 @@ def render_markdown(
         "![Latency versus maze size](latency-vs-size.png)",
         "",
         "*Median repair latency (bar up to the 99th percentile) against maze size: replans of "
-        "the replanning robot versus table hits of the replacing robot.*",
+        "the A* replanner (variant replan) versus table hits of the replacing robot.*",
         "",
         *(
             [

@@ -30,7 +30,7 @@ from selfrepair.experiment.stats import (
     Interval,
     bootstrap_interval,
 )
-from selfrepair.experiment.summary import Row, met_fault, num
+from selfrepair.experiment.summary import Row, is_reference_replan, met_fault, num
 
 __all__ = ["Crossover", "MazeRatio", "crossover", "maze_side"]
 
@@ -91,7 +91,7 @@ def maze_side(row: Row) -> float:
 
 def _pairs(rows: Sequence[Row], variant: str) -> list[tuple[str, float, float]]:
     """``(maze, side, ratio)`` of every usable pair for ``variant``."""
-    replan = {situation(r): r for r in rows if r.get("strategy") == "replan"}
+    replan = {situation(r): r for r in rows if is_reference_replan(r)}
     out = []
     for r in rows:
         if r.get("variant") != variant or not met_fault(r) or num(r, "replans") > 0:

@@ -40,17 +40,20 @@ from selfrepair.experiment.stats import Interval, bootstrap_interval
 from selfrepair.experiment.store import Value
 
 __all__ = [
+    "STRATEGY_ORDER",
     "FaultSetBite",
     "Row",
     "StrategySummary",
     "fault_set_bite",
     "group_label",
+    "is_reference_replan",
     "local_share",
     "median",
     "met_fault",
     "num",
     "percentile",
     "repairs_of",
+    "strategy_order",
     "summarize",
 ]
 
@@ -85,6 +88,13 @@ def num(row: Row, column: str) -> float:
     """A numeric column as a float (0 when missing or not a number)."""
     value = row.get(column)
     return float(value) if isinstance(value, int | float) else 0.0
+
+
+def is_reference_replan(row: Row) -> bool:
+    """Whether ``row`` is a mission of the replanning robot the findings compare with: strategy
+    ``replan`` with the default planner backend (variant ``replan``; an experiment may also run
+    ``replan[python]``, the pure-Python search, which is not the reference)."""
+    return row.get("strategy") == "replan" and row.get("variant", "replan") == "replan"
 
 
 def met_fault(row: Row) -> bool:
@@ -194,12 +204,20 @@ def summarize(rows: Iterable[Row]) -> list[StrategySummary]:
     groups: dict[str, list[Row]] = defaultdict(list)
     for row in rows:
         groups[group_label(row)].append(row)
-    return [_summary(label, groups[label]) for label in sorted(groups, key=_order)]
+    return [_summary(label, groups[label]) for label in sorted(groups, key=strategy_order)]
 
 
-def _order(label: str) -> tuple[int, str]:
-    rank = {"replan": 0, "replacement": 1, "lookahead": 2}
-    return rank.get(label.split("[")[0].split(" ")[0], 3), label
+STRATEGY_ORDER = ("replan", "dstar-lite", "lpg-adapt", "replacement", "lookahead")
+"""The order of strategies in tables: the replanners first (the reference, then the baselines
+from neighbouring fields), then the table-based strategies; other strategies after them."""
+
+
+def strategy_order(label: str) -> tuple[int, str]:
+    """Sort key of a variant label (``replan``, ``replacement[handwritten,guarded] w=1/2``, ...):
+    by :data:`STRATEGY_ORDER`, then by label."""
+    strategy = label.split("[")[0].split(" ")[0]
+    rank = STRATEGY_ORDER.index(strategy) if strategy in STRATEGY_ORDER else len(STRATEGY_ORDER)
+    return rank, label
 
 
 def _summary(label: str, rows: list[Row]) -> StrategySummary:
@@ -229,7 +247,7 @@ def _summary(label: str, rows: list[Row]) -> StrategySummary:
 @dataclass(frozen=True, slots=True)
 class FaultSetBite:
     """How often a fault set mattered: missions run under it, and those that met a faulty action
-    (all strategies together, and the replanning robot alone: its count is the share of routes
+    (all strategies together, and variant ``replan`` alone: its count is the share of routes
     whose initial plan the set touches)."""
 
     faults: str
@@ -249,7 +267,7 @@ def fault_set_bite(rows: Iterable[Row]) -> list[FaultSetBite]:
         faults = str(r.get("faults") or "")
         missions[faults] += 1
         met[faults] += met_fault(r)
-        if r.get("strategy") == "replan":
+        if is_reference_replan(r):
             replan[faults] += 1
             replan_met[faults] += met_fault(r)
     return [FaultSetBite(f, missions[f], met[f], replan[f], replan_met[f]) for f in missions]

@@ -62,6 +62,7 @@ SOURCE_COLOURS = {
     "replacement": "#009E73",
     "lookahead": "#CC79A7",
     "replan": "#E69F00",
+    "plan-repair": "#56B4E9",
     "failed-attempt": "#D55E00",
 }
 """Step colours by source: those of the report's figures (Okabe-Ito, colour-blind safe)."""
@@ -70,6 +71,7 @@ REPAIR_SOURCE_NAMES = {
     "replacement": "table replacement",
     "lookahead": "lookahead window",
     "replan": "replan",
+    "plan-repair": "plan repair (LPG-adapt)",
 }
 
 

@@ -312,15 +312,20 @@ class DStarLite:
         for node in touched:
             self.update(node)
 
+    def begin(self, pose: Pose, known: frozenset[Any]) -> None:
+        """Set up the first search, from ``pose`` with the faults ``known`` (:meth:`compute`
+        runs it)."""
+        self._choose(known)
+        self.start = self.node(pose)
+        self.rhs[GOAL] = 0.0
+        self.push(GOAL)
+
     def repair(self, request: RepairRequest) -> Repair:
         """Plan (incrementally) from the robot's pose with the known faults."""
         self.expanded = 0
         node = self.node(request.pose)
         if self.start is None:
-            self._choose(request.known)
-            self.start = node
-            self.rhs[GOAL] = 0.0
-            self.push(GOAL)
+            self.begin(request.pose, request.known)
         else:
             self.km += self.h(node)
             self.start = node
@@ -346,10 +351,19 @@ class DStarLite:
 
 
 def start_dstar_lite(context: MissionContext) -> Repairer:
-    """The strategy factory: a fresh search for one mission."""
+    """The strategy factory: a fresh search for one mission.
+
+    When the context names the mission's start, the first search runs here, with no fault known
+    (as the executor's initial plan is made), as D* Lite's initial plan would be: each repair is
+    then an incremental update of that search, which is what D* Lite is for. Without a start, the
+    first repair searches from scratch."""
     domain = context.domain
     grid = context.grid
     lattice = _lattice(domain, grid.stride, grid.margin)
     rate = float(progress_rate(domain, domain.actions) * context.cost_scale)
     goal_cell = grid.index(*context.goal)
-    return DStarLite(context, lattice, rate, goal_cell)
+    search = DStarLite(context, lattice, rate, goal_cell)
+    if context.start is not None:
+        search.begin(context.start, frozenset())
+        search.compute(context.replan_budget)  # if the budget runs out, repairs go on from here
+    return search

@@ -21,6 +21,11 @@ Factories live in the registry :data:`STRATEGIES` (:func:`register_strategy` add
     faults and at most ``lookahead_expansions`` expansions; fall back to ``replacement``, then
     ``replan``. This is the original work's proposed extension ("replanning windows").
 
+Two baselines from neighbouring fields are registered by name and built elsewhere (imported on
+first use, see :data:`_BUILT_ELSEWHERE`): ``dstar-lite``, incremental replanning
+(:mod:`selfrepair.repair.dstar_lite`), and ``lpg-adapt``, plan repair with LPG-adapt
+(:mod:`selfrepair.baselines.adapt`, needs the ``pddl`` extra).
+
 This module is domain-generic and knows no maze: everything about the world comes in through the
 context as values and functions, so the same strategies run any robot on any map.
 
@@ -99,6 +104,7 @@ class RepairSource(StrEnum):
     REPLACEMENT = "replacement"
     LOOKAHEAD = "lookahead"
     REPLAN = "replan"
+    PLAN_REPAIR = "plan-repair"
 
 
 _FROM_PLAN = {
@@ -117,7 +123,9 @@ class StrategyOptions:
     ``max_depth`` the depth bound of ``guarded`` mode; ``window`` the lookahead window (actions
     after the faulty one); ``before`` the actions before the faulty one that a lookahead window
     may take in as well, when the fault is known that early (see :func:`lookahead`);
-    ``lookahead_expansions`` the budget of one window search.
+    ``lookahead_expansions`` the budget of one window search. ``lpg_time_limit_s`` and
+    ``lpg_seed`` are the wall-clock limit (seconds) and the seed of each LPG-adapt call of the
+    ``lpg-adapt`` strategy.
     """
 
     table: str | ReplacementTable = "handwritten"
@@ -126,6 +134,8 @@ class StrategyOptions:
     window: int = 3
     lookahead_expansions: int = 20_000
     before: int = 0
+    lpg_time_limit_s: float = 5.0
+    lpg_seed: int = 0
 
     def __post_init__(self) -> None:
         object.__setattr__(
@@ -135,6 +145,8 @@ class StrategyOptions:
             raise ProblemError(
                 "window, before and max_depth must be >= 0 and lookahead_expansions >= 1"
             )
+        if not self.lpg_time_limit_s > 0 or self.lpg_seed < 0:
+            raise ProblemError("lpg_time_limit_s must be above 0 and lpg_seed >= 0")
 
     @property
     def table_label(self) -> str:
@@ -169,7 +181,8 @@ class MissionContext:
     ``cost * cost_scale`` is an integer for every step. ``world``
     is the map itself (a :class:`selfrepair.world.maze.Maze`), typed loosely so that this layer does
     not depend on the world layer; only strategies that must read the map (e.g. to export it)
-    use it.
+    use it. ``start`` is the mission's start pose (``None`` when unknown): a strategy that searches
+    ahead of its first repair, as D* Lite does, starts there.
     """
 
     domain: Domain[Any, Any]
@@ -184,6 +197,7 @@ class MissionContext:
     cost: Callable[[Pose, Any], Fraction]
     world: object = None
     cost_scale: int = 1
+    start: Pose | None = None
 
     def at_goal(self, pose: Pose) -> bool:
         """Whether ``pose`` satisfies the mission's goal."""
@@ -214,7 +228,9 @@ class Repair(NamedTuple):
     actions. ``attempts`` lists the strategies tried, in order. ``replans`` counts full replans;
     ``candidate_length``/``depth``/``candidate_index`` describe a table replacement (the index in
     the looked-up candidate list); ``examined`` counts table candidates looked at;
-    ``expansions`` the search nodes expanded by planning.
+    ``expansions`` the search nodes expanded by planning. An attempt that gave up may say why
+    after a colon: ``("lpg-adapt:timeout", "replan")`` means LPG-adapt ran out of time and the
+    strategy fell back to replanning.
     """
 
     status: RepairStatus
@@ -494,6 +510,7 @@ _TABLE_USERS: set[str] = {StrategyName.REPLACEMENT, StrategyName.LOOKAHEAD}
 
 _BUILT_ELSEWHERE: dict[str, str] = {
     "dstar-lite": "selfrepair.repair.dstar_lite:start_dstar_lite",
+    "lpg-adapt": "selfrepair.baselines.adapt:start_lpg_adapt",
 }
 """Strategies whose modules import this one, by ``"module:factory"``: imported on first use (so
 that importing the registry does not import every strategy, and no module imports itself)."""

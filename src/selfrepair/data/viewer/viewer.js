@@ -10,7 +10,7 @@
   const steps = data.steps;
   const repairs = data.repairs;
   const last = frames.length - 1;
-  const LETTERS = { replacement: "R", lookahead: "L", replan: "P" };
+  const LETTERS = { replacement: "R", lookahead: "L", replan: "P", "plan-repair": "A" };
 
   const state = { frame: -1, shown: 0, timer: null, picked: null };
 
