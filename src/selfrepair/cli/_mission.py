@@ -76,6 +76,14 @@ LpgTimeLimit = Annotated[
         help="lpg-adapt: wall-clock limit of each LPG-adapt call (a time-out falls back to A*).",
     ),
 ]
+Rewrite = Annotated[
+    bool,
+    typer.Option(
+        "--rewrite",
+        help="Replacement: once a fault is known, substitute every faulty action of the rest of "
+        "the plan that has a valid replacement (whole-plan rewriting).",
+    ),
+]
 PlanWithFaults = Annotated[
     bool,
     typer.Option(
@@ -189,6 +197,7 @@ def mission_spec(
     max_table_candidates: int,
     strategies: Sequence[str] = (),
     lpg_time_limit: float = 5.0,
+    rewrite: bool = False,
 ) -> MissionSpec:
     """The mission the options describe; every option is checked here, so bad input is exit 2
     before anything runs (``strategies``: every strategy that will run). The table is loaded
@@ -232,6 +241,7 @@ def mission_spec(
             max_depth=max_depth,
             window=window,
             lpg_time_limit_s=lpg_time_limit,
+            rewrite=rewrite,
         ),
         clearance_weight=parse_weight(clearance_weight),
         seed=seed,

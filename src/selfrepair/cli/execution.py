@@ -49,6 +49,7 @@ from selfrepair.cli._mission import (
     MaxDepth,
     PlanWithFaults,
     Recursion,
+    Rewrite,
     Seed,
     TableOpt,
     Transient,
@@ -176,6 +177,7 @@ def run(
     max_depth: MaxDepth = 2,
     window: Window = 3,
     lpg_time_limit: LpgTimeLimit = 5.0,
+    rewrite: Rewrite = False,
     clearance_weight: ClearanceWeight = "0",
     heuristic: Heuristic = "grid-distance",
     backend: Backend = "auto",
@@ -226,6 +228,7 @@ def run(
         max_table_bytes=max_table_bytes,
         max_table_candidates=max_table_candidates,
         lpg_time_limit=lpg_time_limit,
+        rewrite=rewrite,
     )
     load_ns = kernel_load_ns(backend)
     if warm_up:
