@@ -10,7 +10,15 @@ import pytest
 from selfrepair.cli import main
 from selfrepair.errors import ConfigError, ProblemError
 from selfrepair.experiment.config import parse_config
-from selfrepair.experiment.findings import check_findings, is_rewrite, summarize
+from selfrepair.experiment.findings import (
+    Finding,
+    Outcome,
+    Row,
+    StrategySummary,
+    check_findings,
+    is_rewrite,
+    summarize,
+)
 from selfrepair.experiment.missions import expand, to_spec
 from selfrepair.repair.strategies import StrategyOptions
 
@@ -85,6 +93,16 @@ def test_strategy_options_check_rewrite() -> None:
         StrategyOptions(rewrite="yes")  # type: ignore[arg-type]
 
 
+def test_rewrite_is_refused_in_deferring_modes() -> None:
+    """``primitive`` replacements may keep faulty actions for later: nothing to rewrite with."""
+    with pytest.raises(ProblemError, match="primitive"):
+        StrategyOptions(recursion="primitive", rewrite=True)
+    text = CONFIG.replace('["flat"]', '["flat", "primitive"]') + "rewrite = [false, true]\n"
+    with pytest.raises(ConfigError, match="primitive"):
+        parse_config(text)
+    assert StrategyOptions(recursion="primitive").rewrite is False
+
+
 def test_run_with_rewrite_repairs_once(capsys: pytest.CaptureFixture[str]) -> None:
     route = ["narrow-short", "--start", "1,1,E", "--goal", "13,13", "--faults", "FL:F"]
     rows = {}
@@ -98,7 +116,7 @@ def test_run_with_rewrite_repairs_once(capsys: pytest.CaptureFixture[str]) -> No
     assert rewriting["ticks"] == plain["ticks"]
 
 
-# --- summary and finding 1 -----------------------------------------------------------------------
+# --- summary and finding 1r ----------------------------------------------------------------------
 
 
 def _row(
@@ -109,7 +127,7 @@ def _row(
         "key": f"{variant}-{route}",
         "strategy": strategy,
         "variant": variant,
-        "table": "handwritten" if "[" in variant else None,
+        "table": variant.split("[")[1].split(",")[0] if "[" in variant else None,
         "recursion": "guarded" if "[" in variant else None,
         "clearance_weight": "0",
         "maze": "m",
@@ -119,6 +137,7 @@ def _row(
         "detection": "now",
         "replicate": 0,
         "reached": 1,
+        "completed_without_replan": int(replans == 0),
         "faulty_encounters": len(latencies),
         "replacements": sum(1 for s, _ in latencies if s == "replacement"),
         "lookaheads": 0,
@@ -127,55 +146,63 @@ def _row(
         "actions_executed": 20,
         "repair_latencies_ns": json.dumps([lat for _, lat in latencies]),
         "repair_sources": json.dumps([s for s, _ in latencies]),
-        "repair_latency_total_ns": sum(lat for _, lat in latencies),
-        "compute_per_action_ns": 1000.0,
-        "extra_ticks": 1.0,
+        "repair_compute_ns": sum(lat for _, lat in latencies),
         "plan_distance": 2,
     }
 
 
-ROWS = [
-    _row("replan", [("replan", 500_000)], replans=1),
-    _row("replacement[handwritten,guarded]", [("replacement", 3_000)] * 40),
-    _row("replacement[handwritten,guarded,rewrite]", [("replacement", 20_000)]),
-]
+def _rows(variant: str, latencies: list[tuple[str, int]], replans: int = 0) -> list[Row]:
+    """The same mission on 12 routes (finding 1 needs at least 10 pairs)."""
+    return [_row(variant, latencies, replans=replans, route=f"r{i}") for i in range(12)]
 
 
-def test_summary_columns_for_hits_repairs_and_compute() -> None:
-    by_label = {s.label: s for s in summarize(ROWS)}
+REPLAN = _rows("replan", [("replan", 500_000)], replans=1)
+PER_ENCOUNTER = _rows("replacement[handwritten,guarded]", [("replacement", 3_000)] * 40)
+REWRITING = _rows("replacement[handwritten,guarded,rewrite]", [("replacement", 20_000)])
+
+
+def test_summary_columns_for_repairs_and_hits() -> None:
+    by_label = {s.label: s for s in summarize([*REPLAN, *PER_ENCOUNTER, *REWRITING])}
     per_encounter = by_label["replacement[handwritten,guarded]"]
     rewriting = by_label["replacement[handwritten,guarded,rewrite]"]
     assert per_encounter.hit_latency_median_us == 3.0 and per_encounter.repairs_per_mission == 40
-    assert per_encounter.repair_compute_per_mission_us == 120.0
     assert rewriting.hit_latency_median_us == 20.0 and rewriting.repairs_per_mission == 1
     assert by_label["replan"].hit_latency_median_us is None
-    assert by_label["replan"].repair_compute_per_mission_us == 500.0
-    cells = rewriting.cells()
-    assert cells[-3:] == ("20", "1.00", "20")
+    assert rewriting.cells()[-2:] == ("1.00", "20")
+    assert StrategySummary.HEADERS[-2:] == ("repairs/mission", "hit latency median µs")
 
 
-def test_finding_1_is_checked_apart_for_the_rewriting_robot() -> None:
-    assert is_rewrite(ROWS[2]) and not is_rewrite(ROWS[1]) and not is_rewrite(ROWS[0])
-    finding = check_findings(ROWS)[0]
-    assert finding.verdict == "held"
-    first, _, second = finding.evidence.partition("with whole-plan rewriting: ")
-    assert "ratio 0.2400" in first and "ratio 0.0400" in second
-    without = check_findings(ROWS[:2])[0]
-    assert without.verdict == "not held" and "rewriting" not in without.evidence
-    slow = [*ROWS[:2], _row("replacement[handwritten,guarded,rewrite]", [("replacement", 90_000)])]
-    assert check_findings(slow)[0].verdict == "not held"
+def _finding(findings: list[Finding], number: str) -> Finding | None:
+    return next((f for f in findings if f.number == number), None)
 
 
-def test_findings_2_and_3_leave_rewriting_variants_out() -> None:
-    """A rewrite counts as one encounter for many occurrences: its share is not comparable."""
-    hand = _row("replacement[handwritten,guarded]", [("replacement", 3_000)] * 10)
-    other = _row("replacement[generated-indexed,guarded]", [("replacement", 3_000)] * 10)
-    other["table"] = "generated-indexed"
-    bad_rewrite = _row(
+def test_finding_1r_judges_the_rewriting_robot_apart() -> None:
+    assert is_rewrite(REWRITING[0]) and not is_rewrite(PER_ENCOUNTER[0])
+    assert not is_rewrite(REPLAN[0])
+    findings = check_findings([*REPLAN, *PER_ENCOUNTER, *REWRITING])
+    one, rewritten = _finding(findings, "1"), _finding(findings, "1r")
+    assert one is not None and rewritten is not None
+    assert one.outcome is Outcome.NOT_HELD and "rewrite" not in one.evidence  # 0.24 of replan
+    assert rewritten.outcome is Outcome.HELD and "0.040" in rewritten.evidence  # 0.04
+    assert [f.number for f in findings][:2] == ["1", "1r"]
+    without = check_findings([*REPLAN, *PER_ENCOUNTER])
+    assert _finding(without, "1r") is None and _finding(without, "1") == one
+    slow = _rows("replacement[handwritten,guarded,rewrite]", [("replacement", 90_000)])
+    late = _finding(check_findings([*REPLAN, *PER_ENCOUNTER, *slow]), "1r")
+    assert late is not None and late.outcome is Outcome.NOT_HELD
+
+
+def test_other_findings_leave_rewriting_variants_out() -> None:
+    """A rewrite is one repair for many occurrences: rewriting robots are never mixed with the
+    ones that replace per encounter (same table and mode, same situations)."""
+    other = _rows("replacement[generated-indexed,guarded]", [("replacement", 3_000)] * 10)
+    bad = _rows(
         "replacement[generated-indexed,guarded,rewrite]",
         [("replacement", 20_000), ("replan", 400_000)],
         replans=1,
     )
-    bad_rewrite["table"] = "generated-indexed"
-    finding = check_findings([ROWS[0], hand, other, bad_rewrite])[2]
-    assert finding.verdict == "held" and "50.00%" not in finding.evidence
+    base = [*REPLAN, *PER_ENCOUNTER, *other]
+    clean = check_findings(base)
+    mixed = check_findings([*base, *bad, *REWRITING])
+    for number in ("1", "1b", "2", "3", "4"):
+        assert _finding(mixed, number) == _finding(clean, number), number
