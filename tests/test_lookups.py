@@ -12,6 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from selfrepair.caching import cache_stats, clear_caches
+from selfrepair.errors import ProblemError
 from selfrepair.execution.executor import mission_context, run_mission
 from selfrepair.execution.faults import Detection, FaultSchedule
 from selfrepair.execution.result import MissionSpec, MissionStatus
@@ -217,7 +218,6 @@ def test_occupancy_codes_hold_the_free_cells_around_each_cell(
 
 
 def test_pattern_budget_bounds_memory_and_keeps_answers(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(lookups, "MAX_PATTERNS", 5)
     monkeypatch.setattr(lookups, "ENUMERATE_BITS", 0)
     lookups._LOOKUPS.clear()
     table = bundled_table("generated-agnostic")
@@ -229,7 +229,9 @@ def test_pattern_budget_bounds_memory_and_keeps_answers(monkeypatch: pytest.Monk
         for heading in Heading:
             pose = Pose(x, y, heading)
             for action in four_wheel.ACTIONS[:20]:
-                got = compiled_replacement(table, action, pose, faults, grid, mode="guarded")
+                got = compiled_replacement(
+                    table, action, pose, faults, grid, mode="guarded", max_patterns=5
+                )
                 assert got == find_replacement(
                     table, action, pose, faults, maze.all_free, mode="guarded"
                 )
@@ -297,11 +299,14 @@ def test_the_repairer_returns_the_reference_repair(
         return
     options = StrategyOptions(table=name, recursion=mode)
     context = _context(maze, options, Pose(*free[0], Heading.N))
-    repairer = get_strategy(StrategyName.REPLACEMENT)(context)
+    start = get_strategy(StrategyName.REPLACEMENT)
+    repairer = start(context)
     for _ in range(2):
         for cell in free:
             for heading in Heading:
                 pose = Pose(*cell, heading)
+                if mode in DEFERRING:  # its state belongs to one mission's queue
+                    repairer = start(context)
                 repair = repairer.repair(RepairRequest(pose, (action,), faults))
                 found = find_replacement(
                     context.table, action, pose, faults, maze.all_free, mode=mode
@@ -436,3 +441,29 @@ def test_rewrite_rechecks_faults_that_become_known_later(detection: Detection) -
     result = run_mission(spec)
     assert result.status is MissionStatus.REACHED
     assert replay(parse_trace("\n".join(trace_lines(result)))).ok
+
+
+def test_max_lookup_patterns_caps_what_a_mission_stores() -> None:
+    """The ``--max-lookup-patterns`` cap: nothing stored at 0, the same mission either way."""
+    maze, start, goal = Maze(np.zeros((9, 9), dtype=bool)), Pose(1, 1, Heading.E), (7, 7)
+    schedule = FaultSchedule.permanent(four_wheel.parse_faults("FL:F"), at=0)
+    results = []
+    for cap in (0, 4096):
+        clear_caches()
+        options = StrategyOptions(recursion="guarded", max_lookup_patterns=cap)
+        spec = MissionSpec(maze, start, goal, schedule=schedule, options=options)
+        results.append(run_mission(spec))
+        (memory,) = [m for m in lookup_memory() if m.faults == "FL:F"]
+        assert (memory.patterns == 0) == (cap == 0)
+    assert [s.action for s in results[0].steps] == [s.action for s in results[1].steps]
+    with pytest.raises(ProblemError, match="max_lookup_patterns"):
+        StrategyOptions(max_lookup_patterns=-1)
+
+
+def test_run_accepts_max_lookup_patterns(capsys: pytest.CaptureFixture[str]) -> None:
+    from selfrepair.cli import main
+
+    route = ["narrow-short", "--start", "1,1,E", "--goal", "13,13", "--faults", "FL:F", "--json"]
+    assert main(["run", *route, "--max-lookup-patterns", "0"]) == 0
+    capsys.readouterr()
+    assert main(["run", *route, "--max-lookup-patterns", "-1"]) == 2

@@ -121,7 +121,7 @@ def test_run_with_rewrite_repairs_once(capsys: pytest.CaptureFixture[str]) -> No
 
 def _row(
     variant: str, latencies: list[tuple[str, int]], *, replans: int = 0, route: str = "r1"
-) -> dict[str, object]:
+) -> Row:
     strategy = variant.split("[")[0]
     return {
         "key": f"{variant}-{route}",

@@ -11,6 +11,7 @@ import typer
 from selfrepair.cli._app import exact_json, number_json
 from selfrepair.cli._inputs import find_input, parse_weight
 from selfrepair.errors import InputError
+from selfrepair.limits import MAX_LOOKUP_PATTERNS
 
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
@@ -198,6 +199,7 @@ def mission_spec(
     strategies: Sequence[str] = (),
     lpg_time_limit: float = 5.0,
     rewrite: bool = False,
+    max_lookup_patterns: int = MAX_LOOKUP_PATTERNS,
 ) -> MissionSpec:
     """The mission the options describe; every option is checked here, so bad input is exit 2
     before anything runs (``strategies``: every strategy that will run). The table is loaded
@@ -242,6 +244,7 @@ def mission_spec(
             window=window,
             lpg_time_limit_s=lpg_time_limit,
             rewrite=rewrite,
+            max_lookup_patterns=max_lookup_patterns,
         ),
         clearance_weight=parse_weight(clearance_weight),
         seed=seed,

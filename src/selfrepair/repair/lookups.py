@@ -26,7 +26,8 @@ What is kept, and the limits (all in :mod:`selfrepair.caching` caches, see :func
 
 * ``compiled replacement look-ups``: at most :data:`MAX_FAULT_LOOKUPS` (512)
   :class:`FaultLookups` (one per table, fault set, recursion mode, depth bound and answer kind),
-  least recently used evicted. Each holds at most :data:`MAX_PATTERNS` (4096) stored patterns
+  least recently used evicted. Each holds at most ``max_patterns`` stored patterns (default
+  :data:`~selfrepair.limits.MAX_LOOKUP_PATTERNS`, 4096; ``--max-lookup-patterns``)
   over all its actions and headings; past that, answers are still correct but computed by the
   search each time.
 * ``compiled look-ups on grids``: at most :data:`MAX_FAULT_LOOKUPS` :class:`GridLookups`, the
@@ -62,6 +63,7 @@ import numpy as np
 from selfrepair.caching import BoundedCache
 from selfrepair.errors import ProblemError, choice
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
+from selfrepair.limits import MAX_LOOKUP_PATTERNS
 from selfrepair.repair.replacement import (
     DEFAULT_MAX_DEPTH,
     DEFERRING,
@@ -104,8 +106,9 @@ ENUMERATE_BITS = 4
 full (``2^n`` patterns) on first use; larger ones, and every neighbourhood of a recursive mode,
 are filled per pattern met."""
 
-MAX_PATTERNS = 1 << 12
-"""Stored patterns per :class:`FaultLookups` (all actions and headings together)."""
+MAX_PATTERNS = MAX_LOOKUP_PATTERNS
+"""The default of stored patterns per :class:`FaultLookups` (all actions and headings together;
+see :data:`selfrepair.limits.MAX_LOOKUP_PATTERNS`)."""
 
 MAX_FAULT_LOOKUPS = 512
 """Compiled (table, fault set, recursion mode) look-ups kept per process: enough for a sweep's
@@ -341,7 +344,7 @@ class ActionLookup(Generic[T]):
     nested candidates reach further, so that most look-ups of a table share one code list),
     ``masks[h]`` the neighbourhood bits
     for heading ``h`` and ``answers[h]`` the map from masked codes to answers (``None``: no valid
-    candidate). Filled lazily (mutable by nature; bounded by :data:`MAX_PATTERNS`).
+    candidate). Filled lazily (mutable by nature; bounded by the owner's ``max_patterns``).
     """
 
     __slots__ = ("action", "answers", "cells", "masks", "radius")
@@ -378,6 +381,7 @@ class FaultLookups(Generic[T]):
         "known",
         "lookups",
         "max_depth",
+        "max_patterns",
         "mode",
         "radius",
         "stored",
@@ -392,6 +396,7 @@ class FaultLookups(Generic[T]):
         max_depth: int,
         answer: Answer,
         guard: frozenset[Any] = frozenset(),
+        max_patterns: int = MAX_PATTERNS,
     ) -> None:
         domain = table.domain
         self.table = table
@@ -405,6 +410,7 @@ class FaultLookups(Generic[T]):
         self.faulty_slots = tuple(bad for bad in self.faulty for _ in Heading)
         self.lookups: list[ActionLookup[T] | None] = [None] * len(domain.actions)
         self.stored = 0
+        self.max_patterns = max_patterns
         self.radius = table_reach(table)
 
     def action(self, i: int) -> ActionLookup[T]:
@@ -424,7 +430,7 @@ class FaultLookups(Generic[T]):
         if self.mode is RecursionMode.FLAT:
             for heading in Heading:
                 others = sorted(cells[heading] - {(0, 0)})
-                budget = self.stored + (1 << len(others)) <= MAX_PATTERNS
+                budget = self.stored + (1 << len(others)) <= self.max_patterns
                 if len(others) <= ENUMERATE_BITS and budget:
                     self._enumerate(lookup, heading, others, (0, 0) in cells[heading])
         return lookup
@@ -478,7 +484,7 @@ class FaultLookups(Generic[T]):
             guard=self.guard,
         )
         value = None if found is None else self.answer(_relative(found, pose))
-        if self.stored < MAX_PATTERNS:
+        if self.stored < self.max_patterns:
             lookup.answers[pose.heading][key] = value
             self.stored += 1
         return value
@@ -543,7 +549,7 @@ def _key(mode: RecursionMode, max_depth: int) -> int:
 
 
 _LOOKUPS: BoundedCache[
-    tuple[ReplacementTable, frozenset[Any], RecursionMode, int, Hashable, frozenset[Any]],
+    tuple[ReplacementTable, frozenset[Any], RecursionMode, int, Hashable, frozenset[Any], int],
     FaultLookups[Any],
 ] = BoundedCache("compiled replacement look-ups", MAX_FAULT_LOOKUPS)
 
@@ -556,11 +562,15 @@ def fault_lookups(
     max_depth: int = DEFAULT_MAX_DEPTH,
     answer: Answer,
     guard: frozenset[Any] = frozenset(),
+    max_patterns: int = MAX_PATTERNS,
 ) -> FaultLookups[Any]:
     """The compiled look-ups of ``table`` under ``known`` faults in recursion ``mode`` (made on
     first use, kept in a bounded cache). ``answer`` must be a module-level function: it is part
     of the cache key. ``guard``: actions an outer replacement is still replacing (none of them
-    is used; see :func:`~selfrepair.repair.replacement.find_replacement`)."""
+    is used; see :func:`~selfrepair.repair.replacement.find_replacement`). ``max_patterns``:
+    patterns stored at most (see :data:`~selfrepair.limits.MAX_LOOKUP_PATTERNS`)."""
+    if max_patterns < 0:
+        raise ProblemError(f"max_patterns must be at least 0, got {max_patterns}")
     recursion = (
         mode if type(mode) is RecursionMode else choice(RecursionMode, mode, "recursion mode")
     )
@@ -569,8 +579,8 @@ def fault_lookups(
     faults = known if type(known) is frozenset else frozenset(known)
     depth = _key(recursion, max_depth)
     return _LOOKUPS.get(
-        (table, faults, recursion, depth, answer, guard),
-        lambda: FaultLookups(table, faults, recursion, max_depth, answer, guard),
+        (table, faults, recursion, depth, answer, guard, max_patterns),
+        lambda: FaultLookups(table, faults, recursion, max_depth, answer, guard, max_patterns),
     )
 
 
@@ -588,12 +598,19 @@ def compiled_replacement(
     mode: RecursionMode | str = RecursionMode.FLAT,
     max_depth: int = DEFAULT_MAX_DEPTH,
     guard: Iterable[Any] = (),
+    max_patterns: int = MAX_PATTERNS,
 ) -> Replacement | None:
     """:func:`~selfrepair.repair.replacement.find_replacement` through the compiled look-ups:
     the same answer (every field, ``deferred`` included), from one look-up once the pattern has
     been met."""
     lookups = fault_lookups(
-        table, known_faults, mode=mode, max_depth=max_depth, answer=_same, guard=frozenset(guard)
+        table,
+        known_faults,
+        mode=mode,
+        max_depth=max_depth,
+        answer=_same,
+        guard=frozenset(guard),
+        max_patterns=max_patterns,
     )
     found: Replacement | None = lookups.get(action, pose, grid)
     if found is None:

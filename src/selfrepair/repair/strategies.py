@@ -55,6 +55,7 @@ from typing import Any, NamedTuple, Protocol
 
 from selfrepair.errors import ProblemError, choice
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
+from selfrepair.limits import MAX_LOOKUP_PATTERNS
 from selfrepair.repair.lookups import (
     MISSING,
     FaultLookups,
@@ -145,9 +146,11 @@ class StrategyOptions:
     strategy substitutes, when it first meets a faulty action under the faults known, every
     faulty action of the rest of the plan that has a valid replacement at its predicted pose
     (whole-plan rewriting; other strategies ignore it; not in a deferring recursion mode such as
-    ``primitive``, whose replacements may keep faulty actions for later). ``lpg_time_limit_s``
-    and ``lpg_seed`` are the wall-clock limit (seconds) and the seed of each LPG-adapt call of
-    the ``lpg-adapt`` strategy.
+    ``primitive``, whose replacements may keep faulty actions for later);
+    ``max_lookup_patterns`` the patterns one compiled look-up stores at most
+    (:data:`~selfrepair.limits.MAX_LOOKUP_PATTERNS`). ``lpg_time_limit_s`` and ``lpg_seed`` are
+    the wall-clock limit (seconds) and the seed of each LPG-adapt call of the ``lpg-adapt``
+    strategy.
     """
 
     table: str | ReplacementTable = "handwritten"
@@ -159,6 +162,7 @@ class StrategyOptions:
     lpg_time_limit_s: float = 5.0
     lpg_seed: int = 0
     rewrite: bool = False
+    max_lookup_patterns: int = MAX_LOOKUP_PATTERNS
 
     def __post_init__(self) -> None:
         object.__setattr__(
@@ -170,6 +174,10 @@ class StrategyOptions:
             )
         if not self.lpg_time_limit_s > 0 or self.lpg_seed < 0:
             raise ProblemError("lpg_time_limit_s must be above 0 and lpg_seed >= 0")
+        if self.max_lookup_patterns < 0:
+            raise ProblemError(
+                f"max_lookup_patterns must be at least 0, got {self.max_lookup_patterns}"
+            )
         if not isinstance(self.rewrite, bool):
             raise ProblemError(f"rewrite must be True or False, got {self.rewrite!r}")
         if self.rewrite and self.recursion in DEFERRING:
@@ -364,7 +372,12 @@ def _table(context: MissionContext) -> ReplacementTable:
 def _lookups(context: MissionContext, known: frozenset[Any]) -> FaultLookups[Repair]:
     options = context.options
     return fault_lookups(
-        _table(context), known, mode=options.recursion, max_depth=options.max_depth, answer=_hit
+        _table(context),
+        known,
+        mode=options.recursion,
+        max_depth=options.max_depth,
+        answer=_hit,
+        max_patterns=options.max_lookup_patterns,
     )
 
 
@@ -569,6 +582,7 @@ class DeferringRepairer:
             mode=options.recursion,
             max_depth=options.max_depth,
             guard=guard,
+            max_patterns=options.max_lookup_patterns,
         )
         if found is None:
             pending.clear()  # a replan replaces the whole queue
