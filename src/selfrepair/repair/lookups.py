@@ -112,7 +112,7 @@ see :data:`selfrepair.limits.MAX_LOOKUP_PATTERNS`)."""
 
 MAX_FAULT_LOOKUPS = 512
 """Compiled (table, fault set, recursion mode) look-ups kept per process: enough for a sweep's
-working set (the paper experiment uses 3 tables x 12 fault sets x 2 modes)."""
+working set (the paper experiment uses 3 tables x 12 fault sets x 3 modes)."""
 
 MAX_CODE_GRIDS = 16
 """Occupancy code lists (grid and radius) kept per process."""

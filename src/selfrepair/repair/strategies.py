@@ -508,15 +508,15 @@ class ReplacementRepairer:
         will replan there, dropping the rest). The actions after the last substitution stay
         queued as they are, so every action of the repair is available."""
         rest = request.queue[1:]
-        quads, faulty, steps, slots = self._quads, self._faulty, self._steps, self._slots
+        faulty, steps, slots = self._faulty, self._steps, self._slots
+        quads = list(map(self._quads.get, map(id, rest)))  # in C; by identity (see _quad)
         move, h = steps[slot]
         position += move
         parts: list[Sequence[Any]] = [head.actions]
         done = substituted = 0
-        for k, action in enumerate(rest):
-            quad = quads.get(id(action))  # by identity: hashing an action costs more
+        for k, quad in enumerate(quads):
             if quad is None:
-                quad = self._quad(action)
+                quad = self._quad(rest[k])
             slot = quad + h
             if faulty[slot]:
                 mask, answers, codes = slots[slot] or self._on_grid.slot(slot)
