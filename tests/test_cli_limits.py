@@ -9,7 +9,13 @@ from pathlib import Path
 import pytest
 
 from selfrepair.cli import main
-from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES
+from selfrepair.limits import (
+    MAX_CELLS,
+    MAX_LOOKUP_PATTERNS,
+    MAX_MISSIONS,
+    MAX_TABLE_BYTES,
+    MAX_TABLE_CANDIDATES,
+)
 from selfrepair.tables.fileformat import bundled_table, dump_table
 from selfrepair.world.bundled import load_bundled
 from selfrepair.world.maze import save_maze
@@ -90,18 +96,20 @@ def test_limit_flag_refuses_then_admits(
 
 
 def test_defaults_are_the_documented_constants() -> None:
-    assert (MAX_CELLS, MAX_MISSIONS, MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES) == (
-        4_194_304,
-        1_000_000,
-        67_108_864,
-        1_000_000,
-    )
+    assert (
+        MAX_CELLS,
+        MAX_MISSIONS,
+        MAX_TABLE_BYTES,
+        MAX_TABLE_CANDIDATES,
+        MAX_LOOKUP_PATTERNS,
+    ) == (4_194_304, 1_000_000, 67_108_864, 1_000_000, 4096)
     doc = (Path(__file__).parent.parent / "docs" / "reliability.md").read_text(encoding="utf-8")
     for name, default in (
         ("max_cells", "4,194,304"),
         ("max_missions", "1,000,000"),
         ("max_table_bytes", "67,108,864"),
         ("max_table_candidates", "1,000,000"),
+        ("max_lookup_patterns", "4,096"),
     ):
         flag = "--" + name.replace("_", "-")
         assert f"| `{name}` | `{flag}` | {default} |" in doc

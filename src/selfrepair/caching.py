@@ -68,6 +68,10 @@ class BoundedCache(Generic[K, V]):
     def __len__(self) -> int:
         return len(self._data)
 
+    def values(self) -> tuple[V, ...]:
+        """The values kept now, least recently used first (e.g. to report their memory)."""
+        return tuple(self._data.values())
+
     def __contains__(self, key: object) -> bool:
         return key in self._data
 

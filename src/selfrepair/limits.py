@@ -22,6 +22,7 @@ __all__ = [
     "MAX_CELLS",
     "MAX_CLEARANCE_WEIGHT",
     "MAX_FILE_BYTES",
+    "MAX_LOOKUP_PATTERNS",
     "MAX_MISSIONS",
     "MAX_ROBOTS",
     "MAX_TABLE_BYTES",
@@ -86,6 +87,16 @@ MAX_TASKS = 256
 
 Sixteen times the largest bundled load (16 tasks). The allocation solves one assignment problem
 per round over robots x open tasks; a re-allocation does it again at every incident."""
+
+MAX_LOOKUP_PATTERNS = 4096
+"""Occupancy patterns stored by one compiled replacement look-up (one table, fault set and
+recursion mode; :mod:`selfrepair.repair.lookups`), all its actions and headings together.
+
+A cap, not an error: past it, answers are still exact but computed by the reference search each
+time instead of stored. A stored pattern costs about 100 bytes, so one look-up holds at most
+about 0.4 MB and the at most 512 kept in a process about 210 MB; on the bundled experiments one
+holds 1 to 30 KB (measured by ``benchmarks/repair_latency.py``). Raise it with
+``--max-lookup-patterns`` (``selfrepair run``) or ``StrategyOptions.max_lookup_patterns``."""
 
 # --- bounds (no flag) --------------------------------------------------------------------------
 

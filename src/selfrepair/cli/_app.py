@@ -193,6 +193,16 @@ MaxTableBytes = Annotated[
         help="Refuse a table file larger than this, unread.",
     ),
 ]
+MaxLookupPatterns = Annotated[
+    int,
+    typer.Option(
+        "--max-lookup-patterns",
+        metavar="N",
+        min=0,
+        help="Occupancy patterns one compiled table look-up stores at most (past it, answers "
+        "are computed each time).",
+    ),
+]
 MaxTableCandidates = Annotated[
     int,
     typer.Option(

@@ -11,6 +11,7 @@ import typer
 from selfrepair.cli._app import exact_json, number_json
 from selfrepair.cli._inputs import find_input, parse_weight
 from selfrepair.errors import InputError
+from selfrepair.limits import MAX_LOOKUP_PATTERNS
 
 if TYPE_CHECKING:
     from collections.abc import Mapping, Sequence
@@ -74,6 +75,14 @@ LpgTimeLimit = Annotated[
         metavar="SECONDS",
         min=0.001,
         help="lpg-adapt: wall-clock limit of each LPG-adapt call (a time-out falls back to A*).",
+    ),
+]
+Rewrite = Annotated[
+    bool,
+    typer.Option(
+        "--rewrite",
+        help="Replacement: once a fault is known, substitute every faulty action of the rest of "
+        "the plan that has a valid replacement (whole-plan rewriting).",
     ),
 ]
 PlanWithFaults = Annotated[
@@ -189,6 +198,8 @@ def mission_spec(
     max_table_candidates: int,
     strategies: Sequence[str] = (),
     lpg_time_limit: float = 5.0,
+    rewrite: bool = False,
+    max_lookup_patterns: int = MAX_LOOKUP_PATTERNS,
 ) -> MissionSpec:
     """The mission the options describe; every option is checked here, so bad input is exit 2
     before anything runs (``strategies``: every strategy that will run). The table is loaded
@@ -232,6 +243,8 @@ def mission_spec(
             max_depth=max_depth,
             window=window,
             lpg_time_limit_s=lpg_time_limit,
+            rewrite=rewrite,
+            max_lookup_patterns=max_lookup_patterns,
         ),
         clearance_weight=parse_weight(clearance_weight),
         seed=seed,

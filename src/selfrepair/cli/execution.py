@@ -18,6 +18,7 @@ import typer
 
 from selfrepair.cli._app import (
     MaxCells,
+    MaxLookupPatterns,
     MaxTableBytes,
     MaxTableCandidates,
     MaxTraceBytes,
@@ -49,6 +50,7 @@ from selfrepair.cli._mission import (
     MaxDepth,
     PlanWithFaults,
     Recursion,
+    Rewrite,
     Seed,
     TableOpt,
     Transient,
@@ -58,7 +60,13 @@ from selfrepair.cli._mission import (
     row_json,
 )
 from selfrepair.cli.planning import kernel_load_ns
-from selfrepair.limits import MAX_CELLS, MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES, MAX_TRACE_BYTES
+from selfrepair.limits import (
+    MAX_CELLS,
+    MAX_LOOKUP_PATTERNS,
+    MAX_TABLE_BYTES,
+    MAX_TABLE_CANDIDATES,
+    MAX_TRACE_BYTES,
+)
 
 if TYPE_CHECKING:
     from selfrepair.execution.result import MissionResult
@@ -176,6 +184,7 @@ def run(
     max_depth: MaxDepth = 2,
     window: Window = 3,
     lpg_time_limit: LpgTimeLimit = 5.0,
+    rewrite: Rewrite = False,
     clearance_weight: ClearanceWeight = "0",
     heuristic: Heuristic = "grid-distance",
     backend: Backend = "auto",
@@ -191,6 +200,7 @@ def run(
     max_cells: MaxCells = MAX_CELLS,
     max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
     max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
+    max_lookup_patterns: MaxLookupPatterns = MAX_LOOKUP_PATTERNS,
 ) -> int:
     """Run one mission: plan, execute with faults, repair.
 
@@ -226,6 +236,8 @@ def run(
         max_table_bytes=max_table_bytes,
         max_table_candidates=max_table_candidates,
         lpg_time_limit=lpg_time_limit,
+        rewrite=rewrite,
+        max_lookup_patterns=max_lookup_patterns,
     )
     load_ns = kernel_load_ns(backend)
     if warm_up:

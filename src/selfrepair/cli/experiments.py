@@ -301,6 +301,8 @@ _SHORT_HEADERS = {
     "first repair warm µs": "first\nrepair\nwarm µs",
     "repair latency median µs": "repair\nlatency\nmedian µs",
     "repair latency p99 µs": "repair\nlatency\np99 µs",
+    "repairs/mission": "repairs/\nmission",
+    "hit latency median µs": "hit\nlatency\nmedian µs",
 }
 """Stacked headers for a terminal, where every column must fit without truncating a number."""
 

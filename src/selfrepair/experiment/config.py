@@ -26,6 +26,7 @@ The file format is described in ``docs/experiments.md``; in short::
     name = "replacement"         # replan | replacement | lookahead | dstar-lite | lpg-adapt
     tables = ["handwritten"]
     recursion = ["guarded"]
+    rewrite = [false, true]      # per encounter, and whole-plan rewriting (default false)
     mazes = ["narrow-short"]     # optional, any strategy: run it on these mazes only
 
     [[strategies]]
@@ -68,7 +69,7 @@ from selfrepair.errors import ConfigError, InputError
 from selfrepair.execution.faults import Clock, Detection, Persistence
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CLEARANCE_WEIGHT, MAX_FILE_BYTES
-from selfrepair.repair.replacement import RecursionMode
+from selfrepair.repair.replacement import DEFERRING, RecursionMode
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import get_domain, load_plugin
 from selfrepair.textio import read_text, strip_bom, text_lines
@@ -251,13 +252,26 @@ class ReplanStrategy(_Frozen):
 
 
 class ReplacementStrategy(_Frozen):
-    """Replacement tables with recursion mode; one variant per table and mode."""
+    """Replacement tables with recursion mode; one variant per table, mode and ``rewrite``
+    value (``true``: whole-plan rewriting, ``[false, true]``: both; default per encounter)."""
 
     name: Literal["replacement"]
     tables: tuple[str, ...] = ("handwritten",)
     recursion: tuple[RecursionMode, ...] = (RecursionMode.GUARDED,)
+    rewrite: tuple[bool, ...] = (False,)
     clearance_weights: tuple[str, ...] | None = None
     mazes: MazeNames = None
+
+    @field_validator("rewrite", mode="before")
+    @classmethod
+    def _rewrite(cls, value: Any) -> Any:
+        if isinstance(value, bool):
+            return (value,)
+        if isinstance(value, list | tuple) and not value:
+            raise ValueError("expected true, false or a non-empty list of them")
+        if isinstance(value, list | tuple) and not all(isinstance(v, bool) for v in value):
+            raise ValueError(f"expected true, false or a list of them, got {value!r}")
+        return value
 
     @field_validator("clearance_weights", mode="before")
     @classmethod
@@ -271,6 +285,17 @@ class ReplacementStrategy(_Frozen):
             raise ValueError("expected a non-empty list")
         return value
 
+    @model_validator(mode="after")
+    def _rewrite_modes(self) -> ReplacementStrategy:
+        deferring = [str(m) for m in self.recursion if m in DEFERRING]
+        if any(self.rewrite) and deferring:
+            raise ValueError(
+                f"rewrite is not available with {', '.join(deferring)} recursion (its "
+                "replacements may keep faulty actions for later); list those modes in a "
+                "strategy without rewrite"
+            )
+        return self
+
 
 class LookaheadStrategy(ReplacementStrategy):
     """Replace a window of ``window`` actions after the faulty one and, when the fault is known
@@ -279,6 +304,13 @@ class LookaheadStrategy(ReplacementStrategy):
     name: Literal["lookahead"]  # type: ignore[assignment]
     window: tuple[Annotated[Int, Field(ge=0, le=64)], ...] = (3,)
     before: tuple[Annotated[Int, Field(ge=0, le=64)], ...] = (0,)
+
+    @field_validator("rewrite")
+    @classmethod
+    def _no_rewrite(cls, value: tuple[bool, ...]) -> tuple[bool, ...]:
+        if any(value):
+            raise ValueError("rewrite applies to the replacement strategy only")
+        return value
 
 
 class DStarLiteStrategy(_Frozen):

@@ -16,6 +16,10 @@ docs/experiments.md states them with their reasons.
    repair compute), for replacing missions that met a fault and never replanned. HELD when the
    upper end of its 95% bootstrap interval is at most :data:`NEGLIGIBLE`; NOT HELD when the lower
    end is above it.
+1r. The same as 1 for the robots that rewrite the whole plan once a fault is known
+   (``replacement[...,rewrite]`` variants, judged only when there are such rows). Every other
+   finding leaves the rewriting variants out: they are judged apart, never mixed with the robots
+   that replace per encounter.
 1b. *...and replanning time falls when most did*: the same for the time spent in replans, over
    missions where most but not all encounters were replaced; threshold :data:`FALLS`.
 2. *Clearance weight > 0 raises the share of successful replacements*: per replacement variant
@@ -46,6 +50,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 from fractions import Fraction
 
+from selfrepair.experiment.missions import REWRITE_LABEL
 from selfrepair.experiment.stats import Interval, bootstrap_interval, sign_test, wilcoxon_greater
 from selfrepair.experiment.store import Value
 from selfrepair.experiment.summary import (
@@ -74,6 +79,7 @@ __all__ = [
     "StrategySummary",
     "check_findings",
     "group_label",
+    "is_rewrite",
     "local_share",
     "median",
     "percentile",
@@ -160,6 +166,8 @@ def _cap(text: str) -> str:
 CLAIMS = {
     "1": "with replacement, repair compute is negligible (at most 1/10 of the replanner's) "
     "whenever every faulty action found a substitute",
+    "1r": "with whole-plan rewriting, repair compute is negligible (at most 1/10 of the "
+    "replanner's) whenever every faulty action found a substitute",
     "1b": "replanning time falls when most faulty actions found a substitute",
     "2": "keeping plans away from walls (clearance weight > 0) raises the share of missions "
     "completed without a replan",
@@ -197,8 +205,11 @@ def reference_note(rows: Sequence[Row]) -> str | None:
 
 def check_findings(rows: Sequence[Row]) -> list[Finding]:
     """Every finding, each HELD / NOT HELD / INCONCLUSIVE, with the numbers behind it."""
+    rewriting = [r for r in rows if is_rewrite(r)]
+    rows = [r for r in rows if not is_rewrite(r)]
     return [
         _finding_1(rows),
+        *([_finding_1(rows + rewriting, "1r")] if rewriting else []),
         _finding_1b(rows),
         _finding_2(rows),
         _finding_3(rows),
@@ -238,6 +249,12 @@ def _is_replacement(row: Row) -> bool:
     return row.get("strategy") == "replacement"
 
 
+def is_rewrite(row: Row) -> bool:
+    """Whether a row's variant rewrites the whole plan (``replacement[...,rewrite]``)."""
+    inside = str(row.get("variant") or "").partition("[")[2].rstrip("]")
+    return REWRITE_LABEL in inside.split(",")
+
+
 # --- finding 1: compute ------------------------------------------------------------------------
 
 
@@ -253,14 +270,23 @@ def ratio_outcome(interval: Interval | None, threshold: float) -> Outcome:
     return Outcome.INCONCLUSIVE
 
 
-def _finding_1(rows: Sequence[Row]) -> Finding:
+def _finding_1(rows: Sequence[Row], number: str = "1") -> Finding:
+    """Finding 1 over the replacing robots of ``rows`` that replace per encounter, or, as
+    finding ``1r``, over those that rewrite the whole plan."""
+    rewriting = number == "1r"
     replan = _by_situation(rows, is_reference_replan)
     variants: dict[str, list[Row]] = defaultdict(list)
     for r in rows:
-        if _is_replacement(r) and _weight(r) == 0 and met_fault(r) and num(r, "replans") == 0:
+        if (
+            _is_replacement(r)
+            and is_rewrite(r) == rewriting
+            and _weight(r) == 0
+            and met_fault(r)
+            and num(r, "replans") == 0
+        ):
             variants[group_label(r)].append(r)
     if not replan or not variants:
-        return Finding("1", CLAIMS["1"], Outcome.INCONCLUSIVE, (_NEEDS_BOTH,))
+        return Finding(number, CLAIMS[number], Outcome.INCONCLUSIVE, (_NEEDS_BOTH,))
     outcomes = []
     lines = []
     for label, group in sorted(variants.items()):
@@ -274,7 +300,7 @@ def _finding_1(rows: Sequence[Row]) -> Finding:
         outcome = ratio_outcome(interval, NEGLIGIBLE)
         outcomes.append(outcome)
         lines.append(_ratio_line(label, interval, outcome, pairs))
-    return Finding("1", CLAIMS["1"], _combine(outcomes), (_ONE_INTRO, *lines))
+    return Finding(number, CLAIMS[number], _combine(outcomes), (_ONE_INTRO, *lines))
 
 
 _NEEDS_BOTH = "Needs replan (variant replan) and replacing missions in the same situations."

@@ -58,6 +58,7 @@ from selfrepair.world.routes import Route, random_routes
 __all__ = [
     "BUNDLED_TABLES",
     "PAPER_FAULT_SETS",
+    "REWRITE_LABEL",
     "SCHEMA",
     "Mission",
     "biting_fault_sets",
@@ -329,15 +330,18 @@ def _strategy_variants(
         for table in strategy.tables:
             for recursion in strategy.recursion:
                 for window, before in windows:
-                    options: dict[str, Any] = {
-                        **_table_identity(table, config),
-                        "recursion": recursion,
-                    }
-                    if window is not None:
-                        options["window"] = window
-                    if before:  # absent when 0, so older mission keys stay valid
-                        options["before"] = before
-                    yield {"strategy": strategy.name, "options": options}, weights
+                    for rewrite in strategy.rewrite:
+                        options: dict[str, Any] = {
+                            **_table_identity(table, config),
+                            "recursion": recursion,
+                        }
+                        if window is not None:
+                            options["window"] = window
+                        if before:  # absent when 0, so older mission keys stay valid
+                            options["before"] = before
+                        if rewrite:  # absent when false, so older mission keys stay valid
+                            options["rewrite"] = True
+                        yield {"strategy": strategy.name, "options": options}, weights
     else:
         yield {"strategy": strategy.name, "options": _plain_options(strategy)}, weights
 
@@ -445,6 +449,11 @@ def portable(settings: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+REWRITE_LABEL = "rewrite"
+"""The part of a variant label that marks whole-plan rewriting, e.g.
+``replacement[handwritten,guarded,rewrite]``."""
+
+
 def variant_label(strategy: str, options: dict[str, Any]) -> str:
     """A short readable strategy variant, e.g. ``replacement[handwritten,guarded]``."""
     if not options:
@@ -465,6 +474,8 @@ def variant_label(strategy: str, options: dict[str, Any]) -> str:
         parts.append(f"{options['lpg_time_limit_s']:g}s")
     if options.get("lpg_seed"):
         parts.append(f"seed={options['lpg_seed']}")
+    if options.get("rewrite"):
+        parts.append(REWRITE_LABEL)
     return f"{strategy}[{','.join(parts)}]"
 
 
@@ -506,7 +517,13 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
                 if isinstance(strategy, LookaheadStrategy)
                 else 1
             )
-            count = len(strategy.tables) * len(strategy.recursion) * windows * weights
+            count = (
+                len(strategy.tables)
+                * len(strategy.recursion)
+                * windows
+                * len(strategy.rewrite)
+                * weights
+            )
         else:
             count = weights
         variants += count
@@ -689,6 +706,7 @@ def to_spec(mission: Mission) -> MissionSpec:
             before=options.get("before", 0),
             lpg_time_limit_s=options.get("lpg_time_limit_s", 5.0),
             lpg_seed=options.get("lpg_seed", 0),
+            rewrite=options.get("rewrite", False),
         ),
         clearance_weight=Fraction(s["clearance_weight"]),
         clearance_radius=s["clearance_radius"],

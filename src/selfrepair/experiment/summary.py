@@ -23,6 +23,10 @@ mission that never meets a faulty action says nothing about repair.
   over missions with intervals;
 * *repair latency median, p99*: over every repair of every mission (pooled; descriptive only,
   repairs of one mission are not independent);
+* *repairs/mission*: repairs (faulty encounters and defensive replans), mean over missions that
+  met a fault (a whole-plan rewrite is one repair, however many actions it substitutes);
+* *hit latency median*: over the repairs a table replacement resolved (for a rewriting variant,
+  its whole-plan rewrites), pooled;
 * *plan distance* (Fox et al. 2006) between initial and executed plan, mean over missions, as
   ground actions and by motion class.
 """
@@ -143,6 +147,8 @@ class StrategySummary:
     warm_first_repair_us: Interval | None
     latency_median_us: float | None
     latency_p99_us: float | None
+    repairs_per_mission: float | None = None
+    hit_latency_median_us: float | None = None
 
     HEADERS: ClassVar[tuple[str, ...]] = (
         "strategy",
@@ -159,6 +165,8 @@ class StrategySummary:
         "first repair warm µs",
         "repair latency median µs",
         "repair latency p99 µs",
+        "repairs/mission",
+        "hit latency median µs",
     )
 
     @property
@@ -184,6 +192,8 @@ class StrategySummary:
             _interval(self.warm_first_repair_us),
             _fmt(self.latency_median_us),
             _fmt(self.latency_p99_us),
+            _fmt(self.repairs_per_mission, 2),
+            _fmt(self.hit_latency_median_us),
         )
 
 
@@ -222,7 +232,9 @@ def strategy_order(label: str) -> tuple[int, str]:
 
 def _summary(label: str, rows: list[Row]) -> StrategySummary:
     met = [r for r in rows if met_fault(r)]
-    latencies = [lat / 1000 for r in rows for _, lat in repairs_of(r)]
+    repairs = [(source, lat / 1000) for r in rows for source, lat in repairs_of(r)]
+    latencies = [lat for _, lat in repairs]
+    hits = [lat for source, lat in repairs if source == _HIT]
     share, _, _ = local_share(rows)
     motion = _values(rows, "plan_distance_motion")
     return StrategySummary(
@@ -241,7 +253,13 @@ def _summary(label: str, rows: list[Row]) -> StrategySummary:
         warm_first_repair_us=bootstrap_interval(_values(met, "first_repair_ns", 1e-3)),
         latency_median_us=median(latencies),
         latency_p99_us=percentile(latencies, 0.99),
+        repairs_per_mission=sum(num(r, "repair_count") for r in met) / len(met) if met else None,
+        hit_latency_median_us=median(hits),
     )
+
+
+_HIT = "replacement"
+"""The ``repair_sources`` entry of a table hit (``RepairSource.REPLACEMENT``)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -5,7 +5,9 @@ A strategy has a lifecycle. At the start of a mission the executor calls its fac
 free-cell test, an edge cost), and gets a :class:`Repairer`; then, each time the next action is
 faulty, it calls ``repairer.repair(request)`` with a :class:`RepairRequest` (the pose, the queued
 actions and the known faults) and splices the :class:`Repair` into its queue. A repairer may keep
-state between repairs (an incremental planner keeps its search); the built-in ones do not.
+state between repairs (an incremental planner keeps its search); the built-in ``replacement``
+keeps the mission's compiled look-ups at hand (:class:`ReplacementRepairer`), the others keep
+nothing.
 
 Factories live in the registry :data:`STRATEGIES` (:func:`register_strategy` adds one,
 :func:`get_strategy` looks one up). The built-in strategies (:class:`StrategyName`):
@@ -14,7 +16,12 @@ Factories live in the registry :data:`STRATEGIES` (:func:`register_strategy` add
     The original baseline: plan from scratch from the current pose with the known faults.
 ``replacement``
     Look the faulty action up in the replacement table and take the first valid candidate (in the
-    chosen recursion mode); fall back to ``replan`` when none is valid.
+    chosen recursion mode); fall back to ``replan`` when none is valid. The look-up goes through
+    the compiled look-ups of :mod:`selfrepair.repair.lookups` (a warm hit is one integer-keyed
+    dictionary look-up; same answers as the reference search). With ``StrategyOptions.rewrite``
+    the repairer, once a fault is known, also walks the rest of the plan and substitutes every
+    faulty action that has a valid replacement at its predicted pose, so later encounters never
+    reach the repairer (see :class:`ReplacementRepairer`).
 ``lookahead``
     Replace a window of the plan, the faulty action and up to ``window`` actions after it, by the
     cheapest sub-plan that reaches the pose at the end of the window, found by A* with the known
@@ -43,18 +50,29 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 from fractions import Fraction
+from itertools import chain
 from typing import Any, NamedTuple, Protocol
 
 from selfrepair.errors import ProblemError, choice
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
+from selfrepair.limits import MAX_LOOKUP_PATTERNS
+from selfrepair.repair.lookups import (
+    MISSING,
+    FaultLookups,
+    GridLookups,
+    Missing,
+    action_index,
+    compiled_replacement,
+    fault_lookups,
+    grid_lookups,
+    occupancy_codes,
+)
 from selfrepair.repair.replacement import (
     DEFAULT_MAX_DEPTH,
     DEFERRING,
     FreeTest,
     RecursionMode,
     Replacement,
-    find_replacement,
-    flat_replacement,
 )
 from selfrepair.robots.domain import Domain, run_open
 from selfrepair.search.astar import PlanResult, PlanStatus
@@ -72,6 +90,7 @@ __all__ = [
     "RepairSource",
     "RepairStatus",
     "Repairer",
+    "ReplacementRepairer",
     "StrategyFactory",
     "StrategyName",
     "StrategyOptions",
@@ -123,9 +142,15 @@ class StrategyOptions:
     ``max_depth`` the depth bound of ``guarded`` mode; ``window`` the lookahead window (actions
     after the faulty one); ``before`` the actions before the faulty one that a lookahead window
     may take in as well, when the fault is known that early (see :func:`lookahead`);
-    ``lookahead_expansions`` the budget of one window search. ``lpg_time_limit_s`` and
-    ``lpg_seed`` are the wall-clock limit (seconds) and the seed of each LPG-adapt call of the
-    ``lpg-adapt`` strategy.
+    ``lookahead_expansions`` the budget of one window search; ``rewrite``: the ``replacement``
+    strategy substitutes, when it first meets a faulty action under the faults known, every
+    faulty action of the rest of the plan that has a valid replacement at its predicted pose
+    (whole-plan rewriting; other strategies ignore it; not in a deferring recursion mode such as
+    ``primitive``, whose replacements may keep faulty actions for later);
+    ``max_lookup_patterns`` the patterns one compiled look-up stores at most
+    (:data:`~selfrepair.limits.MAX_LOOKUP_PATTERNS`). ``lpg_time_limit_s`` and ``lpg_seed`` are
+    the wall-clock limit (seconds) and the seed of each LPG-adapt call of the ``lpg-adapt``
+    strategy.
     """
 
     table: str | ReplacementTable = "handwritten"
@@ -136,6 +161,8 @@ class StrategyOptions:
     before: int = 0
     lpg_time_limit_s: float = 5.0
     lpg_seed: int = 0
+    rewrite: bool = False
+    max_lookup_patterns: int = MAX_LOOKUP_PATTERNS
 
     def __post_init__(self) -> None:
         object.__setattr__(
@@ -147,6 +174,17 @@ class StrategyOptions:
             )
         if not self.lpg_time_limit_s > 0 or self.lpg_seed < 0:
             raise ProblemError("lpg_time_limit_s must be above 0 and lpg_seed >= 0")
+        if self.max_lookup_patterns < 0:
+            raise ProblemError(
+                f"max_lookup_patterns must be at least 0, got {self.max_lookup_patterns}"
+            )
+        if not isinstance(self.rewrite, bool):
+            raise ProblemError(f"rewrite must be True or False, got {self.rewrite!r}")
+        if self.rewrite and self.recursion in DEFERRING:
+            raise ProblemError(
+                f"rewrite is not available in {self.recursion} recursion (its replacements may "
+                "keep faulty actions for later)"
+            )
 
     @property
     def table_label(self) -> str:
@@ -230,7 +268,9 @@ class Repair(NamedTuple):
     the looked-up candidate list); ``examined`` counts table candidates looked at;
     ``expansions`` the search nodes expanded by planning. An attempt that gave up may say why
     after a colon: ``("lpg-adapt:timeout", "replan")`` means LPG-adapt ran out of time and the
-    strategy fell back to replanning.
+    strategy fell back to replanning. ``rewritten`` counts the later queued actions a whole-plan
+    rewrite substituted (their replacements are in ``actions``, which then runs up to the last
+    substituted one, and ``consumed`` covers them); 0 for any other repair.
     """
 
     status: RepairStatus
@@ -244,6 +284,7 @@ class Repair(NamedTuple):
     expansions: int = 0
     attempts: tuple[str, ...] = ()
     candidate_index: int | None = None
+    rewritten: int = 0
 
 
 class Repairer(Protocol):
@@ -306,39 +347,208 @@ def replan(context: MissionContext, request: RepairRequest) -> Repair:
     )
 
 
-def replacement(context: MissionContext, request: RepairRequest) -> Repair:
-    """The first valid table candidate for the faulty action, else :func:`replan`."""
-    table = context.table
-    if table is None:
+def _hit(found: Replacement) -> Repair:
+    """The repair of a table hit. It does not depend on the pose, so the compiled look-ups store
+    it and a warm hit returns it as it is."""
+    return Repair(
+        RepairStatus.REPAIRED,
+        RepairSource.REPLACEMENT,
+        found.actions,
+        1,
+        candidate_length=len(found.actions),
+        depth=found.depth,
+        examined=found.examined,
+        attempts=(StrategyName.REPLACEMENT,),
+        candidate_index=found.position,
+    )
+
+
+def _table(context: MissionContext) -> ReplacementTable:
+    if context.table is None:
         raise ProblemError("the replacement strategy needs a table")
-    action = request.queue[0]
+    return context.table
+
+
+def _lookups(context: MissionContext, known: frozenset[Any]) -> FaultLookups[Repair]:
     options = context.options
-    if options.recursion is RecursionMode.FLAT:
-        found = flat_replacement(table, action, request.pose, request.known, context.grid)
-    else:
-        found = find_replacement(
-            table,
-            action,
-            request.pose,
-            request.known,
-            context.free,
-            mode=options.recursion,
-            max_depth=options.max_depth,
-        )
-    if found is not None:
-        return Repair(
-            RepairStatus.REPAIRED,
-            RepairSource.REPLACEMENT,
-            found.actions,
-            1,
-            candidate_length=len(found.actions),
-            depth=found.depth,
-            examined=found.examined,
-            attempts=(StrategyName.REPLACEMENT,),
-            candidate_index=found.position,
-        )
-    examined = len(table.candidates(action, request.known))
+    return fault_lookups(
+        _table(context),
+        known,
+        mode=options.recursion,
+        max_depth=options.max_depth,
+        answer=_hit,
+        max_patterns=options.max_lookup_patterns,
+    )
+
+
+def _miss(context: MissionContext, request: RepairRequest, action: Any) -> Repair:
+    """No valid candidate: :func:`replan`, with the candidates looked at counted."""
+    examined = len(_table(context).candidates(action, request.known))
     return _chain(replan(context, request), (StrategyName.REPLACEMENT,), examined=examined)
+
+
+def replacement(context: MissionContext, request: RepairRequest) -> Repair:
+    """The first valid table candidate for the faulty action, else :func:`replan` (the stateless
+    form, for strategies that fall back to it; the ``replacement`` strategy itself is
+    :class:`ReplacementRepairer`)."""
+    action = request.queue[0]
+    found = _lookups(context, request.known).get(action, request.pose, context.grid)
+    return _miss(context, request, action) if found is None else found
+
+
+class ReplacementRepairer:
+    """The ``replacement`` strategy started for one mission.
+
+    A hit reads the occupancy code of the pose from the mission's grid and looks the masked code
+    up in the compiled map of the faulty action under the known faults (see
+    :mod:`selfrepair.repair.lookups`); the stored :class:`Repair` is returned as it is. A pattern
+    met for the first time runs the reference search once. With no valid candidate it replans.
+
+    With ``options.rewrite`` a hit also walks the rest of the queue once, following the poses the
+    plan predicts, and substitutes every faulty action that has a valid replacement there, up
+    to the first faulty action without one: that one stays, and the robot replans when it meets
+    it (as it would without rewriting), which drops everything after it anyway.
+    Replacements end where the replaced action ends, so the predicted poses stay exact, and with
+    permanent faults detected at once the robot executes the same steps as without rewriting,
+    but meets one faulty action per fault set instead of one per occurrence. The executor still
+    checks each next action against the faults known at that time (new faults trigger a new
+    rewrite), and the simulator still holds the true faults and walls.
+
+    State (per mission): the known faults of the last request and the compiled look-ups for them
+    as read on the mission's grid (:class:`~selfrepair.repair.lookups.GridLookups`, shared with
+    other missions on the same grid). Poses are tracked as buffer positions of the grid and
+    actions by slot ``4 * index + heading``; ``steps[slot]`` is the position change and new
+    heading of an action from a heading.
+    """
+
+    __slots__ = (
+        "_context",
+        "_faulty",
+        "_index",
+        "_known",
+        "_last",
+        "_offset",
+        "_on_grid",
+        "_quads",
+        "_rewrite",
+        "_slots",
+        "_steps",
+        "_stride",
+    )
+
+    def __init__(self, context: MissionContext) -> None:
+        table = _table(context)
+        if table.domain is not context.domain:
+            raise ProblemError(
+                f"table for domain {table.domain.name!r} used with domain {context.domain.name!r}"
+            )
+        self._context = context
+        self._rewrite = context.options.rewrite
+        self._index = action_index(context.domain)
+        grid = context.grid
+        self._stride = grid.stride
+        self._offset = grid.margin * grid.stride + grid.margin
+        self._quads = self._index.quads
+        self._steps = self._index.steps(grid.stride)
+        self._known: frozenset[Any] | None = None
+        self._last: tuple[Any, int] = (None, -1)
+        lookups = _lookups(context, frozenset())
+        self._on_grid: GridLookups[Repair] = grid_lookups(lookups, grid)
+        self._slots = self._on_grid.slots
+        self._faulty = lookups.faulty_slots
+        occupancy_codes(grid, lookups.radius)  # the grid's codes, before any timed repair
+
+    def _use(self, known: frozenset[Any]) -> None:
+        """Switch to the look-ups of ``known`` (a new frozenset of the same faults keeps them)."""
+        if self._known is None or known != self._known:
+            lookups = _lookups(self._context, known)
+            self._on_grid = grid_lookups(lookups, self._context.grid)
+            self._slots = self._on_grid.slots
+            self._faulty = lookups.faulty_slots
+        self._known = known
+
+    def _quad(self, action: Any) -> int:
+        """``4 *`` the index of ``action`` (by identity, else by equality)."""
+        quad = self._quads.get(id(action))
+        return 4 * self._index.of(action) if quad is None else quad
+
+    def repair(self, request: RepairRequest) -> Repair:
+        """The stored repair of the pattern around the pose (see the class docstring).
+
+        The hot path of a warm hit, kept to a few dozen bytecodes: the request unpacked at once,
+        the last faulty action's slot remembered by identity (a robot meets the same faulty
+        action again and again), then one list index, one ``&`` and one dictionary look-up."""
+        pose, queue, known, _ = request
+        if known is not self._known:
+            self._use(known)
+        action = queue[0]
+        last, quad = self._last
+        if action is not last:
+            quad = self._quad(action)
+            self._last = (action, quad)
+        slot = quad + pose.heading
+        entry = self._slots[slot]
+        if entry is None:
+            entry = self._on_grid.slot(slot)
+        mask, answers, codes = entry
+        position = self._offset + pose.y * self._stride + pose.x
+        key = codes[position] & mask
+        found: Repair | Missing | None = answers.get(key, MISSING)
+        if found is MISSING:
+            found = self._on_grid.fill(slot, position, key)
+        if found is None:
+            return _miss(self._context, request, action)
+        if self._rewrite:
+            return self._rewritten(request, found, slot, position)
+        return found
+
+    def _rewritten(self, request: RepairRequest, head: Repair, slot: int, position: int) -> Repair:
+        """``head`` extended over the rest of the queue: every later faulty action with a valid
+        replacement at its predicted pose substituted, up to the first one without (the robot
+        will replan there, dropping the rest). The actions after the last substitution stay
+        queued as they are, so every action of the repair is available."""
+        rest = request.queue[1:]
+        faulty, steps, slots = self._faulty, self._steps, self._slots
+        quads = list(map(self._quads.get, map(id, rest)))  # in C; by identity (see _quad)
+        move, h = steps[slot]
+        position += move
+        parts: list[Sequence[Any]] = [head.actions]
+        done = substituted = 0
+        for k, quad in enumerate(quads):
+            if quad is None:
+                quad = self._quad(rest[k])
+            slot = quad + h
+            if faulty[slot]:
+                mask, answers, codes = slots[slot] or self._on_grid.slot(slot)
+                key = codes[position] & mask
+                hit: Repair | Missing | None = answers.get(key, MISSING)
+                if hit is MISSING:
+                    hit = self._on_grid.fill(slot, position, key)
+                if hit is None:  # the robot will replan here: what follows would be dropped
+                    break
+                if done < k:
+                    parts.append(rest[done:k])
+                parts.append(hit.actions)
+                done = k + 1
+                substituted += 1
+            move, h = steps[slot]
+            position += move
+        if not substituted:
+            return head
+        return Repair(  # built directly: NamedTuple._replace costs several microseconds
+            head.status,
+            head.source,
+            tuple(chain.from_iterable(parts)),
+            1 + done,
+            head.replans,
+            head.candidate_length,
+            head.depth,
+            head.examined,
+            head.expansions,
+            head.attempts,
+            head.candidate_index,
+            substituted,
+        )
 
 
 class DeferringRepairer:
@@ -363,9 +573,7 @@ class DeferringRepairer:
     def repair(self, request: RepairRequest) -> Repair:
         """The first valid candidate (deferred actions kept), else :func:`replan`."""
         context = self._context
-        table = context.table
-        if table is None:
-            raise ProblemError("the replacement strategy needs a table")
+        table = _table(context)
         queue, action = request.queue, request.queue[0]
         remaining = len(queue)
         pending = self._pending
@@ -374,15 +582,16 @@ class DeferringRepairer:
         outer = pending.pop(remaining, None)
         guard = outer[1] if outer is not None and outer[0] == action else frozenset()
         options = context.options
-        found = find_replacement(
+        found = compiled_replacement(
             table,
             action,
             request.pose,
             request.known,
-            context.free,
+            context.grid,
             mode=options.recursion,
             max_depth=options.max_depth,
             guard=guard,
+            max_patterns=options.max_lookup_patterns,
         )
         if found is None:
             pending.clear()  # a replan replaces the whole queue
@@ -395,34 +604,12 @@ class DeferringRepairer:
         return _hit(found)
 
 
-def _hit(found: Replacement) -> Repair:
-    """The repair of a table hit."""
-    return Repair(
-        RepairStatus.REPAIRED,
-        RepairSource.REPLACEMENT,
-        found.actions,
-        1,
-        candidate_length=len(found.actions),
-        depth=found.depth,
-        examined=found.examined,
-        attempts=(StrategyName.REPLACEMENT,),
-        candidate_index=found.position,
-    )
-
-
-def _miss(context: MissionContext, request: RepairRequest, action: Any) -> Repair:
-    """No valid candidate: :func:`replan`, with the candidates looked at counted."""
-    assert context.table is not None
-    examined = len(context.table.candidates(action, request.known))
-    return _chain(replan(context, request), (StrategyName.REPLACEMENT,), examined=examined)
-
-
 def start_replacement(context: MissionContext) -> Repairer:
-    """The ``replacement`` strategy's factory: stateless, except in a deferring recursion mode
-    (:class:`DeferringRepairer`)."""
+    """The ``replacement`` strategy's factory: :class:`ReplacementRepairer`, or
+    :class:`DeferringRepairer` in a deferring recursion mode (``primitive``)."""
     if context.options.recursion in DEFERRING:
         return DeferringRepairer(context)
-    return FunctionRepairer(context, replacement)
+    return ReplacementRepairer(context)
 
 
 def lookahead(context: MissionContext, request: RepairRequest) -> Repair:

@@ -1,0 +1,699 @@
+"""Compiled replacement look-ups: a table hit as one integer-keyed dictionary look-up.
+
+Whether a candidate is valid at a pose depends only on the replaced action, the known faults, the
+recursion mode (with its guard set and depth bound) and which cells around the pose are free. The
+cells that matter form the action's **neighbourhood**: the union of every cell the search of
+:func:`~selfrepair.repair.replacement.find_replacement` could test, relative to the pose, for each
+heading (the footprints of every candidate's steps, nested candidates included, up to where a
+candidate must stop whatever the walls). So per (table, action, known faults, recursion mode) the
+search is compiled into a map from the neighbourhood's occupancy bits to its answer:
+
+* the map's key is the **occupancy code** of the pose masked to the neighbourhood: every cell of
+  a ``(2r+1) x (2r+1)`` window around a cell is one bit, precomputed once per
+  :class:`~selfrepair.geometry.FreeGrid` and radius (:func:`occupancy_codes`, a list indexed like
+  ``FreeGrid.index``; cells beyond the grid's margin count as walls). A hit is then one list
+  index, one ``&`` and one dictionary look-up with an integer key;
+* the map's value is the reference search's answer for that pattern, made pose-independent (the
+  end pose is kept relative to the start cell). In flat mode, small neighbourhoods (at most
+  :data:`ENUMERATE_BITS` cells besides the robot's own, which is always free) are enumerated on
+  first use, all ``2^n`` patterns, by bit tests (the first candidate whose cells are all free);
+  larger ones, and recursive modes, are filled lazily: the reference search runs once for each
+  pattern actually met. Either way the answer equals the reference search's, including the
+  candidate index, the nested depth and the number of candidates examined (a property test
+  checks this over random mazes, poses, faults, tables and recursion modes).
+
+What is kept, and the limits (all in :mod:`selfrepair.caching` caches, see :func:`cache_stats`):
+
+* ``compiled replacement look-ups``: at most :data:`MAX_FAULT_LOOKUPS` (512)
+  :class:`FaultLookups` (one per table, fault set, recursion mode, depth bound and answer kind),
+  least recently used evicted. Each holds at most ``max_patterns`` stored patterns (default
+  :data:`~selfrepair.limits.MAX_LOOKUP_PATTERNS`, 4096; ``--max-lookup-patterns``)
+  over all its actions and headings; past that, answers are still correct but computed by the
+  search each time.
+* ``compiled look-ups on grids``: at most :data:`MAX_FAULT_LOOKUPS` :class:`GridLookups`, the
+  per-(action, heading) references a hit reads on one grid (one list of ``4 x actions`` slots
+  each; they may keep an evicted :class:`FaultLookups` or code list alive until evicted too).
+* ``occupancy codes``: at most :data:`MAX_CODE_GRIDS` (16) code lists (one per grid and radius),
+  one pointer per padded cell plus one integer object per distinct code (8 bytes a cell: a few
+  kilobytes on the bundled mazes, about 2.2 MB on a 512x512 map, so at most 16 x 8 bytes x the
+  largest grid's cells).
+
+Memory is measured by :func:`lookup_memory` with ``sys.getsizeof``: per :class:`FaultLookups`,
+its per-action lists, each per-heading map (hash table), its integer keys and each distinct
+answer with its action tuple (shallow: the action objects belong to the domain and are shared).
+A stored pattern costs about 100 bytes, so one :class:`FaultLookups` stays below about 0.5 MB and
+all of them below about 230 MB; typical ones hold 10 to 25 KB (``benchmarks/repair_latency.py``
+prints them), about 2 MB for the whole paper experiment.
+
+Action objects are found by identity first (``id(action)`` to the action's index in
+``domain.actions``; the domain keeps those objects alive) and by equality only when a domain hands
+out equal copies, because hashing a frozen-dataclass action costs more than the whole look-up.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable, Hashable, Iterable
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any, Final, Generic, TypeVar
+
+import numpy as np
+
+from selfrepair.caching import BoundedCache
+from selfrepair.errors import ProblemError, choice
+from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
+from selfrepair.limits import MAX_LOOKUP_PATTERNS
+from selfrepair.repair.replacement import (
+    DEFAULT_MAX_DEPTH,
+    DEFERRING,
+    RECURSION_MODES,
+    RecurseRule,
+    RecursionMode,
+    Replacement,
+    complex_actions,
+    find_replacement,
+    table_reach,
+)
+from selfrepair.robots.domain import Domain
+from selfrepair.tables.model import ReplacementTable
+
+__all__ = [
+    "ENUMERATE_BITS",
+    "MAX_CODE_GRIDS",
+    "MAX_FAULT_LOOKUPS",
+    "MAX_PATTERNS",
+    "MISSING",
+    "ActionIndex",
+    "ActionLookup",
+    "FaultLookups",
+    "GridLookups",
+    "LookupMemory",
+    "Missing",
+    "action_index",
+    "compiled_replacement",
+    "fault_lookups",
+    "grid_lookups",
+    "lookup_memory",
+    "neighbourhood",
+    "occupancy_codes",
+]
+
+T = TypeVar("T")
+
+ENUMERATE_BITS = 4
+"""Flat-mode neighbourhoods of at most this many cells besides the robot's own are enumerated in
+full (``2^n`` patterns) on first use; larger ones, and every neighbourhood of a recursive mode,
+are filled per pattern met."""
+
+MAX_PATTERNS = MAX_LOOKUP_PATTERNS
+"""The default of stored patterns per :class:`FaultLookups` (all actions and headings together;
+see :data:`selfrepair.limits.MAX_LOOKUP_PATTERNS`)."""
+
+MAX_FAULT_LOOKUPS = 512
+"""Compiled (table, fault set, recursion mode) look-ups kept per process: enough for a sweep's
+working set (the paper experiment uses 3 tables x 12 fault sets x 3 modes)."""
+
+MAX_CODE_GRIDS = 16
+"""Occupancy code lists (grid and radius) kept per process."""
+
+
+class Missing(Enum):
+    """The marker of a pattern not met yet (distinct from ``None``, "no valid candidate")."""
+
+    MISSING = 0
+
+
+MISSING: Final = Missing.MISSING
+
+Answer = Callable[[Replacement], Any]
+"""Turns a found replacement (end pose relative to the start cell) into the stored answer."""
+
+
+# --- actions by index -------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class ActionIndex:
+    """A domain's actions by position, with their moves, found without hashing an action.
+
+    ``ids`` maps ``id(action)`` of the domain's own action objects to their index (``quads``
+    to four times it: the first of the action's four per-heading slots); ``positions`` maps
+    actions by equality (for equal copies). ``moves[i][h]`` is ``(dx, dy, heading)``: what
+    action ``i`` does from heading ``h`` on an open plane; ``footprints[i][h]`` its footprint
+    cells relative to the start cell.
+    """
+
+    domain: Domain[Any, Any]
+    ids: dict[int, int]
+    positions: dict[Any, int]
+    moves: tuple[tuple[tuple[int, int, int], ...], ...]
+    footprints: tuple[tuple[tuple[Cell, ...], ...], ...]
+    quads: dict[int, int]
+
+    def steps(self, stride: int) -> tuple[tuple[int, int], ...]:
+        """Per slot ``4 * i + heading``: the change of buffer position (rows of ``stride``) and
+        the new heading of action ``i`` from that heading (kept for a few strides)."""
+        return _STEPS.get((self, stride), lambda: self._steps(stride))
+
+    def _steps(self, stride: int) -> tuple[tuple[int, int], ...]:
+        return tuple((dy * stride + dx, h) for per in self.moves for dx, dy, h in per)
+
+    def of(self, action: Any) -> int:
+        """The index of ``action`` in ``domain.actions``; :class:`ProblemError` if it has none."""
+        found = self.ids.get(id(action))
+        if found is not None:
+            return found
+        found = self.positions.get(action)
+        if found is None:
+            raise ProblemError(f"{action!r} is not an action of domain {self.domain.name!r}")
+        return found
+
+
+def _action_index(domain: Domain[Any, Any]) -> ActionIndex:
+    starts = [Pose(0, 0, heading) for heading in Heading]
+    moves = []
+    for action in domain.actions:
+        ends = [domain.apply(start, action) for start in starts]
+        moves.append(tuple((end.x, end.y, int(end.heading)) for end in ends))
+    return ActionIndex(
+        domain,
+        {id(a): i for i, a in enumerate(domain.actions)},
+        {a: i for i, a in enumerate(domain.actions)},
+        tuple(moves),
+        tuple(tuple(domain.footprint(s, a) for s in starts) for a in domain.actions),
+        {id(a): 4 * i for i, a in enumerate(domain.actions)},
+    )
+
+
+_INDEX: BoundedCache[Domain[Any, Any], ActionIndex] = BoundedCache("action index", 16)
+_STEPS: BoundedCache[tuple[ActionIndex, int], tuple[tuple[int, int], ...]] = BoundedCache(
+    "action steps by grid stride", 16
+)
+
+
+def action_index(domain: Domain[Any, Any]) -> ActionIndex:
+    """The :class:`ActionIndex` of ``domain`` (built once per domain)."""
+    return _INDEX.get(domain, lambda: _action_index(domain))
+
+
+# --- neighbourhoods -----------------------------------------------------------------------------
+
+
+def neighbourhood(
+    table: ReplacementTable,
+    action: Any,
+    known: frozenset[Any],
+    heading: Heading,
+    *,
+    mode: RecursionMode | str = RecursionMode.FLAT,
+    max_depth: int = DEFAULT_MAX_DEPTH,
+) -> frozenset[Cell]:
+    """Every cell, relative to a pose at the origin facing ``heading``, whose occupancy the search
+    for a replacement of ``action`` could test: the answer depends on these cells only."""
+    walk = _walk_of(
+        table, frozenset(known), choice(RecursionMode, mode, "recursion mode"), max_depth
+    )
+    return walk.cells(action, int(heading), frozenset({action}), 0)
+
+
+def _walk_of(
+    table: ReplacementTable, known: frozenset[Any], mode: RecursionMode, max_depth: int
+) -> _Walk:
+    rule = RECURSION_MODES[mode](table.domain, max_depth)
+    deferrable = complex_actions(table, known) if mode in DEFERRING else frozenset()
+    return _Walk(table, known, rule, action_index(table.domain), deferrable)
+
+
+@dataclass(slots=True)
+class _Walk:
+    """The symbolic search behind :func:`neighbourhood` (mutable: memoises sub-neighbourhoods).
+
+    It mirrors ``replacement._Search`` but follows every candidate whatever the walls: a
+    candidate is followed until a step must fail in any case (a guarded action, a faulty one
+    that may not be replaced, or a deferrable one that would run first). A deferred action
+    (``deferrable``: the faulty complex actions of a deferring mode such as ``primitive``) adds
+    no cell, as the search does not test it, but the walk goes on after it. Sub-neighbourhoods
+    are relative to their start cell (actions commute with translation), so each (action,
+    heading, guard set, depth, whether it runs first) is walked once.
+    """
+
+    table: ReplacementTable
+    known: frozenset[Any]
+    rule: RecurseRule
+    index: ActionIndex
+    deferrable: frozenset[Any] = frozenset()
+    memo: dict[tuple[Any, int, frozenset[Any], int, bool], frozenset[Cell]] = field(
+        default_factory=dict
+    )
+
+    def cells(
+        self, action: Any, heading: int, replacing: frozenset[Any], depth: int, first: bool = True
+    ) -> frozenset[Cell]:
+        key = (action, heading, replacing, depth, first)
+        found = self.memo.get(key)
+        if found is None:
+            found = self._walk(action, heading, replacing, depth, first)
+            self.memo[key] = found
+        return found
+
+    def _walk(
+        self, action: Any, heading: int, replacing: frozenset[Any], depth: int, first: bool
+    ) -> frozenset[Cell]:
+        index = self.index
+        available = self.table.domain.available
+        out: set[Cell] = set()
+        for candidate in self.table.candidates(action, self.known):
+            x = y = 0
+            h = heading
+            for k, b in enumerate(candidate):
+                if b in replacing:
+                    break
+                i = index.of(b)
+                runs_first = first and k == 0
+                if available(b, self.known):
+                    out.update((x + cx, y + cy) for cx, cy in index.footprints[i][h])
+                elif b in self.deferrable:
+                    if runs_first:
+                        break
+                elif self.rule(b, action, depth):
+                    sub = self.cells(b, h, replacing | {b}, depth + 1, runs_first)
+                    out.update((x + cx, y + cy) for cx, cy in sub)
+                else:
+                    break
+                dx, dy, h = index.moves[i][h]  # a nested replacement ends where b ends
+                x += dx
+                y += dy
+        return frozenset(out)
+
+
+def _bit(cell: Cell, radius: int) -> int:
+    """The bit of a relative cell in the occupancy code of radius ``radius``."""
+    side = 2 * radius + 1
+    return (cell[1] + radius) * side + cell[0] + radius
+
+
+# --- occupancy codes ----------------------------------------------------------------------------
+
+
+def _codes(grid: FreeGrid, radius: int) -> list[int]:
+    rows = grid.height + 2 * grid.margin
+    cols = grid.stride
+    free = np.frombuffer(grid.data, dtype=np.uint8).reshape(rows, cols)
+    padded = np.pad(free, radius)  # zeros: cells beyond the margin are walls
+    side = 2 * radius + 1
+    chunks: list[np.ndarray[Any, np.dtype[np.uint64]]] = []
+    for first in range(0, side * side, 64):
+        chunk = np.zeros((rows, cols), dtype=np.uint64)
+        for bit in range(first, min(first + 64, side * side)):
+            dy, dx = divmod(bit, side)
+            window = padded[dy : dy + rows, dx : dx + cols].astype(np.uint64)
+            chunk |= window << np.uint64(bit - first)
+        chunks.append(chunk.ravel())
+    if len(chunks) == 1:  # share one int object per distinct code: 8 bytes a cell
+        distinct, inverse = np.unique(chunks[0], return_inverse=True)
+        values: list[int] = distinct.tolist()
+        return list(map(values.__getitem__, inverse.ravel().tolist()))
+    parts = [c.tolist() for c in chunks]
+    return [
+        sum(int(p) << (64 * k) for k, p in enumerate(cell)) for cell in zip(*parts, strict=True)
+    ]
+
+
+_CODES: BoundedCache[tuple[FreeGrid, int], list[int]] = BoundedCache(
+    "occupancy codes", MAX_CODE_GRIDS
+)
+
+
+def occupancy_codes(grid: FreeGrid, radius: int) -> list[int]:
+    """Per padded cell of ``grid`` (indexed like ``grid.index``), the bits of the free cells in
+    the ``(2 radius + 1)``-wide window around it; bit ``(dy + r) * (2r + 1) + dx + r`` is cell
+    ``(x + dx, y + dy)``. Built once per grid and radius (a few are kept)."""
+    if radius < 0:
+        raise ProblemError(f"radius must be at least 0, got {radius}")
+    return _CODES.get((grid, radius), lambda: _codes(grid, radius))
+
+
+# --- compiled look-ups --------------------------------------------------------------------------
+
+
+class ActionLookup(Generic[T]):
+    """The compiled look-up of one action under one fault set and recursion mode.
+
+    ``radius`` is the window of the occupancy codes it reads (the table's reach, or more when
+    nested candidates reach further, so that most look-ups of a table share one code list),
+    ``masks[h]`` the neighbourhood bits
+    for heading ``h`` and ``answers[h]`` the map from masked codes to answers (``None``: no valid
+    candidate). Filled lazily (mutable by nature; bounded by the owner's ``max_patterns``).
+    """
+
+    __slots__ = ("action", "answers", "cells", "masks", "radius")
+
+    def __init__(self, action: Any, cells: tuple[frozenset[Cell], ...], radius: int) -> None:
+        self.action = action
+        self.cells = cells
+        reach = max((max(abs(x), abs(y)) for per in cells for x, y in per), default=0)
+        self.radius = max(reach, radius)
+        self.masks = tuple(sum(1 << _bit(c, self.radius) for c in per) for per in cells)
+        self.answers: tuple[dict[int, T | None], ...] = tuple({} for _ in cells)
+
+    def patterns(self) -> int:
+        """Patterns stored, over every heading."""
+        return sum(len(a) for a in self.answers)
+
+
+class FaultLookups(Generic[T]):
+    """The compiled look-ups of one table under one fault set, recursion mode and depth bound.
+
+    ``faulty[i]`` tells whether action ``i`` of the domain is unavailable under the faults
+    (``faulty_slots[4 * i + heading]`` the same, per action and heading);
+    :meth:`action` compiles an action's :class:`ActionLookup` on first use and :meth:`fill`
+    answers a pattern met for the first time. ``answer`` turns a found replacement (end pose
+    relative to the start cell) into what the maps store.
+    """
+
+    __slots__ = (
+        "answer",
+        "faulty",
+        "faulty_slots",
+        "guard",
+        "index",
+        "known",
+        "lookups",
+        "max_depth",
+        "max_patterns",
+        "mode",
+        "radius",
+        "stored",
+        "table",
+    )
+
+    def __init__(
+        self,
+        table: ReplacementTable,
+        known: frozenset[Any],
+        mode: RecursionMode,
+        max_depth: int,
+        answer: Answer,
+        guard: frozenset[Any] = frozenset(),
+        max_patterns: int = MAX_PATTERNS,
+    ) -> None:
+        domain = table.domain
+        self.table = table
+        self.known = known
+        self.mode = mode
+        self.max_depth = max_depth
+        self.answer = answer
+        self.guard = guard
+        self.index = action_index(domain)
+        self.faulty = tuple(not domain.available(a, known) for a in domain.actions)
+        self.faulty_slots = tuple(bad for bad in self.faulty for _ in Heading)
+        self.lookups: list[ActionLookup[T] | None] = [None] * len(domain.actions)
+        self.stored = 0
+        self.max_patterns = max_patterns
+        self.radius = table_reach(table)
+
+    def action(self, i: int) -> ActionLookup[T]:
+        """The look-up of action ``i`` (compiled, and enumerated when small, on first use)."""
+        lookup = self.lookups[i]
+        if lookup is None:
+            lookup = self._compile(i)
+            self.lookups[i] = lookup
+        return lookup
+
+    def _compile(self, i: int) -> ActionLookup[T]:
+        action = self.table.domain.actions[i]
+        walk = _walk_of(self.table, self.known, self.mode, self.max_depth)
+        replacing = self.guard | {action}
+        cells = tuple(walk.cells(action, h, replacing, 0) for h in range(len(Heading)))
+        lookup: ActionLookup[T] = ActionLookup(action, cells, self.radius)
+        if self.mode is RecursionMode.FLAT:
+            for heading in Heading:
+                others = sorted(cells[heading] - {(0, 0)})
+                budget = self.stored + (1 << len(others)) <= self.max_patterns
+                if len(others) <= ENUMERATE_BITS and budget:
+                    self._enumerate(lookup, heading, others, (0, 0) in cells[heading])
+        return lookup
+
+    def _enumerate(
+        self, lookup: ActionLookup[T], heading: Heading, others: list[Cell], own: bool
+    ) -> None:
+        """Answer every pattern of a flat-mode neighbourhood (the robot's own cell free).
+
+        In flat mode a candidate is valid exactly when it does not use the replaced action, all
+        its actions are available and all its cells are free, so each pattern's answer is the
+        first candidate whose cells it contains: bit tests, no search. (Recursive modes are
+        filled per pattern met instead: enumerating them would run an exhaustive recursive
+        search for every pattern, tens of milliseconds for one action.)
+        """
+        dom = self.table.domain
+        action = lookup.action
+        bit_of = {c: 1 << k for k, c in enumerate(others)}
+        usable = []
+        replacing = self.guard | {action}
+        for position, candidate in enumerate(self.table.candidates(action, self.known)):
+            if not replacing.isdisjoint(candidate) or not all(
+                dom.available(b, self.known) for b in candidate
+            ):
+                continue
+            state, need = Pose(0, 0, heading), 0
+            for b in candidate:
+                need |= sum(bit_of.get(c, 0) for c in dom.footprint(state, b))
+                state = dom.apply(state, b)
+            found = Replacement(action, candidate, candidate, position, 0, position + 1, state)
+            usable.append((need, self.answer(found)))
+        radius = lookup.radius
+        answers = lookup.answers[heading]
+        own_bit = 1 << _bit((0, 0), radius) if own else 0
+        for pattern in range(1 << len(others)):
+            key = own_bit | sum(1 << _bit(c, radius) for c, b in bit_of.items() if pattern & b)
+            answers[key] = next((value for need, value in usable if need & ~pattern == 0), None)
+            self.stored += 1
+
+    def fill(self, lookup: ActionLookup[T], pose: Pose, key: int, grid: FreeGrid) -> T | None:
+        """The answer at ``pose`` for a pattern not stored yet: the reference search, kept for
+        the next pose with the same pattern (while the pattern budget lasts)."""
+        found = find_replacement(
+            self.table,
+            lookup.action,
+            pose,
+            self.known,
+            grid.all_free,
+            mode=self.mode,
+            max_depth=self.max_depth,
+            guard=self.guard,
+        )
+        value = None if found is None else self.answer(_relative(found, pose))
+        if self.stored < self.max_patterns:
+            lookup.answers[pose.heading][key] = value
+            self.stored += 1
+        return value
+
+    def get(self, action: Any, pose: Pose, grid: FreeGrid) -> T | None:
+        """The answer for ``action`` at ``pose`` on ``grid`` (the convenient, slower entry: the
+        strategies inline this)."""
+        lookup = self.action(self.index.of(action))
+        codes = occupancy_codes(grid, lookup.radius)
+        key = codes[grid.index(pose.x, pose.y)] & lookup.masks[pose.heading]
+        value = lookup.answers[pose.heading].get(key, MISSING)
+        if value is MISSING:
+            return self.fill(lookup, pose, key, grid)
+        return value
+
+    def memory(self) -> LookupMemory:
+        """What this look-up holds now (see :func:`lookup_memory`)."""
+        compiled = [lk for lk in self.lookups if lk is not None]
+        size = sys.getsizeof(self.lookups) + sys.getsizeof(self.faulty)
+        seen: set[int] = set()
+        for lookup in compiled:
+            size += sys.getsizeof(lookup.masks) + sys.getsizeof(lookup.answers)
+            for answers in lookup.answers:
+                size += sys.getsizeof(answers)
+                for key, value in answers.items():
+                    size += sys.getsizeof(key)
+                    if value is not None and id(value) not in seen:
+                        seen.add(id(value))
+                        size += _answer_size(value)
+        dom = self.table.domain
+        return LookupMemory(
+            self.table.source,
+            dom.format_faults(self.known),
+            self.mode,
+            _key(self.mode, self.max_depth),
+            len(compiled),
+            sum(lk.patterns() for lk in compiled),
+            size,
+        )
+
+
+def _answer_size(value: object) -> int:
+    size = sys.getsizeof(value)
+    actions = getattr(value, "actions", None)
+    if isinstance(actions, tuple):
+        size += sys.getsizeof(actions)
+    return size
+
+
+def _relative(found: Replacement, pose: Pose) -> Replacement:
+    end = found.end
+    return found._replace(end=Pose(end.x - pose.x, end.y - pose.y, end.heading))
+
+
+_DEPTH_BOUNDED = frozenset({RecursionMode.GUARDED, RecursionMode.PRIMITIVE})
+"""Recursion modes whose rule reads the depth bound (``primitive`` recurses as ``guarded``)."""
+
+
+def _key(mode: RecursionMode, max_depth: int) -> int:
+    """The depth bound matters in depth-bounded modes only; others share one compiled look-up."""
+    return max_depth if mode in _DEPTH_BOUNDED else 0
+
+
+_LOOKUPS: BoundedCache[
+    tuple[ReplacementTable, frozenset[Any], RecursionMode, int, Hashable, frozenset[Any], int],
+    FaultLookups[Any],
+] = BoundedCache("compiled replacement look-ups", MAX_FAULT_LOOKUPS)
+
+
+def fault_lookups(
+    table: ReplacementTable,
+    known: Iterable[Any],
+    *,
+    mode: RecursionMode | str = RecursionMode.FLAT,
+    max_depth: int = DEFAULT_MAX_DEPTH,
+    answer: Answer,
+    guard: frozenset[Any] = frozenset(),
+    max_patterns: int = MAX_PATTERNS,
+) -> FaultLookups[Any]:
+    """The compiled look-ups of ``table`` under ``known`` faults in recursion ``mode`` (made on
+    first use, kept in a bounded cache). ``answer`` must be a module-level function: it is part
+    of the cache key. ``guard``: actions an outer replacement is still replacing (none of them
+    is used; see :func:`~selfrepair.repair.replacement.find_replacement`). ``max_patterns``:
+    patterns stored at most (see :data:`~selfrepair.limits.MAX_LOOKUP_PATTERNS`)."""
+    if max_patterns < 0:
+        raise ProblemError(f"max_patterns must be at least 0, got {max_patterns}")
+    recursion = (
+        mode if type(mode) is RecursionMode else choice(RecursionMode, mode, "recursion mode")
+    )
+    if max_depth < 0:
+        raise ProblemError(f"max_depth must be at least 0, got {max_depth}")
+    faults = known if type(known) is frozenset else frozenset(known)
+    depth = _key(recursion, max_depth)
+    return _LOOKUPS.get(
+        (table, faults, recursion, depth, answer, guard, max_patterns),
+        lambda: FaultLookups(table, faults, recursion, max_depth, answer, guard, max_patterns),
+    )
+
+
+def _same(found: Replacement) -> Replacement:
+    return found
+
+
+def compiled_replacement(
+    table: ReplacementTable,
+    action: Any,
+    pose: Pose,
+    known_faults: Iterable[Any],
+    grid: FreeGrid,
+    *,
+    mode: RecursionMode | str = RecursionMode.FLAT,
+    max_depth: int = DEFAULT_MAX_DEPTH,
+    guard: Iterable[Any] = (),
+    max_patterns: int = MAX_PATTERNS,
+) -> Replacement | None:
+    """:func:`~selfrepair.repair.replacement.find_replacement` through the compiled look-ups:
+    the same answer (every field, ``deferred`` included), from one look-up once the pattern has
+    been met."""
+    lookups = fault_lookups(
+        table,
+        known_faults,
+        mode=mode,
+        max_depth=max_depth,
+        answer=_same,
+        guard=frozenset(guard),
+        max_patterns=max_patterns,
+    )
+    found: Replacement | None = lookups.get(action, pose, grid)
+    if found is None:
+        return None
+    end = found.end
+    return found._replace(end=Pose(pose.x + end.x, pose.y + end.y, end.heading))
+
+
+# --- look-ups read on one grid -------------------------------------------------------------------
+
+Slot = tuple[int, dict[int, Any], list[int]]
+"""What a hit reads for one (action, heading): the neighbourhood mask, the map from masked codes
+to answers, and the grid's occupancy codes at the look-up's radius."""
+
+
+class GridLookups(Generic[T]):
+    """The compiled look-ups of one fault set (:class:`FaultLookups`) as read on one grid.
+
+    ``slots[4 * i + heading]`` holds what a hit of action ``i`` from ``heading`` reads
+    (:data:`Slot`), filled on first use, for all four headings at once; positions are buffer
+    indices of the grid (``offset + y * stride + x``). Shared by every mission on the same grid
+    under the same faults, so a mission does not refill them (mutable by nature; bounded by
+    the number of slots).
+    """
+
+    __slots__ = ("grid", "lookups", "offset", "slots", "stride")
+
+    def __init__(self, lookups: FaultLookups[T], grid: FreeGrid) -> None:
+        self.lookups = lookups
+        self.grid = grid
+        self.stride = grid.stride
+        self.offset = grid.margin * grid.stride + grid.margin
+        self.slots: list[Slot | None] = [None] * len(lookups.faulty_slots)
+
+    def slot(self, slot: int) -> Slot:
+        """Fill the four slots of the action of ``slot`` (compiling its look-up if need be)."""
+        first = slot & ~3
+        lookup = self.lookups.action(first >> 2)
+        codes = occupancy_codes(self.grid, lookup.radius)
+        for heading in range(4):
+            self.slots[first + heading] = (lookup.masks[heading], lookup.answers[heading], codes)
+        return (lookup.masks[slot & 3], lookup.answers[slot & 3], codes)
+
+    def fill(self, slot: int, position: int, key: int) -> T | None:
+        """Answer a pattern met for the first time at buffer ``position`` (see
+        :meth:`FaultLookups.fill`)."""
+        y, x = divmod(position - self.offset, self.stride)
+        lookups = self.lookups
+        pose = Pose(x, y, Heading(slot & 3))
+        found: T | None = lookups.fill(lookups.action(slot >> 2), pose, key, self.grid)
+        return found
+
+
+_ON_GRIDS: BoundedCache[tuple[FaultLookups[Any], FreeGrid], GridLookups[Any]] = BoundedCache(
+    "compiled look-ups on grids", MAX_FAULT_LOOKUPS
+)
+
+
+def grid_lookups(lookups: FaultLookups[T], grid: FreeGrid) -> GridLookups[T]:
+    """``lookups`` as read on ``grid`` (kept per fault set and grid, a bounded number)."""
+    found: GridLookups[T] = _ON_GRIDS.get((lookups, grid), lambda: GridLookups(lookups, grid))
+    return found
+
+
+# --- memory -------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True, slots=True)
+class LookupMemory:
+    """What one compiled (table, fault set, mode) look-up holds: compiled actions, stored
+    patterns and approximate bytes (``sys.getsizeof``, see the module docstring). ``max_depth``
+    is 0 except in the modes it changes (guarded, primitive)."""
+
+    table: str
+    faults: str
+    mode: RecursionMode
+    max_depth: int
+    actions: int
+    patterns: int
+    bytes: int
+
+
+def lookup_memory() -> tuple[LookupMemory, ...]:
+    """The memory of every compiled look-up kept now, largest first."""
+    items = [value.memory() for value in _LOOKUPS.values()]
+    return tuple(sorted(items, key=lambda m: (-m.bytes, m.table, m.faults, m.mode)))
