@@ -93,6 +93,7 @@ __all__ = [
     "find_line",
     "load_config",
     "parse_config",
+    "read_experiment_text",
     "read_toml",
 ]
 
@@ -235,13 +236,10 @@ class PlannerConfig(_Frozen):
         return _weights(value)
 
 
-class ReplanStrategy(_Frozen):
-    """The baseline: replan from scratch at every faulty encounter, with the planner ``backend``
-    (``auto``: the compiled kernels when numba is installed; ``python``: the pure-Python search,
-    to compare with pure-Python strategies such as D* Lite)."""
+class _StrategyEntry(_Frozen):
+    """What every strategy entry has: its own clearance weights (else the planner's) and the
+    labels of the mazes it runs on (else all)."""
 
-    name: Literal["replan"]
-    backend: Literal["auto", "numba", "python"] = "auto"
     clearance_weights: tuple[str, ...] | None = None
     mazes: MazeNames = None
 
@@ -251,7 +249,16 @@ class ReplanStrategy(_Frozen):
         return _weights(value)
 
 
-class ReplacementStrategy(_Frozen):
+class ReplanStrategy(_StrategyEntry):
+    """The baseline: replan from scratch at every faulty encounter, with the planner ``backend``
+    (``auto``: the compiled kernels when numba is installed; ``python``: the pure-Python search,
+    to compare with pure-Python strategies such as D* Lite)."""
+
+    name: Literal["replan"]
+    backend: Literal["auto", "numba", "python"] = "auto"
+
+
+class ReplacementStrategy(_StrategyEntry):
     """Replacement tables with recursion mode; one variant per table, mode and ``rewrite``
     value (``true``: whole-plan rewriting, ``[false, true]``: both; default per encounter)."""
 
@@ -259,8 +266,6 @@ class ReplacementStrategy(_Frozen):
     tables: tuple[str, ...] = ("handwritten",)
     recursion: tuple[RecursionMode, ...] = (RecursionMode.GUARDED,)
     rewrite: tuple[bool, ...] = (False,)
-    clearance_weights: tuple[str, ...] | None = None
-    mazes: MazeNames = None
 
     @field_validator("rewrite", mode="before")
     @classmethod
@@ -272,11 +277,6 @@ class ReplacementStrategy(_Frozen):
         if isinstance(value, list | tuple) and not all(isinstance(v, bool) for v in value):
             raise ValueError(f"expected true, false or a list of them, got {value!r}")
         return value
-
-    @field_validator("clearance_weights", mode="before")
-    @classmethod
-    def _weights(cls, value: Any) -> Any:
-        return _weights(value)
 
     @field_validator("tables", "recursion")
     @classmethod
@@ -313,33 +313,19 @@ class LookaheadStrategy(ReplacementStrategy):
         return value
 
 
-class DStarLiteStrategy(_Frozen):
+class DStarLiteStrategy(_StrategyEntry):
     """D* Lite, incremental replanning (pure Python), keeping its search between repairs."""
 
     name: Literal["dstar-lite"]
-    clearance_weights: tuple[str, ...] | None = None
-    mazes: MazeNames = None
-
-    @field_validator("clearance_weights", mode="before")
-    @classmethod
-    def _weights(cls, value: Any) -> Any:
-        return _weights(value)
 
 
-class LpgAdaptStrategy(_Frozen):
+class LpgAdaptStrategy(_StrategyEntry):
     """Plan repair with LPG-adapt (``pddl`` extra, four-wheel robot): ``time_limit`` seconds per
     call, LPG's ``seed``; LPG's failures and time-outs fall back to replanning."""
 
     name: Literal["lpg-adapt"]
     time_limit: Annotated[Float, Field(gt=0, le=3600)] = 5.0
     seed: Annotated[Int, Field(ge=0, lt=2**31)] = 0
-    clearance_weights: tuple[str, ...] | None = None
-    mazes: MazeNames = None
-
-    @field_validator("clearance_weights", mode="before")
-    @classmethod
-    def _weights(cls, value: Any) -> Any:
-        return _weights(value)
 
     @field_validator("name")
     @classmethod
@@ -436,6 +422,15 @@ def load_config(
     path: str | Path, *, max_file_bytes: int | None = MAX_FILE_BYTES
 ) -> ExperimentConfig:
     """Read and validate an experiment TOML file (refused unread if over ``max_file_bytes``)."""
+    text, source = read_experiment_text(path, max_file_bytes=max_file_bytes)
+    return parse_config(text, source=source)
+
+
+def read_experiment_text(
+    path: str | Path, *, max_file_bytes: int | None = MAX_FILE_BYTES
+) -> tuple[str, str]:
+    """The text of the experiment file ``path`` and its absolute path as the error source (a
+    file over ``max_file_bytes`` is refused unread)."""
     file = Path(path)
     text = read_text(
         file,
@@ -444,7 +439,7 @@ def load_config(
         max_bytes=max_file_bytes,
         limit="max_file_bytes",
     )
-    return parse_config(text, source=str(file.resolve()))
+    return text, str(file.resolve())
 
 
 def read_toml(text: str, *, source: str = "<string>") -> dict[str, Any]:

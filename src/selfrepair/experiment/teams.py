@@ -57,6 +57,7 @@ from selfrepair.experiment.config import (
     config_error,
     find_line,
     parse_config,
+    read_experiment_text,
     read_toml,
 )
 from selfrepair.experiment.missions import (
@@ -77,7 +78,6 @@ from selfrepair.team.experiment import FaultCase, TeamCase, case_row
 from selfrepair.team.model import TeamStrategyName, TeamTableName
 from selfrepair.team.result import TeamOptions
 from selfrepair.team.scenario import GripperMix, components
-from selfrepair.textio import read_text
 
 __all__ = [
     "TeamExperimentConfig",
@@ -195,15 +195,7 @@ def load_experiment(
 ) -> ExperimentConfig | TeamExperimentConfig:
     """Read an experiment file of either kind (``kind = "team"`` or none); a file over
     ``max_file_bytes`` is refused unread."""
-    file = Path(path)
-    text = read_text(
-        file,
-        what="experiment file",
-        error=ConfigError,
-        max_bytes=max_file_bytes,
-        limit="max_file_bytes",
-    )
-    source = str(file.resolve())
+    text, source = read_experiment_text(path, max_file_bytes=max_file_bytes)
     data = read_toml(text, source=source)
     if data.get("kind") != TEAM_KIND:
         if "kind" in data:
