@@ -25,17 +25,14 @@ from collections import Counter
 from collections.abc import Callable, Hashable, Iterable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from selfrepair.caching import BoundedCache
-from selfrepair.execution.result import MissionResult, MissionSpec
+from selfrepair.execution.result import MissionResult, MissionSpec, TraceStep
 from selfrepair.repair.strategies import RepairSource, RepairStatus
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.lattice import action_cost, plan
 from selfrepair.search.problem import PlanningProblem
-
-if TYPE_CHECKING:
-    from selfrepair.execution.result import MissionResult
 
 __all__ = [
     "ROW_COLUMNS",
@@ -171,6 +168,29 @@ def executed_cost(result: MissionResult) -> Fraction:
     )
 
 
+def _cost_and_distance(
+    result: MissionResult, executed: tuple[TraceStep, ...]
+) -> tuple[Fraction, PlanDistance, PlanDistance]:
+    """The executed cost, the plan distance and the plan distance by motion: from the executor's
+    tally when the result has one, else recomputed from the steps (:func:`executed_cost`,
+    :func:`plan_distance`, :func:`motion_distance`)."""
+    tally = result.tally
+    if tally is None:
+        planned = list(zip(result.initial_plan.poses, result.initial_plan.actions, strict=False))
+        done = [(s.start, s.action) for s in executed]
+        distance = plan_distance(planned, done)
+        by_motion = motion_distance(result.spec.domain.motion_class, planned, done)
+        return executed_cost(result), distance, by_motion
+    cost = Fraction(tally.executed_units, tally.unit)
+    if tally.penalty:
+        cost += Fraction(result.spec.clearance_weight) * tally.penalty
+    return (
+        cost,
+        PlanDistance(tally.plan_removed, tally.plan_added),
+        PlanDistance(tally.motion_removed, tally.motion_added),
+    )
+
+
 def mission_row(result: MissionResult, *, optimum: Fraction | None = None) -> Row:
     """Flatten a mission result into one row; the columns are :data:`ROW_COLUMNS`, documented in
     docs/replacement.md. Exact values are strings (``"31/3"``) with ``_float`` twins; times are
@@ -188,12 +208,8 @@ def mission_row(result: MissionResult, *, optimum: Fraction | None = None) -> Ro
     ]
     latencies = [r.latency_ns for r in repairs]
     stats = latency_stats(latencies)
-    cost_after = executed_cost(result)
+    cost_after, distance, by_motion = _cost_and_distance(result, executed)
     compute_ns = result.initial_planning_ns + stats.total_ns
-    planned = list(zip(initial.poses, initial.actions, strict=False))
-    done = [(s.start, s.action) for s in executed]
-    distance = plan_distance(planned, done)
-    by_motion = motion_distance(spec.domain.motion_class, planned, done)
     replans = sum(r.repair.replans for r in repairs)
     row: Row = {
         "maze": spec.maze.name,

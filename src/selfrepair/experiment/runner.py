@@ -175,7 +175,7 @@ def _median_timings(runs: Sequence[MissionResult]) -> MissionResult:
     if counts != {len(first.repairs)}:  # never expected: missions are deterministic
         return replace(first, initial_planning_ns=planning)
     repairs = tuple(
-        replace(record, latency_ns=_lower_median([r.repairs[i].latency_ns for r in runs]))
+        record._replace(latency_ns=_lower_median([r.repairs[i].latency_ns for r in runs]))
         for i, record in enumerate(first.repairs)
     )
     return replace(first, repairs=repairs, initial_planning_ns=planning)
