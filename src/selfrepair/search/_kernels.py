@@ -9,21 +9,23 @@ Layout: the grid is padded by one wall cell on every side and flattened, so a ce
 ``p = (y + 1) * (width + 2) + (x + 1)`` and every motion is a fixed integer offset; a lattice
 state is ``4 * p + heading``.
 
-The open list is a 4-ary heap of records ``(f, h, counter, node)``, one row of a 2-D array each
-(one or two cache lines per sift level instead of four arrays), with lazy deletion exactly like
-:func:`~selfrepair.search.astar.astar`: a node is pushed again when its ``g`` improves and a
-popped entry of a closed node is skipped. The keys are unique (the counter), so both pop exactly
-the same nodes in the same order and return the same plan.
+The open list is an indexed 4-ary heap of records ``(f, h, counter, node)``, one row of a 2-D
+array each (one or two cache lines per sift level instead of four arrays), with decrease-key: a
+node whose ``g`` improves takes a new counter and moves up in place. It pops exactly the entries
+that the lazy-deletion heap of :func:`selfrepair.search.astar.astar` pops, in the same order (the
+keys are unique), so both backends return the same plan.
 
-Per-state scratch (``g``, the move that reached the state, and a ``mark``) lives in arrays that are
-reused from one search to the next. Marks are generation stamps (``2k + 1`` open, ``2k + 2``
-closed in search ``k``; anything lower is unvisited), so a new search does not clear anything:
-only the states a search touches cost memory or time, which matters for a small search on a large
-map. Parents are not stored: the move index and the parent's heading give the parent state.
+Per-state scratch lives in arrays reused from one search to the next: ``g``, the heap slot, and a
+*word* holding a generation stamp and the move that reached the state (lattice: stamp above bit
+10, heading of the parent and move index below; grid: a stamp byte array and a move byte). Stamps
+are ``2k + 1`` (open) and ``2k + 2`` (closed) in search ``k``, anything lower is unvisited, so a
+new search clears nothing: only the states a search touches cost memory or time, which matters
+for a small search on a large map. Parents are not stored: the move and the parent's heading give
+the parent state.
 
 Kernels are resumable: all search state lives in arrays, and a call stops after a given number of
-expansions (so that the Python wrapper can look at the clock between calls) or when the heap
-array is full (the wrapper then grows it and calls again).
+expansions (so that the Python wrapper can look at the clock between calls) or when the heap or
+queue array is full (the wrapper then grows it and calls again).
 """
 
 from __future__ import annotations
@@ -68,7 +70,11 @@ CHUNK = 1 << 15
 _PAUSED, _SOLVED, _UNSOLVABLE, _GROW = 0, 1, 2, 3
 _SIZE, _COUNTER, _EXPANSIONS, _FOUND = 0, 1, 2, 3
 _F, _H, _C, _NODE = 0, 1, 2, 3  # heap record columns
-_MARK_MAX = np.iinfo(np.uint16).max
+_MOVE_BITS = 10
+"""Lattice words: the parent's heading (2 bits) and the move index (8 bits) below the stamp."""
+_MOVE_MASK = (1 << _MOVE_BITS) - 1
+_LATTICE_MARK_MAX = (1 << (31 - _MOVE_BITS)) - 1
+_GRID_MARK_MAX = int(np.iinfo(np.uint16).max) >> 3
 _FIRST_HEAP = 1 << 12
 """Heap records allocated at first; the heap doubles when a search needs more."""
 
@@ -77,9 +83,9 @@ _FIRST_HEAP = 1 << 12
 _DCELL, _NHEAD, _DUR, _NEED, _NSW, _SW = 0, 1, 2, 3, 4, 5
 
 
-# --- 4-ary heap of records ---------------------------------------------------------------------
-# Row i holds (f, h, counter, node); the children of row i are rows 4i+1 .. 4i+4: half the levels
-# of a binary heap, so fewer cache misses.
+# --- indexed 4-ary heap of records -------------------------------------------------------------
+# Row i holds (f, h, counter, node) and pos[node] == i; the children of row i are rows 4i+1 ..
+# 4i+4: half the levels of a binary heap, so fewer cache misses.
 
 
 @njit(cache=True, inline="always")
@@ -92,9 +98,9 @@ def _less(f1: Any, h1: Any, c1: Any, f2: Any, h2: Any, c2: Any) -> bool:
 
 
 @njit(cache=True)
-def _push(heap: Any, size: int, f: Any, h: Any, c: Any, node: Any) -> None:
-    """Insert a record at slot ``size`` and sift it up (the caller ensures room)."""
-    i = size
+def _sift_up(heap: Any, pos: Any, i: int, f: Any, h: Any, c: Any, node: Any) -> None:
+    """Place the record ``(f, h, c, node)`` at slot ``i`` or above (a push when ``i`` is the
+    heap's size, a decrease-key when it is the node's slot)."""
     while i > 0:
         up = (i - 1) >> 2
         if not _less(f, h, c, heap[up, 0], heap[up, 1], heap[up, 2]):
@@ -103,15 +109,17 @@ def _push(heap: Any, size: int, f: Any, h: Any, c: Any, node: Any) -> None:
         heap[i, 1] = heap[up, 1]
         heap[i, 2] = heap[up, 2]
         heap[i, 3] = heap[up, 3]
+        pos[int(heap[i, 3])] = i
         i = up
     heap[i, 0] = f
     heap[i, 1] = h
     heap[i, 2] = c
     heap[i, 3] = node
+    pos[int(node)] = i
 
 
 @njit(cache=True)
-def _pop(heap: Any, size: int) -> int:
+def _pop(heap: Any, pos: Any, size: int) -> int:
     """Remove the top record; ``size`` is the heap size before the pop. Returns the new size."""
     size -= 1
     if size > 0:
@@ -134,11 +142,13 @@ def _pop(heap: Any, size: int) -> int:
             heap[i, 1] = heap[child, 1]
             heap[i, 2] = heap[child, 2]
             heap[i, 3] = heap[child, 3]
+            pos[int(heap[i, 3])] = i
             i = child
         heap[i, 0] = f
         heap[i, 1] = h
         heap[i, 2] = c
         heap[i, 3] = node
+        pos[int(node)] = i
     return size
 
 
@@ -146,53 +156,46 @@ def _pop(heap: Any, size: int) -> int:
 
 
 @njit(cache=True)
-def _bfs(pw: int, goal: int, dist: Any, queue: Any) -> None:
-    """Breadth-first search on ``dist``: -1 marks an unvisited free cell, -2 a wall."""
-    dist[goal] = 0
-    queue[0] = goal
-    head, tail = 0, 1
-    while head < tail:
+def _bfs(pw: int, dist: Any, queue: Any, st: Any) -> int:
+    """Breadth-first search on ``dist`` (-1 marks an unvisited free cell, -2 a wall) from the
+    cells in the ring ``queue`` (``st``: head and count; the capacity is a power of two). Returns
+    1 when the queue must grow before going on, else 0."""
+    mask = queue.shape[0] - 1
+    head, count = st[0], st[1]
+    while count > 0:
+        if count + 4 > mask + 1:
+            st[0], st[1] = head, count
+            return 1
         p = queue[head]
-        head += 1
+        head = (head + 1) & mask
+        count -= 1
         d = dist[p] + 1
         q = p - pw
         if dist[q] == -1:
             dist[q] = d
-            queue[tail] = q
-            tail += 1
+            queue[(head + count) & mask] = q
+            count += 1
         q = p + 1
         if dist[q] == -1:
             dist[q] = d
-            queue[tail] = q
-            tail += 1
+            queue[(head + count) & mask] = q
+            count += 1
         q = p + pw
         if dist[q] == -1:
             dist[q] = d
-            queue[tail] = q
-            tail += 1
+            queue[(head + count) & mask] = q
+            count += 1
         q = p - 1
         if dist[q] == -1:
             dist[q] = d
-            queue[tail] = q
-            tail += 1
+            queue[(head + count) & mask] = q
+            count += 1
+    st[0], st[1] = head, count
+    return 0
 
 
 def _cached(cache: BoundedCache[Any, Any], key: Hashable, make: Callable[[], Any]) -> Any:
     return cache.get(key, make)
-
-
-def _bfs_template(maze: Maze) -> npt.NDArray[np.int32]:
-    """-1 on free cells and -2 on walls and the border: the starting state of :func:`_bfs`."""
-
-    def make() -> npt.NDArray[np.int32]:
-        out = np.where(_padded_free(maze) != 0, -1, -2).astype(np.int32)
-        out.setflags(write=False)
-        return out
-
-    return _cached(_TEMPLATES, maze, make)  # type: ignore[no-any-return]
-
-
-_TEMPLATES: BoundedCache[Maze, npt.NDArray[np.int32]] = BoundedCache("bfs templates", 4)
 
 
 @dataclass(slots=True)
@@ -201,12 +204,13 @@ class _Scratch:
 
     size: int
     arrays: dict[str, Any]
+    mark_max: int
     generation: int = 0
 
     def next_marks(self) -> tuple[int, int]:
-        """The (open, closed) marks of a new search; clears the marks when they run out."""
+        """The (open, closed) stamps of a new search; clears the marks when they run out."""
         opened = 2 * self.generation + 1
-        if opened + 1 > _MARK_MAX:
+        if opened + 1 > self.mark_max:
             self.arrays["mark"].fill(0)
             self.generation, opened = 0, 1
         self.generation += 1
@@ -216,7 +220,7 @@ class _Scratch:
 _local = threading.local()
 
 
-def _scratch(tag: str, n: int, spec: tuple[tuple[str, Any], ...]) -> _Scratch:
+def _scratch(tag: str, n: int, spec: tuple[tuple[str, Any], ...], mark_max: int) -> _Scratch:
     """Scratch arrays of ``n`` states kept per thread and reused across searches.
 
     Fresh arrays would cost a page fault per touched page on every query, which for the
@@ -233,7 +237,7 @@ def _scratch(tag: str, n: int, spec: tuple[tuple[str, Any], ...]) -> _Scratch:
             name: np.zeros(n, dtype=dtype) if name == "mark" else np.empty(n, dtype=dtype)
             for name, dtype in spec
         }
-        entry = cache[tag] = _Scratch(n, arrays)
+        entry = cache[tag] = _Scratch(n, arrays, mark_max)
     return entry
 
 
@@ -295,13 +299,26 @@ def bfs_padded(maze: Maze, goal: Cell) -> npt.NDArray[np.int32]:
     """4-connected BFS distances to ``goal``, shape ``(height + 2, width + 2)``.
 
     Negative means unreachable: -1 for a free cell cut off from the goal, -2 for a wall or the
-    border.
+    border. The queue is a ring that grows with the frontier, not with the maze.
     """
     pw = maze.width + 2
-    dist = _bfs_template(maze).copy()
-    queue = np.empty(dist.size, dtype=np.int32)  # touched only as far as the search reaches
-    _bfs(pw, (goal[1] + 1) * pw + goal[0] + 1, dist, queue)
+    dist = np.where(_padded_free(maze) != 0, -1, -2).astype(np.int32)
+    goal_p = (goal[1] + 1) * pw + goal[0] + 1
+    dist[goal_p] = 0
+    queue = np.empty(_FIRST_QUEUE, dtype=np.int32)
+    queue[0] = goal_p
+    st = np.array([0, 1], dtype=np.int64)
+    while _bfs(pw, dist, queue, st):
+        head, count = int(st[0]), int(st[1])
+        live = queue[(head + np.arange(count)) & (queue.shape[0] - 1)]
+        queue = np.empty(2 * queue.shape[0], dtype=np.int32)
+        queue[:count] = live
+        st[0] = 0
     return dist.reshape(maze.height + 2, pw)
+
+
+_FIRST_QUEUE = 1 << 12
+"""Breadth-first queue entries allocated at first (a power of two; doubled on demand)."""
 
 
 # --- robot lattice -------------------------------------------------------------------------
@@ -310,7 +327,7 @@ def bfs_padded(maze: Maze, goal: Cell) -> npt.NDArray[np.int32]:
 @njit(cache=True)
 def _lattice(
     nbr: Any, pen: Any, hdist: Any, mt: Any, par: Any,
-    g: Any, pmove: Any, mark: Any, heap: Any, scal: Any,
+    g: Any, word: Any, heap: Any, scal: Any, pos: Any,
 ) -> int:  # fmt: skip
     rnum, rden, wmul = par[0], par[1], par[2]
     goal_cell, goal_head, limit, opened = par[3], par[4], par[5], par[6]
@@ -320,18 +337,15 @@ def _lattice(
     room = heap.shape[0] - nmoves
     status = _UNSOLVABLE
     while size > 0:
-        s = heap[0, _NODE]
-        if mark[s] == closed:  # a stale record: the state was reached more cheaply before
-            size = _pop(heap, size)
-            continue
         if expansions >= limit:
             status = _PAUSED
             break
         if size > room:
             status = _GROW
             break
-        size = _pop(heap, size)
-        mark[s] = closed
+        s = heap[0, _NODE]
+        size = _pop(heap, pos, size)
+        word[s] = (closed << _MOVE_BITS) | (word[s] & _MOVE_MASK)
         expansions += 1
         cell = s >> 2
         head = s & 3
@@ -347,7 +361,7 @@ def _lattice(
                 continue
             nc = cell + mt[head, k, _DCELL]
             ns = 4 * nc + mt[head, k, _NHEAD]
-            m = mark[ns]
+            m = word[ns] >> _MOVE_BITS
             if m == closed:
                 continue
             gn = gs + mt[head, k, _DUR]
@@ -364,22 +378,24 @@ def _lattice(
             hv = d * rnum if rden == 1 else d * rnum // rden
             counter += 1
             g[ns] = gn
-            pmove[ns] = (head << 8) | k
-            mark[ns] = opened
-            _push(heap, size, gn + hv, hv, counter, ns)
-            size += 1
+            word[ns] = (opened << _MOVE_BITS) | (head << 8) | k
+            if m == opened:
+                _sift_up(heap, pos, pos[ns], gn + hv, hv, counter, ns)
+            else:
+                _sift_up(heap, pos, size, gn + hv, hv, counter, ns)
+                size += 1
     scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS] = size, counter, expansions
     return status
 
 
 @njit(cache=True)
-def _walk_lattice(pmove: Any, mt: Any, start: int, goal: int) -> Any:
+def _walk_lattice(word: Any, mt: Any, start: int, goal: int) -> Any:
     """The states from ``start`` to ``goal`` (``out[0]``), the move index into each (``out[1]``,
     -1 for the start) and the scaled duration of the path (``out[2, 0]``)."""
     n = 1
     s = goal
     while s != start:
-        pm = pmove[s]
+        pm = word[s] & _MOVE_MASK
         head = pm >> 8
         s = 4 * ((s >> 2) - mt[head, pm & 255, _DCELL]) + head
         n += 1
@@ -389,7 +405,7 @@ def _walk_lattice(pmove: Any, mt: Any, start: int, goal: int) -> Any:
     for i in range(n - 1, -1, -1):
         out[0, i] = s
         if i:
-            pm = pmove[s]
+            pm = word[s] & _MOVE_MASK
             head = pm >> 8
             k = pm & 255
             out[1, i] = k
@@ -468,7 +484,8 @@ _PENALTY: BoundedCache[tuple[Maze, int], tuple[npt.NDArray[np.int64], int]] = Bo
 _NO_PENALTY = np.zeros(1, dtype=np.int64)
 _NO_PENALTY.setflags(write=False)
 
-_LATTICE_ARRAYS = (("g", np.int64), ("pmove", np.int16), ("mark", np.uint16))
+_LATTICE_ARRAYS = (("g", np.int64), ("mark", np.int32), ("pos", np.int32))
+"""Per lattice state: cost so far, word (stamp and move, see the module docstring), heap slot."""
 
 
 def plan_lattice(
@@ -516,13 +533,13 @@ def plan_lattice(
         return PlanStatus.UNSOLVABLE, (), (), 0, 0, 0
     goal_cell = (problem.goal[1] + 1) * pw + problem.goal[0] + 1
     goal_head = -1 if problem.goal_heading is None else int(problem.goal_heading)
-    scratch = _scratch("lattice", n_states, _LATTICE_ARRAYS)
+    scratch = _scratch("lattice", n_states, _LATTICE_ARRAYS, _LATTICE_MARK_MAX)
     arrays = scratch.arrays
-    g, pmove, mark = arrays["g"], arrays["pmove"], arrays["mark"]
+    g, word, pos = arrays["g"], arrays["mark"], arrays["pos"]
     opened, _ = scratch.next_marks()
     h0 = int(hdist[start_cell]) * rnum // rden
     heap = _heap("lattice", np.int64, _FIRST_HEAP)
-    g[start_state], mark[start_state] = 0, opened
+    g[start_state], word[start_state], pos[start_state] = 0, opened << _MOVE_BITS, 0
     heap[0] = (h0, h0, 0, start_state)
     scal = np.array([1, 0, 0, -1], dtype=np.int64)
     par = np.array([rnum, rden, wmul, goal_cell, goal_head, 0, opened], dtype=np.int64)
@@ -532,7 +549,7 @@ def plan_lattice(
         nonlocal heap
         while True:
             par[5] = limit
-            code = int(_lattice(nbr, pen, hdist, mt, par, g, pmove, mark, heap, scal))
+            code = int(_lattice(nbr, pen, hdist, mt, par, g, word, heap, scal, pos))
             if code != _GROW:
                 return code
             heap = _heap("lattice", np.int64, 2 * heap.shape[0])
@@ -542,7 +559,7 @@ def plan_lattice(
     if status is not PlanStatus.SOLVED:
         return status, (), (), 0, 0, expansions
     goal = int(scal[_FOUND])
-    walk = _walk_lattice(pmove, mt, start_state, goal)
+    walk = _walk_lattice(word, mt, start_state, goal)
     actions = tuple(motion.moves[walk[1, 1:]].tolist())
     return status, actions, _poses(maze, walk[0], pw), int(g[goal]), int(walk[2, 0]), expansions
 
@@ -606,7 +623,7 @@ def _drive(
 @njit(cache=True)
 def _grid(
     free: Any, pw: int, diagonal: bool, goal: int, limit: int, opened: int,
-    g: Any, pmove: Any, mark: Any, heap: Any, scal: Any,
+    g: Any, word: Any, heap: Any, scal: Any, pos: Any,
 ) -> int:  # fmt: skip
     size, counter, expansions = scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS]
     closed = opened + 1
@@ -615,86 +632,115 @@ def _grid(
     nmoves = 8 if diagonal else 4
     room = heap.shape[0] - nmoves
     sqrt2 = np.sqrt(2.0)
+    keys = (diagonal, sqrt2, opened, closed)
+    arrays = (free, g, word, heap, pos)
     status = _UNSOLVABLE
     while size > 0:
-        p = int(heap[0, _NODE])
-        if mark[p] == closed:  # a stale record
-            size = _pop(heap, size)
-            continue
         if expansions >= limit:
             status = _PAUSED
             break
         if size > room:
             status = _GROW
             break
-        size = _pop(heap, size)
-        mark[p] = closed
+        p = int(heap[0, _NODE])
+        size = _pop(heap, pos, size)
+        word[p] = (closed << 3) | (word[p] & 7)
         expansions += 1
         if p == goal:
             scal[_FOUND] = p
             status = _SOLVED
             break
         gp = g[p]
-        ex = p % pw - gx  # offset of p from the goal; a neighbour adds (dx, dy)
+        ex = p % pw - gx
         ey = p // pw - gy
         north, east, south, west = free[p - pw], free[p + 1], free[p + pw], free[p - 1]
-        for k in range(nmoves):
-            # N, E, S, W, then NE, SE, SW, NW (a diagonal needs both orthogonal cells free)
-            if k == 0:
-                ok, q, step, dx, dy = north, p - pw, 1.0, 0, -1
-            elif k == 1:
-                ok, q, step, dx, dy = east, p + 1, 1.0, 1, 0
-            elif k == 2:
-                ok, q, step, dx, dy = south, p + pw, 1.0, 0, 1
-            elif k == 3:
-                ok, q, step, dx, dy = west, p - 1, 1.0, -1, 0
-            elif k == 4:
-                ok, q, step, dx, dy = north and east, p - pw + 1, sqrt2, 1, -1
-            elif k == 5:
-                ok, q, step, dx, dy = south and east, p + pw + 1, sqrt2, 1, 1
-            elif k == 6:
-                ok, q, step, dx, dy = south and west, p + pw - 1, sqrt2, -1, 1
-            else:
-                ok, q, step, dx, dy = north and west, p - pw - 1, sqrt2, -1, -1
-            if not ok or free[q] == 0:
-                continue
-            m = mark[q]
-            if m == closed:
-                continue
-            gn = gp + step
-            if m == opened and gn >= g[q]:
-                continue
-            dx = abs(ex + dx)
-            dy = abs(ey + dy)
-            hv = (dx + dy) + (sqrt2 - 2.0) * min(dx, dy) if diagonal else float(dx + dy)
-            counter += 1
-            g[q] = gn
-            pmove[q] = k
-            mark[q] = opened
-            _push(heap, size, gn + hv, hv, float(counter), float(q))
-            size += 1
+        # N, E, S, W, then NE, SE, SW, NW (a diagonal needs both orthogonal cells free)
+        if north:
+            size, counter = _relax(p - pw, 0, 1.0, ex, ey - 1, gp, keys, arrays, size, counter)
+        if east:
+            size, counter = _relax(p + 1, 1, 1.0, ex + 1, ey, gp, keys, arrays, size, counter)
+        if south:
+            size, counter = _relax(p + pw, 2, 1.0, ex, ey + 1, gp, keys, arrays, size, counter)
+        if west:
+            size, counter = _relax(p - 1, 3, 1.0, ex - 1, ey, gp, keys, arrays, size, counter)
+        if diagonal:
+            if north and east:
+                size, counter = _relax(
+                    p - pw + 1, 4, sqrt2, ex + 1, ey - 1, gp, keys, arrays, size, counter
+                )
+            if south and east:
+                size, counter = _relax(
+                    p + pw + 1, 5, sqrt2, ex + 1, ey + 1, gp, keys, arrays, size, counter
+                )
+            if south and west:
+                size, counter = _relax(
+                    p + pw - 1, 6, sqrt2, ex - 1, ey + 1, gp, keys, arrays, size, counter
+                )
+            if north and west:
+                size, counter = _relax(
+                    p - pw - 1, 7, sqrt2, ex - 1, ey - 1, gp, keys, arrays, size, counter
+                )
     scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS] = size, counter, expansions
     return status
 
 
+@njit(cache=True, inline="always")
+def _relax(
+    q: Any, k: int, step: float, ex: Any, ey: Any, gp: float, keys: Any, arrays: Any,
+    size: int, counter: int,
+) -> tuple[int, int]:  # fmt: skip
+    """Relax the edge to cell ``q`` (move ``k``, cost ``step``; ``(ex, ey)`` its offset from the
+    goal); returns the new heap size and push counter. Inlined into :func:`_grid`."""
+    diagonal, sqrt2, opened, closed = keys
+    free, g, word, heap, pos = arrays
+    if free[q] == 0:
+        return size, counter
+    m = word[q] >> 3
+    if m == closed:
+        return size, counter
+    gn = gp + step
+    if m == opened and gn >= g[q]:
+        return size, counter
+    dx = abs(ex)
+    dy = abs(ey)
+    hv = (dx + dy) + (sqrt2 - 2.0) * min(dx, dy) if diagonal else float(dx + dy)
+    counter += 1
+    g[q] = gn
+    word[q] = (opened << 3) | k
+    if m == opened:
+        _sift_up(heap, pos, pos[q], gn + hv, hv, float(counter), float(q))
+    else:
+        _sift_up(heap, pos, size, gn + hv, hv, float(counter), float(q))
+        size += 1
+    return size, counter
+
+
 @njit(cache=True)
-def _walk_grid(pmove: Any, pw: int, start: int, goal: int) -> Any:
+def _walk_grid(word: Any, pw: int, start: int, goal: int) -> Any:
+    """The cells from ``start`` to ``goal`` (``out[:-1]``) and the number of diagonal steps
+    (``out[-1]``)."""
     steps = np.array([-pw, 1, pw, -1, 1 - pw, pw + 1, pw - 1, -pw - 1], dtype=np.int64)
     n = 1
     p = goal
     while p != start:
-        p -= steps[pmove[p]]
+        p -= steps[word[p] & 7]
         n += 1
-    out = np.empty(n, dtype=np.int64)
+    out = np.empty(n + 1, dtype=np.int64)
     p = goal
+    diagonals = 0
     for i in range(n - 1, -1, -1):
         out[i] = p
         if i:
-            p -= steps[pmove[p]]
+            k = word[p] & 7
+            diagonals += k >= 4
+            p -= steps[k]
+    out[n] = diagonals
     return out
 
 
-_GRID_ARRAYS = (("g", np.float64), ("pmove", np.int8), ("mark", np.uint16))
+_GRID_ARRAYS = (("g", np.float64), ("mark", np.uint16), ("pos", np.int32))
+"""Per grid cell: cost so far, word (stamp above bit 3, the move that reached it below), heap
+slot."""
 
 
 def grid_search(
@@ -704,8 +750,9 @@ def grid_search(
     connectivity: int,
     max_expansions: int | None,
     deadline_ns: int | None,
-) -> tuple[PlanStatus, tuple[Cell, ...], int]:
-    """Run the plain-grid search; returns status, path (start first) and expansions."""
+) -> tuple[PlanStatus, tuple[Cell, ...], int, int]:
+    """Run the plain-grid search; returns status, path (start first), expansions and the number
+    of diagonal steps of the path."""
     from selfrepair.search.problem import grid_heuristic
 
     pw = maze.width + 2
@@ -715,12 +762,12 @@ def grid_search(
     free = _padded_free(maze)
     s = (start[1] + 1) * pw + start[0] + 1
     goal_p = (goal[1] + 1) * pw + goal[0] + 1
-    scratch = _scratch("grid", n, _GRID_ARRAYS)
-    g, pmove, mark = scratch.arrays["g"], scratch.arrays["pmove"], scratch.arrays["mark"]
+    scratch = _scratch("grid", n, _GRID_ARRAYS, _GRID_MARK_MAX)
+    g, word, pos = scratch.arrays["g"], scratch.arrays["mark"], scratch.arrays["pos"]
     opened, _ = scratch.next_marks()
     heap = _heap("grid", np.float64, _FIRST_HEAP)
     h0 = grid_heuristic(start, goal, connectivity)
-    g[s], mark[s] = 0.0, opened
+    g[s], word[s], pos[s] = 0.0, opened << 3, 0
     heap[0] = (h0, h0, 0.0, float(s))
     scal = np.array([1, 0, 0, -1], dtype=np.int64)
     diagonal = connectivity == 8
@@ -728,7 +775,8 @@ def grid_search(
     def run(limit: int) -> int:
         nonlocal heap
         while True:
-            code = int(_grid(free, pw, diagonal, goal_p, limit, opened, g, pmove, mark, heap, scal))
+            code = _grid(free, pw, diagonal, goal_p, limit, opened, g, word, heap, scal, pos)
+            code = int(code)
             if code != _GROW:
                 return code
             heap = _heap("grid", np.float64, 2 * heap.shape[0])
@@ -736,7 +784,8 @@ def grid_search(
     status = _drive(run, scal, max_expansions, deadline_ns)
     expansions = int(scal[_EXPANSIONS])
     if status is not PlanStatus.SOLVED:
-        return status, (), expansions
-    cells = _walk_grid(pmove, pw, s, goal_p) - pw - 1
+        return status, (), expansions, 0
+    walk = _walk_grid(word, pw, s, goal_p)
+    cells = walk[:-1] - pw - 1
     xs, ys = (cells % pw).tolist(), (cells // pw).tolist()
-    return status, tuple(zip(xs, ys, strict=True)), expansions
+    return status, tuple(zip(xs, ys, strict=True)), expansions, int(walk[-1])

@@ -94,10 +94,9 @@ def grid_astar(
             found = None
     if found is None:
         found = _grid_python(maze, start, goal, connectivity, max_expansions, deadline)
-    status, path, expansions = found
+    status, path, expansions, diagonal = found
     if status is not PlanStatus.SOLVED:
         return GridResult(status, (), None, expansions, _since(t0, load_ns), load_ns)
-    diagonal = sum(1 for a, b in itertools.pairwise(path) if a[0] != b[0] and a[1] != b[1])
     cost = OctileCost(len(path) - 1 - diagonal, diagonal)
     return GridResult(status, path, cost, expansions, _since(t0, load_ns), load_ns)
 
@@ -128,8 +127,9 @@ def _grid_python(
     connectivity: int,
     max_expansions: int | None,
     deadline_ns: int | None,
-) -> tuple[PlanStatus, tuple[Cell, ...], int]:
-    """The reference search on :func:`selfrepair.search.astar` with cells as nodes."""
+) -> tuple[PlanStatus, tuple[Cell, ...], int, int]:
+    """The reference search on :func:`selfrepair.search.astar` with cells as nodes; returns the
+    status, path, expansions and number of diagonal steps."""
     h, w = maze.walls.shape
     free = (~maze.walls).tolist()
 
@@ -159,7 +159,9 @@ def _grid_python(
         max_expansions=max_expansions,
         deadline_ns=deadline_ns,
     )
-    return outcome.status, outcome.path, outcome.expansions
+    path = outcome.path
+    diagonal = sum(1 for a, b in itertools.pairwise(path) if a[0] != b[0] and a[1] != b[1])
+    return outcome.status, path, outcome.expansions, diagonal
 
 
 def _since(t0: int, load_ns: int = 0) -> int:
