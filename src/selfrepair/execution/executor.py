@@ -377,6 +377,7 @@ def _result(
 ) -> MissionResult:
     removed, added, motion_removed, motion_added = _plan_distances(run, initial)
     tally = MissionTally(
+        len(run.moved),
         run.executed_units,
         run.sim.unit,
         run.penalty,

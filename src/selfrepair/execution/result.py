@@ -146,16 +146,18 @@ class RepairRecord(NamedTuple):
 class MissionTally(NamedTuple):
     """Sums the executor keeps while it runs, so that the metrics need not walk the steps again.
 
-    ``executed_units``: total duration of the executed (moving) steps in units of ``1 / unit``
-    tick (see :mod:`selfrepair.execution.moves`); ``penalty``: the summed clearance penalty of
-    their footprints (the cost model's ``max(0, radius - clearance)`` per cell, counted only when
-    the clearance weight is not zero, else 0); ``plan_removed``/``plan_added``: the plan distance
-    between the initial plan and the executed one, ``motion_removed``/``motion_added`` the same by
-    motion class (see :mod:`selfrepair.execution.metrics`).
+    ``actions_executed``: the number of executed (moving) steps; ``executed_units``: their total
+    duration in units of ``1 / unit`` tick (see :mod:`selfrepair.execution.moves`); ``penalty``:
+    the summed clearance penalty of their footprints (the cost model's
+    ``max(0, radius - clearance)`` per cell, counted only when the clearance weight is not zero,
+    else 0); ``plan_removed``/``plan_added``: the plan distance between the initial plan and
+    the executed one, ``motion_removed``/``motion_added`` the same by motion class (see
+    :mod:`selfrepair.execution.metrics`).
     :func:`selfrepair.execution.metrics.mission_row` falls back to recomputing these from the
     steps when a result has no tally; tests check both agree.
     """
 
+    actions_executed: int
     executed_units: int
     unit: int
     penalty: int
