@@ -11,7 +11,9 @@ state is ``4 * p + heading``.
 
 The open list is an indexed 4-ary heap of records ``(f, h, counter, node)``, one row of a 2-D
 array each (one or two cache lines per sift level instead of four arrays), with decrease-key: a
-node whose ``g`` improves takes a new counter and moves up in place. It pops exactly the entries
+node whose ``g`` improves takes a new counter and moves up in place. The lattice, whose costs are
+integers, packs ``f`` and ``h`` into one key ``(f << s) | h`` (``s`` bits hold the largest ``h``)
+and leaves ``h`` at 0: the same order with one comparison less per tie. It pops exactly the entries
 that the lazy-deletion heap of :func:`selfrepair.search.astar.astar` pops, in the same order (the
 keys are unique), so both backends return the same plan.
 
@@ -330,7 +332,7 @@ def _lattice(
     g: Any, word: Any, heap: Any, scal: Any, pos: Any,
 ) -> int:  # fmt: skip
     rnum, rden, wmul = par[0], par[1], par[2]
-    goal_cell, goal_head, limit, opened = par[3], par[4], par[5], par[6]
+    goal_cell, goal_head, limit, opened, shift = par[3], par[4], par[5], par[6], par[7]
     closed = opened + 1
     size, counter, expansions = scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS]
     nmoves = mt.shape[1]
@@ -380,9 +382,9 @@ def _lattice(
             g[ns] = gn
             word[ns] = (opened << _MOVE_BITS) | (head << 8) | k
             if m == opened:
-                _sift_up(heap, pos, pos[ns], gn + hv, hv, counter, ns)
+                _sift_up(heap, pos, pos[ns], ((gn + hv) << shift) | hv, 0, counter, ns)
             else:
-                _sift_up(heap, pos, size, gn + hv, hv, counter, ns)
+                _sift_up(heap, pos, size, ((gn + hv) << shift) | hv, 0, counter, ns)
                 size += 1
     scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS] = size, counter, expansions
     return status
@@ -525,7 +527,9 @@ def plan_lattice(
         lambda: _motion(domain, moves, pw, scale),
     )  # fmt: skip
     mt = motion.table
-    _check_int64(motion.dur_max, mt.shape[2] - _SW, pen_max, wmul, rnum, n_states)
+    hmax = int(hdist.max(initial=0)) * rnum // rden
+    shift = hmax.bit_length()  # heap key: (f << shift) | h, ordered as (f, h)
+    _check_int64(motion.dur_max, mt.shape[2] - _SW, pen_max, wmul, hmax, shift, n_states)
     start = problem.start
     start_cell = (start.y + 1) * pw + start.x + 1
     start_state = 4 * start_cell + start.heading
@@ -540,9 +544,9 @@ def plan_lattice(
     h0 = int(hdist[start_cell]) * rnum // rden
     heap = _heap("lattice", np.int64, _FIRST_HEAP)
     g[start_state], word[start_state], pos[start_state] = 0, opened << _MOVE_BITS, 0
-    heap[0] = (h0, h0, 0, start_state)
+    heap[0] = ((h0 << shift) | h0, 0, 0, start_state)
     scal = np.array([1, 0, 0, -1], dtype=np.int64)
-    par = np.array([rnum, rden, wmul, goal_cell, goal_head, 0, opened], dtype=np.int64)
+    par = np.array([rnum, rden, wmul, goal_cell, goal_head, 0, opened, shift], dtype=np.int64)
     nbr = _neighbourhoods(maze)
 
     def run(limit: int) -> int:
@@ -584,13 +588,14 @@ _HEADINGS = tuple(Heading)
 
 
 def _check_int64(
-    dur_max: int, cells: int, pen_max: int, wmul: int, rnum: int, n_states: int
+    dur_max: int, cells: int, pen_max: int, wmul: int, hmax: int, shift: int, n_states: int
 ) -> None:
-    """Refuse problems whose scaled costs could overflow int64 or whose states overflow int32
-    (heuristic distances are ``int32``, so ``h <= 2**31 * rnum``)."""
+    """Refuse problems whose heap keys ``(f << shift) | h`` could overflow int64 (``f`` is at most
+    the largest step cost times the number of states plus the largest heuristic value) or whose
+    states overflow int32."""
     step_max = dur_max + wmul * cells * pen_max
-    bound = step_max * n_states + (rnum << 31)
-    if bound >= 1 << 62 or wmul >= 1 << 62 or n_states >= 1 << 31:
+    f_max = step_max * n_states + hmax
+    if f_max >= 1 << (62 - shift) or wmul >= 1 << 62 or n_states >= 1 << 31:
         raise OverflowError("the problem is too large for the integer kernel")
 
 
