@@ -221,6 +221,11 @@ class _Run:
         return repair
 
 
+_new_tuple = tuple.__new__
+"""Builds the :class:`TraceStep` of each step without the ``NamedTuple`` constructor's Python
+frame (the same value)."""
+
+
 def run_mission(spec: MissionSpec) -> MissionResult:
     """Plan, execute and repair one mission (see the module docstring)."""
     factory = get_strategy(spec.strategy)  # fails fast on a bad name
@@ -326,7 +331,9 @@ def _loop(run: _Run) -> tuple[MissionStatus, str]:
         else:
             name = spec.domain.format_action(action)
             return MissionStatus.COLLISION, f"{name} at {sim.pose} would sweep a wall"
-        steps.append(TraceStep(step, action, pose, sim.pose, sim.last_duration, source, known))
+        steps.append(
+            _new_tuple(TraceStep, (step, action, pose, sim.pose, sim.last_duration, source, known))
+        )
         if run.known is not known:
             known = run.known
             available = available_moves(table, known)
