@@ -19,9 +19,9 @@ from typing import Any, NamedTuple
 
 from selfrepair.execution.faults import Detection, FaultClock, FaultSchedule
 from selfrepair.execution.moves import Move, MoveTable, available_moves, move_table
-from selfrepair.geometry import Cell, Pose
+from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain
-from selfrepair.search.problem import make_pose
+from selfrepair.search.problem import make_pose, pose_table
 from selfrepair.world.maze import Maze
 
 __all__ = ["FAILED_ATTEMPT_TICKS", "Outcome", "Simulator", "StepOutcome"]
@@ -94,6 +94,8 @@ class Simulator:
         self._moves: dict[Any, tuple[Move, ...]] = {}
         self._failed_units = int(FAILED_ATTEMPT_TICKS * self.unit)
         self._inside = maze.in_bounds(start.x, start.y)
+        self._pw = maze.width + 2
+        self._poses = pose_table(maze) if self.table.ends_covered else None
 
     @property
     def ticks(self) -> Fraction:
@@ -148,9 +150,16 @@ class Simulator:
                 self.last_duration = Fraction(0)
                 self.last_blocking = frozenset()
                 return Outcome.COLLISION
-            self.pose = end = make_pose(start.x + move.dx, start.y + move.dy, move.heading)
-            if not self.table.ends_covered:  # the end cell may lie off the footprint
-                self._inside = self.maze.in_bounds(end.x, end.y)
+            x, y, heading = start.x + move.dx, start.y + move.dy, move.heading
+            poses = self._poses
+            if poses is not None and self._inside:  # the end is on the grid: a shared pose
+                state = ((y + 1) * self._pw + x + 1) * 4 + heading
+                end = poses[state] or _shared(poses, state, x, y, heading)
+            else:
+                end = make_pose(x, y, heading)
+                if not self.table.ends_covered:  # the end cell may lie off the footprint
+                    self._inside = self.maze.in_bounds(x, y)
+            self.pose = end
             self.last_move = move
             self.last_duration = move.duration
             self.last_blocking = frozenset()
@@ -169,3 +178,9 @@ class Simulator:
             if not data[base + offset]:
                 return False
         return True
+
+
+def _shared(poses: list[Pose | None], state: int, x: int, y: int, heading: Heading) -> Pose:
+    """Make the pose of ``state`` and keep it in the maze's pose table."""
+    pose = poses[state] = make_pose(x, y, heading)
+    return pose

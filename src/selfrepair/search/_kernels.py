@@ -499,11 +499,13 @@ def plan_lattice(
     deadline_ns: int | None,
     *,
     key: Hashable | None = None,
+    largest: int | None = None,
 ) -> tuple[PlanStatus, tuple[Any, ...], tuple[Pose, ...], int, int, int]:
     """Run the lattice search over ``moves``; the arguments mean what they mean in
     :mod:`selfrepair.search.lattice` (``problem.clearance_weight`` a
     :class:`~fractions.Fraction`); ``key`` identifies ``(problem.domain, moves)`` for the
-    motion-table cache (``moves`` itself when omitted).
+    motion-table cache (``moves`` itself when omitted); ``largest`` is the largest distance in
+    ``bound`` when the caller knows it (else it is found by a scan).
 
     Returns status, actions, poses, the scaled integer cost, the scaled integer duration and the
     number of expansions. Raises :class:`OverflowError` when the problem does not fit the integer
@@ -527,7 +529,7 @@ def plan_lattice(
         lambda: _motion(domain, moves, pw, scale),
     )  # fmt: skip
     mt = motion.table
-    hmax = int(hdist.max(initial=0)) * rnum // rden
+    hmax = (int(hdist.max(initial=0)) if largest is None else largest) * rnum // rden
     shift = hmax.bit_length()  # heap key: (f << shift) | h, ordered as (f, h)
     _check_int64(motion.dur_max, mt.shape[2] - _SW, pen_max, wmul, hmax, shift, n_states)
     start = problem.start

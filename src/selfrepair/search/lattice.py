@@ -194,7 +194,7 @@ def _zero_bound(
     *,
     backend: str = "auto",
 ) -> CellBound:
-    return CellBound(_goal_distances(_zero_distances, maze, (0, 0), backend), Fraction(0))
+    return CellBound(_goal_distances(_zero_distances, maze, (0, 0), backend)[0], Fraction(0))
 
 
 def _manhattan_bound(
@@ -205,7 +205,7 @@ def _manhattan_bound(
     *,
     backend: str = "auto",
 ) -> CellBound:
-    distance = _goal_distances(_manhattan_distances, maze, goal, backend)
+    distance, _ = _goal_distances(_manhattan_distances, maze, goal, backend)
     return CellBound(distance, progress_rate(domain, actions))
 
 
@@ -217,23 +217,23 @@ def _grid_distance_bound(
     *,
     backend: str = "auto",
 ) -> CellBound:
-    distance = _goal_distances(_bfs_padded, maze, goal, backend)
+    distance, _ = _goal_distances(_bfs_padded, maze, goal, backend)
     return CellBound(distance, progress_rate(domain, actions))
 
 
 def _goal_distances(
     make: _DistanceFn, maze: Maze, goal: Cell, backend: str
-) -> npt.NDArray[np.int32]:
-    """The padded distances of a built-in heuristic to one goal, made once and reused by every
-    query to that goal on that maze (any faults, any start, either backend: both compute the
-    same distances): read-only arrays in a bounded cache, a small one for large mazes (an entry
-    costs 4 bytes per cell)."""
+) -> tuple[npt.NDArray[np.int32], int]:
+    """The padded distances of a built-in heuristic to one goal and their maximum, made once and
+    reused by every query to that goal on that maze (any faults, any start, either backend: both
+    compute the same distances): read-only arrays in a bounded cache, a small one for large mazes
+    (an entry costs 4 bytes per cell)."""
     cache = _DISTANCES if maze.width * maze.height <= _SMALL_MAZE else _LARGE_DISTANCES
 
-    def made() -> npt.NDArray[np.int32]:
+    def made() -> tuple[npt.NDArray[np.int32], int]:
         distance = make(maze, goal, backend)
         distance.setflags(write=False)
-        return distance
+        return distance, int(distance.max(initial=0))
 
     return cache.get((make, maze, goal), made)
 
@@ -241,11 +241,12 @@ def _goal_distances(
 _SMALL_MAZE = 1 << 18
 """Mazes up to this many cells (512 x 512) share the larger cache of goal distances."""
 
-_DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], npt.NDArray[np.int32]] = BoundedCache(
+_Distances = tuple[npt.NDArray[np.int32], int]
+_DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], _Distances] = BoundedCache(
     "goal distances (mazes up to 512x512)", 32
 )
-_LARGE_DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], npt.NDArray[np.int32]] = (
-    BoundedCache("goal distances (larger mazes)", 4)
+_LARGE_DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], _Distances] = BoundedCache(
+    "goal distances (larger mazes)", 4
 )
 
 
@@ -298,16 +299,20 @@ _BUILT_IN: dict[HeuristicFn, tuple[_DistanceFn, bool]] = {
 from the per-fault-set setup)."""
 
 
-def _bound(problem: PlanningProblem, heuristic: str, setup: _Setup, backend: str) -> CellBound:
-    """The heuristic bound of ``problem`` (see :data:`_BUILT_IN`)."""
+def _bound(
+    problem: PlanningProblem, heuristic: str, setup: _Setup, backend: str
+) -> tuple[CellBound, int | None]:
+    """The heuristic bound of ``problem`` (see :data:`_BUILT_IN`) and its largest distance when
+    known without a scan."""
     fn = HEURISTICS[heuristic]
     built_in = _BUILT_IN.get(fn)
     if built_in is None:
-        return fn(problem.maze, problem.goal, problem.domain, setup.actions, backend=backend)
+        bound = fn(problem.maze, problem.goal, problem.domain, setup.actions, backend=backend)
+        return bound, None
     make, scaled = built_in
     goal = problem.goal if make is not _zero_distances else (0, 0)
-    distance = _goal_distances(make, problem.maze, goal, backend)
-    return CellBound(distance, setup.rate if scaled else Fraction(0))
+    distance, largest = _goal_distances(make, problem.maze, goal, backend)
+    return CellBound(distance, setup.rate if scaled else Fraction(0)), largest
 
 
 def action_cost(
@@ -402,7 +407,7 @@ def plan(
     domain = problem.domain
     setup = _setup(domain, problem.faults)
     actions = setup.actions
-    bound = _bound(problem, heuristic, setup, "numba" if fast else "python")
+    bound, largest = _bound(problem, heuristic, setup, "numba" if fast else "python")
     scale = _duration_scale(domain) * problem.clearance_weight.denominator
     deadline = deadline_from(time_limit, t0 + load_ns)
     found: _Found | None = None
@@ -412,7 +417,7 @@ def plan(
         key = (domain, problem.faults)  # what ``actions`` are a function of
         try:
             found = _kernels.plan_lattice(
-                problem, actions, bound, scale, max_expansions, deadline, key=key
+                problem, actions, bound, scale, max_expansions, deadline, key=key, largest=largest
             )
         except OverflowError:  # beyond int64 or the 3x3 neighbourhood: the Python search works
             found = None
