@@ -1,11 +1,12 @@
 """Missions per second of ``selfrepair experiment paper --jobs 1``, against the baseline commit.
 
-Both versions run the same command with the same interpreter, alternately, ``--repeats`` times,
-each into a fresh database (the baseline commit, see ``benchmarks/_common.py``, with its ``src``
-first on ``PYTHONPATH``). Each run is followed by the same command on the now complete database,
-which skips every mission: its CPU time is the command's fixed cost (imports, kernel loading,
-configuration, summary and findings). Figures are CPU seconds of the process (user + system), so
-that other load on the machine disturbs them less than wall time:
+Both versions run the same command with the same interpreter (the baseline commit, see
+``benchmarks/_common.py``, with its ``src`` first on ``PYTHONPATH``), once unmeasured (so that
+numba's cache is filled) and then alternately ``--repeats`` times, each into a fresh database. Each
+run is followed by the same command on the now complete database, which skips every mission: its
+CPU time is the command's fixed cost (imports, kernel loading, configuration, summary and
+findings). Figures are CPU seconds of the process (user + system), so that other load on the
+machine disturbs them less than wall time:
 
 * gross missions/s: missions / CPU seconds of the whole command;
 * net missions/s: missions / (CPU seconds of the whole command - its fixed cost).
@@ -144,6 +145,8 @@ def main() -> None:
     runs: dict[str, list[dict[str, float]]] = {"baseline": [], "current": []}
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
+        for version, src in (("baseline", old_src), ("current", None)):
+            sweep(args, src, folder, f"prime-{version}")  # fills numba's cache, warms the disk
         for i in range(args.repeats):
             for version, src in (("baseline", old_src), ("current", None)):
                 run = sweep(args, src, folder, f"{version}-{i}")
