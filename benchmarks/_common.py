@@ -27,6 +27,9 @@ ROOT = Path(__file__).resolve().parent.parent
 RESULTS = ROOT / "benchmarks" / "results"
 BASELINE_COMMIT = "743cfa9"
 """The code the performance issue (issue 12) measured."""
+BEFORE_COMMIT = "b407647"
+"""``main`` just before the speed-ups of issue 12 landed: the current experiment design (cold and
+warm runs per mission, mission-level metrics), so a ratio against it is one on equal work."""
 
 
 def baseline_source(commit: str = BASELINE_COMMIT) -> Path:

@@ -1,8 +1,17 @@
-"""Missions per second of ``selfrepair experiment paper --jobs 1``, against the baseline commit.
+"""Missions per second of ``selfrepair experiment paper --jobs 1``, against earlier commits.
 
-Both versions run the same command with the same interpreter (the baseline commit, see
+Three versions run the same command with the same interpreter (each earlier commit, see
 ``benchmarks/_common.py``, with its ``src`` first on ``PYTHONPATH``), once unmeasured (so that
-numba's cache is filled) and then alternately ``--repeats`` times, each into a fresh database. Each
+numba's cache is filled) and then in turn ``--repeats`` times, each into a fresh database:
+
+* ``baseline``: the code issue 12 measured (:data:`BASELINE_COMMIT`), whose ``paper`` experiment
+  ran each of its 2304 missions once;
+* ``before``: the code just before these speed-ups (:data:`BEFORE_COMMIT`), with the same
+  experiment design as the current code (3072 missions, each run cold after the derived-data
+  caches are emptied and then once warm), so ``current / before`` is the speed-up on equal work;
+* ``current``: this checkout.
+
+Each version's missions are counted with its own code. Each
 run is followed by the same command on the now complete database, which skips every mission: its
 CPU time is the command's fixed cost (imports, kernel loading, configuration, summary and
 findings). Figures are CPU seconds of the process (user + system), so that other load on the
@@ -11,8 +20,8 @@ machine disturbs them less than wall time:
 * gross missions/s: missions / CPU seconds of the whole command;
 * net missions/s: missions / (CPU seconds of the whole command - its fixed cost).
 
-Target (issue 12): at least 4x the baseline's missions/s (reported for both), medians over the
-repeats.
+Target (issue 12): at least 4x the baseline's missions/s (reported for gross and net), medians
+over the repeats.
 
 Then one more run of the current version under ``py-spy`` (when installed) gives the share of
 samples spent in the compiled search kernels (the leaf frame is a call of a numba kernel): target
@@ -35,7 +44,7 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
-from _common import ROOT, baseline_source, median, run_child, write_report
+from _common import BEFORE_COMMIT, ROOT, baseline_source, median, run_child, write_report
 
 CLI = "import sys; from selfrepair.cli import main; sys.exit(main(sys.argv[1:]))"
 KERNELS = ROOT / "src" / "selfrepair" / "search" / "_kernels.py"
@@ -64,14 +73,14 @@ def sweep(args: argparse.Namespace, src: Path | None, folder: Path, tag: str) ->
     return {"cpu_s": cpu, "wall_s": wall, "fixed_cpu_s": fixed_cpu, "fixed_wall_s": fixed_wall}
 
 
-def count_missions(args: argparse.Namespace) -> int:
+def count_missions(args: argparse.Namespace, src: Path | None) -> int:
     code = (
         "import sys; from selfrepair.cli.experiments import resolve_experiment; "
         "from selfrepair.experiment.config import load_config; "
         "from selfrepair.experiment.missions import expand; "
         "print(len(expand(load_config(resolve_experiment(sys.argv[1])))))"
     )
-    return int(run_child(["-c", code, args.experiment])[2].strip())
+    return int(run_child(["-c", code, args.experiment], src=src)[2].strip())
 
 
 def kernel_lines() -> set[int]:
@@ -140,21 +149,26 @@ def main() -> None:
     parser.add_argument("--no-profile", action="store_true")
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args()
-    missions = count_missions(args)
-    old_src = baseline_source()
-    runs: dict[str, list[dict[str, float]]] = {"baseline": [], "current": []}
+    versions: dict[str, Path | None] = {
+        "baseline": baseline_source(),
+        "before": baseline_source(BEFORE_COMMIT),
+        "current": None,
+    }
+    missions = {v: count_missions(args, src) for v, src in versions.items()}
+    runs: dict[str, list[dict[str, float]]] = {v: [] for v in versions}
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        for version, src in (("baseline", old_src), ("current", None)):
+        for version, src in versions.items():
             sweep(args, src, folder, f"prime-{version}")  # fills numba's cache, warms the disk
         for i in range(args.repeats):
-            for version, src in (("baseline", old_src), ("current", None)):
+            for version, src in versions.items():
                 run = sweep(args, src, folder, f"{version}-{i}")
-                run["gross_missions_per_s"] = missions / run["cpu_s"]
-                run["net_missions_per_s"] = missions / max(1e-9, run["cpu_s"] - run["fixed_cpu_s"])
+                n = missions[version]
+                run["gross_missions_per_s"] = n / run["cpu_s"]
+                run["net_missions_per_s"] = n / max(1e-9, run["cpu_s"] - run["fixed_cpu_s"])
                 runs[version].append(run)
                 print(
-                    f"  {version:8} run {i + 1}: {run['cpu_s']:6.2f} s CPU "
+                    f"  {version:8} run {i + 1}: {n} missions, {run['cpu_s']:6.2f} s CPU "
                     f"(fixed {run['fixed_cpu_s']:.2f} s), {run['wall_s']:6.2f} s wall: "
                     f"{run['gross_missions_per_s']:6.1f} missions/s gross, "
                     f"{run['net_missions_per_s']:6.1f} net",
@@ -168,27 +182,36 @@ def main() -> None:
         }
         for version, rows in runs.items()
     }
-    gross = summary["current"]["gross_missions_per_s"] / summary["baseline"]["gross_missions_per_s"]
-    net = summary["current"]["net_missions_per_s"] / summary["baseline"]["net_missions_per_s"]
+
+    def ratio(peer: str, kind: str) -> float:
+        key = f"{kind}_missions_per_s"
+        return summary["current"][key] / summary[peer][key]
+
     report: dict[str, Any] = {
         "settings": {"experiment": args.experiment, "repeats": args.repeats, "missions": missions},
-        "baseline_commit": old_src.parent.name,
+        "commits": {v: None if src is None else src.parent.name for v, src in versions.items()},
         "runs": runs,
         "medians": summary,
-        "speedup_gross": gross,
-        "speedup_net": net,
+        "speedup_gross": ratio("baseline", "gross"),
+        "speedup_net": ratio("baseline", "net"),
+        "speedup_over_before_gross": ratio("before", "gross"),
+        "speedup_over_before_net": ratio("before", "net"),
         "target_speedup_at_least": 4.0,
         "profile": profiled,
         "target_compiled_share_at_least": 0.25,
     }
-    print(
-        f"{missions} missions, medians of {args.repeats}: baseline "
-        f"{summary['baseline']['gross_missions_per_s']:.1f} missions/s gross "
-        f"({summary['baseline']['net_missions_per_s']:.1f} net), current "
-        f"{summary['current']['gross_missions_per_s']:.1f} "
-        f"({summary['current']['net_missions_per_s']:.1f} net): speed-up {gross:.2f}x gross, "
-        f"{net:.2f}x net (target >= 4)"
-    )
+    print(f"medians of {args.repeats}, missions/s gross (net of the fixed cost):")
+    for version in versions:
+        m = summary[version]
+        print(
+            f"  {version:8} {m['gross_missions_per_s']:7.1f} ({m['net_missions_per_s']:.1f})"
+            f"  [{missions[version]} missions]"
+        )
+    for peer in ("baseline", "before"):
+        print(
+            f"current / {peer}: {ratio(peer, 'gross'):.2f}x gross, {ratio(peer, 'net'):.2f}x net"
+            + (" (target >= 4)" if peer == "baseline" else " (same work per mission)")
+        )
     if profiled is not None:
         print(
             f"compiled search: {profiled['compiled_search_share']:.1%} of all samples "
