@@ -597,7 +597,7 @@ def _check_int64(
     states overflow int32."""
     step_max = dur_max + wmul * cells * pen_max
     f_max = step_max * n_states + hmax
-    if f_max >= 1 << (62 - shift) or wmul >= 1 << 62 or n_states >= 1 << 31:
+    if shift >= 62 or f_max >= 1 << (62 - shift) or wmul >= 1 << 62 or n_states >= 1 << 31:
         raise OverflowError("the problem is too large for the integer kernel")
 
 
