@@ -28,6 +28,7 @@ from selfrepair.geometry import Heading, Pose
 from selfrepair.robots.domain import Domain
 
 __all__ = [
+    "SIMULATION_CACHES",
     "Move",
     "MoveTable",
     "available_moves",
@@ -126,3 +127,10 @@ def _available(table: MoveTable, faults: frozenset[Any]) -> dict[Any, tuple[Move
 _AVAILABLE: BoundedCache[tuple[MoveTable, frozenset[Any]], dict[Any, tuple[Move, ...]]] = (
     BoundedCache("available moves per fault set", 4096)
 )
+
+
+SIMULATION_CACHES: tuple[str, ...] = (_UNITS.name, _TABLES.name, _AVAILABLE.name)
+"""The names of this module's caches: the simulator's and the executor's own bookkeeping, derived
+from the robot model alone (per domain, maze stride and fault set) and never read by a plan or a
+repair, so no timed call depends on them. A measurement that empties the caches to time a cold
+first repair can keep these (the experiment runner does)."""
