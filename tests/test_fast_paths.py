@@ -252,3 +252,18 @@ def test_kernel_load_is_reported_apart_from_the_search() -> None:
     assert first > 0 and second == 0  # the first call of a process loads the kernels
     assert grid > 0  # the grid kernel is loaded on its own first call
     assert wall >= 0
+
+
+def test_cold_runs_keep_the_simulators_move_tables_and_empty_the_planners_caches() -> None:
+    from selfrepair.cli.experiments import resolve_experiment
+    from selfrepair.experiment.config import load_config
+    from selfrepair.experiment.missions import expand
+    from selfrepair.experiment.runner import execute_mission
+
+    mission = expand(load_config(resolve_experiment("paper")))[0]
+    kept = move_table(FOUR_WHEEL, 40)
+    maze = Maze(np.zeros((5, 6), dtype=bool))
+    poses = pose_table(maze)
+    execute_mission(mission)
+    assert move_table(FOUR_WHEEL, 40) is kept  # simulation bookkeeping survives the cold run
+    assert pose_table(maze) is not poses  # a planner cache is emptied for it
