@@ -44,7 +44,15 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
-from _common import BEFORE_COMMIT, ROOT, baseline_source, median, run_child, write_report
+from _common import (
+    BASELINE_COMMIT,
+    BEFORE_COMMIT,
+    ROOT,
+    baseline_source,
+    median,
+    run_child,
+    write_report,
+)
 
 CLI = "import sys; from selfrepair.cli import main; sys.exit(main(sys.argv[1:]))"
 KERNELS = ROOT / "src" / "selfrepair" / "search" / "_kernels.py"
@@ -147,18 +155,22 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--rate", type=int, default=250, help="py-spy samples per second")
     parser.add_argument("--no-profile", action="store_true")
+    parser.add_argument(
+        "--versions", default="baseline,before,current", help="which versions to run, in turn"
+    )
+    parser.add_argument("--no-prime", action="store_true", help="numba's caches are already full")
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args()
+    sources = {"baseline": BASELINE_COMMIT, "before": BEFORE_COMMIT, "current": None}
     versions: dict[str, Path | None] = {
-        "baseline": baseline_source(),
-        "before": baseline_source(BEFORE_COMMIT),
-        "current": None,
+        v: None if sources[v] is None else baseline_source(str(sources[v]))
+        for v in args.versions.split(",")
     }
     missions = {v: count_missions(args, src) for v, src in versions.items()}
     runs: dict[str, list[dict[str, float]]] = {v: [] for v in versions}
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        for version, src in versions.items():
+        for version, src in versions.items() if not args.no_prime else ():
             sweep(args, src, folder, f"prime-{version}")  # fills numba's cache, warms the disk
         for i in range(args.repeats):
             for version, src in versions.items():
@@ -183,8 +195,10 @@ def main() -> None:
         for version, rows in runs.items()
     }
 
-    def ratio(peer: str, kind: str) -> float:
+    def ratio(peer: str, kind: str) -> float | None:
         key = f"{kind}_missions_per_s"
+        if "current" not in summary or peer not in summary:
+            return None
         return summary["current"][key] / summary[peer][key]
 
     report: dict[str, Any] = {
@@ -208,8 +222,11 @@ def main() -> None:
             f"  [{missions[version]} missions]"
         )
     for peer in ("baseline", "before"):
+        gross, net = ratio(peer, "gross"), ratio(peer, "net")
+        if gross is None or net is None:
+            continue
         print(
-            f"current / {peer}: {ratio(peer, 'gross'):.2f}x gross, {ratio(peer, 'net'):.2f}x net"
+            f"current / {peer}: {gross:.2f}x gross, {net:.2f}x net"
             + (" (target >= 4)" if peer == "baseline" else " (same work per mission)")
         )
     if profiled is not None:
