@@ -267,3 +267,26 @@ def test_cold_runs_keep_the_simulators_move_tables_and_empty_the_planners_caches
     execute_mission(mission)
     assert move_table(FOUR_WHEEL, 40) is kept  # simulation bookkeeping survives the cold run
     assert pose_table(maze) is not poses  # a planner cache is emptied for it
+
+
+def test_cold_runs_keep_the_candidate_geometry_every_mission_computes_before_timing() -> None:
+    from selfrepair.caching import cache_stats
+    from selfrepair.cli.experiments import resolve_experiment
+    from selfrepair.experiment.config import load_config
+    from selfrepair.experiment.missions import expand
+    from selfrepair.experiment.runner import execute_mission
+    from selfrepair.repair.replacement import PREFILLED_CACHES
+
+    def stats() -> dict[str, tuple[int, int]]:
+        return {s.name: (s.size, s.hits) for s in cache_stats() if s.name in PREFILLED_CACHES}
+
+    missions = expand(load_config(resolve_experiment("paper")))
+    mission = next(m for m in missions if dict(m.labels).get("strategy") == "replacement")
+    execute_mission(mission)
+    before = stats()
+    assert set(before) == set(PREFILLED_CACHES) and all(size for size, _ in before.values())
+    execute_mission(mission)  # its cold run empties the other caches, not these
+    after = stats()
+    for name, (size, hits) in before.items():
+        # kept: same entries, and the hit count goes on (emptying would reset it)
+        assert after[name][0] == size and after[name][1] > hits
