@@ -159,9 +159,10 @@ def main() -> None:
         "--versions", default="baseline,before,current", help="which versions to run, in turn"
     )
     parser.add_argument("--no-prime", action="store_true", help="numba's caches are already full")
+    parser.add_argument("--before", default=BEFORE_COMMIT, help="the commit run as 'before'")
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args()
-    sources = {"baseline": BASELINE_COMMIT, "before": BEFORE_COMMIT, "current": None}
+    sources = {"baseline": BASELINE_COMMIT, "before": args.before, "current": None}
     versions: dict[str, Path | None] = {
         v: None if sources[v] is None else baseline_source(str(sources[v]))
         for v in args.versions.split(",")
