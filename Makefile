@@ -63,6 +63,9 @@ bench: $(BENCH_STAMP)
 	$(PY) benchmarks/gym_env.py
 	$(PY) benchmarks/sweeps.py
 	$(PY) benchmarks/startup.py
+	$(PY) benchmarks/mazegen.py
+	$(PY) benchmarks/memory.py
+	$(PY) benchmarks/missions.py
 
 clean:
 	rm -rf $(VENV) build dist .pytest_cache .ruff_cache .hypothesis

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 from collections import deque
 
 import numpy as np
@@ -157,3 +158,22 @@ def test_a_maze_over_the_cell_limit_is_refused_before_any_work() -> None:
     # `maze generate --width 1000000000 --height 15` ran 207 s into a MemoryError.
     with pytest.raises(LimitError, match=r"15,000,000,000 \(width 1000000000 x height 15\)"):
         generate_maze(1_000_000_000, 15, seed=0)
+
+
+# Digests of mazes made by the generator before braiding became linear-time (commit 0e75591):
+# speed-ups must give the same maze for the same seed and options.
+KNOWN_DIGESTS = [
+    (41, 31, 1, 0.0, 3, "327b5743fcdd207e"),
+    (41, 31, 1, 0.3, 3, "32eb6b976288913e"),
+    (64, 48, 2, 1.0, 11, "dc553c4a64a39930"),
+    (101, 77, 3, 0.5, 2024, "3ce7aae3b9ea151b"),
+    (256, 256, 1, 0.1, 7, "a0e5d56e0e356ffe"),
+]
+
+
+@pytest.mark.parametrize(("width", "height", "corridor", "braid", "seed", "digest"), KNOWN_DIGESTS)
+def test_generator_output_is_unchanged(
+    width: int, height: int, corridor: int, braid: float, seed: int, digest: str
+) -> None:
+    maze = generate_maze(width, height, corridor=corridor, braid=braid, seed=seed)
+    assert hashlib.sha256(maze.walls.tobytes()).hexdigest()[:16] == digest

@@ -35,27 +35,33 @@ faulty action, i.e. only when ``replan`` makes one too.
 from __future__ import annotations
 
 import time
-from collections import deque
-from collections.abc import Iterator, Sequence
+from array import array
+from collections import Counter, deque
+from collections.abc import Container, Iterator, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
 from itertools import islice, repeat
 from operator import itemgetter
 from typing import Any, overload
 
+import numpy as np
+
+from selfrepair.caching import BoundedCache
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import Detection
+from selfrepair.execution.moves import available_moves
 from selfrepair.execution.result import (
     MissionResult,
     MissionSpec,
     MissionStatus,
+    MissionTally,
     RepairRecord,
     StepSource,
     TraceStep,
 )
 from selfrepair.execution.simulator import Outcome, Simulator
-from selfrepair.geometry import Cell, Heading, Pose
-from selfrepair.repair.replacement import table_reach
+from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
+from selfrepair.repair.replacement import FreeTest, table_reach
 from selfrepair.repair.strategies import (
     MissionContext,
     Repair,
@@ -71,6 +77,7 @@ from selfrepair.search.backend import use_numba
 from selfrepair.search.lattice import action_cost, cost_scale, plan
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.tables.model import ReplacementTable
+from selfrepair.world.maze import Maze, clearance_penalties
 
 __all__ = ["mission_context", "run_mission"]
 
@@ -133,44 +140,53 @@ def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> Missio
     test and step cost on its map, with ``table`` (``None`` for strategies without one)."""
     settings = spec.planner
     weight = Fraction(settings.clearance_weight)
+    maze, domain, radius = spec.maze, spec.domain, settings.clearance_radius
+    heuristic, backend = settings.heuristic, settings.backend
 
     def plan_to(
         start: Pose, goal: Cell, heading: Heading | None, known: frozenset[Any], budget: int | None
     ) -> PlanResult:
-        problem = PlanningProblem(
-            spec.maze, start, goal, heading, known, weight, settings.clearance_radius, spec.domain
-        )
-        return plan(
-            problem, heuristic=settings.heuristic, max_expansions=budget, backend=settings.backend
-        )
+        problem = PlanningProblem(maze, start, goal, heading, known, weight, radius, domain)
+        return plan(problem, heuristic=heuristic, max_expansions=budget, backend=backend)
 
     def cost(pose: Pose, action: Any) -> Fraction:
         return action_cost(
-            spec.maze,
-            pose,
-            action,
-            clearance_weight=weight,
-            clearance_radius=settings.clearance_radius,
-            domain=spec.domain,
+            maze, pose, action, clearance_weight=weight, clearance_radius=radius, domain=domain
         )
 
     margin = max(2, table_reach(table)) if table is not None else 2
-    grid = spec.maze.free_grid(margin)
+    grid = maze.free_grid(margin)
     return MissionContext(
-        domain=spec.domain,
+        domain=domain,
         goal=spec.goal,
         goal_heading=spec.goal_heading,
         options=spec.options,
         table=table,
         plan=plan_to,
         replan_budget=settings.max_expansions,
-        free=grid.all_free,
+        free=free_test(grid),
         grid=grid,
         cost=cost,
         world=spec.maze,
         cost_scale=cost_scale(spec.domain, weight),
         start=spec.start,
     )
+
+
+def free_test(grid: FreeGrid) -> FreeTest:
+    """``grid.all_free`` as one closure over the buffer (no method call per cell)."""
+    data, stride, margin = grid.data, grid.stride, grid.margin
+    width, height = grid.width, grid.height
+
+    def all_free(cells: tuple[Cell, ...]) -> bool:
+        for x, y in cells:
+            if not (
+                0 <= x < width and 0 <= y < height and data[(y + margin) * stride + x + margin]
+            ):
+                return False
+        return True
+
+    return all_free
 
 
 @dataclass(slots=True)
@@ -185,10 +201,10 @@ class _Run:
     known: frozenset[Any] = frozenset()
     steps: list[TraceStep] = field(default_factory=list)
     repairs: list[RepairRecord] = field(default_factory=list)
-
-    def sense(self) -> None:
-        if self.spec.schedule.detection is Detection.NOW:
-            self.known = self.sim.sense()
+    moved: list[int] = field(default_factory=list)
+    """Per executed step, its (start state, action) as one integer (for the plan distance)."""
+    executed_units: int = 0
+    penalty: int = 0
 
     def repair(self, action: Any | None) -> Repair:
         """Ask the strategy (or, with an empty queue off the goal, a plain replan) for a repair
@@ -204,23 +220,10 @@ class _Run:
         self.repairs.append(RepairRecord(self.sim.steps, self.sim.pose, action, repair, latency))
         return repair
 
-    def execute(self, action: Any, source: StepSource) -> MissionStatus | None:
-        """Run one command; returns a terminal status or ``None`` to go on."""
-        outcome = self.sim.execute(action)
-        if outcome.status is Outcome.COLLISION:
-            return MissionStatus.COLLISION
-        known = self.known  # what was known when the command was given
-        if outcome.status is Outcome.FAILED_ATTEMPT:
-            self.known = known | outcome.blocking
-            source = StepSource.FAILED_ATTEMPT
-        else:
-            self.queue.popleft()
-        self.steps.append(
-            TraceStep(
-                outcome.step, action, outcome.start, outcome.end, outcome.duration, source, known
-            )
-        )
-        return None
+
+_new_tuple = tuple.__new__
+"""Builds the :class:`TraceStep` of each step without the ``NamedTuple`` constructor's Python
+frame (the same value)."""
 
 
 def run_mission(spec: MissionSpec) -> MissionResult:
@@ -262,41 +265,109 @@ def _prepare(spec: MissionSpec, table: ReplacementTable | None) -> None:
 
 
 def _loop(run: _Run) -> tuple[MissionStatus, str]:
-    spec = run.spec
-    domain = spec.domain
+    """Execute until the goal, a failed repair, the step limit or a collision.
+
+    The hot path of every experiment: it keeps what it reads on each step in locals, tests
+    availability against the moves available under the known faults (one look-up per step) and
+    records each step as a light :class:`TraceStep`.
+    """
+    spec, sim, queue, steps = run.spec, run.sim, run.queue, run.steps
     limit = spec.step_limit()
+    goal, goal_heading = spec.goal, spec.goal_heading
+    sense_now = spec.schedule.detection is Detection.NOW
+    table = sim.table
+    weight = bool(Fraction(spec.clearance_weight))
+    margin, stride = sim.grid.margin, sim.grid.stride
+    penalty = penalty_buffer(sim.grid, spec.maze, spec.clearance_radius) if weight else b""
+    moved = run.moved
+    n_actions = len(spec.domain.actions)
+    known = run.known
+    available = available_moves(table, known)
     horizon = int(getattr(run.repairer, "horizon", 0))
     early_at = -1  # the step of the last early repair: at most one per step, so none can loop
     while True:
-        if spec.at_goal(run.sim.pose):
+        pose = sim.pose
+        if pose.cell == goal and (goal_heading is None or pose.heading == goal_heading):
             return MissionStatus.REACHED, "goal reached"
-        if run.sim.steps >= limit:
+        if sim.steps >= limit:
             return MissionStatus.STEP_LIMIT, f"{limit} steps without reaching the goal"
-        run.sense()
-        if not run.queue or not domain.available(run.queue[0][0], run.known):
-            repair = run.repair(run.queue[0][0] if run.queue else None)
+        if sense_now:
+            sensed = sim.sense()
+            if sensed is not known:
+                run.known = known = sensed
+                available = available_moves(table, known)
+        if not queue or queue[0][0] not in available:
+            repair = run.repair(queue[0][0] if queue else None)
             if repair.status is not RepairStatus.REPAIRED:
                 return MissionStatus(repair.status), _why(repair, run)
             continue
-        if horizon and early_at != run.sim.steps and (ahead := _faulty_ahead(run, horizon)):
-            early_at = run.sim.steps
+        if (
+            horizon
+            and early_at != sim.steps
+            and (ahead := _faulty_ahead(queue, available, horizon))
+        ):
+            early_at = sim.steps
             repair = run.repair(ahead[0])  # a known fault ahead: the repairer wants it early
             if repair.status is not RepairStatus.REPAIRED:
                 return MissionStatus(repair.status), _why(repair, run)
             continue
-        action, source = run.queue[0]
-        terminal = run.execute(action, source)
-        if terminal is not None:
-            name = domain.format_action(action)
-            return terminal, f"{name} at {run.sim.pose} would sweep a wall"
+        action, source = queue[0]
+        step = sim.steps
+        outcome = sim.advance(action)
+        if outcome is Outcome.MOVED:
+            queue.popleft()
+            move = sim.last_move
+            assert move is not None
+            run.executed_units += move.units
+            moved.append(
+                (((pose.y << 32) + 4 * pose.x + pose.heading) * n_actions) + move.action_index
+            )
+            if weight:
+                base = (pose.y + margin) * stride + pose.x + margin
+                run.penalty += sum([penalty[base + offset] for offset in move.cells])
+        elif outcome is Outcome.FAILED_ATTEMPT:
+            run.known = known | sim.last_blocking
+            source = StepSource.FAILED_ATTEMPT
+        else:
+            name = spec.domain.format_action(action)
+            return MissionStatus.COLLISION, f"{name} at {sim.pose} would sweep a wall"
+        steps.append(
+            _new_tuple(TraceStep, (step, action, pose, sim.pose, sim.last_duration, source, known))
+        )
+        if run.known is not known:
+            known = run.known
+            available = available_moves(table, known)
 
 
-def _faulty_ahead(run: _Run, horizon: int) -> tuple[Any] | None:
+def penalty_buffer(grid: FreeGrid, maze: Maze, radius: int) -> Sequence[int]:
+    """The clearance penalties ``max(0, radius - clearance)`` of ``maze`` in the layout of
+    ``grid`` (its free-cell buffer; 0 in the margin), as compact bytes or an ``array`` (kept per
+    maze, radius and margin)."""
+    return _PENALTIES.get((maze, radius, grid.margin), lambda: _penalty_buffer(grid, maze, radius))
+
+
+def _penalty_buffer(grid: FreeGrid, maze: Maze, radius: int) -> Sequence[int]:
+    m = grid.margin
+    padded = np.zeros((grid.height + 2 * m, grid.width + 2 * m), dtype=np.int64)
+    padded[m : m + grid.height, m : m + grid.width] = clearance_penalties(maze, radius)
+    if int(padded.max(initial=0)) < 256:
+        return padded.astype(np.uint8).tobytes()
+    return array("q", padded.tobytes())
+
+
+_PENALTIES: BoundedCache[tuple[Maze, int, int], Sequence[int]] = BoundedCache(
+    "clearance penalties in free-grid layout", 8
+)
+
+
+def _faulty_ahead(
+    queue: deque[tuple[Any, StepSource]], available: Container[Any], horizon: int
+) -> tuple[Any] | None:
     """The first of the ``horizon`` queued actions after the front that is unavailable under the
-    known faults, in a 1-tuple (``None`` when all are available)."""
-    available, known, queue = run.spec.domain.available, run.known, run.queue
+    known faults (not in ``available``, the moves available under them), in a 1-tuple (``None``
+    when all are available)."""
     for i in range(1, min(horizon + 1, len(queue))):
-        if not available(queue[i][0], known):
+        if queue[i][0] not in available:
             return (queue[i][0],)
     return None
 
@@ -311,6 +382,17 @@ def _why(repair: Repair, run: _Run) -> str:
 def _result(
     run: _Run, initial: PlanResult, planning_ns: int, status: MissionStatus, reason: str
 ) -> MissionResult:
+    removed, added, motion_removed, motion_added = _plan_distances(run, initial)
+    tally = MissionTally(
+        len(run.moved),
+        run.executed_units,
+        run.sim.unit,
+        run.penalty,
+        removed,
+        added,
+        motion_removed,
+        motion_added,
+    )
     return MissionResult(
         run.spec,
         status,
@@ -321,4 +403,39 @@ def _result(
         planning_ns,
         run.sim.pose,
         run.sim.ticks,
+        tally,
     )
+
+
+def _plan_distances(run: _Run, initial: PlanResult) -> tuple[int, int, int, int]:
+    """Removed and added actions between the initial plan and the executed steps, as multisets
+    of (start state, action) encoded as integers (the same keys the loop recorded), then the same
+    by motion class (each action index replaced by that of the first action of its motion)."""
+    moves = run.sim.table.moves
+    domain = run.spec.domain
+    n_actions = len(domain.actions)
+    planned = [
+        (((p.y << 32) + 4 * p.x + p.heading) * n_actions) + moves[a][0].action_index
+        for p, a in zip(initial.poses, initial.actions, strict=False)
+    ]
+    executed = run.moved
+    removed, added = _multiset_distance(planned, executed)
+    first_of: dict[str, int] = {}
+    motion = [first_of.setdefault(domain.motion_class(a), i) for i, a in enumerate(domain.actions)]
+    if all(m == i for i, m in enumerate(motion)):  # every action its own motion class
+        return removed, added, removed, added
+    planned = [k - k % n_actions + motion[k % n_actions] for k in planned]
+    by_motion = [k - k % n_actions + motion[k % n_actions] for k in executed]
+    return (removed, added, *_multiset_distance(planned, by_motion))
+
+
+def _multiset_distance(planned: list[int], executed: list[int]) -> tuple[int, int]:
+    """Elements of ``planned`` not in ``executed`` and of ``executed`` not in ``planned``, as
+    multisets."""
+    first, second = set(planned), set(executed)
+    if len(first) == len(planned) and len(second) == len(executed):
+        common = len(first & second)
+    else:
+        a, b = Counter(planned), Counter(executed)
+        common = sum(min(n, b[k]) for k, n in a.items())
+    return len(planned) - common, len(executed) - common

@@ -46,6 +46,7 @@ from selfrepair.robots.domain import Domain
 __all__ = [
     "Clock",
     "Detection",
+    "FaultClock",
     "FaultEvent",
     "FaultSchedule",
     "Persistence",
@@ -238,6 +239,61 @@ class FaultSchedule:
             events=tuple(FaultEvent.from_json(e, domain, source) for e in events),
             detection=str(data.get("detection", "now")),  # type: ignore[arg-type]
         )
+
+
+class FaultClock:
+    """The true faults of one mission over time, for a clock that counts in integer time units
+    (``unit`` units per tick, see :mod:`selfrepair.execution.moves`).
+
+    The active set is a step function of (step, tick): :meth:`at` recomputes it with
+    :meth:`FaultSchedule.active_faults` (the reference) only when the step or the time reaches the
+    next point at which some event can start or end, and otherwise returns the same frozenset
+    object. Intermittent events draw anew at every step, so with one of them active the set is
+    recomputed at each step. Mutable (it remembers the last set and how long it holds).
+    """
+
+    __slots__ = ("_faults", "_schedule", "_seed", "_step_until", "_unit", "_units_until")
+
+    def __init__(self, schedule: FaultSchedule, seed: int, unit: int) -> None:
+        self._schedule = schedule
+        self._seed = seed
+        self._unit = unit
+        self._faults: frozenset[Any] = frozenset()
+        self._step_until = -1  # the cached set holds for steps < _step_until ...
+        self._units_until = -1  # ... and times < _units_until (in units)
+
+    def at(self, step: int, units: int) -> frozenset[Any]:
+        """The faults active at the start of step ``step``, ``units`` time units in."""
+        if step < self._step_until and units < self._units_until:
+            return self._faults
+        unit = self._unit
+        faults = self._schedule.active_faults(step, Fraction(units, unit), self._seed)
+        if faults != self._faults:
+            self._faults = faults
+        step_until = units_until = _FOREVER
+        for event in self._schedule.events:
+            at, end = event.at, None
+            if event.persistence is Persistence.TRANSIENT:
+                assert event.duration is not None
+                end = at + event.duration
+            if event.clock is Clock.STEP:
+                now, scale = step, 1
+            else:
+                now, scale = units, unit
+            edges = [b * scale for b in (at, end) if b is not None and b * scale > now]
+            if event.persistence is Persistence.INTERMITTENT and now >= at * scale:
+                step_until = min(step_until, step + 1)  # a new draw at every step
+            if edges:
+                if event.clock is Clock.STEP:
+                    step_until = min(step_until, *edges)
+                else:
+                    units_until = min(units_until, *edges)
+        self._step_until, self._units_until = step_until, units_until
+        return self._faults
+
+
+_FOREVER = 1 << 62
+"""A step or time no mission reaches."""
 
 
 def canonical_order(faults: Iterable[Any]) -> list[Any]:

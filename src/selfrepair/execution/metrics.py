@@ -25,17 +25,16 @@ from collections import Counter
 from collections.abc import Callable, Hashable, Iterable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import TYPE_CHECKING, Any
+from typing import Any, NamedTuple
 
 from selfrepair.caching import BoundedCache
-from selfrepair.execution.result import MissionResult, MissionSpec
+from selfrepair.execution.faults import FaultSchedule
+from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
 from selfrepair.repair.strategies import RepairSource, RepairStatus
+from selfrepair.robots.domain import Domain
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.lattice import action_cost, plan
 from selfrepair.search.problem import PlanningProblem
-
-if TYPE_CHECKING:
-    from selfrepair.execution.result import MissionResult
 
 __all__ = [
     "ROW_COLUMNS",
@@ -145,7 +144,10 @@ def latency_stats(latencies_ns: Iterable[int]) -> LatencyStats:
 
 def histogram_text(values: Iterable[int]) -> str:
     """A compact, sortable histogram such as ``"1:3,5:1"`` (value:count, by value)."""
-    counts = Counter(values)
+    return _histogram(Counter(values))
+
+
+def _histogram(counts: Counter[int]) -> str:
     return ",".join(f"{value}:{counts[value]}" for value in sorted(counts))
 
 
@@ -171,30 +173,99 @@ def executed_cost(result: MissionResult) -> Fraction:
     )
 
 
+def _cost_and_distance(
+    result: MissionResult, executed: tuple[TraceStep, ...]
+) -> tuple[Fraction, PlanDistance, PlanDistance]:
+    """The executed cost, the plan distance and the plan distance by motion: from the executor's
+    tally when the result has one, else recomputed from the steps (:func:`executed_cost`,
+    :func:`plan_distance`, :func:`motion_distance`)."""
+    tally = result.tally
+    if tally is None:
+        executed = executed or result.executed
+        planned = list(zip(result.initial_plan.poses, result.initial_plan.actions, strict=False))
+        done = [(s.start, s.action) for s in executed]
+        distance = plan_distance(planned, done)
+        by_motion = motion_distance(result.spec.domain.motion_class, planned, done)
+        return executed_cost(result), distance, by_motion
+    cost = Fraction(tally.executed_units, tally.unit)
+    if tally.penalty:
+        cost += Fraction(result.spec.clearance_weight) * tally.penalty
+    return (
+        cost,
+        PlanDistance(tally.plan_removed, tally.plan_added),
+        PlanDistance(tally.motion_removed, tally.motion_added),
+    )
+
+
+class _RepairTotals(NamedTuple):
+    """What the row needs from the repairs, gathered in one pass."""
+
+    latencies: list[int]
+    replacements: int
+    lookaheads: int
+    replans: int
+    replans_failed: int
+    lengths: Counter[int]
+    depths: Counter[int]
+
+
+def _repair_totals(repairs: Sequence[RepairRecord]) -> _RepairTotals:
+    latencies: list[int] = []
+    replacements = lookaheads = replans = failed = 0
+    lengths: Counter[int] = Counter()
+    depths: Counter[int] = Counter()
+    for record in repairs:
+        repair = record.repair
+        latencies.append(record.latency_ns)
+        replans += repair.replans
+        if repair.status is RepairStatus.REPAIRED:
+            if repair.source is RepairSource.REPLACEMENT:
+                replacements += 1
+                lengths[repair.candidate_length or 0] += 1
+                depths[repair.depth or 0] += 1
+            elif repair.source is RepairSource.LOOKAHEAD:
+                lookaheads += 1
+        elif repair.source is RepairSource.REPLAN:
+            failed += 1
+    return _RepairTotals(latencies, replacements, lookaheads, replans, failed, lengths, depths)
+
+
+def _schedule_texts(schedule: FaultSchedule, domain: Domain[Any, Any]) -> tuple[str, str]:
+    """The row's ``faults`` and ``fault_schedule`` texts (made once per schedule and domain)."""
+    return _SCHEDULE_TEXTS.get(
+        (schedule, domain),
+        lambda: (
+            domain.format_faults(schedule.all_faults()),
+            json.dumps(schedule.to_json(domain), sort_keys=True),
+        ),
+    )
+
+
+_SCHEDULE_TEXTS: BoundedCache[tuple[FaultSchedule, Domain[Any, Any]], tuple[str, str]] = (
+    BoundedCache("fault schedule texts", 256)
+)
+
+
 def mission_row(result: MissionResult, *, optimum: Fraction | None = None) -> Row:
     """Flatten a mission result into one row; the columns are :data:`ROW_COLUMNS`, documented in
     docs/replacement.md. Exact values are strings (``"31/3"``) with ``_float`` twins; times are
-    integer nanoseconds. ``optimum`` is the reference duration of ``ticks_over_optimum``
-    (:func:`optimum_ticks`); without it that column is ``None``."""
+    integer nanoseconds. Computed in one pass over the repairs, and from the executor's tally
+    (:class:`~selfrepair.execution.result.MissionTally`) instead of the steps when the result has
+    one. ``optimum`` is the reference duration of ``ticks_over_optimum`` (:func:`optimum_ticks`);
+    without it that column is ``None``."""
     spec = result.spec
     options = spec.options
     initial = result.initial_plan
-    executed = result.executed
+    tally = result.tally
+    executed = result.executed if tally is None else ()
+    n_executed = len(executed) if tally is None else tally.actions_executed
     repairs = result.repairs
-    table_hits = [
-        r.repair
-        for r in repairs
-        if r.repair.status is RepairStatus.REPAIRED and r.repair.source is RepairSource.REPLACEMENT
-    ]
-    latencies = [r.latency_ns for r in repairs]
-    stats = latency_stats(latencies)
-    cost_after = executed_cost(result)
+    totals = _repair_totals(repairs)
+    stats = latency_stats(totals.latencies)
+    cost_after, distance, by_motion = _cost_and_distance(result, executed)
     compute_ns = result.initial_planning_ns + stats.total_ns
-    planned = list(zip(initial.poses, initial.actions, strict=False))
-    done = [(s.start, s.action) for s in executed]
-    distance = plan_distance(planned, done)
-    by_motion = motion_distance(spec.domain.motion_class, planned, done)
-    replans = sum(r.repair.replans for r in repairs)
+    faults, schedule = _schedule_texts(spec.schedule, spec.domain)
+    replans = totals.replans
     row: Row = {
         "maze": spec.maze.name,
         "maze_width": spec.maze.width,
@@ -208,8 +279,8 @@ def mission_row(result: MissionResult, *, optimum: Fraction | None = None) -> Ro
         "recursion": options.recursion.value,
         "max_depth": options.max_depth,
         "window": options.window,
-        "faults": spec.domain.format_faults(spec.schedule.all_faults()),
-        "fault_schedule": json.dumps(spec.schedule.to_json(spec.domain), sort_keys=True),
+        "faults": faults,
+        "fault_schedule": schedule,
         "detection": spec.schedule.detection.value,
         "seed": spec.seed,
         "clearance_weight": str(spec.clearance_weight),
@@ -222,41 +293,31 @@ def mission_row(result: MissionResult, *, optimum: Fraction | None = None) -> Ro
         "ticks": str(result.ticks),
         "ticks_float": float(result.ticks),
         "steps": len(result.steps),
-        "actions_executed": len(executed),
-        "failed_attempts": len(result.steps) - len(executed),
+        "actions_executed": n_executed,
+        "failed_attempts": len(result.steps) - n_executed,
         "plan_length_before": len(initial.actions),
         "plan_cost_before": None if initial.cost is None else str(initial.cost),
         "plan_cost_before_float": None if initial.cost is None else float(initial.cost),
         "initial_expansions": initial.expansions,
-        "plan_length_after": len(executed),
+        "plan_length_after": n_executed,
         "plan_cost_after": str(cost_after),
         "plan_cost_after_float": float(cost_after),
-        "faulty_encounters": len(repairs),
-        "replacements": len(table_hits),
-        "lookaheads": sum(
-            1
-            for r in repairs
-            if r.repair.status is RepairStatus.REPAIRED
-            and r.repair.source is RepairSource.LOOKAHEAD
-        ),
-        "replans": replans,
-        "replans_failed": sum(
-            1
-            for r in repairs
-            if r.repair.source is RepairSource.REPLAN
-            and r.repair.status is not RepairStatus.REPAIRED
-        ),
-        "replacement_lengths": histogram_text(h.candidate_length or 0 for h in table_hits),
-        "replacement_depths": histogram_text(h.depth or 0 for h in table_hits),
+        "faulty_encounters": len(result.repairs),
+        "replacements": totals.replacements,
+        "lookaheads": totals.lookaheads,
+        "replans": totals.replans,
+        "replans_failed": totals.replans_failed,
+        "replacement_lengths": _histogram(totals.lengths),
+        "replacement_depths": _histogram(totals.depths),
         "initial_planning_ns": result.initial_planning_ns,
         "repair_count": stats.count,
         "repair_latency_median_ns": stats.median_ns,
         "repair_latency_p99_ns": stats.p99_ns,
         "repair_latency_max_ns": stats.max_ns,
         "repair_latency_total_ns": stats.total_ns,
-        "repair_latencies_ns": json.dumps(latencies),
+        "repair_latencies_ns": json.dumps(totals.latencies),
         "compute_ns": compute_ns,
-        "compute_per_action_ns": compute_ns / len(executed) if executed else None,
+        "compute_per_action_ns": compute_ns / n_executed if n_executed else None,
         "plan_distance": distance.total,
         "plan_distance_removed": distance.removed,
         "plan_distance_added": distance.added,

@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from enum import StrEnum
 from fractions import Fraction
-from typing import Any
+from typing import Any, NamedTuple
 
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import FaultSchedule
@@ -27,6 +27,7 @@ __all__ = [
     "MissionResult",
     "MissionSpec",
     "MissionStatus",
+    "MissionTally",
     "RepairRecord",
     "StepSource",
     "TraceStep",
@@ -115,9 +116,11 @@ class MissionSpec:
         )
 
 
-@dataclass(frozen=True, slots=True)
-class TraceStep:
-    """One executed command: what, from where to where, how long, why, and what was known."""
+class TraceStep(NamedTuple):
+    """One executed command: what, from where to where, how long, why, and what was known.
+
+    An immutable ``NamedTuple`` (one is made per executed step, on the mission loop's hot path;
+    a frozen dataclass costs several times more to build)."""
 
     step: int
     action: Any
@@ -128,10 +131,10 @@ class TraceStep:
     known: frozenset[Any]
 
 
-@dataclass(frozen=True, slots=True)
-class RepairRecord:
+class RepairRecord(NamedTuple):
     """One meeting with a faulty action and what the strategy did about it. ``action`` is
-    ``None`` for the defensive replan made when the queue runs out away from the goal."""
+    ``None`` for the defensive replan made when the queue runs out away from the goal.
+    An immutable ``NamedTuple`` (made per repair, on the hot path)."""
 
     step: int
     pose: Pose
@@ -140,10 +143,35 @@ class RepairRecord:
     latency_ns: int
 
 
+class MissionTally(NamedTuple):
+    """Sums the executor keeps while it runs, so that the metrics need not walk the steps again.
+
+    ``actions_executed``: the number of executed (moving) steps; ``executed_units``: their total
+    duration in units of ``1 / unit`` tick (see :mod:`selfrepair.execution.moves`); ``penalty``:
+    the summed clearance penalty of their footprints (the cost model's
+    ``max(0, radius - clearance)`` per cell, counted only when the clearance weight is not zero,
+    else 0); ``plan_removed``/``plan_added``: the plan distance between the initial plan and
+    the executed one, ``motion_removed``/``motion_added`` the same by motion class (see
+    :mod:`selfrepair.execution.metrics`).
+    :func:`selfrepair.execution.metrics.mission_row` falls back to recomputing these from the
+    steps when a result has no tally; tests check both agree.
+    """
+
+    actions_executed: int
+    executed_units: int
+    unit: int
+    penalty: int
+    plan_removed: int
+    plan_added: int
+    motion_removed: int
+    motion_added: int
+
+
 @dataclass(frozen=True, slots=True)
 class MissionResult:
     """The outcome of one mission; :func:`selfrepair.execution.metrics.mission_row` flattens it
-    (columns in docs/replacement.md)."""
+    (columns in docs/replacement.md). ``tally`` holds sums the executor kept on the way
+    (``None`` for a result made otherwise)."""
 
     spec: MissionSpec
     status: MissionStatus
@@ -154,6 +182,7 @@ class MissionResult:
     initial_planning_ns: int
     final_pose: Pose
     ticks: Fraction
+    tally: MissionTally | None = None
 
     @property
     def reached(self) -> bool:

@@ -17,9 +17,11 @@ from enum import StrEnum
 from fractions import Fraction
 from typing import Any, NamedTuple
 
-from selfrepair.execution.faults import Detection, FaultSchedule
-from selfrepair.geometry import Cell, Pose
+from selfrepair.execution.faults import Detection, FaultClock, FaultSchedule
+from selfrepair.execution.moves import Move, MoveTable, available_moves, move_table
+from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain
+from selfrepair.search.problem import make_pose, pose_table
 from selfrepair.world.maze import Maze
 
 __all__ = ["FAILED_ATTEMPT_TICKS", "Outcome", "Simulator", "StepOutcome"]
@@ -54,7 +56,13 @@ class StepOutcome(NamedTuple):
 
 
 class Simulator:
-    """The true world for one mission (mutable: the pose, step count and clock advance)."""
+    """The true world for one mission (mutable: the pose, step count and clock advance).
+
+    Motion comes from the domain's :class:`~selfrepair.execution.moves.MoveTable` (derived from
+    ``Domain.apply``/``footprint``/``duration`` once per domain), footprints are tested against the
+    maze's :class:`~selfrepair.geometry.FreeGrid` with a margin of the table's reach, and the clock
+    counts integer time units (``ticks`` is the exact :class:`~fractions.Fraction`).
+    """
 
     def __init__(
         self,
@@ -66,28 +74,37 @@ class Simulator:
     ) -> None:
         self.domain = domain
         self.maze = maze
-        self.grid = maze.free_grid()
         self.schedule = schedule
         self.seed = seed
         self.pose = start
         self.steps = 0
-        self.ticks = Fraction(0)
-        self._active: tuple[int, Fraction, frozenset[Any]] | None = None
+        margin = max(2, move_table(domain, 1).reach)
+        self.grid = maze.free_grid(margin)
+        self.table: MoveTable = move_table(domain, self.grid.stride)
+        self.unit = self.table.unit
+        self.units = 0
+        """Elapsed time in units of ``1 / unit`` tick."""
+        self.last_move: Move | None = None
+        """The move of the last command if it moved the robot, else ``None``."""
+        self.last_duration = Fraction(0)
+        self.last_blocking: frozenset[Any] = frozenset()
+        self._clock = FaultClock(schedule, seed, self.unit)
+        self._sense_now = schedule.detection is Detection.NOW
+        self._faults: frozenset[Any] | None = None
+        self._moves: dict[Any, tuple[Move, ...]] = {}
+        self._failed_units = int(FAILED_ATTEMPT_TICKS * self.unit)
+        self._inside = maze.in_bounds(start.x, start.y)
+        self._pw = maze.width + 2
+        self._poses = pose_table(maze) if self.table.ends_covered else None
+
+    @property
+    def ticks(self) -> Fraction:
+        """The exact elapsed time."""
+        return Fraction(self.units, self.unit)
 
     def true_faults(self) -> frozenset[Any]:
-        """The faults active now (at the start of the next step).
-
-        A pure function of (schedule, seed, step, tick), so it is computed once per step: the
-        executor and the Gymnasium environment ask for it to sense and again to execute.
-        """
-        steps, ticks = self.steps, self.ticks
-        active = self._active
-        # ``ticks`` is a new Fraction whenever time passes, so identity is the cheap test.
-        if active is not None and active[0] == steps and active[1] is ticks:
-            return active[2]
-        faults = self.schedule.active_faults(steps, ticks, self.seed)
-        self._active = (steps, ticks, faults)
-        return faults
+        """The faults active now (at the start of the next step)."""
+        return self._clock.at(self.steps, self.units)
 
     def sense(self) -> frozenset[Any]:
         """What the robot's sensors report before the next step.
@@ -95,38 +112,75 @@ class Simulator:
         Detection ``now``: the active faults. Detection ``on-use``: nothing (faults are learned only
         from failed attempts).
         """
-        if self.schedule.detection is Detection.NOW:
-            return self.true_faults()
+        if self._sense_now:
+            return self._clock.at(self.steps, self.units)
         return frozenset()
 
     def execute(self, action: Any) -> StepOutcome:
         """Command ``action`` from the current pose and advance the world."""
-        domain = self.domain
-        faults = self.true_faults()
-        start = self.pose
-        if not domain.available(action, faults):
-            outcome = StepOutcome(
-                Outcome.FAILED_ATTEMPT,
-                self.steps,
-                action,
-                start,
-                start,
-                (start.cell,),
-                FAILED_ATTEMPT_TICKS,
-                domain.blocking(action, faults),
-            )
+        start, step = self.pose, self.steps
+        status = self.advance(action)
+        if status is Outcome.FAILED_ATTEMPT:
+            swept: tuple[Cell, ...] = (start.cell,)
         else:
-            end, swept, duration = domain.step(start, action)
-            if not self.grid.all_free(swept):
-                return StepOutcome(
-                    Outcome.COLLISION, self.steps, action, start, start, swept, Fraction(0),
-                    frozenset(),
-                )  # fmt: skip
-            outcome = StepOutcome(
-                Outcome.MOVED, self.steps, action, start, end, swept, Fraction(duration),
-                frozenset(),
-            )  # fmt: skip
-        self.pose = outcome.end
+            swept = self.domain.footprint(start, action)
+        return StepOutcome(
+            status, step, action, start, self.pose, swept, self.last_duration, self.last_blocking
+        )
+
+    def advance(self, action: Any) -> Outcome:
+        """Command ``action`` and advance the world; what it did is left in ``pose``,
+        ``last_move``, ``last_duration`` and ``last_blocking`` (the executor's fast path:
+        :meth:`execute` wraps it into a :class:`StepOutcome`). A collision changes nothing."""
+        faults = self._clock.at(self.steps, self.units)
+        if faults is not self._faults:
+            self._faults = faults
+            self._moves = available_moves(self.table, faults)
+        moves = self._moves.get(action)
+        start = self.pose
+        if moves is None:
+            self.last_move = None
+            self.last_duration = FAILED_ATTEMPT_TICKS
+            self.last_blocking = self.domain.blocking(action, faults)
+            self.units += self._failed_units
+        else:
+            move = moves[start.heading]
+            if not self._free(start, move, action):
+                self.last_move = None
+                self.last_duration = Fraction(0)
+                self.last_blocking = frozenset()
+                return Outcome.COLLISION
+            x, y, heading = start.x + move.dx, start.y + move.dy, move.heading
+            poses = self._poses
+            if poses is not None and self._inside:  # the end is on the grid: a shared pose
+                state = ((y + 1) * self._pw + x + 1) * 4 + heading
+                end = poses[state] or _shared(poses, state, x, y, heading)
+            else:
+                end = make_pose(x, y, heading)
+                if not self.table.ends_covered:  # the end cell may lie off the footprint
+                    self._inside = self.maze.in_bounds(x, y)
+            self.pose = end
+            self.last_move = move
+            self.last_duration = move.duration
+            self.last_blocking = frozenset()
+            self.units += move.units
         self.steps += 1
-        self.ticks += outcome.duration
-        return outcome
+        return Outcome.MOVED if moves is not None else Outcome.FAILED_ATTEMPT
+
+    def _free(self, start: Pose, move: Move, action: Any) -> bool:
+        """Whether the footprint of ``move`` from ``start`` is free (on the grid)."""
+        if not self._inside:  # a start off the grid: the general test
+            return self.grid.all_free(self.domain.footprint(start, action))
+        grid = self.grid
+        data = grid.data
+        base = (start.y + grid.margin) * grid.stride + start.x + grid.margin
+        for offset in move.cells:  # noqa: SIM110 - a loop is faster than all() on a generator
+            if not data[base + offset]:
+                return False
+        return True
+
+
+def _shared(poses: list[Pose | None], state: int, x: int, y: int, heading: Heading) -> Pose:
+    """Make the pose of ``state`` and keep it in the maze's pose table."""
+    pose = poses[state] = make_pose(x, y, heading)
+    return pose

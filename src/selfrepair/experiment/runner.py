@@ -124,22 +124,26 @@ def execute_mission(mission: Mission, *, repeats: int = 1) -> Mapping[str, Value
 
     Timing, with one cache policy for every strategy (docs/experiments.md): the mission first
     runs **cold**, after every derived-data cache of the process is emptied
-    (:func:`~selfrepair.caching.clear_caches`; loaded table files and the compiled planner
-    kernels stay), so its first repair pays what a first repair in a fresh process pays:
-    ``cold_first_repair_ns``, ``cold_repair_compute_ns``, ``cold_initial_planning_ns``. Then it
-    runs ``repeats`` more times **warm** (caches as the runs before left them); every other
+    (:func:`~selfrepair.caching.clear_caches`; loaded table files, the compiled planner kernels,
+    the simulator's move tables, which no plan or repair reads, and the tables' candidate
+    geometry, which every mission computes before its clocks start, stay), so its first repair
+    pays what a first repair in a fresh process pays: ``cold_first_repair_ns``,
+    ``cold_repair_compute_ns``, ``cold_initial_planning_ns``. Then it runs ``repeats`` more times
+    **warm** (caches as the runs before left them); every other
     timing column is the median over those warm runs, repair by repair (results are
     deterministic, so the repairs line up). ``timing_repeats`` records ``repeats``.
     """
     from selfrepair.caching import clear_caches
     from selfrepair.execution.executor import run_mission
     from selfrepair.execution.metrics import optimum_ticks
+    from selfrepair.execution.moves import SIMULATION_CACHES
     from selfrepair.experiment.missions import to_spec
+    from selfrepair.repair.replacement import PREFILLED_CACHES
 
     if repeats < 1:
         raise ProblemError(f"repeats must be at least 1, got {repeats}")
     spec = to_spec(mission)
-    clear_caches(keep=INPUT_CACHES)
+    clear_caches(keep=(*INPUT_CACHES, *SIMULATION_CACHES, *PREFILLED_CACHES))
     cold = run_mission(spec)
     warm = [run_mission(spec) for _ in range(repeats)]
     result = _median_timings(warm)
@@ -175,7 +179,7 @@ def _median_timings(runs: Sequence[MissionResult]) -> MissionResult:
     if counts != {len(first.repairs)}:  # never expected: missions are deterministic
         return replace(first, initial_planning_ns=planning)
     repairs = tuple(
-        replace(record, latency_ns=_lower_median([r.repairs[i].latency_ns for r in runs]))
+        record._replace(latency_ns=_lower_median([r.repairs[i].latency_ns for r in runs]))
         for i, record in enumerate(first.repairs)
     )
     return replace(first, repairs=repairs, initial_planning_ns=planning)

@@ -66,6 +66,7 @@ from selfrepair.tables.model import ReplacementTable
 
 __all__ = [
     "DEFAULT_MAX_DEPTH",
+    "PREFILLED_CACHES",
     "RECURSION_MODES",
     "FreeTest",
     "RecursionMode",
@@ -377,6 +378,12 @@ def _reach(table: ReplacementTable) -> int:
 
 
 _REACH: BoundedCache[ReplacementTable, int] = BoundedCache("table reach", 64)
+
+PREFILLED_CACHES: tuple[str, ...] = (_REACH.name, _GEOMETRY.name)
+"""The names of the caches :func:`table_reach` fills: a mission fills them before anything is
+timed (the margin of its free grid needs the reach), so no timed look-up computes them. A
+measurement that empties the caches to time a cold first repair can keep these (the experiment
+runner does): the cold repair does the same work either way."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -7,30 +7,47 @@ the kernels only search.
 
 Layout: the grid is padded by one wall cell on every side and flattened, so a cell is one integer
 ``p = (y + 1) * (width + 2) + (x + 1)`` and every motion is a fixed integer offset; a lattice
-state is ``4 * p + heading``. The open list is an indexed 4-ary heap keyed ``(f, h, counter)``
-per state (decrease-key instead of lazy deletion). It pops exactly the entries that the
-lazy-deletion heap of :func:`selfrepair.search.astar.astar` pops, in the same order, so both
-backends return the same plan.
+state is ``4 * p + heading``.
+
+The open list is an indexed 4-ary heap of records ``(f, h, counter, node)``, one row of a 2-D
+array each (one or two cache lines per sift level instead of four arrays), with decrease-key: a
+node whose ``g`` improves takes a new counter and moves up in place. The lattice, whose costs are
+integers, packs ``f`` and ``h`` into one key ``(f << s) | h`` (``s`` bits hold the largest ``h``)
+and leaves ``h`` at 0: the same order with one comparison less per tie. It pops exactly the entries
+that the lazy-deletion heap of :func:`selfrepair.search.astar.astar` pops, in the same order (the
+keys are unique), so both backends return the same plan.
+
+Per-state scratch lives in arrays reused from one search to the next: ``g``, the heap slot, and a
+*word* holding a generation stamp and the move that reached the state (lattice: stamp above bit
+10, heading of the parent and move index below; grid: a stamp byte array and a move byte). Stamps
+are ``2k + 1`` (open) and ``2k + 2`` (closed) in search ``k``, anything lower is unvisited, so a
+new search clears nothing: only the states a search touches cost memory or time, which matters
+for a small search on a large map. Parents are not stored: the move and the parent's heading give
+the parent state.
 
 Kernels are resumable: all search state lives in arrays, and a call stops after a given number of
-expansions so that the Python wrapper can look at the clock between calls.
+expansions (so that the Python wrapper can look at the clock between calls) or when the heap or
+queue array is full (the wrapper then grows it and calls again).
 """
 
 from __future__ import annotations
 
+import math
 import threading
 import time
+from collections.abc import Callable, Hashable
+from dataclasses import dataclass
 from fractions import Fraction
-from functools import lru_cache
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 import numpy.typing as npt
 
+from selfrepair.caching import BoundedCache
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain
 from selfrepair.search.astar import PlanStatus
-from selfrepair.search.problem import CellBound, PlanningProblem
+from selfrepair.search.problem import CellBound, PlanningProblem, make_pose, pose_table
 from selfrepair.world.maze import Maze
 
 try:
@@ -52,70 +69,63 @@ __all__ = ["CHUNK", "NUMBA", "bfs_padded", "grid_search", "plan_lattice"]
 CHUNK = 1 << 15
 """Expansions per kernel call when a time limit is set (between two looks at the clock)."""
 
-_PAUSED, _SOLVED, _UNSOLVABLE = 0, 1, 2
+_PAUSED, _SOLVED, _UNSOLVABLE, _GROW = 0, 1, 2, 3
 _SIZE, _COUNTER, _EXPANSIONS, _FOUND = 0, 1, 2, 3
+_F, _H, _C, _NODE = 0, 1, 2, 3  # heap record columns
+_MOVE_BITS = 10
+"""Lattice words: the parent's heading (2 bits) and the move index (8 bits) below the stamp."""
+_MOVE_MASK = (1 << _MOVE_BITS) - 1
+_LATTICE_MARK_MAX = (1 << (31 - _MOVE_BITS)) - 1
+_GRID_MARK_MAX = int(np.iinfo(np.uint16).max) >> 3
+_FIRST_HEAP = 1 << 12
+"""Heap records allocated at first; the heap doubles when a search needs more."""
+
+# motion table columns (per heading and move): end-cell offset, end heading, scaled duration,
+# neighbourhood bits of the footprint, number of footprint cells, then the footprint offsets
+_DCELL, _NHEAD, _DUR, _NEED, _NSW, _SW = 0, 1, 2, 3, 4, 5
 
 
-# --- indexed 4-ary heap ----------------------------------------------------------------------
-# Slot arrays hn (node), hf, hh, hc (keys f, h, counter) in heap order; pos[node] is the slot.
-# Children of slot i are 4i+1 .. 4i+4: half the levels of a binary heap, so fewer cache misses.
+# --- indexed 4-ary heap of records -------------------------------------------------------------
+# Row i holds (f, h, counter, node) and pos[node] == i; the children of row i are rows 4i+1 ..
+# 4i+4: half the levels of a binary heap, so fewer cache misses.
 
 
 @njit(cache=True, inline="always")
-def _less(f1: Any, h1: Any, c1: int, f2: Any, h2: Any, c2: int) -> bool:
+def _less(f1: Any, h1: Any, c1: Any, f2: Any, h2: Any, c2: Any) -> bool:
     if f1 != f2:
         return bool(f1 < f2)
     if h1 != h2:
         return bool(h1 < h2)
-    return c1 < c2
+    return bool(c1 < c2)
 
 
 @njit(cache=True)
-def _sift_up(
-    hn: Any, hf: Any, hh: Any, hc: Any, pos: Any, i: int, node: int, f: Any, h: Any, c: int
-) -> None:
+def _sift_up(heap: Any, pos: Any, i: int, f: Any, h: Any, c: Any, node: Any) -> None:
+    """Place the record ``(f, h, c, node)`` at slot ``i`` or above (a push when ``i`` is the
+    heap's size, a decrease-key when it is the node's slot)."""
     while i > 0:
         up = (i - 1) >> 2
-        if not _less(f, h, c, hf[up], hh[up], hc[up]):
+        if not _less(f, h, c, heap[up, 0], heap[up, 1], heap[up, 2]):
             break
-        moved = hn[up]
-        hn[i], hf[i], hh[i], hc[i] = moved, hf[up], hh[up], hc[up]
-        pos[moved] = i
+        heap[i, 0] = heap[up, 0]
+        heap[i, 1] = heap[up, 1]
+        heap[i, 2] = heap[up, 2]
+        heap[i, 3] = heap[up, 3]
+        pos[int(heap[i, 3])] = i
         i = up
-    hn[i], hf[i], hh[i], hc[i] = node, f, h, c
-    pos[node] = i
+    heap[i, 0] = f
+    heap[i, 1] = h
+    heap[i, 2] = c
+    heap[i, 3] = node
+    pos[int(node)] = i
 
 
-@njit(cache=True, inline="always")
-def _push(
-    flag: Any,
-    hn: Any,
-    hf: Any,
-    hh: Any,
-    hc: Any,
-    pos: Any,
-    size: int,
-    node: int,
-    f: Any,
-    h: Any,
-    c: int,
-) -> int:
-    """Insert ``node`` (flag 0 to 1, open) or lower its key if open; returns the new size."""
-    if flag[node] == 0:
-        flag[node] = 1
-        _sift_up(hn, hf, hh, hc, pos, size, node, f, h, c)
-        return size + 1
-    _sift_up(hn, hf, hh, hc, pos, pos[node], node, f, h, c)
-    return size
-
-
-@njit(cache=True, inline="always")
-def _pop(hn: Any, hf: Any, hh: Any, hc: Any, pos: Any, size: int) -> int:
-    """Remove and return the minimum node; ``size`` is the heap size before the pop."""
-    top = hn[0]
+@njit(cache=True)
+def _pop(heap: Any, pos: Any, size: int) -> int:
+    """Remove the top record; ``size`` is the heap size before the pop. Returns the new size."""
     size -= 1
     if size > 0:
-        node, f, h, c = hn[size], hf[size], hh[size], hc[size]
+        f, h, c, node = heap[size, 0], heap[size, 1], heap[size, 2], heap[size, 3]
         i = 0
         while True:
             first = 4 * i + 1
@@ -123,119 +133,194 @@ def _pop(hn: Any, hf: Any, hh: Any, hc: Any, pos: Any, size: int) -> int:
                 break
             child = first
             for other in range(first + 1, min(first + 4, size)):
-                if _less(hf[other], hh[other], hc[other], hf[child], hh[child], hc[child]):
+                if _less(
+                    heap[other, 0], heap[other, 1], heap[other, 2],
+                    heap[child, 0], heap[child, 1], heap[child, 2],
+                ):  # fmt: skip
                     child = other
-            if not _less(hf[child], hh[child], hc[child], f, h, c):
+            if not _less(heap[child, 0], heap[child, 1], heap[child, 2], f, h, c):
                 break
-            moved = hn[child]
-            hn[i], hf[i], hh[i], hc[i] = moved, hf[child], hh[child], hc[child]
-            pos[moved] = i
+            heap[i, 0] = heap[child, 0]
+            heap[i, 1] = heap[child, 1]
+            heap[i, 2] = heap[child, 2]
+            heap[i, 3] = heap[child, 3]
+            pos[int(heap[i, 3])] = i
             i = child
-        hn[i], hf[i], hh[i], hc[i] = node, f, h, c
-        pos[node] = i
-    return int(top)
+        heap[i, 0] = f
+        heap[i, 1] = h
+        heap[i, 2] = c
+        heap[i, 3] = node
+        pos[int(node)] = i
+    return size
 
 
-# --- breadth-first distances ---------------------------------------------------------------
+# --- breadth-first distances -------------------------------------------------------------------
 
 
 @njit(cache=True)
-def _bfs(pw: int, goal: int, dist: Any, queue: Any) -> None:
-    """Breadth-first search on ``dist``: -1 marks an unvisited free cell, -2 a wall."""
-    dist[goal] = 0
-    queue[0] = goal
-    head, tail = 0, 1
-    while head < tail:
+def _bfs(pw: int, dist: Any, queue: Any, st: Any) -> int:
+    """Breadth-first search on ``dist`` (-1 marks an unvisited free cell, -2 a wall) from the
+    cells in the ring ``queue`` (``st``: head and count; the capacity is a power of two). Returns
+    1 when the queue must grow before going on, else 0."""
+    mask = queue.shape[0] - 1
+    head, count = st[0], st[1]
+    while count > 0:
+        if count + 4 > mask + 1:
+            st[0], st[1] = head, count
+            return 1
         p = queue[head]
-        head += 1
+        head = (head + 1) & mask
+        count -= 1
         d = dist[p] + 1
         q = p - pw
         if dist[q] == -1:
             dist[q] = d
-            queue[tail] = q
-            tail += 1
+            queue[(head + count) & mask] = q
+            count += 1
         q = p + 1
         if dist[q] == -1:
             dist[q] = d
-            queue[tail] = q
-            tail += 1
+            queue[(head + count) & mask] = q
+            count += 1
         q = p + pw
         if dist[q] == -1:
             dist[q] = d
-            queue[tail] = q
-            tail += 1
+            queue[(head + count) & mask] = q
+            count += 1
         q = p - 1
         if dist[q] == -1:
             dist[q] = d
-            queue[tail] = q
-            tail += 1
+            queue[(head + count) & mask] = q
+            count += 1
+    st[0], st[1] = head, count
+    return 0
 
 
-@lru_cache(maxsize=16)
-def _bfs_template(maze: Maze) -> npt.NDArray[np.int32]:
-    """-1 on free cells and -2 on walls and the border: the starting state of :func:`_bfs`."""
-    out = np.where(_padded_free(maze) != 0, -1, -2).astype(np.int32)
-    out.setflags(write=False)
-    return out
+def _cached(cache: BoundedCache[Any, Any], key: Hashable, make: Callable[[], Any]) -> Any:
+    return cache.get(key, make)
+
+
+@dataclass(slots=True)
+class _Scratch:
+    """Per-thread search arrays of one kind, reused across searches (mutable by nature)."""
+
+    size: int
+    arrays: dict[str, Any]
+    mark_max: int
+    generation: int = 0
+
+    def next_marks(self) -> tuple[int, int]:
+        """The (open, closed) stamps of a new search; clears the marks when they run out."""
+        opened = 2 * self.generation + 1
+        if opened + 1 > self.mark_max:
+            self.arrays["mark"].fill(0)
+            self.generation, opened = 0, 1
+        self.generation += 1
+        return opened, opened + 1
 
 
 _local = threading.local()
 
 
-def _buffers(tag: str, n: int, spec: tuple[tuple[str, Any], ...]) -> dict[str, Any]:
-    """Scratch arrays of length ``n`` kept per thread and reused across searches.
+def _scratch(tag: str, n: int, spec: tuple[tuple[str, Any], ...], mark_max: int) -> _Scratch:
+    """Scratch arrays of ``n`` states kept per thread and reused across searches.
 
     Fresh arrays would cost a page fault per touched page on every query, which for the
-    million-state lattice of a 512x512 map is as slow as the search itself. Only the last size
-    per ``tag`` is kept. Callers must reset what they read before writing (the ``flag`` arrays).
+    million-state lattice of a 512x512 map is as slow as the search itself. Arrays are reused for
+    any size from a quarter of theirs up; ``mark`` starts zeroed (lazily, by the OS), the others
+    are never read before a search writes them. The heap is allocated small and grown on demand.
     """
-    cache = getattr(_local, "buffers", None)
+    cache = getattr(_local, "scratch", None)
     if cache is None:
-        cache = _local.buffers = {}
+        cache = _local.scratch = {}
     entry = cache.get(tag)
-    if entry is None or entry[0] != n:
-        entry = (n, {name: np.empty(n, dtype=dtype) for name, dtype in spec})
-        cache[tag] = entry
-    return entry[1]
+    if entry is None or not n <= entry.size <= 4 * n:
+        arrays = {
+            name: np.zeros(n, dtype=dtype) if name == "mark" else np.empty(n, dtype=dtype)
+            for name, dtype in spec
+        }
+        entry = cache[tag] = _Scratch(n, arrays, mark_max)
+    return entry
 
 
-@lru_cache(maxsize=16)
+def _heap(tag: str, dtype: Any, need: int) -> npt.NDArray[Any]:
+    """The per-thread heap array of ``tag``, at least ``need`` records long."""
+    cache = getattr(_local, "heaps", None)
+    if cache is None:
+        cache = _local.heaps = {}
+    heap = cache.get(tag)
+    if heap is None or heap.shape[0] < need:
+        size = max(_FIRST_HEAP, need, 0 if heap is None else 2 * heap.shape[0])
+        fresh = np.empty((size, 4), dtype=dtype)
+        if heap is not None:
+            fresh[: heap.shape[0]] = heap
+        heap = cache[tag] = fresh
+    return heap
+
+
 def _padded_free(maze: Maze) -> npt.NDArray[np.uint8]:
-    free = np.zeros((maze.height + 2, maze.width + 2), dtype=np.uint8)
-    free[1:-1, 1:-1] = ~maze.walls
-    out = free.ravel()
-    out.setflags(write=False)
-    return out
+    def make() -> npt.NDArray[np.uint8]:
+        free = np.zeros((maze.height + 2, maze.width + 2), dtype=np.uint8)
+        free[1:-1, 1:-1] = ~maze.walls
+        out = free.ravel()
+        out.setflags(write=False)
+        return out
+
+    return _cached(_FREE, maze, make)  # type: ignore[no-any-return]
 
 
-@lru_cache(maxsize=16)
+_FREE: BoundedCache[Maze, npt.NDArray[np.uint8]] = BoundedCache("padded free cells", 8)
+
+
 def _neighbourhoods(maze: Maze) -> npt.NDArray[np.uint16]:
     """Per padded cell: bit ``3 * (dy + 1) + (dx + 1)`` is set when the cell ``(dx, dy)`` away is
     free."""
-    free = np.zeros((maze.height + 4, maze.width + 4), dtype=np.uint16)
-    free[2:-2, 2:-2] = ~maze.walls
-    h, w = maze.height + 2, maze.width + 2
-    mask = np.zeros((h, w), dtype=np.uint16)
-    for dy in (-1, 0, 1):
-        for dx in (-1, 0, 1):
-            bit = np.uint16(1 << (3 * (dy + 1) + dx + 1))
-            mask |= free[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w] * bit
-    out = mask.ravel()
-    out.setflags(write=False)
-    return out
+
+    def make() -> npt.NDArray[np.uint16]:
+        free = np.zeros((maze.height + 4, maze.width + 4), dtype=np.uint16)
+        free[2:-2, 2:-2] = ~maze.walls
+        h, w = maze.height + 2, maze.width + 2
+        mask = np.zeros((h, w), dtype=np.uint16)
+        for dy in (-1, 0, 1):
+            for dx in (-1, 0, 1):
+                bit = np.uint16(1 << (3 * (dy + 1) + dx + 1))
+                mask |= free[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w] * bit
+        out = mask.ravel()
+        out.setflags(write=False)
+        return out
+
+    return _cached(_NEIGHBOURS, maze, make)  # type: ignore[no-any-return]
+
+
+_NEIGHBOURS: BoundedCache[Maze, npt.NDArray[np.uint16]] = BoundedCache(
+    "lattice neighbourhood masks", 8
+)
 
 
 def bfs_padded(maze: Maze, goal: Cell) -> npt.NDArray[np.int32]:
     """4-connected BFS distances to ``goal``, shape ``(height + 2, width + 2)``.
 
     Negative means unreachable: -1 for a free cell cut off from the goal, -2 for a wall or the
-    border.
+    border. The queue is a ring that grows with the frontier, not with the maze.
     """
     pw = maze.width + 2
-    dist = _bfs_template(maze).copy()
-    queue = _buffers("bfs", dist.size, (("queue", np.int32),))["queue"]
-    _bfs(pw, (goal[1] + 1) * pw + goal[0] + 1, dist, queue)
+    dist = np.where(_padded_free(maze) != 0, -1, -2).astype(np.int32)
+    goal_p = (goal[1] + 1) * pw + goal[0] + 1
+    dist[goal_p] = 0
+    queue = np.empty(_FIRST_QUEUE, dtype=np.int32)
+    queue[0] = goal_p
+    st = np.array([0, 1], dtype=np.int64)
+    while _bfs(pw, dist, queue, st):
+        head, count = int(st[0]), int(st[1])
+        live = queue[(head + np.arange(count)) & (queue.shape[0] - 1)]
+        queue = np.empty(2 * queue.shape[0], dtype=np.int32)
+        queue[:count] = live
+        st[0] = 0
     return dist.reshape(maze.height + 2, pw)
+
+
+_FIRST_QUEUE = 1 << 12
+"""Breadth-first queue entries allocated at first (a power of two; doubled on demand)."""
 
 
 # --- robot lattice -------------------------------------------------------------------------
@@ -243,22 +328,26 @@ def bfs_padded(maze: Maze, goal: Cell) -> npt.NDArray[np.int32]:
 
 @njit(cache=True)
 def _lattice(
-    nbr: Any, pen: Any, hdist: Any, rnum: int, rden: int, wmul: int,
-    dcell: Any, nhead: Any, dur: Any, need: Any, nsw: Any, sw: Any,
-    goal_cell: int, goal_head: int, limit: int,
-    flag: Any, g: Any, parent: Any, pmove: Any, pos: Any,
-    hn: Any, hf: Any, hh: Any, hc: Any, scal: Any,
+    nbr: Any, pen: Any, hdist: Any, mt: Any, par: Any,
+    g: Any, word: Any, heap: Any, scal: Any, pos: Any,
 ) -> int:  # fmt: skip
+    rnum, rden, wmul = par[0], par[1], par[2]
+    goal_cell, goal_head, limit, opened, shift = par[3], par[4], par[5], par[6], par[7]
+    closed = opened + 1
     size, counter, expansions = scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS]
-    nmoves = dcell.shape[1]
+    nmoves = mt.shape[1]
+    room = heap.shape[0] - nmoves
     status = _UNSOLVABLE
     while size > 0:
         if expansions >= limit:
             status = _PAUSED
             break
-        s = _pop(hn, hf, hh, hc, pos, size)
-        size -= 1
-        flag[s] = 2
+        if size > room:
+            status = _GROW
+            break
+        s = heap[0, _NODE]
+        size = _pop(heap, pos, size)
+        word[s] = (closed << _MOVE_BITS) | (word[s] & _MOVE_MASK)
         expansions += 1
         cell = s >> 2
         head = s & 3
@@ -269,21 +358,21 @@ def _lattice(
         gs = g[s]
         around = nbr[cell]
         for k in range(nmoves):
-            mask = need[head, k]
-            if around & mask != mask:
+            need = mt[head, k, _NEED]
+            if around & need != need:
                 continue
-            nc = cell + dcell[head, k]
-            ns = 4 * nc + nhead[head, k]
-            state = flag[ns]
-            if state == 2:
+            nc = cell + mt[head, k, _DCELL]
+            ns = 4 * nc + mt[head, k, _NHEAD]
+            m = word[ns] >> _MOVE_BITS
+            if m == closed:
                 continue
-            gn = gs + dur[head, k]
+            gn = gs + mt[head, k, _DUR]
             if wmul:
                 penalty = 0
-                for j in range(nsw[head, k]):
-                    penalty += pen[cell + sw[head, k, j]]
+                for j in range(mt[head, k, _NSW]):
+                    penalty += pen[cell + mt[head, k, _SW + j]]
                 gn += wmul * penalty
-            if state == 1 and gn >= g[ns]:
+            if m == opened and gn >= g[ns]:
                 continue
             d = hdist[nc]
             if d < 0:
@@ -291,88 +380,114 @@ def _lattice(
             hv = d * rnum if rden == 1 else d * rnum // rden
             counter += 1
             g[ns] = gn
-            parent[ns] = s
-            pmove[ns] = k
-            size = _push(flag, hn, hf, hh, hc, pos, size, ns, gn + hv, hv, counter)
+            word[ns] = (opened << _MOVE_BITS) | (head << 8) | k
+            if m == opened:
+                _sift_up(heap, pos, pos[ns], ((gn + hv) << shift) | hv, 0, counter, ns)
+            else:
+                _sift_up(heap, pos, size, ((gn + hv) << shift) | hv, 0, counter, ns)
+                size += 1
     scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS] = size, counter, expansions
     return status
 
 
 @njit(cache=True)
-def _walk_back(parent: Any, start: int, goal: int) -> Any:
+def _walk_lattice(word: Any, mt: Any, start: int, goal: int) -> Any:
+    """The states from ``start`` to ``goal`` (``out[0]``), the move index into each (``out[1]``,
+    -1 for the start) and the scaled duration of the path (``out[2, 0]``)."""
     n = 1
     s = goal
     while s != start:
-        s = parent[s]
+        pm = word[s] & _MOVE_MASK
+        head = pm >> 8
+        s = 4 * ((s >> 2) - mt[head, pm & 255, _DCELL]) + head
         n += 1
-    out = np.empty(n, dtype=np.int64)
+    out = np.zeros((3, n), dtype=np.int64)
     s = goal
+    total = 0
     for i in range(n - 1, -1, -1):
-        out[i] = s
+        out[0, i] = s
         if i:
-            s = parent[s]
+            pm = word[s] & _MOVE_MASK
+            head = pm >> 8
+            k = pm & 255
+            out[1, i] = k
+            total += mt[head, k, _DUR]
+            s = 4 * ((s >> 2) - mt[head, k, _DCELL]) + head
+    out[1, 0] = -1
+    out[2, 0] = total
     return out
 
 
-@lru_cache(maxsize=64)
-def _motion_tables(
-    domain: Domain[Any, Any], moves: tuple[Any, ...], pw: int, scale: int
-) -> tuple[npt.NDArray[np.int64], ...]:
-    """Integer tables for every heading and action, derived with ``domain.step``.
+class _Motion(NamedTuple):
+    """A motion table (read-only), its largest duration, and the moves as an object array (to
+    turn the kernel's move indices into actions in one step)."""
 
-    ``dcell``/``nhead``: end-cell offset and end heading; ``dur``: scaled duration; ``need``: the
-    neighbourhood bits of the footprint cells; ``nsw``/``sw``: the footprint cells as offsets.
-    Raises :class:`OverflowError` for an action that reaches beyond the 3x3 neighbourhood.
-    """
+    table: npt.NDArray[np.int64]
+    dur_max: int
+    moves: npt.NDArray[np.object_]
+
+
+def _motion(domain: Domain[Any, Any], moves: tuple[Any, ...], pw: int, scale: int) -> _Motion:
+    """Integer motion table ``[heading, move, column]`` derived with ``domain.step`` (columns as
+    in the module's ``_DCELL`` .. ``_SW``). Raises :class:`OverflowError` for an action that
+    reaches beyond the 3x3 neighbourhood or a duration that is not a multiple of ``1/scale``."""
     n = len(moves)
-    dcell = np.zeros((4, n), dtype=np.int64)
-    nhead = np.zeros((4, n), dtype=np.int64)
-    dur = np.zeros((4, n), dtype=np.int64)
-    need = np.zeros((4, n), dtype=np.int64)
-    nsw = np.zeros((4, n), dtype=np.int64)
+    if n > 255:
+        raise OverflowError("more than 255 planning actions")
     width = max([len(domain.footprint(Pose(0, 0, h), a)) for a in moves for h in Heading] or [1])
-    sw = np.zeros((4, n, width), dtype=np.int64)
+    table = np.zeros((4, n, _SW + width), dtype=np.int64)
     for heading in Heading:
         for k, action in enumerate(moves):
             end, swept, duration = domain.step(Pose(0, 0, heading), action)
             if max(abs(end.x), abs(end.y)) > 1:
                 raise OverflowError("an action moves beyond the 3x3 neighbourhood")
-            dcell[heading, k] = end.y * pw + end.x
-            nhead[heading, k] = int(end.heading)
+            row = table[heading, k]
+            row[_DCELL] = end.y * pw + end.x
+            row[_NHEAD] = int(end.heading)
             scaled = Fraction(duration) * scale
             if scaled.denominator != 1:
                 raise OverflowError(f"duration {duration} is not a multiple of 1/{scale}")
-            dur[heading, k] = scaled.numerator
-            nsw[heading, k] = len(swept)
+            row[_DUR] = scaled.numerator
+            row[_NSW] = len(swept)
             for j, (x, y) in enumerate(swept):
                 if max(abs(x), abs(y)) > 1:
                     raise OverflowError("an action sweeps beyond the 3x3 neighbourhood")
-                sw[heading, k, j] = y * pw + x
-                need[heading, k] |= 1 << (3 * (y + 1) + x + 1)
-    tables = (dcell, nhead, dur, need, nsw, sw)
-    for table in tables:
-        table.setflags(write=False)
-    return tables
+                row[_SW + j] = y * pw + x
+                row[_NEED] |= 1 << (3 * (y + 1) + x + 1)
+    table.setflags(write=False)
+    objects = np.empty(n, dtype=object)
+    objects[:] = moves
+    return _Motion(table, int(table[:, :, _DUR].max(initial=0)), objects)
 
 
-@lru_cache(maxsize=16)
-def _padded_penalty(maze: Maze, radius: int) -> npt.NDArray[np.int64]:
-    from selfrepair.world.maze import clearance_penalties
+_MOTIONS: BoundedCache[Hashable, _Motion] = BoundedCache("lattice motion tables", 256)
 
-    padded = np.full((maze.height + 2, maze.width + 2), radius, dtype=np.int64)
-    padded[1:-1, 1:-1] = clearance_penalties(maze, radius)
-    out = padded.ravel()
-    out.setflags(write=False)
-    return out
 
+def _padded_penalty(maze: Maze, radius: int) -> tuple[npt.NDArray[np.int64], int]:
+    """The clearance penalties in the padded layout (``radius`` on the border) and their
+    maximum."""
+
+    def make() -> tuple[npt.NDArray[np.int64], int]:
+        from selfrepair.world.maze import clearance_penalties
+
+        padded = np.full((maze.height + 2, maze.width + 2), radius, dtype=np.int64)
+        padded[1:-1, 1:-1] = clearance_penalties(maze, radius)
+        out = padded.ravel()
+        out.setflags(write=False)
+        return out, int(out.max(initial=0))
+
+    return _cached(_PENALTY, (maze, radius), make)  # type: ignore[no-any-return]
+
+
+_PENALTY: BoundedCache[tuple[Maze, int], tuple[npt.NDArray[np.int64], int]] = BoundedCache(
+    "padded clearance penalties", 8
+)
 
 _NO_PENALTY = np.zeros(1, dtype=np.int64)
 _NO_PENALTY.setflags(write=False)
 
-_LATTICE_BUFFERS = (
-    ("flag", np.uint8), ("g", np.int64), ("parent", np.int32), ("pmove", np.int8),
-    ("pos", np.int32), ("hn", np.int32), ("hf", np.int64), ("hh", np.int64), ("hc", np.int64),
-)  # fmt: skip
+_LATTICE_ARRAYS = (("g", np.int64), ("mark", np.int32), ("pos", np.int32))
+"""Per lattice state: cost so far, word (stamp and move, see the module docstring), heap slot."""
 
 
 def plan_lattice(
@@ -382,80 +497,115 @@ def plan_lattice(
     scale: int,
     max_expansions: int | None,
     deadline_ns: int | None,
-) -> tuple[PlanStatus, tuple[Any, ...], tuple[Pose, ...], int, int]:
+    *,
+    key: Hashable | None = None,
+    largest: int | None = None,
+) -> tuple[PlanStatus, tuple[Any, ...], tuple[Pose, ...], int, int, int]:
     """Run the lattice search over ``moves``; the arguments mean what they mean in
-    :mod:`selfrepair.search.lattice`.
+    :mod:`selfrepair.search.lattice` (``problem.clearance_weight`` a
+    :class:`~fractions.Fraction`); ``key`` identifies ``(problem.domain, moves)`` for the
+    motion-table cache (``moves`` itself when omitted); ``largest`` is the largest distance in
+    ``bound`` when the caller knows it (else it is found by a scan).
 
-    Returns status, actions, poses, the scaled integer cost and the number of expansions. Raises
-    :class:`OverflowError` when the problem does not fit the integer kernel (the caller then uses
-    the pure-Python search).
+    Returns status, actions, poses, the scaled integer cost, the scaled integer duration and the
+    number of expansions. Raises :class:`OverflowError` when the problem does not fit the integer
+    kernel (the caller then uses the pure-Python search).
     """
     maze = problem.maze
-    pw = maze.width + 2
-    n_states = 4 * (maze.height + 2) * pw
-    weight = Fraction(problem.clearance_weight)
+    height, width = maze.walls.shape
+    pw = width + 2
+    n_states = 4 * (height + 2) * pw
+    weight = problem.clearance_weight
     wmul = weight.numerator * (scale // weight.denominator)
-    pen = _padded_penalty(maze, problem.clearance_radius) if wmul else _NO_PENALTY
-    hdist = bound.padded.ravel()
-    rate = bound.rate * scale
-    tables = _motion_tables(problem.domain, moves, pw, scale)
-    _check_int64(tables[2], pen, wmul, hdist, rate, n_states)
-    start_cell = (problem.start.y + 1) * pw + problem.start.x + 1
-    start = 4 * start_cell + int(problem.start.heading)
+    pen, pen_max = _padded_penalty(maze, problem.clearance_radius) if wmul else (_NO_PENALTY, 0)
+    hdist = bound.padded.ravel().view()
+    hdist.setflags(write=False)  # one kernel signature whatever the heuristic hands over
+    rnum, rden = bound.rate.numerator * scale, bound.rate.denominator
+    common = math.gcd(rnum, rden)
+    rnum, rden = rnum // common, rden // common
+    domain = problem.domain
+    motion = _cached(
+        _MOTIONS, (domain, moves if key is None else key, pw, scale),
+        lambda: _motion(domain, moves, pw, scale),
+    )  # fmt: skip
+    mt = motion.table
+    hmax = (int(hdist.max(initial=0)) if largest is None else largest) * rnum // rden
+    shift = hmax.bit_length()  # heap key: (f << shift) | h, ordered as (f, h)
+    _check_int64(motion.dur_max, mt.shape[2] - _SW, pen_max, wmul, hmax, shift, n_states)
+    start = problem.start
+    start_cell = (start.y + 1) * pw + start.x + 1
+    start_state = 4 * start_cell + start.heading
+    if hdist[start_cell] < 0:
+        return PlanStatus.UNSOLVABLE, (), (), 0, 0, 0
     goal_cell = (problem.goal[1] + 1) * pw + problem.goal[0] + 1
     goal_head = -1 if problem.goal_heading is None else int(problem.goal_heading)
-    if hdist[start_cell] < 0:
-        return PlanStatus.UNSOLVABLE, (), (), 0, 0
-    buf = _buffers("lattice", n_states, _LATTICE_BUFFERS)
-    flag, g, parent, pmove, pos = buf["flag"], buf["g"], buf["parent"], buf["pmove"], buf["pos"]
-    hn, hf, hh, hc = buf["hn"], buf["hf"], buf["hh"], buf["hc"]
-    flag.fill(0)
-    h0 = int(hdist[start_cell]) * rate.numerator // rate.denominator
-    g[start], flag[start], pos[start] = 0, 1, 0
-    hn[0], hf[0], hh[0], hc[0] = start, h0, h0, 0
+    scratch = _scratch("lattice", n_states, _LATTICE_ARRAYS, _LATTICE_MARK_MAX)
+    arrays = scratch.arrays
+    g, word, pos = arrays["g"], arrays["mark"], arrays["pos"]
+    opened, _ = scratch.next_marks()
+    h0 = int(hdist[start_cell]) * rnum // rden
+    heap = _heap("lattice", np.int64, _FIRST_HEAP)
+    g[start_state], word[start_state], pos[start_state] = 0, opened << _MOVE_BITS, 0
+    heap[0] = ((h0 << shift) | h0, 0, 0, start_state)
     scal = np.array([1, 0, 0, -1], dtype=np.int64)
+    par = np.array([rnum, rden, wmul, goal_cell, goal_head, 0, opened, shift], dtype=np.int64)
     nbr = _neighbourhoods(maze)
 
     def run(limit: int) -> int:
-        kernel: Any = _lattice  # a numba dispatcher: typed loosely
-        return int(
-            kernel(
-                nbr, pen, hdist, rate.numerator, rate.denominator, wmul, *tables,
-                goal_cell, goal_head, limit,
-                flag, g, parent, pmove, pos, hn, hf, hh, hc, scal,
-            )
-        )  # fmt: skip
+        nonlocal heap
+        while True:
+            par[5] = limit
+            code = int(_lattice(nbr, pen, hdist, mt, par, g, word, heap, scal, pos))
+            if code != _GROW:
+                return code
+            heap = _heap("lattice", np.int64, 2 * heap.shape[0])
 
     status = _drive(run, scal, max_expansions, deadline_ns)
     expansions = int(scal[_EXPANSIONS])
     if status is not PlanStatus.SOLVED:
-        return status, (), (), 0, expansions
-    path = _walk_back(parent, start, int(scal[_FOUND]))
-    actions = tuple(moves[k] for k in pmove[path[1:]].tolist())
-    cells, headings = (path >> 2) - pw - 1, (path & 3).tolist()
-    xs, ys = (cells % pw).tolist(), (cells // pw).tolist()
-    heading_of = tuple(Heading)
-    poses = tuple(Pose(x, y, heading_of[h]) for x, y, h in zip(xs, ys, headings, strict=True))
-    return status, actions, poses, int(g[path[-1]]), expansions
+        return status, (), (), 0, 0, expansions
+    goal = int(scal[_FOUND])
+    walk = _walk_lattice(word, mt, start_state, goal)
+    actions = tuple(motion.moves[walk[1, 1:]].tolist())
+    return status, actions, _poses(maze, walk[0], pw), int(g[goal]), int(walk[2, 0]), expansions
+
+
+def _poses(maze: Maze, path: npt.NDArray[np.int64], pw: int) -> tuple[Pose, ...]:
+    """The poses of a path of lattice states (shared from the maze's pose table if it has one)."""
+    table = pose_table(maze)
+    if table is not None:  # poses are truthy: ``or`` makes only the missing ones
+        return tuple([table[s] or _new_pose(table, s, pw) for s in path.tolist()])
+    cells = (path >> 2) - pw - 1
+    xs, ys, headings = (cells % pw).tolist(), (cells // pw).tolist(), (path & 3).tolist()
+    return tuple(map(make_pose, xs, ys, [_HEADINGS[h] for h in headings]))
+
+
+def _new_pose(table: list[Pose | None], state: int, pw: int) -> Pose:
+    cell = (state >> 2) - pw - 1
+    pose = table[state] = make_pose(cell % pw, cell // pw, _HEADINGS[state & 3])
+    return pose
+
+
+_HEADINGS = tuple(Heading)
 
 
 def _check_int64(
-    dur: npt.NDArray[np.int64],
-    pen: npt.NDArray[np.int64],
-    wmul: int,
-    hdist: npt.NDArray[np.int32],
-    rate: Fraction,
-    n_states: int,
+    dur_max: int, cells: int, pen_max: int, wmul: int, hmax: int, shift: int, n_states: int
 ) -> None:
-    """Refuse problems whose scaled costs could overflow int64 or whose states overflow int32."""
-    step_max = int(dur.max(initial=0)) + wmul * 4 * int(pen.max(initial=0))
-    bound = step_max * n_states + int(hdist.max(initial=0)) * rate.numerator
-    if bound >= 1 << 62 or wmul >= 1 << 62 or n_states >= 1 << 31:
+    """Refuse problems whose heap keys ``(f << shift) | h`` could overflow int64 (``f`` is at most
+    the largest step cost times the number of states plus the largest heuristic value) or whose
+    states overflow int32."""
+    step_max = dur_max + wmul * cells * pen_max
+    f_max = step_max * n_states + hmax
+    if shift >= 62 or f_max >= 1 << (62 - shift) or wmul >= 1 << 62 or n_states >= 1 << 31:
         raise OverflowError("the problem is too large for the integer kernel")
 
 
 def _drive(
-    run: Any, scal: npt.NDArray[np.int64], max_expansions: int | None, deadline_ns: int | None
+    run: Callable[[int], int],
+    scal: npt.NDArray[np.int64],
+    max_expansions: int | None,
+    deadline_ns: int | None,
 ) -> PlanStatus:
     """Call a resumable kernel until it finishes, the node budget is spent or time is up."""
     budget = min(1 << 62, (1 << 62) if max_expansions is None else max_expansions)
@@ -479,72 +629,125 @@ def _drive(
 
 @njit(cache=True)
 def _grid(
-    free: Any, pw: int, diagonal: bool, goal: int, limit: int,
-    flag: Any, g: Any, parent: Any, pos: Any, hn: Any, hf: Any, hh: Any, hc: Any, scal: Any,
+    free: Any, pw: int, diagonal: bool, goal: int, limit: int, opened: int,
+    g: Any, word: Any, heap: Any, scal: Any, pos: Any,
 ) -> int:  # fmt: skip
     size, counter, expansions = scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS]
+    closed = opened + 1
     gx = goal % pw
     gy = goal // pw
     nmoves = 8 if diagonal else 4
+    room = heap.shape[0] - nmoves
     sqrt2 = np.sqrt(2.0)
+    keys = (diagonal, sqrt2, opened, closed)
+    arrays = (free, g, word, heap, pos)
     status = _UNSOLVABLE
     while size > 0:
         if expansions >= limit:
             status = _PAUSED
             break
-        p = _pop(hn, hf, hh, hc, pos, size)
-        size -= 1
-        flag[p] = 2
+        if size > room:
+            status = _GROW
+            break
+        p = int(heap[0, _NODE])
+        size = _pop(heap, pos, size)
+        word[p] = (closed << 3) | (word[p] & 7)
         expansions += 1
         if p == goal:
             scal[_FOUND] = p
             status = _SOLVED
             break
         gp = g[p]
-        ex = p % pw - gx  # offset of p from the goal; a neighbour adds (dx, dy)
+        ex = p % pw - gx
         ey = p // pw - gy
         north, east, south, west = free[p - pw], free[p + 1], free[p + pw], free[p - 1]
-        for k in range(nmoves):
-            # N, E, S, W, then NE, SE, SW, NW (a diagonal needs both orthogonal cells free)
-            if k == 0:
-                ok, q, step, dx, dy = north, p - pw, 1.0, 0, -1
-            elif k == 1:
-                ok, q, step, dx, dy = east, p + 1, 1.0, 1, 0
-            elif k == 2:
-                ok, q, step, dx, dy = south, p + pw, 1.0, 0, 1
-            elif k == 3:
-                ok, q, step, dx, dy = west, p - 1, 1.0, -1, 0
-            elif k == 4:
-                ok, q, step, dx, dy = north and east, p - pw + 1, sqrt2, 1, -1
-            elif k == 5:
-                ok, q, step, dx, dy = south and east, p + pw + 1, sqrt2, 1, 1
-            elif k == 6:
-                ok, q, step, dx, dy = south and west, p + pw - 1, sqrt2, -1, 1
-            else:
-                ok, q, step, dx, dy = north and west, p - pw - 1, sqrt2, -1, -1
-            if not ok or free[q] == 0:
-                continue
-            state = flag[q]
-            if state == 2:
-                continue
-            gn = gp + step
-            if state == 1 and gn >= g[q]:
-                continue
-            dx = abs(ex + dx)
-            dy = abs(ey + dy)
-            hv = (dx + dy) + (sqrt2 - 2.0) * min(dx, dy) if diagonal else float(dx + dy)
-            counter += 1
-            g[q] = gn
-            parent[q] = p
-            size = _push(flag, hn, hf, hh, hc, pos, size, q, gn + hv, hv, counter)
+        # N, E, S, W, then NE, SE, SW, NW (a diagonal needs both orthogonal cells free)
+        if north:
+            size, counter = _relax(p - pw, 0, 1.0, ex, ey - 1, gp, keys, arrays, size, counter)
+        if east:
+            size, counter = _relax(p + 1, 1, 1.0, ex + 1, ey, gp, keys, arrays, size, counter)
+        if south:
+            size, counter = _relax(p + pw, 2, 1.0, ex, ey + 1, gp, keys, arrays, size, counter)
+        if west:
+            size, counter = _relax(p - 1, 3, 1.0, ex - 1, ey, gp, keys, arrays, size, counter)
+        if diagonal:
+            if north and east:
+                size, counter = _relax(
+                    p - pw + 1, 4, sqrt2, ex + 1, ey - 1, gp, keys, arrays, size, counter
+                )
+            if south and east:
+                size, counter = _relax(
+                    p + pw + 1, 5, sqrt2, ex + 1, ey + 1, gp, keys, arrays, size, counter
+                )
+            if south and west:
+                size, counter = _relax(
+                    p + pw - 1, 6, sqrt2, ex - 1, ey + 1, gp, keys, arrays, size, counter
+                )
+            if north and west:
+                size, counter = _relax(
+                    p - pw - 1, 7, sqrt2, ex - 1, ey - 1, gp, keys, arrays, size, counter
+                )
     scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS] = size, counter, expansions
     return status
 
 
-_GRID_BUFFERS = (
-    ("flag", np.uint8), ("g", np.float64), ("parent", np.int32), ("pos", np.int32),
-    ("hn", np.int32), ("hf", np.float64), ("hh", np.float64), ("hc", np.int64),
-)  # fmt: skip
+@njit(cache=True, inline="always")
+def _relax(
+    q: Any, k: int, step: float, ex: Any, ey: Any, gp: float, keys: Any, arrays: Any,
+    size: int, counter: int,
+) -> tuple[int, int]:  # fmt: skip
+    """Relax the edge to cell ``q`` (move ``k``, cost ``step``; ``(ex, ey)`` its offset from the
+    goal); returns the new heap size and push counter. Inlined into :func:`_grid`."""
+    diagonal, sqrt2, opened, closed = keys
+    free, g, word, heap, pos = arrays
+    if free[q] == 0:
+        return size, counter
+    m = word[q] >> 3
+    if m == closed:
+        return size, counter
+    gn = gp + step
+    if m == opened and gn >= g[q]:
+        return size, counter
+    dx = abs(ex)
+    dy = abs(ey)
+    hv = (dx + dy) + (sqrt2 - 2.0) * min(dx, dy) if diagonal else float(dx + dy)
+    counter += 1
+    g[q] = gn
+    word[q] = (opened << 3) | k
+    if m == opened:
+        _sift_up(heap, pos, pos[q], gn + hv, hv, float(counter), float(q))
+    else:
+        _sift_up(heap, pos, size, gn + hv, hv, float(counter), float(q))
+        size += 1
+    return size, counter
+
+
+@njit(cache=True)
+def _walk_grid(word: Any, pw: int, start: int, goal: int) -> Any:
+    """The cells from ``start`` to ``goal`` (``out[:-1]``) and the number of diagonal steps
+    (``out[-1]``)."""
+    steps = np.array([-pw, 1, pw, -1, 1 - pw, pw + 1, pw - 1, -pw - 1], dtype=np.int64)
+    n = 1
+    p = goal
+    while p != start:
+        p -= steps[word[p] & 7]
+        n += 1
+    out = np.empty(n + 1, dtype=np.int64)
+    p = goal
+    diagonals = 0
+    for i in range(n - 1, -1, -1):
+        out[i] = p
+        if i:
+            k = word[p] & 7
+            diagonals += k >= 4
+            p -= steps[k]
+    out[n] = diagonals
+    return out
+
+
+_GRID_ARRAYS = (("g", np.float64), ("mark", np.uint16), ("pos", np.int32))
+"""Per grid cell: cost so far, word (stamp above bit 3, the move that reached it below), heap
+slot."""
 
 
 def grid_search(
@@ -554,8 +757,9 @@ def grid_search(
     connectivity: int,
     max_expansions: int | None,
     deadline_ns: int | None,
-) -> tuple[PlanStatus, tuple[Cell, ...], int]:
-    """Run the plain-grid search; returns status, path (start first) and expansions."""
+) -> tuple[PlanStatus, tuple[Cell, ...], int, int]:
+    """Run the plain-grid search; returns status, path (start first), expansions and the number
+    of diagonal steps of the path."""
     from selfrepair.search.problem import grid_heuristic
 
     pw = maze.width + 2
@@ -565,28 +769,30 @@ def grid_search(
     free = _padded_free(maze)
     s = (start[1] + 1) * pw + start[0] + 1
     goal_p = (goal[1] + 1) * pw + goal[0] + 1
-    buf = _buffers("grid", n, _GRID_BUFFERS)
-    flag, g, parent, pos = buf["flag"], buf["g"], buf["parent"], buf["pos"]
-    hn, hf, hh, hc = buf["hn"], buf["hf"], buf["hh"], buf["hc"]
-    flag.fill(0)
+    scratch = _scratch("grid", n, _GRID_ARRAYS, _GRID_MARK_MAX)
+    g, word, pos = scratch.arrays["g"], scratch.arrays["mark"], scratch.arrays["pos"]
+    opened, _ = scratch.next_marks()
+    heap = _heap("grid", np.float64, _FIRST_HEAP)
     h0 = grid_heuristic(start, goal, connectivity)
-    g[s], flag[s], pos[s] = 0.0, 1, 0
-    hn[0], hf[0], hh[0], hc[0] = s, h0, h0, 0
+    g[s], word[s], pos[s] = 0.0, opened << 3, 0
+    heap[0] = (h0, h0, 0.0, float(s))
     scal = np.array([1, 0, 0, -1], dtype=np.int64)
     diagonal = connectivity == 8
 
     def run(limit: int) -> int:
-        return int(
-            _grid(
-                free, pw, diagonal, goal_p, limit,
-                flag, g, parent, pos, hn, hf, hh, hc, scal,
-            )
-        )  # fmt: skip
+        nonlocal heap
+        while True:
+            code = _grid(free, pw, diagonal, goal_p, limit, opened, g, word, heap, scal, pos)
+            code = int(code)
+            if code != _GROW:
+                return code
+            heap = _heap("grid", np.float64, 2 * heap.shape[0])
 
     status = _drive(run, scal, max_expansions, deadline_ns)
     expansions = int(scal[_EXPANSIONS])
     if status is not PlanStatus.SOLVED:
-        return status, (), expansions
-    cells = _walk_back(parent, s, goal_p) - pw - 1
+        return status, (), expansions, 0
+    walk = _walk_grid(word, pw, s, goal_p)
+    cells = walk[:-1] - pw - 1
     xs, ys = (cells % pw).tolist(), (cells // pw).tolist()
-    return status, tuple(zip(xs, ys, strict=True)), expansions
+    return status, tuple(zip(xs, ys, strict=True)), expansions, int(walk[-1])

@@ -161,7 +161,9 @@ class PlanResult:
     ``actions`` are the domain's actions (the fastest available one of each motion class), ``poses``
     the ``len(actions) + 1`` poses from start to goal; both are empty unless solved. ``cost`` is
     duration plus clearance term (``None`` unless solved), ``duration`` the total ticks (0 unless
-    solved). ``expansions`` counts closed nodes; ``wall_time_ns`` is the wall time of the call.
+    solved). ``expansions`` counts closed nodes; ``wall_time_ns`` is the wall time of the call
+    without ``kernel_load_ns``, the time this call spent importing and loading (or compiling) the
+    compiled kernels, which only the first call of a process pays.
     """
 
     status: PlanStatus
@@ -171,3 +173,4 @@ class PlanResult:
     duration: Fraction
     expansions: int
     wall_time_ns: int
+    kernel_load_ns: int = 0

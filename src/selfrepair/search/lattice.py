@@ -46,12 +46,12 @@ Determinism
 from __future__ import annotations
 
 import math
+import sys
 import time
 from collections import deque
-from collections.abc import Sequence
-from dataclasses import replace
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
 from fractions import Fraction
-from functools import lru_cache
 from typing import Any, Protocol
 
 import numpy as np
@@ -111,14 +111,30 @@ def planning_actions(domain: Domain[Any, Any], faults: frozenset[Any]) -> tuple[
     """The actions the planner expands under ``faults``: the fastest available one of each motion
     class (:func:`~selfrepair.robots.domain.primitive_by_motion` order), without actions that
     leave the pose unchanged (computed once per domain and fault set)."""
-    return _ACTIONS.get((domain, faults), lambda: _planning_actions(domain, faults))
+    return _setup(domain, faults).actions
 
 
-def _planning_actions(domain: Domain[Any, Any], faults: frozenset[Any]) -> tuple[Any, ...]:
-    return tuple(a for a in primitive_by_motion(domain, faults).values() if not _no_op(domain, a))
+@dataclass(frozen=True, slots=True, eq=False)
+class _Setup:
+    """What the planner derives from (domain, faults) once: the planning actions and their
+    :func:`progress_rate`."""
+
+    actions: tuple[Any, ...]
+    rate: Fraction
 
 
-_ACTIONS: BoundedCache[tuple[Domain[Any, Any], frozenset[Any]], tuple[Any, ...]] = BoundedCache(
+def _setup(domain: Domain[Any, Any], faults: frozenset[Any]) -> _Setup:
+    return _SETUPS.get((domain, faults), lambda: _make_setup(domain, faults))
+
+
+def _make_setup(domain: Domain[Any, Any], faults: frozenset[Any]) -> _Setup:
+    actions = tuple(
+        a for a in primitive_by_motion(domain, faults).values() if not _no_op(domain, a)
+    )
+    return _Setup(actions, progress_rate(domain, actions))
+
+
+_SETUPS: BoundedCache[tuple[Domain[Any, Any], frozenset[Any]], _Setup] = BoundedCache(
     "planner actions per fault set", 1024
 )
 
@@ -148,9 +164,26 @@ def cost_scale(domain: Domain[Any, Any], weight: Fraction) -> int:
     return _duration_scale(domain) * weight.denominator
 
 
-@lru_cache(maxsize=64)
 def _duration_scale(domain: Domain[Any, Any]) -> int:
-    return math.lcm(*(Fraction(domain.duration(a)).denominator for a in domain.actions))
+    return _SCALES.get(
+        domain,
+        lambda: math.lcm(*(Fraction(domain.duration(a)).denominator for a in domain.actions)),
+    )
+
+
+_SCALES: BoundedCache[Domain[Any, Any], int] = BoundedCache("domain duration scales", 64)
+
+
+def _zero_distances(maze: Maze, goal: Cell, backend: str) -> npt.NDArray[np.int32]:
+    return with_border(np.zeros(maze.walls.shape, dtype=np.int64))
+
+
+def _manhattan_distances(maze: Maze, goal: Cell, backend: str) -> npt.NDArray[np.int32]:
+    ys, xs = np.indices(maze.walls.shape, dtype=np.int64)
+    return with_border(np.abs(xs - goal[0]) + np.abs(ys - goal[1]))
+
+
+_DistanceFn = Callable[[Maze, Cell, str], npt.NDArray[np.int32]]
 
 
 def _zero_bound(
@@ -161,7 +194,7 @@ def _zero_bound(
     *,
     backend: str = "auto",
 ) -> CellBound:
-    return CellBound(with_border(np.zeros(maze.walls.shape, dtype=np.int64)), Fraction(0))
+    return CellBound(_goal_distances(_zero_distances, maze, (0, 0), backend)[0], Fraction(0))
 
 
 def _manhattan_bound(
@@ -172,9 +205,8 @@ def _manhattan_bound(
     *,
     backend: str = "auto",
 ) -> CellBound:
-    ys, xs = np.indices(maze.walls.shape, dtype=np.int64)
-    distance = np.abs(xs - goal[0]) + np.abs(ys - goal[1])
-    return CellBound(with_border(distance), progress_rate(domain, actions))
+    distance, _ = _goal_distances(_manhattan_distances, maze, goal, backend)
+    return CellBound(distance, progress_rate(domain, actions))
 
 
 def _grid_distance_bound(
@@ -185,7 +217,37 @@ def _grid_distance_bound(
     *,
     backend: str = "auto",
 ) -> CellBound:
-    return CellBound(_bfs_padded(maze, goal, backend), progress_rate(domain, actions))
+    distance, _ = _goal_distances(_bfs_padded, maze, goal, backend)
+    return CellBound(distance, progress_rate(domain, actions))
+
+
+def _goal_distances(
+    make: _DistanceFn, maze: Maze, goal: Cell, backend: str
+) -> tuple[npt.NDArray[np.int32], int]:
+    """The padded distances of a built-in heuristic to one goal and their maximum, made once and
+    reused by every query to that goal on that maze (any faults, any start, either backend: both
+    compute the same distances): read-only arrays in a bounded cache, a small one for large mazes
+    (an entry costs 4 bytes per cell)."""
+    cache = _DISTANCES if maze.width * maze.height <= _SMALL_MAZE else _LARGE_DISTANCES
+
+    def made() -> tuple[npt.NDArray[np.int32], int]:
+        distance = make(maze, goal, backend)
+        distance.setflags(write=False)
+        return distance, int(distance.max(initial=0))
+
+    return cache.get((make, maze, goal), made)
+
+
+_SMALL_MAZE = 1 << 18
+"""Mazes up to this many cells (512 x 512) share the larger cache of goal distances."""
+
+_Distances = tuple[npt.NDArray[np.int32], int]
+_DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], _Distances] = BoundedCache(
+    "goal distances (mazes up to 512x512)", 32
+)
+_LARGE_DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], _Distances] = BoundedCache(
+    "goal distances (larger mazes)", 4
+)
 
 
 HEURISTICS: dict[str, HeuristicFn] = {
@@ -195,6 +257,7 @@ HEURISTICS: dict[str, HeuristicFn] = {
 }
 """Heuristic registry: name -> function ``(maze, goal, domain, actions, *, backend) ->
 CellBound``."""
+
 
 NEEDS_CONNECTED_FOOTPRINTS = frozenset({"grid-distance"})
 """Heuristics that are admissible only for domains with ``footprint_connected``."""
@@ -224,6 +287,32 @@ def _bfs_padded(maze: Maze, goal: Cell, backend: str) -> npt.NDArray[np.int32]:
                 dist[ny][nx] = d
                 queue.append((nx, ny))
     return with_border(np.array(dist, dtype=np.int32))
+
+
+_BUILT_IN: dict[HeuristicFn, tuple[_DistanceFn, bool]] = {
+    _zero_bound: (_zero_distances, False),
+    _manhattan_bound: (_manhattan_distances, True),
+    _grid_distance_bound: (_bfs_padded, True),
+}
+"""The built-in heuristics as (cached distances, whether scaled by the progress rate): what
+:func:`plan` builds their bound from without calling them (the same bound, with the rate taken
+from the per-fault-set setup)."""
+
+
+def _bound(
+    problem: PlanningProblem, heuristic: str, setup: _Setup, backend: str
+) -> tuple[CellBound, int | None]:
+    """The heuristic bound of ``problem`` (see :data:`_BUILT_IN`) and its largest distance when
+    known without a scan."""
+    fn = HEURISTICS[heuristic]
+    built_in = _BUILT_IN.get(fn)
+    if built_in is None:
+        bound = fn(problem.maze, problem.goal, problem.domain, setup.actions, backend=backend)
+        return bound, None
+    make, scaled = built_in
+    goal = problem.goal if make is not _zero_distances else (0, 0)
+    distance, largest = _goal_distances(make, problem.maze, goal, backend)
+    return CellBound(distance, setup.rate if scaled else Fraction(0)), largest
 
 
 def action_cost(
@@ -300,43 +389,79 @@ def plan(
     the grid or in a wall, an unknown heuristic or backend, a heuristic that is not admissible for
     the domain, a negative budget, a weight outside ``[0, MAX_CLEARANCE_WEIGHT]``
     (:mod:`selfrepair.limits`) or a radius outside ``[0, MAX_CLEARANCE_RADIUS]``.
+
+    The first call of a process with the compiled backend imports numba and loads the kernels;
+    that time is reported as ``kernel_load_ns`` and left out of ``wall_time_ns`` (and of the time
+    limit).
     """
     t0 = time.perf_counter_ns()
     _validate(problem, heuristic, max_expansions, time_limit, backend)
+    fast, load_ns = _load(backend)
     if not isinstance(problem.clearance_weight, Fraction):
         problem = replace(problem, clearance_weight=Fraction(problem.clearance_weight))
     if problem.at_goal(problem.start):
         return PlanResult(
-            PlanStatus.SOLVED, (), (problem.start,), Fraction(0), Fraction(0), 0, _since(t0)
-        )
+            PlanStatus.SOLVED, (), (problem.start,), Fraction(0), Fraction(0), 0,
+            _since(t0, load_ns), load_ns,
+        )  # fmt: skip
     domain = problem.domain
-    actions = planning_actions(domain, problem.faults)
-    fast = use_numba(backend)
-    bound = HEURISTICS[heuristic](
-        problem.maze, problem.goal, domain, actions, backend="numba" if fast else "python"
-    )
-    scale = cost_scale(domain, Fraction(problem.clearance_weight))
-    deadline = deadline_from(time_limit, t0)
+    setup = _setup(domain, problem.faults)
+    actions = setup.actions
+    bound, largest = _bound(problem, heuristic, setup, "numba" if fast else "python")
+    scale = _duration_scale(domain) * problem.clearance_weight.denominator
+    deadline = deadline_from(time_limit, t0 + load_ns)
     found: _Found | None = None
     if fast:
         from selfrepair.search import _kernels
 
+        key = (domain, problem.faults)  # what ``actions`` are a function of
         try:
-            found = _kernels.plan_lattice(problem, actions, bound, scale, max_expansions, deadline)
+            found = _kernels.plan_lattice(
+                problem, actions, bound, scale, max_expansions, deadline, key=key, largest=largest
+            )
         except OverflowError:  # beyond int64 or the 3x3 neighbourhood: the Python search works
             found = None
     if found is None:
         found = _plan_python(problem, actions, bound, scale, max_expansions, deadline)
-    status, steps, poses, cost_scaled, expansions = found
+    status, steps, poses, cost_scaled, duration_scaled, expansions = found
     if status is not PlanStatus.SOLVED:
-        return PlanResult(status, (), (), None, Fraction(0), expansions, _since(t0))
-    total = sum((Fraction(domain.duration(a)) for a in steps), Fraction(0))
+        return PlanResult(
+            status, (), (), None, Fraction(0), expansions, _since(t0, load_ns), load_ns
+        )
     return PlanResult(
-        status, steps, poses, Fraction(cost_scaled, scale), total, expansions, _since(t0)
+        status,
+        steps,
+        poses,
+        Fraction(cost_scaled, scale),
+        Fraction(duration_scaled, scale),
+        expansions,
+        _since(t0, load_ns),
+        load_ns,
     )
 
 
-_Found = tuple[PlanStatus, tuple[Any, ...], tuple[Pose, ...], int, int]
+def _load(backend: str) -> tuple[bool, int]:
+    """Whether ``backend`` means the compiled kernels, and the nanoseconds spent now importing
+    numba and loading them (0 when this process already had)."""
+    t0 = time.perf_counter_ns()
+    cold = "selfrepair.search._kernels" not in sys.modules
+    fast = use_numba(backend)
+    global _KERNELS_LOADED
+    if fast and not _KERNELS_LOADED:
+        _KERNELS_LOADED = cold = True
+        maze = Maze(np.zeros((3, 3), dtype=bool))
+        for weight in (Fraction(0), Fraction(1)):
+            problem = PlanningProblem(maze, Pose(0, 0, Heading.E), (2, 2), clearance_weight=weight)
+            plan(problem, backend="numba")
+    return fast, (time.perf_counter_ns() - t0 if cold else 0)
+
+
+_KERNELS_LOADED = False
+"""Whether this process has loaded the lattice kernels (see :func:`_load`)."""
+
+
+_Found = tuple[PlanStatus, tuple[Any, ...], tuple[Pose, ...], int, int, int]
+"""Status, actions, poses, scaled cost, scaled duration, expansions."""
 
 
 def _plan_python(
@@ -378,7 +503,9 @@ def _plan_python(
         deadline_ns=deadline_ns,
     )
     cost = int(outcome.cost) if outcome.cost is not None else 0
-    return outcome.status, outcome.labels, outcome.path, cost, outcome.expansions
+    duration = sum(Fraction(domain.duration(a)) for a in outcome.labels) * scale
+    assert duration.denominator == 1  # the scale makes every duration an integer
+    return outcome.status, outcome.labels, outcome.path, cost, int(duration), outcome.expansions
 
 
 MAX_CLEARANCE_RADIUS = 1_000_000
@@ -431,5 +558,5 @@ def _short_number(value: Fraction | int | float) -> str:
     return f"{'-' if value < 0 else ''}a number of {digits} digits"
 
 
-def _since(t0: int) -> int:
-    return time.perf_counter_ns() - t0
+def _since(t0: int, load_ns: int = 0) -> int:
+    return time.perf_counter_ns() - t0 - load_ns

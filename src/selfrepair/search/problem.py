@@ -9,8 +9,9 @@ planners that call the kernels.
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
@@ -18,6 +19,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from selfrepair.caching import BoundedCache
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain
@@ -36,6 +38,8 @@ __all__ = [
     "PlanningProblem",
     "check_search_inputs",
     "grid_heuristic",
+    "make_pose",
+    "pose_table",
     "with_border",
 ]
 
@@ -94,6 +98,49 @@ class CellBound:
         return self.padded[1:-1, 1:-1]
 
 
+def _pose_maker() -> Callable[[int, int, Heading], Pose]:
+    """A :class:`~selfrepair.geometry.Pose` constructor for the hot paths (plan paths, simulator
+    steps) that fills the three slots directly: the same value as ``Pose(x, y, heading)`` at a
+    third of the cost of the frozen dataclass's ``__init__``. Falls back to the class itself should
+    ``Pose`` ever validate its fields (a ``__post_init__``) or change its fields."""
+    fields = tuple(f.name for f in dataclasses.fields(Pose))
+    if hasattr(Pose, "__post_init__") or fields != ("x", "y", "heading"):
+        return Pose
+    new = object.__new__
+    set_x, set_y, set_heading = (getattr(Pose, name).__set__ for name in fields)
+
+    def make(x: int, y: int, heading: Heading) -> Pose:
+        pose = new(Pose)
+        set_x(pose, x)
+        set_y(pose, y)
+        set_heading(pose, heading)
+        return pose
+
+    return make
+
+
+make_pose: Callable[[int, int, Heading], Pose] = _pose_maker()
+"""``make_pose(x, y, heading) == Pose(x, y, heading)``, built faster (see :func:`_pose_maker`)."""
+
+
+def pose_table(maze: Maze) -> list[Pose | None] | None:
+    """The canonical :class:`~selfrepair.geometry.Pose` of each lattice state of ``maze``, made
+    on first use: index ``4 * ((y + 1) * (width + 2) + x + 1) + heading`` (the kernels' padded
+    state layout), ``None`` where not made yet. Plan paths and simulator steps share these
+    immutable values instead of building a new pose per step. Only for mazes of at most
+    :data:`POSE_TABLE_CELLS` cells (8 bytes per state); ``None`` for larger ones. Kept per maze
+    in a bounded cache."""
+    if maze.width * maze.height > POSE_TABLE_CELLS:
+        return None
+    return _POSES.get(maze, lambda: [None] * (4 * (maze.height + 2) * (maze.width + 2)))
+
+
+POSE_TABLE_CELLS = 1 << 16
+"""The largest maze (cells) with a :func:`pose_table`: 256 x 256, 2 MB per table."""
+
+_POSES: BoundedCache[Maze, list[Pose | None]] = BoundedCache("canonical poses per maze", 16)
+
+
 def with_border(inner: npt.NDArray[np.integer]) -> npt.NDArray[np.int32]:
     padded = np.full((inner.shape[0] + 2, inner.shape[1] + 2), -1, dtype=np.int32)
     padded[1:-1, 1:-1] = inner
@@ -139,13 +186,16 @@ class OctileCost:
 
 @dataclass(frozen=True, slots=True)
 class GridResult:
-    """The outcome of :func:`grid_astar`; ``path`` (start first) is empty unless solved."""
+    """The outcome of :func:`grid_astar`; ``path`` (start first) is empty unless solved.
+    ``wall_time_ns`` leaves out ``kernel_load_ns``, the time this call spent importing and loading
+    (or compiling) the compiled kernels (only the first call of a process pays it)."""
 
     status: PlanStatus
     path: tuple[Cell, ...]
     cost: OctileCost | None
     expansions: int
     wall_time_ns: int
+    kernel_load_ns: int = 0
 
 
 def grid_heuristic(cell: Cell, goal: Cell, connectivity: int) -> float:
@@ -167,12 +217,12 @@ def check_search_inputs(
 ) -> None:
     """Raise :class:`ProblemError` for an endpoint outside ``maze`` or in a wall, an unknown
     backend, or a negative budget: the checks the grid and lattice planners share."""
+    walls = maze.walls
+    height, width = walls.shape
     for label, (x, y) in endpoints:
-        if not maze.in_bounds(x, y):
-            raise ProblemError(
-                f"the {label} ({x},{y}) is outside the {maze.width}x{maze.height} maze"
-            )
-        if not maze.is_free(x, y):
+        if not (0 <= x < width and 0 <= y < height):
+            raise ProblemError(f"the {label} ({x},{y}) is outside the {width}x{height} maze")
+        if walls[y, x]:
             raise ProblemError(f"the {label} ({x},{y}) is a wall")
     if backend not in BACKENDS:
         raise ProblemError(f"unknown backend {backend!r}; expected one of {', '.join(BACKENDS)}")

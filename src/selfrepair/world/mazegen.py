@@ -127,6 +127,7 @@ def _braid_passages(
     order = rng.permutation(len(dead_ends))
     quota = round(braid * len(dead_ends))
     extra: set[frozenset[Room]] = set()
+    carved = set(passages)  # every passage so far, tree and extra: one set, updated in place
     opened = 0
     for index in order:
         if opened >= quota:
@@ -134,7 +135,7 @@ def _braid_passages(
         room = dead_ends[int(index)]
         if degree[room] != 1:
             continue  # an earlier extra passage already opened it
-        closed = [n for n in _neighbours(room, nx, ny) if _edge(room, n) not in passages | extra]
+        closed = [n for n in _neighbours(room, nx, ny) if _edge(room, n) not in carved]
         if not closed:
             continue
         # Prefer joining two dead ends: one passage then removes both.
@@ -142,6 +143,7 @@ def _braid_passages(
         pool = paired or closed
         other = pool[int(rng.integers(len(pool)))]
         extra.add(_edge(room, other))
+        carved.add(_edge(room, other))
         degree[room] += 1
         degree[other] += 1
         opened += 1
@@ -153,10 +155,12 @@ def _carve(
 ) -> np.ndarray:
     pitch = corridor + 1
     walls = np.ones((height, width), dtype=bool)
-    for i in range(nx):
-        for j in range(ny):
-            x0, y0 = 1 + i * pitch, 1 + j * pitch
-            walls[y0 : y0 + corridor, x0 : x0 + corridor] = False
+    # the rooms' interiors at once: columns and rows inside one of the nx (ny) rooms
+    xs = np.arange(width) - 1
+    ys = np.arange(height) - 1
+    in_x = (xs >= 0) & (xs < nx * pitch) & (xs % pitch < corridor)
+    in_y = (ys >= 0) & (ys < ny * pitch) & (ys % pitch < corridor)
+    walls[np.ix_(in_y, in_x)] = False
     for edge in passages:
         (ai, aj), (bi, _) = sorted(edge)
         x0, y0 = 1 + ai * pitch, 1 + aj * pitch
