@@ -111,24 +111,24 @@ def _open(driver: Any, html: Path) -> list[dict[str, Any]]:
 
 
 def _robot(driver: Any) -> tuple[Pose, int]:
-    """The robot's pose as drawn (from its SVG transform) and the frame the page says it shows."""
-    from selenium.webdriver.common.by import By
+    """The robot's pose as drawn (from its SVG transform) and the frame the page says it shows.
 
+    All attributes are read in one script call: while the page plays, separate reads could see
+    two different frames."""
     from selfrepair.geometry import Heading
 
-    robot = driver.find_element(By.ID, "robot")
-    transform = robot.get_attribute("transform")
+    transform, data_x, data_y, heading, frame = driver.execute_script(
+        "const r = document.getElementById('robot');"
+        "return ['transform', 'data-x', 'data-y', 'data-heading', 'data-frame']"
+        ".map(name => r.getAttribute(name));"
+    )
     match = re.fullmatch(r"translate\(([-\d.]+) ([-\d.]+)\) rotate\(([-\d.]+)\)", transform)
     assert match is not None, transform
     x, y, angle = (float(v) for v in match.groups())
     drawn = Pose(round(x / CELL - 0.5), round(y / CELL - 0.5), Heading(round(angle / 90) % 4))
-    said = Pose(
-        int(robot.get_attribute("data-x")),
-        int(robot.get_attribute("data-y")),
-        Heading[robot.get_attribute("data-heading")],
-    )
+    said = Pose(int(data_x), int(data_y), Heading[heading])
     assert drawn == said
-    return drawn, int(robot.get_attribute("data-frame"))
+    return drawn, int(frame)
 
 
 def _expected(trace: Trace, frame: int) -> Pose:
