@@ -46,7 +46,7 @@ from selfrepair.execution.result import (
     TraceStep,
 )
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS
-from selfrepair.geometry import Heading, Pose
+from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.strategies import RepairSource, RepairStatus, StrategyOptions
 from selfrepair.robots.domain import Domain
@@ -59,6 +59,7 @@ __all__ = [
     "TRACE_VERSION",
     "ReplayReport",
     "Trace",
+    "TraceFields",
     "TraceRepair",
     "header_json",
     "parse_trace",
@@ -210,8 +211,10 @@ class Trace:
 # --- reading --------------------------------------------------------------------------------------
 
 
-class _Fields:
-    """Typed access to one line's fields; every failure is a :class:`TraceError` on that line."""
+class TraceFields:
+    """Typed access to one JSON line's fields; every failure is a :class:`TraceError` on that
+    line. Mission traces and team traces (:mod:`selfrepair.team.trace`) read their lines with
+    it."""
 
     def __init__(self, data: Mapping[str, Any], source: str, line: int) -> None:
         self.data, self.source, self.line = data, source, line
@@ -265,14 +268,28 @@ class _Fields:
             raise self.fail(f"expected {key!r} in {', '.join(options)}, got {value!r}")
         return str(value)
 
+    def cell(self, value: Any) -> Cell:
+        """``value`` as a cell ``[x, y]``."""
+        if not isinstance(value, list) or len(value) != 2 or not all(type(v) is int for v in value):
+            raise self.fail(f"expected a cell [x, y], got {value!r}")
+        return (value[0], value[1])
+
+    def cells(self, key: str) -> tuple[Cell, ...]:
+        value = self.get(key)
+        if not isinstance(value, list):
+            raise self.fail(f"expected {key!r} to be a list of cells, got {value!r}")
+        return tuple(self.cell(v) for v in value)
+
     def parsed(self, what: str, fn: Any, text: str) -> Any:
+        """``fn(text)``; its :class:`InputError` or ``ValueError`` becomes this line's error."""
         try:
             return fn(text)
-        except InputError as exc:
-            raise self.fail(f"bad {what}: {exc.reason}") from None
+        except (InputError, ValueError) as exc:
+            reason = exc.reason if isinstance(exc, InputError) else str(exc)
+            raise self.fail(f"bad {what}: {reason}") from None
 
 
-def _parse_step(domain: Domain[Any, Any], f: _Fields) -> TraceStep:
+def _parse_step(domain: Domain[Any, Any], f: TraceFields) -> TraceStep:
     action = f.parsed("action", domain.parse_action, f.text("action"))
     known: set[Any] = set()
     for text in f.texts("known"):
@@ -291,7 +308,7 @@ def _parse_step(domain: Domain[Any, Any], f: _Fields) -> TraceStep:
     )
 
 
-def _parse_repair(domain: Domain[Any, Any], f: _Fields, next_step: int) -> TraceRepair:
+def _parse_repair(domain: Domain[Any, Any], f: TraceFields, next_step: int) -> TraceRepair:
     """A repair line, type-checked; it must come just before step line ``next_step``."""
     step = f.integer("step", minimum=0)
     if step != next_step:
@@ -361,11 +378,11 @@ def parse_trace(text: str, source: str = "<trace>", *, partial: bool = False) ->
         if summary is not None:
             raise TraceError("expected nothing after the summary line", source=source, line=number)
         if kind == "step":
-            steps.append(_parse_step(domain, _Fields(data, source, number)))
+            steps.append(_parse_step(domain, TraceFields(data, source, number)))
             lines.append(number)
         elif kind == "repair":
             next_step = len(steps)
-            repairs.append(_parse_repair(domain, _Fields(data, source, number), next_step))
+            repairs.append(_parse_repair(domain, TraceFields(data, source, number), next_step))
             repair_lines.append(number)
         elif kind == "summary":
             summary, summary_line = data, number
@@ -421,7 +438,7 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
         maze = parse_maze(
             "\n".join(maze_data["rows"]), source=source, name=str(maze_data.get("name", ""))
         )
-        f = _Fields(header, source, 1)
+        f = TraceFields(header, source, 1)
         gx, gy = header["goal"]
         heading = header.get("goal_heading")
         options = header.get("options", {})

@@ -34,10 +34,11 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from selfrepair.errors import InputError, TraceError
+from selfrepair.errors import TraceError
 from selfrepair.execution.faults import Persistence
 from selfrepair.execution.result import StepSource
-from selfrepair.geometry import Cell, Heading, Pose
+from selfrepair.execution.trace import TraceFields
+from selfrepair.geometry import Cell, Pose
 from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.robots.domain import Domain
@@ -272,62 +273,6 @@ class TeamTrace:
     summary: Mapping[str, Any] | None
 
 
-class _Line:
-    """Typed access to one line's fields; failures are :class:`TraceError` on that line."""
-
-    def __init__(self, data: Mapping[str, Any], source: str, line: int) -> None:
-        self.data, self.source, self.line = data, source, line
-
-    def fail(self, what: str) -> TraceError:
-        return TraceError(what, source=self.source, line=self.line)
-
-    def get(self, key: str) -> Any:
-        if key not in self.data:
-            raise self.fail(f"expected a {self.data.get('type', 'line')} line with key {key!r}")
-        return self.data[key]
-
-    def integer(self, key: str, minimum: int = 0) -> int:
-        value = self.get(key)
-        if type(value) is not int or value < minimum:
-            raise self.fail(f"expected {key!r} to be an integer >= {minimum}, got {value!r}")
-        return value
-
-    def text(self, key: str) -> str:
-        value = self.get(key)
-        if not isinstance(value, str):
-            raise self.fail(f"expected {key!r} to be a string, got {value!r}")
-        return value
-
-    def pose(self, key: str) -> Pose:
-        value = self.get(key)
-        if (
-            not isinstance(value, list)
-            or len(value) != 3
-            or not all(type(v) is int for v in value[:2])
-            or value[2] not in Heading.__members__
-        ):
-            raise self.fail(f'expected {key!r} as [x, y, "N|E|S|W"], got {value!r}')
-        return Pose(value[0], value[1], Heading[value[2]])
-
-    def cell(self, value: Any) -> Cell:
-        if not isinstance(value, list) or len(value) != 2 or not all(type(v) is int for v in value):
-            raise self.fail(f"expected a cell [x, y], got {value!r}")
-        return (value[0], value[1])
-
-    def cells(self, key: str) -> tuple[Cell, ...]:
-        value = self.get(key)
-        if not isinstance(value, list):
-            raise self.fail(f"expected {key!r} to be a list of cells, got {value!r}")
-        return tuple(self.cell(v) for v in value)
-
-    def parsed(self, what: str, fn: Any, text: str) -> Any:
-        try:
-            return fn(text)
-        except (InputError, ValueError) as exc:
-            reason = exc.reason if isinstance(exc, InputError) else str(exc)
-            raise self.fail(f"bad {what}: {reason}") from None
-
-
 def is_team_trace(path: str | Path) -> bool:
     """Whether the first line of ``path`` is a team trace header."""
     try:
@@ -368,7 +313,7 @@ def parse_team_trace(text: str, *, source: str = "<trace>", partial: bool = Fals
             raise TraceError(f"expected a JSON object: {exc.msg}", source=source, line=n) from None
         if not isinstance(data, dict):
             raise TraceError("expected a JSON object", source=source, line=n)
-        objects.append(_Line(data, source, n))
+        objects.append(TraceFields(data, source, n))
     scenario, options, scale = _header(objects[0])
     domain = scenario.domain
     moves, acts, faults, other = [], [], [], []
@@ -381,7 +326,7 @@ def parse_team_trace(text: str, *, source: str = "<trace>", partial: bool = Fals
             moves.append(_move(f, domain))
         elif kind == "act":
             acts.append(
-                TraceAct(f.integer("start"), f.integer("end"),
+                TraceAct(f.integer("start", minimum=0), f.integer("end", minimum=0),
                          f.parsed("team action", parse_team_action, f.text("action")),
                          f.cells("cells"), f.line)
             )  # fmt: skip
@@ -389,10 +334,10 @@ def parse_team_trace(text: str, *, source: str = "<trace>", partial: bool = Fals
             active = f.get("active")
             if not isinstance(active, bool):
                 raise f.fail(f"expected 'active' true or false, got {active!r}")
-            index = f.integer("index")
+            index = f.integer("index", minimum=0)
             if index >= len(scenario.faults):
                 raise f.fail(f"expected a fault index below {len(scenario.faults)}, got {index}")
-            faults.append(TraceFault(f.integer("at"), index, active, f.line))
+            faults.append(TraceFault(f.integer("at", minimum=0), index, active, f.line))
         elif kind in ("incident", "repair", "own-repair"):
             other.append(f.data)
         elif kind == "summary":
@@ -411,20 +356,20 @@ def parse_team_trace(text: str, *, source: str = "<trace>", partial: bool = Fals
     )  # fmt: skip
 
 
-def _move(f: _Line, domain: Domain[Any, Any]) -> TraceMove:
+def _move(f: TraceFields, domain: Domain[Any, Any]) -> TraceMove:
     source = f.text("source")
     if source not in {s.value for s in StepSource}:
         raise f.fail(
             f"expected 'source' in {', '.join(s.value for s in StepSource)}, got {source!r}"
         )
     return TraceMove(
-        f.text("robot"), f.integer("start"), f.integer("end"),
+        f.text("robot"), f.integer("start", minimum=0), f.integer("end", minimum=0),
         f.parsed("action", domain.parse_action, f.text("action")),
         f.pose("from"), f.pose("to"), StepSource(source), f.line,
     )  # fmt: skip
 
 
-def _header(f: _Line) -> tuple[TeamScenario, TeamOptions, int]:
+def _header(f: TraceFields) -> tuple[TeamScenario, TeamOptions, int]:
     if f.data.get("type") != "header" or f.data.get("format") != TEAM_TRACE_FORMAT:
         raise f.fail(f'expected a header line with "format": "{TEAM_TRACE_FORMAT}"')
     if f.data.get("version") != TEAM_TRACE_VERSION:
@@ -441,17 +386,17 @@ def _header(f: _Line) -> tuple[TeamScenario, TeamOptions, int]:
     )  # fmt: skip
     robots = []
     for r in _list(f, "robots"):
-        line = _Line(r, f.source, f.line)
+        line = TraceFields(r, f.source, f.line)
         robots.append(
             RobotSpec(line.text("name"), line.pose("start"), bool(r.get("gripper", True)))
         )
     tasks = []
     for t in _list(f, "tasks"):
-        line = _Line(t, f.source, f.line)
+        line = TraceFields(t, f.source, f.line)
         tasks.append(
             Task(line.text("item"), line.cell(line.get("pickup")), line.cell(line.get("dropoff")))
         )
-    faults = [_fault(_Line(d, f.source, f.line)) for d in _list(f, "faults")]
+    faults = [_fault(TraceFields(d, f.source, f.line)) for d in _list(f, "faults")]
     options = _options(f)
     scenario = TeamScenario(
         maze, tuple(robots), tuple(tasks), tuple(faults), domain,
@@ -463,7 +408,7 @@ def _header(f: _Line) -> tuple[TeamScenario, TeamOptions, int]:
     return scenario, options, scale
 
 
-def _fault(f: _Line) -> TeamFault:
+def _fault(f: TraceFields) -> TeamFault:
     d = f.data
     try:
         return TeamFault(
@@ -482,7 +427,7 @@ def _fault(f: _Line) -> TeamFault:
         raise f.fail(f"bad fault {dict(d)!r}: {exc}") from None
 
 
-def _options(f: _Line) -> TeamOptions:
+def _options(f: TraceFields) -> TeamOptions:
     o = f.get("options")
     if not isinstance(o, dict):
         raise f.fail("expected 'options' to be an object")
@@ -504,7 +449,7 @@ def _options(f: _Line) -> TeamOptions:
         raise f.fail(f"bad options: {exc}") from None
 
 
-def _list(f: _Line, key: str) -> list[dict[str, Any]]:
+def _list(f: TraceFields, key: str) -> list[dict[str, Any]]:
     value = f.get(key)
     if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
         raise f.fail(f"expected {key!r} to be a list of objects")
