@@ -22,7 +22,7 @@ MAKE_VENV = test -x $(PY) || { $(PYTHON) -m venv $(VENV) && $(PY) -m pip install
 
 $(STAMP): pyproject.toml
 	$(MAKE_VENV)
-	$(PY) -m pip install --quiet -e '.[fast,viz,test,gym,pddl,team]'
+	$(PY) -m pip install --quiet -e '.[fast,viz,test,gym,pddl]'
 	touch $(STAMP)
 
 $(DEMO_STAMP): pyproject.toml
@@ -31,7 +31,7 @@ $(DEMO_STAMP): pyproject.toml
 	touch $(DEMO_STAMP)
 
 $(BENCH_STAMP): $(STAMP)
-	$(PY) -m pip install --quiet -e '.[fast,viz,test,gym,pddl,team,bench]'
+	$(PY) -m pip install --quiet -e '.[fast,viz,test,gym,pddl,bench]'
 	touch $(BENCH_STAMP)
 
 # The main job: the replacement-vs-replanning study on the bundled mazes, then

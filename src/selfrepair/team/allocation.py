@@ -1,7 +1,7 @@
 """Task allocation: which robot delivers which item, in which order, and the team plan it gives.
 
 :func:`allocate` assigns tasks in rounds with the Hungarian method
-(``scipy.optimize.linear_sum_assignment``, extra ``team``): in each round every capable robot
+(``scipy.optimize.linear_sum_assignment``): in each round every capable robot
 gets at most one task, minimising the sum of the estimated completion times
 
     ready(robot) + d(robot's position, where the item is) + d(there, drop-off)
@@ -25,8 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
+from scipy.optimize import linear_sum_assignment
 
-from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell
 from selfrepair.search.lattice import bfs_distances
 from selfrepair.team.model import DROP_TICKS, PICK_TICKS, TeamAction, drive, drop, handover, pick
@@ -38,7 +38,6 @@ __all__ = [
     "Job",
     "Worker",
     "allocate",
-    "assignment_solver",
     "distance_maps",
     "job_plan",
 ]
@@ -79,22 +78,6 @@ def distance_maps(
     return {c: bfs_distances(maze, c, backend=backend) for c in dict.fromkeys(cells)}
 
 
-def assignment_solver() -> Callable[
-    [npt.NDArray[np.int64]], tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]]
-]:
-    """scipy's ``linear_sum_assignment``, or a :class:`ProblemError` naming the extra to install."""
-    try:
-        from scipy.optimize import linear_sum_assignment
-    except ImportError:
-        raise ProblemError(
-            "team missions need scipy for task allocation: pip install 'selfrepair[team]'"
-        ) from None
-    solver: Callable[[npt.NDArray[np.int64]], tuple[npt.NDArray[np.intp], npt.NDArray[np.intp]]] = (
-        linear_sum_assignment
-    )
-    return solver
-
-
 def _distance(maps: Mapping[Cell, DistanceMap], target: Cell, cell: Cell, *, adjacent: bool) -> int:
     """Grid distance from ``cell`` to ``target`` (to a cell next to it when ``adjacent``)."""
     value = int(maps[target][cell[1], cell[0]])
@@ -125,7 +108,6 @@ def allocate(
 ) -> tuple[dict[str, list[Job]], tuple[Job, ...]]:
     """Jobs per worker, in the order to do them, and the jobs no worker can reach (see the
     module docstring). ``maps`` must hold the distance map of every job's source and drop-off."""
-    solve = assignment_solver()
     order: dict[str, list[Job]] = {w.name: [] for w in workers}
     cell = {w.name: w.cell for w in workers}
     ready = {w.name: w.ready for w in workers}
@@ -139,7 +121,7 @@ def allocate(
                 carry = _carry(maps, job)
                 if fetch < UNREACHABLE and carry < UNREACHABLE:
                     costs[i, j] = ready[name] + fetch + carry
-        rows, cols = solve(costs)
+        rows, cols = linear_sum_assignment(costs)
         assigned = [
             (int(i), int(j)) for i, j in zip(rows, cols, strict=True) if costs[i, j] < UNREACHABLE
         ]
