@@ -44,6 +44,7 @@ def animate_trace(
     file written. A trace file over ``max_trace_bytes`` is refused unread."""
     from selfrepair.execution.trace import read_trace, replay
     from selfrepair.experiment import plots
+    from selfrepair.optional import matplotlib
     from selfrepair.team.trace import is_team_trace
 
     if is_team_trace(trace):  # several robots: one colour each, items drawn
@@ -54,7 +55,7 @@ def animate_trace(
         )
     if not str(out).lower().endswith(".gif"):
         raise TraceError("expected an output file ending in .gif", source=str(out))
-    mpl = plots._matplotlib()
+    mpl = matplotlib()
     from matplotlib.animation import FuncAnimation, PillowWriter
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure

@@ -19,7 +19,6 @@ from typing import Any
 
 import numpy as np
 
-from selfrepair.errors import ProblemError
 from selfrepair.experiment.findings import (
     NEGLIGIBLE,
     Row,
@@ -31,6 +30,7 @@ from selfrepair.experiment.findings import (
 from selfrepair.experiment.scale import Crossover
 from selfrepair.experiment.summary import is_reference_replan
 from selfrepair.geometry import Cell, Pose
+from selfrepair.optional import matplotlib
 from selfrepair.world.maze import Maze
 
 __all__ = [
@@ -76,20 +76,11 @@ STYLE = {
 }
 
 
-def _matplotlib() -> Any:
-    try:
-        import matplotlib
-    except ImportError:
-        raise ProblemError(
-            "figures need matplotlib, which is not installed: pip install 'selfrepair[viz]'"
-        ) from None
-    return matplotlib
-
 
 @contextmanager
 def _figure(width: float, height: float, ncols: int = 1) -> Iterator[tuple[Any, Any]]:
     """A white figure with ``ncols`` axes in the report's style."""
-    mpl = _matplotlib()
+    mpl = matplotlib()
     from matplotlib.figure import Figure
 
     with mpl.rc_context(STYLE):
@@ -340,7 +331,7 @@ def _heat(
     limits: tuple[float, float] | None,
     fmt: str | None,
 ) -> None:
-    mpl = _matplotlib()
+    mpl = matplotlib()
     cmap = mpl.colormaps[cmap_name].with_extremes(bad="#cccccc")
     finite = data[np.isfinite(data)]
     lo, hi = (
@@ -431,7 +422,7 @@ def picture_from_trace(trace: Any) -> MissionPicture:
 def draw_background(ax: Any, picture: MissionPicture) -> None:
     """The parts of a mission drawing that never change: maze, initial plan, start and goal."""
     maze = picture.maze
-    mpl = _matplotlib()
+    mpl = matplotlib()
     cmap = mpl.colors.ListedColormap(["white", WALL])
     ax.imshow(
         maze.walls.astype(int),

@@ -18,9 +18,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from selfrepair.errors import ProblemError, TraceError
+from selfrepair.errors import TraceError
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.limits import MAX_TRACE_BYTES
+from selfrepair.optional import matplotlib
 from selfrepair.team.model import ActionKind, TeamFaultKind
 from selfrepair.team.trace import TeamTrace, read_team_trace, replay_team
 
@@ -43,15 +44,6 @@ _STYLE = {
 }
 _MARKERS = {Heading.N: "^", Heading.E: ">", Heading.S: "v", Heading.W: "<"}
 
-
-def _matplotlib() -> Any:
-    try:
-        import matplotlib
-    except ImportError:
-        raise ProblemError(
-            "pictures need matplotlib, which is not installed: pip install 'selfrepair[viz]'"
-        ) from None
-    return matplotlib
 
 
 def _load(path: str | Path, max_trace_bytes: int | None = MAX_TRACE_BYTES) -> TeamTrace:
@@ -226,7 +218,7 @@ def draw_team_frame(
     """Draw one moment of a team trace (default: the first handover, else the first repair)."""
     if not str(out).lower().endswith(".png"):
         raise TraceError("expected an output file ending in .png", source=str(out))
-    mpl = _matplotlib()
+    mpl = matplotlib()
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -255,7 +247,7 @@ def animate_team_trace(
     """Write a GIF of a team trace; returns the number of frames (the last one held)."""
     if not str(out).lower().endswith(".gif"):
         raise TraceError("expected an output file ending in .gif", source=str(out))
-    mpl = _matplotlib()
+    mpl = matplotlib()
     from matplotlib.animation import FuncAnimation, PillowWriter
     from matplotlib.figure import Figure
 

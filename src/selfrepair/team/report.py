@@ -16,7 +16,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from selfrepair.errors import ProblemError
+from selfrepair.optional import matplotlib
 from selfrepair.team.summary import TeamSummary, by_fault_case, summarize_team
 
 __all__ = ["render_team_markdown", "write_team_figures"]
@@ -33,15 +33,6 @@ _STYLE = {
 }
 
 
-def _matplotlib() -> Any:
-    try:
-        import matplotlib
-    except ImportError:
-        raise ProblemError(
-            "figures need matplotlib, which is not installed: pip install 'selfrepair[viz]'"
-        ) from None
-    return matplotlib
-
 
 def _table(headers: Sequence[str], body: Sequence[Sequence[str]]) -> str:
     lines = ["| " + " | ".join(headers) + " |"]
@@ -53,7 +44,7 @@ def _table(headers: Sequence[str], body: Sequence[Sequence[str]]) -> str:
 def write_team_figures(rows: Sequence[Row], out_dir: Path) -> list[Path]:
     """``team-latency.png`` (repair latency per strategy) and ``team-size.png`` (tasks
     delivered and makespan against team size, per strategy)."""
-    mpl = _matplotlib()
+    mpl = matplotlib()
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
