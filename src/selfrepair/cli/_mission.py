@@ -1,26 +1,66 @@
-"""The mission options that ``run`` and ``compare`` share, the spec they build, and the JSON
-form of a mission's metrics row."""
+"""The options that ``run`` and ``compare`` share, declared once, the spec they build, and the
+JSON form of a mission's metrics row.
 
-from __future__ import annotations
+:class:`MissionOptions` is the one list of the shared options: each field is typed with a Typer
+option alias (or the ``MAZE`` argument) and has the option's default. :func:`mission_options`
+gives a command all of them, and :func:`mission_spec` turns them into the
+:class:`~selfrepair.execution.result.MissionSpec` (with its
+:class:`~selfrepair.repair.strategies.StrategyOptions`), so an option added to the dataclass
+(and used in :func:`mission_spec`) is an option of both commands.
 
+Like the command modules, this module does not use ``from __future__ import annotations``:
+Typer reads the field types as the parameter types of the commands.
+"""
+
+import functools
+import inspect
 import json
+from dataclasses import MISSING, dataclass, fields
 from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from selfrepair.cli._app import exact_json, number_json
-from selfrepair.cli._inputs import find_input, parse_weight
-from selfrepair.errors import InputError
-from selfrepair.limits import MAX_LOOKUP_PATTERNS
+from selfrepair.cli._app import (
+    MaxCells,
+    MaxLookupPatterns,
+    MaxTableBytes,
+    MaxTableCandidates,
+    exact_json,
+    number_json,
+)
+from selfrepair.cli._inputs import (
+    Backend,
+    ClearanceWeight,
+    Faults,
+    Heuristic,
+    MazeArg,
+    Start,
+    find_input,
+    parse_weight,
+)
+from selfrepair.errors import InputError, ProblemError
+from selfrepair.limits import (
+    MAX_CELLS,
+    MAX_LOOKUP_PATTERNS,
+    MAX_TABLE_BYTES,
+    MAX_TABLE_CANDIDATES,
+)
 
 if TYPE_CHECKING:
-    from collections.abc import Mapping, Sequence
+    from collections.abc import Callable, Mapping, Sequence
 
     from selfrepair.execution.faults import FaultSchedule
     from selfrepair.execution.result import MissionSpec
     from selfrepair.robots.domain import Domain
 
-__all__ = ["check_choice", "domain_named", "mission_spec", "row_json"]
+__all__ = [
+    "MissionOptions",
+    "check_choice",
+    "domain_named",
+    "mission_options",
+    "mission_spec",
+    "row_json",
+]
 
 Goal = Annotated[str, typer.Option("--goal", metavar="X,Y", help="Goal cell.")]
 At = Annotated[
@@ -107,7 +147,82 @@ WarmUp = Annotated[
 ]
 
 
-def domain_named(name: str) -> Domain[Any, Any]:
+@dataclass(frozen=True, slots=True)
+class MissionOptions:
+    """The options of ``run`` and ``compare``, as given on the command line (checked by
+    :func:`mission_spec`): the maze and route, the fault schedule, the strategy options, the
+    planner, the warm-up run and the limits. The field order is the order of ``--help``."""
+
+    maze: MazeArg
+    start: Start
+    goal: Goal
+    faults: Faults = ""
+    at: At = 0
+    clock: ClockOpt = "step"
+    detect: Detect = "now"
+    transient: Transient = None
+    intermittent: Intermittent = None
+    table: TableOpt = "handwritten"
+    recursion: Recursion = "flat"
+    max_depth: MaxDepth = 2
+    window: Window = 3
+    lpg_time_limit: LpgTimeLimit = 5.0
+    rewrite: Rewrite = False
+    clearance_weight: ClearanceWeight = "0"
+    heuristic: Heuristic = "grid-distance"
+    backend: Backend = "auto"
+    plan_with_faults: PlanWithFaults = False
+    seed: Seed = 0
+    warm_up: WarmUp = True
+    domain_name: DomainOpt = "four-wheel"
+    max_cells: MaxCells = MAX_CELLS
+    max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES
+    max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES
+    max_lookup_patterns: MaxLookupPatterns = MAX_LOOKUP_PATTERNS
+
+
+def mission_options(command: "Callable[..., int]") -> "Callable[..., int]":
+    """``command`` with every field of :class:`MissionOptions` as a parameter of its own (Typer
+    reads them from the signature), in place of its parameter ``mission``, which it is then
+    called with: the fields' values gathered in one :class:`MissionOptions`.
+
+    Use it below ``@app.command()``; the command's other parameters keep their place around
+    the mission options."""
+    own = inspect.signature(command).parameters
+    names = tuple(f.name for f in fields(MissionOptions))
+    if "mission" not in own or set(names) & set(own):
+        raise ProblemError(
+            f"{command.__name__}: expected a parameter 'mission' and none named as a field of "
+            "MissionOptions"
+        )
+    keyword = inspect.Parameter.KEYWORD_ONLY
+    shared = [
+        inspect.Parameter(
+            f.name,
+            keyword,
+            annotation=f.type,
+            default=inspect.Parameter.empty if f.default is MISSING else f.default,
+        )
+        for f in fields(MissionOptions)
+    ]
+    params: list[inspect.Parameter] = []
+    for param in own.values():
+        params.extend(shared if param.name == "mission" else [param.replace(kind=keyword)])
+
+    @functools.wraps(command)
+    def with_mission_options(**values: Any) -> int:
+        mission = MissionOptions(**{name: values.pop(name) for name in names})
+        return command(mission=mission, **values)
+
+    with_mission_options.__signature__ = inspect.Signature(  # type: ignore[attr-defined]
+        params, return_annotation=int
+    )
+    with_mission_options.__annotations__ = {p.name: p.annotation for p in params}
+    with_mission_options.__annotations__["return"] = int
+    return with_mission_options
+
+
+def domain_named(name: str) -> "Domain[Any, Any]":
     """The registered domain ``name`` (bad names are an error on ``--domain``)."""
     from selfrepair.robots.registry import get_domain
 
@@ -117,21 +232,21 @@ def domain_named(name: str) -> Domain[Any, Any]:
         raise InputError(exc.reason, source="--domain") from None
 
 
-def check_choice(value: str, choices: Sequence[str], option: str) -> None:
+def check_choice(value: str, choices: "Sequence[str]", option: str) -> None:
     """An :class:`InputError` on ``option`` unless ``value`` is one of ``choices``."""
     if value not in choices:
         raise InputError(f"expected one of {', '.join(choices)}, got {value!r}", source=option)
 
 
 def build_schedule(
-    domain: Domain[Any, Any],
+    domain: "Domain[Any, Any]",
     faults: str,
     at: int,
     clock: str,
     detect: str,
     transient: int | None,
     intermittent: float | None,
-) -> FaultSchedule:
+) -> "FaultSchedule":
     """The fault schedule the options describe (one persistence for every fault)."""
     from selfrepair.execution.faults import (
         Clock,
@@ -172,39 +287,13 @@ def build_schedule(
 
 
 def mission_spec(
-    *,
-    maze: str,
-    start: str,
-    goal: str,
-    faults: str,
-    at: int,
-    clock: str,
-    detect: str,
-    transient: int | None,
-    intermittent: float | None,
-    strategy: str,
-    table: str,
-    recursion: str,
-    max_depth: int,
-    window: int,
-    clearance_weight: str,
-    heuristic: str,
-    backend: str,
-    plan_with_faults: bool,
-    seed: int,
-    domain_name: str,
-    max_cells: int,
-    max_table_bytes: int,
-    max_table_candidates: int,
-    strategies: Sequence[str] = (),
-    lpg_time_limit: float = 5.0,
-    rewrite: bool = False,
-    max_lookup_patterns: int = MAX_LOOKUP_PATTERNS,
-) -> MissionSpec:
-    """The mission the options describe; every option is checked here, so bad input is exit 2
-    before anything runs (``strategies``: every strategy that will run). The table is loaded
-    here, within the limits given, and the mission gets the loaded table, so those limits are
-    the ones that hold (a bad table file is exit 2 even when no repair needs it)."""
+    mission: MissionOptions, strategy: str, strategies: "Sequence[str]" = ()
+) -> "MissionSpec":
+    """The mission the options describe, with ``strategy``; every option is checked here, so
+    bad input is exit 2 before anything runs (``strategies``: every strategy that will run). The
+    table is loaded here, within the limits given, and the mission gets the loaded table, so
+    those limits are the ones that hold (a bad table file is exit 2 even when no repair needs
+    it)."""
     from selfrepair.execution.faults import Clock, Detection
     from selfrepair.execution.result import MissionSpec
     from selfrepair.geometry import parse_cell, parse_pose
@@ -216,41 +305,45 @@ def mission_spec(
     from selfrepair.tables.model import ReplacementTable
     from selfrepair.world.bundled import resolve_maze
 
-    domain = domain_named(domain_name)
+    m = mission
+    domain = domain_named(m.domain_name)
     for name in (*strategies, strategy):
         check_choice(name, strategy_names(), "--strategies" if strategies else "--strategy")
-    check_choice(recursion, tuple(RecursionMode), "--recursion")
-    check_choice(detect, tuple(Detection), "--detect")
-    check_choice(clock, tuple(Clock), "--clock")
-    check_choice(heuristic, tuple(HEURISTICS), "--heuristic")
-    check_choice(backend, BACKENDS, "--backend")
-    loaded: str | ReplacementTable = table
+    check_choice(m.recursion, tuple(RecursionMode), "--recursion")
+    check_choice(m.detect, tuple(Detection), "--detect")
+    check_choice(m.clock, tuple(Clock), "--clock")
+    check_choice(m.heuristic, tuple(HEURISTICS), "--heuristic")
+    check_choice(m.backend, BACKENDS, "--backend")
+    loaded: str | ReplacementTable = m.table
     if any(uses_table(name) for name in (*strategies, strategy)):
         loaded = resolve_table(
-            find_input(table),
-            max_table_bytes=max_table_bytes,
-            max_table_candidates=max_table_candidates,
+            find_input(m.table),
+            max_table_bytes=m.max_table_bytes,
+            max_table_candidates=m.max_table_candidates,
         )
+    schedule = build_schedule(
+        domain, m.faults, m.at, m.clock, m.detect, m.transient, m.intermittent
+    )
     return MissionSpec(
-        maze=resolve_maze(find_input(maze), max_cells=max_cells),
-        start=parse_pose(start, source="--start"),
-        goal=parse_cell(goal, source="--goal"),
-        schedule=build_schedule(domain, faults, at, clock, detect, transient, intermittent),
+        maze=resolve_maze(find_input(m.maze), max_cells=m.max_cells),
+        start=parse_pose(m.start, source="--start"),
+        goal=parse_cell(m.goal, source="--goal"),
+        schedule=schedule,
         strategy=strategy,
         options=StrategyOptions(
             table=loaded,
-            recursion=RecursionMode(recursion),
-            max_depth=max_depth,
-            window=window,
-            lpg_time_limit_s=lpg_time_limit,
-            rewrite=rewrite,
-            max_lookup_patterns=max_lookup_patterns,
+            recursion=RecursionMode(m.recursion),
+            max_depth=m.max_depth,
+            window=m.window,
+            lpg_time_limit_s=m.lpg_time_limit,
+            rewrite=m.rewrite,
+            max_lookup_patterns=m.max_lookup_patterns,
         ),
-        clearance_weight=parse_weight(clearance_weight),
-        seed=seed,
-        heuristic=heuristic,
-        backend=backend,
-        initial_faults_known=plan_with_faults,
+        clearance_weight=parse_weight(m.clearance_weight),
+        seed=m.seed,
+        heuristic=m.heuristic,
+        backend=m.backend,
+        initial_faults_known=m.plan_with_faults,
         domain=domain,
     )
 
@@ -263,7 +356,7 @@ _HISTOGRAMS = ("replacement_lengths", "replacement_depths")
 """Columns that hold a ``value:count,...`` histogram as text."""
 
 
-def row_json(row: Mapping[str, Any]) -> dict[str, Any]:
+def row_json(row: "Mapping[str, Any]") -> dict[str, Any]:
     """A mission's metrics row (``mission_row``) as JSON values: numbers are JSON numbers
     (``ticks`` and the other exact values with an exact ``_exact`` string twin, the ``_float``
     twins dropped; floats rounded), ``reached`` a boolean, and the embedded JSON and histogram

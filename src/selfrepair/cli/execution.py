@@ -17,8 +17,6 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from selfrepair.cli._app import (
-    MaxCells,
-    MaxLookupPatterns,
     MaxTableBytes,
     MaxTableCandidates,
     MaxTraceBytes,
@@ -29,44 +27,10 @@ from selfrepair.cli._app import (
     number_json,
     table_app,
 )
-from selfrepair.cli._inputs import (
-    Backend,
-    ClearanceWeight,
-    Faults,
-    Heuristic,
-    Json,
-    MazeArg,
-    Start,
-    find_input,
-)
-from selfrepair.cli._mission import (
-    At,
-    ClockOpt,
-    Detect,
-    DomainOpt,
-    Goal,
-    Intermittent,
-    LpgTimeLimit,
-    MaxDepth,
-    PlanWithFaults,
-    Recursion,
-    Rewrite,
-    Seed,
-    TableOpt,
-    Transient,
-    WarmUp,
-    Window,
-    mission_spec,
-    row_json,
-)
+from selfrepair.cli._inputs import Json, find_input
+from selfrepair.cli._mission import MissionOptions, mission_options, mission_spec, row_json
 from selfrepair.cli.planning import kernel_load_ns
-from selfrepair.limits import (
-    MAX_CELLS,
-    MAX_LOOKUP_PATTERNS,
-    MAX_TABLE_BYTES,
-    MAX_TABLE_CANDIDATES,
-    MAX_TRACE_BYTES,
-)
+from selfrepair.limits import MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES, MAX_TRACE_BYTES
 
 if TYPE_CHECKING:
     from selfrepair.execution.result import MissionResult
@@ -160,16 +124,9 @@ def _timing_note(load_ns: int, warmed: bool) -> str:
 
 
 @app.command()
+@mission_options
 def run(
-    maze: MazeArg,
-    start: Start,
-    goal: Goal,
-    faults: Faults = "",
-    at: At = 0,
-    clock: ClockOpt = "step",
-    detect: Detect = "now",
-    transient: Transient = None,
-    intermittent: Intermittent = None,
+    *,
     strategy: Annotated[
         str,
         typer.Option(
@@ -179,67 +136,28 @@ def run(
             "(pddl extra).",
         ),
     ] = "replacement",
-    table: TableOpt = "handwritten",
-    recursion: Recursion = "flat",
-    max_depth: MaxDepth = 2,
-    window: Window = 3,
-    lpg_time_limit: LpgTimeLimit = 5.0,
-    rewrite: Rewrite = False,
-    clearance_weight: ClearanceWeight = "0",
-    heuristic: Heuristic = "grid-distance",
-    backend: Backend = "auto",
-    plan_with_faults: PlanWithFaults = False,
+    mission: MissionOptions,
     trace: Annotated[
         Path | None,
         typer.Option("--trace", metavar="FILE", help="Write a JSON Lines trace here."),
     ] = None,
-    seed: Seed = 0,
-    warm_up: WarmUp = True,
     as_json: Annotated[bool, typer.Option("--json", help="Print the metrics row as JSON.")] = False,
-    domain_name: DomainOpt = "four-wheel",
-    max_cells: MaxCells = MAX_CELLS,
-    max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
-    max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
-    max_lookup_patterns: MaxLookupPatterns = MAX_LOOKUP_PATTERNS,
 ) -> int:
     """Run one mission: plan, execute with faults, repair.
 
     Shows the maze with the planned and executed paths and the repair sites, then the metrics.
     Exit 1 when the goal is not reached.
+
+    Takes every option of compare but --strategies: --strategy names the one strategy to run,
+    and --trace is run's own.
     """
     from selfrepair.execution.executor import run_mission
     from selfrepair.execution.metrics import mission_row
     from selfrepair.execution.trace import write_trace
 
-    spec = mission_spec(
-        maze=maze,
-        start=start,
-        goal=goal,
-        faults=faults,
-        at=at,
-        clock=clock,
-        detect=detect,
-        transient=transient,
-        intermittent=intermittent,
-        strategy=strategy,
-        table=table,
-        recursion=recursion,
-        max_depth=max_depth,
-        window=window,
-        clearance_weight=clearance_weight,
-        heuristic=heuristic,
-        backend=backend,
-        plan_with_faults=plan_with_faults,
-        seed=seed,
-        domain_name=domain_name,
-        max_cells=max_cells,
-        max_table_bytes=max_table_bytes,
-        max_table_candidates=max_table_candidates,
-        lpg_time_limit=lpg_time_limit,
-        rewrite=rewrite,
-        max_lookup_patterns=max_lookup_patterns,
-    )
-    load_ns = kernel_load_ns(backend)
+    spec = mission_spec(mission, strategy)
+    load_ns = kernel_load_ns(mission.backend)
+    warm_up = mission.warm_up
     if warm_up:
         run_mission(spec)
     result = run_mission(spec)
@@ -253,7 +171,7 @@ def run(
     from rich.text import Text
 
     echo(mission_picture(result) + _picture_legend())
-    metrics = Table(title=Text(f"Mission on {spec.maze.name or maze}"))
+    metrics = Table(title=Text(f"Mission on {spec.maze.name or mission.maze}"))
     metrics.add_column("metric")
     metrics.add_column("value", justify="right")
     shown = row_json(row)
@@ -274,11 +192,9 @@ def _cell(value: Any) -> str:
 
 
 @app.command()
+@mission_options
 def compare(
-    maze: MazeArg,
-    start: Start,
-    goal: Goal,
-    faults: Faults = "",
+    *,
     strategies: Annotated[
         str,
         typer.Option(
@@ -288,72 +204,37 @@ def compare(
             show_default=False,
         ),
     ] = "",
-    at: At = 0,
-    clock: ClockOpt = "step",
-    detect: Detect = "now",
-    transient: Transient = None,
-    intermittent: Intermittent = None,
-    table: TableOpt = "handwritten",
-    recursion: Recursion = "flat",
-    max_depth: MaxDepth = 2,
-    window: Window = 3,
-    clearance_weight: ClearanceWeight = "0",
-    heuristic: Heuristic = "grid-distance",
-    backend: Backend = "auto",
-    plan_with_faults: PlanWithFaults = False,
-    seed: Seed = 0,
-    warm_up: WarmUp = True,
+    mission: MissionOptions,
     as_json: Json = False,
-    domain_name: DomainOpt = "four-wheel",
-    max_cells: MaxCells = MAX_CELLS,
-    max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
-    max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
     """Run every strategy on one mission, side by side.
 
     Ends with a one-line verdict. Exit 1 when a strategy does not reach the goal.
 
     Each strategy gets the same maze, route, faults and planner; the table options apply to
-    the strategies that use a table. Latencies are taken after an untimed warm-up run.
+    the strategies that use a table, and the other strategy options (--window, --rewrite,
+    --lpg-time-limit) to the strategies they name. Latencies are taken after an untimed
+    warm-up run.
+
+    Takes every option of run but two: --strategies in place of --strategy, and no --trace
+    (a trace holds one mission: write one per strategy with run --trace).
     """
     from selfrepair.repair.strategies import strategy_names
 
     names = tuple(s.strip() for s in strategies.split(",") if s.strip()) or strategy_names()
-    spec = mission_spec(
-        maze=maze,
-        start=start,
-        goal=goal,
-        faults=faults,
-        at=at,
-        clock=clock,
-        detect=detect,
-        transient=transient,
-        intermittent=intermittent,
-        strategy=names[0],
-        table=table,
-        recursion=recursion,
-        max_depth=max_depth,
-        window=window,
-        clearance_weight=clearance_weight,
-        heuristic=heuristic,
-        backend=backend,
-        plan_with_faults=plan_with_faults,
-        seed=seed,
-        domain_name=domain_name,
-        max_cells=max_cells,
-        max_table_bytes=max_table_bytes,
-        max_table_candidates=max_table_candidates,
-        strategies=names,
-    )
+    spec = mission_spec(mission, names[0], names)
     from selfrepair.experiment.compare import compare_strategies
 
-    load_ns = kernel_load_ns(backend)
-    comparison = compare_strategies(spec, names, warm_up=warm_up)
+    load_ns = kernel_load_ns(mission.backend)
+    comparison = compare_strategies(spec, names, warm_up=mission.warm_up)
     if as_json:
         echo_json(_comparison_json(comparison, load_ns))
     else:
-        _print_comparison(comparison, f"{spec.maze.name or maze}: {spec.start} to "
-                          f"{spec.goal[0]},{spec.goal[1]}, faults {faults or 'none'}", load_ns)
+        title = (
+            f"{spec.maze.name or mission.maze}: {spec.start} to {spec.goal[0]},{spec.goal[1]}, "
+            f"faults {mission.faults or 'none'}"
+        )
+        _print_comparison(comparison, title, load_ns)
     return 0 if all(r.result.reached for r in comparison.runs) else 1
 
 
