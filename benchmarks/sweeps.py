@@ -52,12 +52,14 @@ missions = expand(load_config(resolve_experiment(spec)))
 missions = missions[:limit] if limit else missions
 
 def cpu_seconds():
-    # CPU time of this process and of the workers it started (read from /proc before they exit;
-    # None where /proc is missing)
-    import os, time
+    # CPU time of this process and of the workers it started: the living ones read from /proc
+    # (loky's outlive the run), the ended ones from getrusage (forked ones end with the run);
+    # None where /proc is missing
+    import os, resource, time
     try:
         tick = os.sysconf("SC_CLK_TCK")
-        total = time.process_time()
+        ended = resource.getrusage(resource.RUSAGE_CHILDREN)
+        total = time.process_time() + ended.ru_utime + ended.ru_stime
         for task in Path("/proc/self/task").iterdir():
             for child in (task / "children").read_text().split():
                 fields = Path(f"/proc/{child}/stat").read_text().rsplit(")", 1)[1].split()

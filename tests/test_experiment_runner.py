@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import sys
 from pathlib import Path
 
 import pytest
@@ -78,6 +79,35 @@ def test_local_processes_match_in_process(tmp_path: Path) -> None:
         run_missions(missions, store, jobs=2, execute=fake_mission)
     assert _rows(tmp_path / "one.sqlite") == _rows(tmp_path / "two.sqlite")
     assert len(_rows(tmp_path / "one.sqlite")) == len(missions)
+
+
+def pid_mission(mission: Mission) -> dict[str, int | float | str | None]:
+    """Records which process ran the mission, and whether that process is a fork of the driver
+    made after this module was imported there (a marker module-level value set below)."""
+    import os
+
+    return {"pid": os.getpid(), "parent": os.getppid(), "warm": WARM_MARKER}
+
+
+WARM_MARKER = 0
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="local workers are forked on Linux only")
+def test_local_workers_are_forked_from_the_warm_driver(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import os
+
+    # a value set in the driver only: a forked worker inherits it, a fresh interpreter would not
+    monkeypatch.setattr(sys.modules[__name__], "WARM_MARKER", 7)
+    missions = _missions()
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        run_missions(missions, store, jobs=2, execute=pid_mission, chunk_size=1)
+        rows = store.rows()
+    by_worker = [r for r in rows if r["pid"] != os.getpid()]
+    assert by_worker, "no mission ran in a worker"
+    assert all(r["parent"] == os.getpid() and r["warm"] == 7 for r in by_worker)
+    assert any(r["pid"] == os.getpid() for r in rows)  # the driver computes too
 
 
 def test_dask_local_cluster_matches_local(tmp_path: Path) -> None:

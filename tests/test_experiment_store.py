@@ -77,13 +77,13 @@ def test_export_csv_and_parquet(tmp_path: Path) -> None:
         for n, m in enumerate(missions):
             store.add(m, {"ticks": n, "latency": n / 3, "note": None if n else "first"}, 0.1)
         assert store.export_csv(tmp_path / "r.csv") == len(missions)
+        with (tmp_path / "r.csv").open() as handle:
+            rows = list(csv.DictReader(handle))
+        assert len(rows) == len(missions) and {r["ticks"] for r in rows} == {
+            str(n) for n in range(len(missions))
+        }
+        pq = need("pyarrow.parquet", "parquet")  # the rest needs the parquet extra
         assert store.export_parquet(tmp_path / "r.parquet") == len(missions)
-    with (tmp_path / "r.csv").open() as handle:
-        rows = list(csv.DictReader(handle))
-    assert len(rows) == len(missions) and {r["ticks"] for r in rows} == {
-        str(n) for n in range(len(missions))
-    }
-    pq = need("pyarrow.parquet", "parquet")
     table = pq.read_table(tmp_path / "r.parquet")
     assert table.num_rows == len(missions)
     assert str(table.schema.field("ticks").type) == "int64"

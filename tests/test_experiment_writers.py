@@ -258,7 +258,7 @@ def test_killed_driver_takes_its_workers_with_it(tmp_path: Path) -> None:
     try:
         _wait_for_rows(proc, db, 5)
         children = _descendants(proc.pid)
-        assert len(children) >= 2, "no worker processes found"
+        assert children, "no worker processes found"
         os.kill(proc.pid, signal.SIGKILL)  # the driver alone
         proc.wait(timeout=30)
         deadline = time.monotonic() + 10

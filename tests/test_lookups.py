@@ -27,6 +27,7 @@ from selfrepair.repair.lookups import (
     lookup_memory,
     neighbourhood,
     occupancy_codes,
+    occupancy_rows,
 )
 from selfrepair.repair.replacement import (
     DEFERRING,
@@ -207,10 +208,13 @@ def test_occupancy_codes_hold_the_free_cells_around_each_cell(
     maze = Maze(rng.random((height, width)) < 0.4)
     grid = maze.free_grid(1)
     codes = occupancy_codes(grid, radius)
+    rows = occupancy_rows(grid, radius)
+    assert [len(row) for row in rows] == [width] * height
     side = 2 * radius + 1
     for y in range(height):
         for x in range(width):
             code = codes[grid.index(x, y)]
+            assert rows[y][x] is code
             for dy in range(-radius, radius + 1):
                 for dx in range(-radius, radius + 1):
                     bit = (dy + radius) * side + dx + radius
@@ -276,6 +280,8 @@ def test_fault_lookups_check_their_arguments() -> None:
         fault_lookups(bundled_table(), (), mode="deep", answer=lambda r: r)
     with pytest.raises(ProblemError, match="radius"):
         occupancy_codes(Maze(np.zeros((2, 2), dtype=bool)).free_grid(1), -1)
+    with pytest.raises(ProblemError, match="radius"):
+        occupancy_rows(Maze(np.zeros((2, 2), dtype=bool)).free_grid(1), -1)
 
 
 # --- the strategy --------------------------------------------------------------------------------

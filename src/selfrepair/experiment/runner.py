@@ -3,9 +3,9 @@
 Missions go out in *chunks*: each task a worker receives is a list of missions (sized to take
 about :data:`CHUNK_SECONDS`), and its results come back together and are stored in one
 transaction. Workers are long-lived processes that import the executor once. Local worker
-processes (loky, ``jobs``) are the default; the ``dask`` and ``ray`` backends use an existing
-cluster. Whatever the backend, workers only *compute*; the driver - this process - writes the
-:class:`~selfrepair.experiment.store.ResultStore`.
+processes (``jobs``; forked from the warm driver on Linux, loky's elsewhere) are the default;
+the ``dask`` and ``ray`` backends use an existing cluster. Whatever the backend, workers only
+*compute*; the driver - this process - writes the :class:`~selfrepair.experiment.store.ResultStore`.
 
 A run is resumable and shareable: missions whose key is already stored are skipped, and every
 chunk is *claimed* in the store before it is sent out, so several drivers started on one
@@ -27,10 +27,11 @@ import logging
 import math
 import os
 import signal
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, wait
+from concurrent.futures import FIRST_COMPLETED, Executor, Future, wait
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import ExitStack, contextmanager, suppress
 from dataclasses import dataclass, replace
@@ -436,46 +437,87 @@ class _InlinePool:
 
 
 class _LocalPool:
-    """``jobs`` local processes: this one and ``jobs - 1`` worker processes (loky's reusable
-    executor, started once, importing once).
+    """``jobs`` local processes: this one and ``jobs - 1`` worker processes.
 
-    The driver computes too: while the workers start (a second or more: a fresh interpreter
-    imports numpy, numba and the executor, and loads the compiled kernels) it is already running
-    missions, and afterwards it runs a chunk whenever the workers have enough queued. Storing a
-    chunk's rows costs the driver little beside computing them.
+    The driver computes too, and runs a chunk whenever the workers have enough queued. Storing a
+    chunk's rows costs the driver little beside computing them. How the workers start:
+
+    * On Linux they are **forked from the warm driver**: the driver runs the first chunk itself
+      (two missions: it imports the executor, loads the compiled kernels and the inputs), then
+      forks the workers, which start with all of that in memory instead of spending about two
+      seconds of CPU each importing numpy, numba and the executor and loading the kernels. They
+      are stopped when the run ends.
+    * Elsewhere (``fork`` is missing or unsafe, as on macOS and Windows) they are loky's reusable
+      workers, started at once and importing once, while the driver already runs missions.
     """
 
     def __init__(self, jobs: int) -> None:
-        from joblib.externals.loky import get_reusable_executor
-
         self.slots = jobs
         self._queued = 2 * (jobs - 1)  # chunks per worker: one running, one waiting
         self.depth = self._queued + 1  # and one here
         self._inline = _InlinePool()
         self._running: list[Future[list[_Result]]] = []
-        self._executor = get_reusable_executor(
-            max_workers=jobs - 1,
+        self._workers = jobs - 1
+        self._forked = _fork_workers()
+        self._executor: Executor | None = None if self._forked else self._start()
+
+    def _start(self) -> Executor:
+        """The worker pool: forked from this process, or loky's reusable executor."""
+        if self._forked:
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+
+            return ProcessPoolExecutor(
+                max_workers=self._workers,
+                mp_context=multiprocessing.get_context("fork"),
+                initializer=worker_setup,
+                initargs=(os.getpid(),),
+            )
+        from joblib.externals.loky import get_reusable_executor
+
+        return get_reusable_executor(  # type: ignore[no-any-return]
+            max_workers=self._workers,
             timeout=WORKER_IDLE_SECONDS,
             initializer=worker_setup,
             initargs=(os.getpid(),),
         )
 
     def submit(self, execute: MissionFunction, chunk: Sequence[Mission]) -> Future[list[_Result]]:
+        if self._executor is None:  # forking: the first chunk warms this process up
+            future = self._inline.submit(execute, chunk)
+            self._executor = self._start()
+            return future
         self._running = [f for f in self._running if not f.done()]
         if len(self._running) >= self._queued:
             return self._inline.submit(execute, chunk)
-        future: Future[list[_Result]] = self._executor.submit(work_chunk, execute, list(chunk))
+        future = self._executor.submit(work_chunk, execute, list(chunk))
         self._running.append(future)
         return future
 
+    def close(self) -> None:
+        """Stop forked workers once the run is over (loky's idle ones time out by themselves)."""
+        if self._forked and self._executor is not None:
+            self._executor.shutdown(wait=True)
+
     def abort(self) -> None:
-        # Kill the workers first: loky then fails every pending future as after a worker crash.
-        # (shutdown(kill_workers=True) with chunks still queued trips a KeyError in loky's
-        # manager thread, printed as a traceback.)
+        # Kill the workers first: the executor then fails every pending future as after a
+        # worker crash. (loky's shutdown(kill_workers=True) with chunks still queued trips a
+        # KeyError in its manager thread, printed as a traceback.)
+        if self._executor is None:
+            return
         for process in list(getattr(self._executor, "_processes", {}).values()):
             with suppress(ProcessLookupError):
                 os.kill(process.pid, signal.SIGKILL)
         self._executor.shutdown(wait=False)
+
+
+def _fork_workers() -> bool:
+    """Whether local workers are forked from the driver: on Linux, where ``fork`` is safe for
+    this process (no native threads it cannot clean up; the kernels are numba's, single-threaded),
+    and kept out of macOS, where forking a process that loaded system frameworks is not."""
+    import multiprocessing
+
+    return sys.platform.startswith("linux") and "fork" in multiprocessing.get_all_start_methods()
 
 
 class _DaskPool:
@@ -524,8 +566,12 @@ def _pool(
     backend: str, *, jobs: int, scheduler: str | None, address: str | None
 ) -> Iterator[_Pool]:
     with ExitStack() as stack:
-        if backend == "local":
-            yield _InlinePool() if jobs == 1 else _LocalPool(_cpu_count() if jobs == -1 else jobs)
+        if backend == "local" and jobs == 1:
+            yield _InlinePool()
+        elif backend == "local":
+            local = _LocalPool(_cpu_count() if jobs == -1 else jobs)
+            stack.callback(local.close)
+            yield local
         elif backend == "dask":
             yield _DaskPool(stack.enter_context(_dask_client(scheduler)))
         else:
@@ -566,13 +612,13 @@ def _dask_client(scheduler: str | None) -> Iterator[object]:
             "the dask backend needs dask[distributed]: pip install 'selfrepair[dask]'"
         ) from None
     try:
-        client = Client(scheduler, set_as_default=False, timeout="20s")  # type: ignore[no-untyped-call]
+        client = Client(scheduler, set_as_default=False, timeout="20s")  # type: ignore[no-untyped-call, unused-ignore]
     except OSError as exc:
         raise ProblemError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
     try:
         yield client
     finally:
-        client.close()  # type: ignore[no-untyped-call]
+        client.close()  # type: ignore[no-untyped-call, unused-ignore]
 
 
 def _start_ray(address: str | None) -> int:

@@ -11,8 +11,9 @@ search is compiled into a map from the neighbourhood's occupancy bits to its ans
 * the map's key is the **occupancy code** of the pose masked to the neighbourhood: every cell of
   a ``(2r+1) x (2r+1)`` window around a cell is one bit, precomputed once per
   :class:`~selfrepair.geometry.FreeGrid` and radius (:func:`occupancy_codes`, a list indexed like
-  ``FreeGrid.index``; cells beyond the grid's margin count as walls). A hit is then one list
-  index, one ``&`` and one dictionary look-up with an integer key;
+  ``FreeGrid.index``, and :func:`occupancy_rows`, the same by row; cells beyond the grid's
+  margin count as walls). A hit is then two list indices (row, column), one ``&`` and one
+  dictionary look-up with an integer key;
 * the map's value is the reference search's answer for that pattern, made pose-independent (the
   end pose is kept relative to the start cell). In flat mode, small neighbourhoods (at most
   :data:`ENUMERATE_BITS` cells besides the robot's own, which is always free) are enumerated on
@@ -37,6 +38,8 @@ What is kept, and the limits (all in :mod:`selfrepair.caching` caches, see :func
   one pointer per padded cell plus one integer object per distinct code (8 bytes a cell: a few
   kilobytes on the bundled mazes, about 2.2 MB on a 512x512 map, so at most 16 x 8 bytes x the
   largest grid's cells).
+* ``occupancy code rows``: at most :data:`MAX_CODE_GRIDS` row lists of the same codes
+  (:func:`occupancy_rows`; one more pointer per cell, 8 bytes, plus one list per row).
 
 Memory is measured by :func:`lookup_memory` with ``sys.getsizeof``: per :class:`FaultLookups`,
 its per-action lists, each per-heading map (hash table), its integer keys and each distinct
@@ -97,6 +100,7 @@ __all__ = [
     "lookup_memory",
     "neighbourhood",
     "occupancy_codes",
+    "occupancy_rows",
 ]
 
 T = TypeVar("T")
@@ -332,6 +336,26 @@ def occupancy_codes(grid: FreeGrid, radius: int) -> list[int]:
     if radius < 0:
         raise ProblemError(f"radius must be at least 0, got {radius}")
     return _CODES.get((grid, radius), lambda: _codes(grid, radius))
+
+
+def _rows(grid: FreeGrid, radius: int) -> list[list[int]]:
+    codes = occupancy_codes(grid, radius)
+    first, stride, width = grid.margin * grid.stride + grid.margin, grid.stride, grid.width
+    return [codes[first + y * stride : first + y * stride + width] for y in range(grid.height)]
+
+
+_ROWS: BoundedCache[tuple[FreeGrid, int], list[list[int]]] = BoundedCache(
+    "occupancy code rows", MAX_CODE_GRIDS
+)
+
+
+def occupancy_rows(grid: FreeGrid, radius: int) -> list[list[int]]:
+    """:func:`occupancy_codes` of the grid's own cells by row: ``rows[y][x]`` is the code of cell
+    ``(x, y)`` (the same integer objects, so 8 more bytes a cell). A table hit reads a pose's code
+    as ``rows[pose.y][pose.x]``, two list indices instead of computing a buffer position."""
+    if radius < 0:
+        raise ProblemError(f"radius must be at least 0, got {radius}")
+    return _ROWS.get((grid, radius), lambda: _rows(grid, radius))
 
 
 # --- compiled look-ups --------------------------------------------------------------------------
@@ -621,9 +645,10 @@ def compiled_replacement(
 
 # --- look-ups read on one grid -------------------------------------------------------------------
 
-Slot = tuple[int, dict[int, Any], list[int]]
+Slot = tuple[int, dict[int, Any], list[int], list[list[int]]]
 """What a hit reads for one (action, heading): the neighbourhood mask, the map from masked codes
-to answers, and the grid's occupancy codes at the look-up's radius."""
+to answers, and the grid's occupancy codes at the look-up's radius, by buffer position (for walks
+that step through the buffer) and by row (:func:`occupancy_rows`, for a single pose)."""
 
 
 class GridLookups(Generic[T]):
@@ -650,9 +675,11 @@ class GridLookups(Generic[T]):
         first = slot & ~3
         lookup = self.lookups.action(first >> 2)
         codes = occupancy_codes(self.grid, lookup.radius)
+        rows = occupancy_rows(self.grid, lookup.radius)
         for heading in range(4):
-            self.slots[first + heading] = (lookup.masks[heading], lookup.answers[heading], codes)
-        return (lookup.masks[slot & 3], lookup.answers[slot & 3], codes)
+            entry = (lookup.masks[heading], lookup.answers[heading], codes, rows)
+            self.slots[first + heading] = entry
+        return (lookup.masks[slot & 3], lookup.answers[slot & 3], codes, rows)
 
     def fill(self, slot: int, position: int, key: int) -> T | None:
         """Answer a pattern met for the first time at buffer ``position`` (see

@@ -65,7 +65,7 @@ from selfrepair.repair.lookups import (
     compiled_replacement,
     fault_lookups,
     grid_lookups,
-    occupancy_codes,
+    occupancy_rows,
 )
 from selfrepair.repair.replacement import (
     DEFAULT_MAX_DEPTH,
@@ -456,7 +456,7 @@ class ReplacementRepairer:
         self._on_grid: GridLookups[Repair] = grid_lookups(lookups, grid)
         self._slots = self._on_grid.slots
         self._faulty = lookups.faulty_slots
-        occupancy_codes(grid, lookups.radius)  # the grid's codes, before any timed repair
+        occupancy_rows(grid, lookups.radius)  # the grid's codes, before any timed repair
 
     def _use(self, known: frozenset[Any]) -> None:
         """Switch to the look-ups of ``known`` (a new frozenset of the same faults keeps them)."""
@@ -477,7 +477,8 @@ class ReplacementRepairer:
 
         The hot path of a warm hit, kept to a few dozen bytecodes: the request unpacked at once,
         the last faulty action's slot remembered by identity (a robot meets the same faulty
-        action again and again), then one list index, one ``&`` and one dictionary look-up."""
+        action again and again), then the pose's occupancy code by row and column, one ``&`` and
+        one dictionary look-up."""
         pose, queue, known, _ = request
         if known is not self._known:
             self._use(known)
@@ -490,15 +491,15 @@ class ReplacementRepairer:
         entry = self._slots[slot]
         if entry is None:
             entry = self._on_grid.slot(slot)
-        mask, answers, codes = entry
-        position = self._offset + pose.y * self._stride + pose.x
-        key = codes[position] & mask
-        found: Repair | Missing | None = answers.get(key, MISSING)
+        mask, answers, _, rows = entry
+        found: Repair | Missing | None = answers.get(rows[pose.y][pose.x] & mask, MISSING)
         if found is MISSING:
-            found = self._on_grid.fill(slot, position, key)
+            position = self._offset + pose.y * self._stride + pose.x
+            found = self._on_grid.fill(slot, position, rows[pose.y][pose.x] & mask)
         if found is None:
             return _miss(self._context, request, action)
         if self._rewrite:
+            position = self._offset + pose.y * self._stride + pose.x
             return self._rewritten(request, found, slot, position)
         return found
 
@@ -519,7 +520,7 @@ class ReplacementRepairer:
                 quad = self._quad(rest[k])
             slot = quad + h
             if faulty[slot]:
-                mask, answers, codes = slots[slot] or self._on_grid.slot(slot)
+                mask, answers, codes, _ = slots[slot] or self._on_grid.slot(slot)
                 key = codes[position] & mask
                 hit: Repair | Missing | None = answers.get(key, MISSING)
                 if hit is MISSING:
