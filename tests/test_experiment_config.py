@@ -87,6 +87,22 @@ def test_good_config_parses_to_frozen_values() -> None:
             15,
             "non-negative",
         ),
+        ('tables = ["handwritten"]', "tables = []", "strategies[1].tables", 22, "non-empty list"),
+        (
+            'tables = ["handwritten"]',
+            "recursion = []",
+            "strategies[1].recursion",
+            22,
+            "non-empty list",
+        ),
+        ('sets = ["FL:F", "FL:F,RR:B"]', 'sets = ["FL:F"]\nat = []', "faults.at", 13, "non-empty"),
+        (
+            'sets = ["FL:F", "FL:F,RR:B"]',
+            'sets = ["FL:F"]\ndetection = []',
+            "faults.detection",
+            13,
+            "non-empty list",
+        ),
     ],
 )
 def test_bad_config_names_file_key_and_line(

@@ -56,6 +56,7 @@ from pathlib import Path
 from typing import Annotated, Any, Literal
 
 from pydantic import (
+    AfterValidator,
     BaseModel,
     ConfigDict,
     Field,
@@ -114,6 +115,17 @@ Float = Annotated[float, Field(strict=True)]  # strict floats still take integer
 
 class _Frozen(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid", strict=False)
+
+
+def _non_empty(value: tuple[Any, ...]) -> tuple[Any, ...]:
+    if not value:
+        raise ValueError("expected a non-empty list")
+    return value
+
+
+NonEmpty = AfterValidator(_non_empty)
+"""Marks a list option that must hold at least one item: ``Annotated[tuple[X, ...], NonEmpty]``
+(an empty list in a configuration is an error naming the key, not an empty sweep)."""
 
 
 class GeneratedMaze(_Frozen):
@@ -182,9 +194,9 @@ class FaultsConfig(_Frozen):
     last (``persistence`` with ``duration`` or ``probability``) and how they are detected."""
 
     sets: Literal["paper", "singles", "doubles", "all"] | tuple[str, ...] = "paper"
-    at: tuple[Annotated[Int, Field(ge=0)], ...] = (0,)
+    at: Annotated[tuple[Annotated[Int, Field(ge=0)], ...], NonEmpty] = (0,)
     clock: Clock = Clock.STEP
-    detection: tuple[Detection, ...] = (Detection.NOW,)
+    detection: Annotated[tuple[Detection, ...], NonEmpty] = (Detection.NOW,)
     persistence: Persistence = Persistence.PERMANENT
     duration: Annotated[Int, Field(ge=1)] | None = None
     probability: Annotated[Float, Field(ge=0.0, le=1.0)] | None = None
@@ -212,12 +224,6 @@ class FaultsConfig(_Frozen):
             raise ValueError("expected at least one fault set")
         return tuple(domain.format_faults(_reraise(domain.parse_faults, text)) for text in value)
 
-    @field_validator("at", "detection")
-    @classmethod
-    def _non_empty(cls, value: tuple[Any, ...]) -> tuple[Any, ...]:
-        if not value:
-            raise ValueError("expected a non-empty list")
-        return value
 
 
 MazeNames = Annotated[tuple[str, ...], Field(min_length=1)] | None
@@ -263,8 +269,8 @@ class ReplacementStrategy(_StrategyEntry):
     value (``true``: whole-plan rewriting, ``[false, true]``: both; default per encounter)."""
 
     name: Literal["replacement"]
-    tables: tuple[str, ...] = ("handwritten",)
-    recursion: tuple[RecursionMode, ...] = (RecursionMode.GUARDED,)
+    tables: Annotated[tuple[str, ...], NonEmpty] = ("handwritten",)
+    recursion: Annotated[tuple[RecursionMode, ...], NonEmpty] = (RecursionMode.GUARDED,)
     rewrite: tuple[bool, ...] = (False,)
 
     @field_validator("rewrite", mode="before")
@@ -278,12 +284,6 @@ class ReplacementStrategy(_StrategyEntry):
             raise ValueError(f"expected true, false or a list of them, got {value!r}")
         return value
 
-    @field_validator("tables", "recursion")
-    @classmethod
-    def _non_empty(cls, value: tuple[Any, ...]) -> tuple[Any, ...]:
-        if not value:
-            raise ValueError("expected a non-empty list")
-        return value
 
     @model_validator(mode="after")
     def _rewrite_modes(self) -> ReplacementStrategy:

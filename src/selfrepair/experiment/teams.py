@@ -45,7 +45,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import Field, ValidationError, field_validator, model_validator
+from pydantic import Field, ValidationError, model_validator
 
 from selfrepair.errors import ConfigError
 from selfrepair.execution.faults import Persistence
@@ -53,6 +53,7 @@ from selfrepair.experiment.config import (
     ExperimentConfig,
     GeneratedMaze,
     MazeConfig,
+    NonEmpty,
     _Frozen,
     config_error,
     find_line,
@@ -117,31 +118,19 @@ class TeamMaze(_Frozen):
 class TeamSettings(_Frozen):
     """Team sizes, task loads (tasks per robot) and equipment mixes to cross."""
 
-    sizes: tuple[Annotated[int, Field(ge=1, le=MAX_ROBOTS)], ...]
-    tasks_per_robot: tuple[Annotated[int, Field(ge=1, le=16)], ...] = (1,)
-    grippers: tuple[GripperMix, ...] = (GripperMix.ALL,)
+    sizes: Annotated[tuple[Annotated[int, Field(ge=1, le=MAX_ROBOTS)], ...], NonEmpty]
+    tasks_per_robot: Annotated[tuple[Annotated[int, Field(ge=1, le=16)], ...], NonEmpty] = (1,)
+    grippers: Annotated[tuple[GripperMix, ...], NonEmpty] = (GripperMix.ALL,)
 
-    @field_validator("sizes", "tasks_per_robot", "grippers")
-    @classmethod
-    def _non_empty(cls, value: tuple[Any, ...]) -> tuple[Any, ...]:
-        if not value:
-            raise ValueError("expected a non-empty list")
-        return value
 
 
 class TeamFaults(_Frozen):
     """Fault cases, persistences and the duration (ticks) of a transient fault."""
 
-    cases: tuple[FaultCase, ...]
-    persistence: tuple[Persistence, ...] = (Persistence.PERMANENT,)
+    cases: Annotated[tuple[FaultCase, ...], NonEmpty]
+    persistence: Annotated[tuple[Persistence, ...], NonEmpty] = (Persistence.PERMANENT,)
     duration: Annotated[int, Field(ge=1, le=100_000)] | None = None
 
-    @field_validator("cases", "persistence")
-    @classmethod
-    def _non_empty(cls, value: tuple[Any, ...]) -> tuple[Any, ...]:
-        if not value:
-            raise ValueError("expected a non-empty list")
-        return value
 
     @model_validator(mode="after")
     def _timing(self) -> TeamFaults:
