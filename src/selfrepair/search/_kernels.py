@@ -25,6 +25,11 @@ new search clears nothing: only the states a search touches cost memory or time,
 for a small search on a large map. Parents are not stored: the move and the parent's heading give
 the parent state.
 
+The search kernels are compiled with ``_nrt=False`` (numba's reference counting off): they only
+read and write arrays handed in, never allocate, and with counting on numba surrounds every call
+and tuple of arrays in the hot loops with atomic reference-count updates, which took most of the
+grid kernel's time.
+
 Kernels are resumable: all search state lives in arrays, and a call stops after a given number of
 expansions (so that the Python wrapper can look at the clock between calls) or when the heap or
 queue array is full (the wrapper then grows it and calls again).
@@ -99,7 +104,7 @@ def _less(f1: Any, h1: Any, c1: Any, f2: Any, h2: Any, c2: Any) -> bool:
     return bool(c1 < c2)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _sift_up(heap: Any, pos: Any, i: int, f: Any, h: Any, c: Any, node: Any) -> None:
     """Place the record ``(f, h, c, node)`` at slot ``i`` or above (a push when ``i`` is the
     heap's size, a decrease-key when it is the node's slot)."""
@@ -120,7 +125,7 @@ def _sift_up(heap: Any, pos: Any, i: int, f: Any, h: Any, c: Any, node: Any) -> 
     pos[int(node)] = i
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _pop(heap: Any, pos: Any, size: int) -> int:
     """Remove the top record; ``size`` is the heap size before the pop. Returns the new size."""
     size -= 1
@@ -157,7 +162,7 @@ def _pop(heap: Any, pos: Any, size: int) -> int:
 # --- breadth-first distances -------------------------------------------------------------------
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _bfs(pw: int, dist: Any, queue: Any, st: Any) -> int:
     """Breadth-first search on ``dist`` (-1 marks an unvisited free cell, -2 a wall) from the
     cells in the ring ``queue`` (``st``: head and count; the capacity is a power of two). Returns
@@ -326,7 +331,7 @@ _FIRST_QUEUE = 1 << 12
 # --- robot lattice -------------------------------------------------------------------------
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _lattice(
     nbr: Any, pen: Any, hdist: Any, mt: Any, par: Any,
     g: Any, word: Any, heap: Any, scal: Any, pos: Any,
@@ -627,7 +632,7 @@ def _drive(
 # --- plain grid ----------------------------------------------------------------------------
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _grid(
     free: Any, pw: int, diagonal: bool, goal: int, limit: int, opened: int,
     g: Any, word: Any, heap: Any, scal: Any, pos: Any,
