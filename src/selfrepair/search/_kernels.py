@@ -13,7 +13,8 @@ The open list is an indexed 4-ary heap of records ``(f, h, counter, node)``, one
 array each (one or two cache lines per sift level instead of four arrays), with decrease-key: a
 node whose ``g`` improves takes a new counter and moves up in place. The lattice, whose costs are
 integers, packs ``f`` and ``h`` into one key ``(f << s) | h`` (``s`` bits hold the largest ``h``)
-and leaves ``h`` at 0: the same order with one comparison less per tie. It pops exactly the entries
+and the counter and node into a second word ``(counter << 31) | node``: records of two words (16
+bytes, four children in one cache line), ordered by the key and then by the counter. It pops exactly the entries
 that the lazy-deletion heap of :func:`selfrepair.search.astar.astar` pops, in the same order (the
 keys are unique), so both backends return the same plan.
 
@@ -159,6 +160,69 @@ def _pop(heap: Any, pos: Any, size: int) -> int:
     return size
 
 
+# --- indexed 4-ary heap of two-word records (the lattice) ----------------------------------------
+# Row ``_BASE + i`` holds slot i: ``(key, tie)`` with ``tie = (counter << _TIE_BITS) | node``, so
+# the order of ties is that of counters (they are unique) and the node needs no column of its own:
+# 16 bytes a record. The array's rows ``_BASE + 4i + 1`` .. ``_BASE + 4i + 4`` (the children of slot
+# i) are rows ``4(i + 1)`` .. ``4(i + 1) + 3``: one 64-byte cache line when the array starts on one
+# (:func:`_heap` sees to that).
+
+_BASE = 3
+_TIE_BITS = 31
+_TIE_MASK = (1 << _TIE_BITS) - 1
+
+
+@njit(cache=True, _nrt=False)
+def _sift_up2(heap: Any, pos: Any, i: int, key: int, tie: int) -> None:
+    """Place the record ``(key, tie)`` at slot ``i`` or above (a push when ``i`` is the heap's
+    size, a decrease-key when it is the node's slot)."""
+    while i > 0:
+        up = (i - 1) >> 2
+        uk = heap[_BASE + up, 0]
+        ut = heap[_BASE + up, 1]
+        if key > uk or (key == uk and tie > ut):
+            break
+        heap[_BASE + i, 0] = uk
+        heap[_BASE + i, 1] = ut
+        pos[ut & _TIE_MASK] = i
+        i = up
+    heap[_BASE + i, 0] = key
+    heap[_BASE + i, 1] = tie
+    pos[tie & _TIE_MASK] = i
+
+
+@njit(cache=True, _nrt=False)
+def _pop2(heap: Any, pos: Any, size: int) -> int:
+    """Remove the top record; ``size`` is the heap size before the pop. Returns the new size."""
+    size -= 1
+    if size > 0:
+        key = heap[_BASE + size, 0]
+        tie = heap[_BASE + size, 1]
+        i = 0
+        while True:
+            first = 4 * i + 1
+            if first >= size:
+                break
+            child = first
+            ck = heap[_BASE + first, 0]
+            ct = heap[_BASE + first, 1]
+            for other in range(first + 1, min(first + 4, size)):
+                ok = heap[_BASE + other, 0]
+                ot = heap[_BASE + other, 1]
+                if (ok < ck) | ((ok == ck) & (ot < ct)):
+                    child, ck, ct = other, ok, ot
+            if (key < ck) | ((key == ck) & (tie < ct)):
+                break
+            heap[_BASE + i, 0] = ck
+            heap[_BASE + i, 1] = ct
+            pos[ct & _TIE_MASK] = i
+            i = child
+        heap[_BASE + i, 0] = key
+        heap[_BASE + i, 1] = tie
+        pos[tie & _TIE_MASK] = i
+    return size
+
+
 # --- breadth-first distances -------------------------------------------------------------------
 
 
@@ -248,15 +312,18 @@ def _scratch(tag: str, n: int, spec: tuple[tuple[str, Any], ...], mark_max: int)
     return entry
 
 
-def _heap(tag: str, dtype: Any, need: int) -> npt.NDArray[Any]:
-    """The per-thread heap array of ``tag``, at least ``need`` records long."""
+def _heap(tag: str, dtype: Any, need: int, columns: int = 4) -> npt.NDArray[Any]:
+    """The per-thread heap array of ``tag``, at least ``need`` records of ``columns`` words long,
+    starting on a 64-byte boundary."""
     cache = getattr(_local, "heaps", None)
     if cache is None:
         cache = _local.heaps = {}
     heap = cache.get(tag)
     if heap is None or heap.shape[0] < need:
         size = max(_FIRST_HEAP, need, 0 if heap is None else 2 * heap.shape[0])
-        fresh = np.empty((size, 4), dtype=dtype)
+        raw = np.empty(size * columns + 8, dtype=dtype)
+        skip = (-raw.ctypes.data % 64) // raw.itemsize
+        fresh = raw[skip : skip + size * columns].reshape(size, columns)
         if heap is not None:
             fresh[: heap.shape[0]] = heap
         heap = cache[tag] = fresh
@@ -341,7 +408,7 @@ def _lattice(
     closed = opened + 1
     size, counter, expansions = scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS]
     nmoves = mt.shape[1]
-    room = heap.shape[0] - nmoves
+    room = heap.shape[0] - _BASE - nmoves
     status = _UNSOLVABLE
     while size > 0:
         if expansions >= limit:
@@ -350,8 +417,8 @@ def _lattice(
         if size > room:
             status = _GROW
             break
-        s = heap[0, _NODE]
-        size = _pop(heap, pos, size)
+        s = heap[_BASE, 1] & _TIE_MASK
+        size = _pop2(heap, pos, size)
         word[s] = (closed << _MOVE_BITS) | (word[s] & _MOVE_MASK)
         expansions += 1
         cell = s >> 2
@@ -386,10 +453,11 @@ def _lattice(
             counter += 1
             g[ns] = gn
             word[ns] = (opened << _MOVE_BITS) | (head << 8) | k
+            key = ((gn + hv) << shift) | hv
             if m == opened:
-                _sift_up(heap, pos, pos[ns], ((gn + hv) << shift) | hv, 0, counter, ns)
+                _sift_up2(heap, pos, pos[ns], key, (counter << _TIE_BITS) | ns)
             else:
-                _sift_up(heap, pos, size, ((gn + hv) << shift) | hv, 0, counter, ns)
+                _sift_up2(heap, pos, size, key, (counter << _TIE_BITS) | ns)
                 size += 1
     scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS] = size, counter, expansions
     return status
@@ -536,7 +604,7 @@ def plan_lattice(
     mt = motion.table
     hmax = (int(hdist.max(initial=0)) if largest is None else largest) * rnum // rden
     shift = hmax.bit_length()  # heap key: (f << shift) | h, ordered as (f, h)
-    _check_int64(motion.dur_max, mt.shape[2] - _SW, pen_max, wmul, hmax, shift, n_states)
+    _check_int64(motion.dur_max, mt.shape[2] - _SW, pen_max, wmul, hmax, shift, n_states, len(moves))
     start = problem.start
     start_cell = (start.y + 1) * pw + start.x + 1
     start_state = 4 * start_cell + start.heading
@@ -549,9 +617,9 @@ def plan_lattice(
     g, word, pos = arrays["g"], arrays["mark"], arrays["pos"]
     opened, _ = scratch.next_marks()
     h0 = int(hdist[start_cell]) * rnum // rden
-    heap = _heap("lattice", np.int64, _FIRST_HEAP)
+    heap = _heap("lattice", np.int64, _FIRST_HEAP, 2)
     g[start_state], word[start_state], pos[start_state] = 0, opened << _MOVE_BITS, 0
-    heap[0] = ((h0 << shift) | h0, 0, 0, start_state)
+    heap[_BASE] = ((h0 << shift) | h0, start_state)
     scal = np.array([1, 0, 0, -1], dtype=np.int64)
     par = np.array([rnum, rden, wmul, goal_cell, goal_head, 0, opened, shift], dtype=np.int64)
     nbr = _neighbourhoods(maze)
@@ -563,7 +631,7 @@ def plan_lattice(
             code = int(_lattice(nbr, pen, hdist, mt, par, g, word, heap, scal, pos))
             if code != _GROW:
                 return code
-            heap = _heap("lattice", np.int64, 2 * heap.shape[0])
+            heap = _heap("lattice", np.int64, 2 * heap.shape[0], 2)
 
     status = _drive(run, scal, max_expansions, deadline_ns)
     expansions = int(scal[_EXPANSIONS])
@@ -595,14 +663,24 @@ _HEADINGS = tuple(Heading)
 
 
 def _check_int64(
-    dur_max: int, cells: int, pen_max: int, wmul: int, hmax: int, shift: int, n_states: int
+    dur_max: int,
+    cells: int,
+    pen_max: int,
+    wmul: int,
+    hmax: int,
+    shift: int,
+    n_states: int,
+    n_moves: int,
 ) -> None:
     """Refuse problems whose heap keys ``(f << shift) | h`` could overflow int64 (``f`` is at most
-    the largest step cost times the number of states plus the largest heuristic value) or whose
-    states overflow int32."""
+    the largest step cost times the number of states plus the largest heuristic value), whose
+    states overflow 31 bits or whose push counter (at most one push per move of each state)
+    overflows the 32 bits above the node in a heap record's tie word."""
     step_max = dur_max + wmul * cells * pen_max
     f_max = step_max * n_states + hmax
-    if shift >= 62 or f_max >= 1 << (62 - shift) or wmul >= 1 << 62 or n_states >= 1 << 31:
+    if shift >= 62 or f_max >= 1 << (62 - shift) or wmul >= 1 << 62 or n_states >= 1 << _TIE_BITS:
+        raise OverflowError("the problem is too large for the integer kernel")
+    if n_states * n_moves >= 1 << (63 - _TIE_BITS):
         raise OverflowError("the problem is too large for the integer kernel")
 
 
