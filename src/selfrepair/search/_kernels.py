@@ -168,12 +168,14 @@ def _pop(heap: Any, pos: Any, size: int) -> int:
 # (:func:`_heap` sees to that).
 
 _BASE = 3
+_G, _WORD, _SLOT = 0, 1, 2
+"""Columns of the lattice's per-state records: cost so far, word (stamp and move), heap slot."""
 _TIE_BITS = 31
 _TIE_MASK = (1 << _TIE_BITS) - 1
 
 
 @njit(cache=True, _nrt=False)
-def _sift_up2(heap: Any, pos: Any, i: int, key: int, tie: int) -> None:
+def _sift_up2(heap: Any, rec: Any, i: int, key: int, tie: int) -> None:
     """Place the record ``(key, tie)`` at slot ``i`` or above (a push when ``i`` is the heap's
     size, a decrease-key when it is the node's slot)."""
     while i > 0:
@@ -184,15 +186,15 @@ def _sift_up2(heap: Any, pos: Any, i: int, key: int, tie: int) -> None:
             break
         heap[_BASE + i, 0] = uk
         heap[_BASE + i, 1] = ut
-        pos[ut & _TIE_MASK] = i
+        rec[ut & _TIE_MASK, _SLOT] = i
         i = up
     heap[_BASE + i, 0] = key
     heap[_BASE + i, 1] = tie
-    pos[tie & _TIE_MASK] = i
+    rec[tie & _TIE_MASK, _SLOT] = i
 
 
 @njit(cache=True, _nrt=False)
-def _pop2(heap: Any, pos: Any, size: int) -> int:
+def _pop2(heap: Any, rec: Any, size: int) -> int:
     """Remove the top record; ``size`` is the heap size before the pop. Returns the new size."""
     size -= 1
     if size > 0:
@@ -215,11 +217,11 @@ def _pop2(heap: Any, pos: Any, size: int) -> int:
                 break
             heap[_BASE + i, 0] = ck
             heap[_BASE + i, 1] = ct
-            pos[ct & _TIE_MASK] = i
+            rec[ct & _TIE_MASK, _SLOT] = i
             i = child
         heap[_BASE + i, 0] = key
         heap[_BASE + i, 1] = tie
-        pos[tie & _TIE_MASK] = i
+        rec[tie & _TIE_MASK, _SLOT] = i
     return size
 
 
@@ -312,6 +314,20 @@ def _scratch(tag: str, n: int, spec: tuple[tuple[str, Any], ...], mark_max: int)
     return entry
 
 
+def _records(tag: str, n: int, dtype: Any, mark_max: int) -> _Scratch:
+    """Per-thread records of ``n`` lattice states (``[g, word, heap slot]`` rows, see
+    :data:`_G`), zeroed lazily by the OS and reused across searches like :func:`_scratch`'s
+    arrays; ``arrays["mark"]`` is the view of the words."""
+    cache = getattr(_local, "scratch", None)
+    if cache is None:
+        cache = _local.scratch = {}
+    entry = cache.get(tag)
+    if entry is None or not n <= entry.size <= 4 * n:
+        rec = np.zeros((n, 3), dtype=dtype)
+        entry = cache[tag] = _Scratch(n, {"rec": rec, "mark": rec[:, _WORD]}, mark_max)
+    return entry
+
+
 def _heap(tag: str, dtype: Any, need: int, columns: int = 4) -> npt.NDArray[Any]:
     """The per-thread heap array of ``tag``, at least ``need`` records of ``columns`` words long,
     starting on a 64-byte boundary."""
@@ -401,7 +417,7 @@ _FIRST_QUEUE = 1 << 12
 @njit(cache=True, _nrt=False)
 def _lattice(
     nbr: Any, pen: Any, hdist: Any, mt: Any, par: Any,
-    g: Any, word: Any, heap: Any, scal: Any, pos: Any,
+    rec: Any, heap: Any, scal: Any,
 ) -> int:  # fmt: skip
     rnum, rden, wmul = par[0], par[1], par[2]
     goal_cell, goal_head, limit, opened, shift = par[3], par[4], par[5], par[6], par[7]
@@ -418,8 +434,8 @@ def _lattice(
             status = _GROW
             break
         s = heap[_BASE, 1] & _TIE_MASK
-        size = _pop2(heap, pos, size)
-        word[s] = (closed << _MOVE_BITS) | (word[s] & _MOVE_MASK)
+        size = _pop2(heap, rec, size)
+        rec[s, _WORD] = (closed << _MOVE_BITS) | (rec[s, _WORD] & _MOVE_MASK)
         expansions += 1
         cell = s >> 2
         head = s & 3
@@ -427,7 +443,7 @@ def _lattice(
             scal[_FOUND] = s
             status = _SOLVED
             break
-        gs = g[s]
+        gs = rec[s, _G]
         around = nbr[cell]
         for k in range(nmoves):
             need = mt[head, k, _NEED]
@@ -435,7 +451,7 @@ def _lattice(
                 continue
             nc = cell + mt[head, k, _DCELL]
             ns = 4 * nc + mt[head, k, _NHEAD]
-            m = word[ns] >> _MOVE_BITS
+            m = rec[ns, _WORD] >> _MOVE_BITS
             if m == closed:
                 continue
             gn = gs + mt[head, k, _DUR]
@@ -444,33 +460,33 @@ def _lattice(
                 for j in range(mt[head, k, _NSW]):
                     penalty += pen[cell + mt[head, k, _SW + j]]
                 gn += wmul * penalty
-            if m == opened and gn >= g[ns]:
+            if m == opened and gn >= rec[ns, _G]:
                 continue
             d = hdist[nc]
             if d < 0:
                 continue
             hv = d * rnum if rden == 1 else d * rnum // rden
             counter += 1
-            g[ns] = gn
-            word[ns] = (opened << _MOVE_BITS) | (head << 8) | k
+            rec[ns, _G] = gn
+            rec[ns, _WORD] = (opened << _MOVE_BITS) | (head << 8) | k
             key = ((gn + hv) << shift) | hv
             if m == opened:
-                _sift_up2(heap, pos, pos[ns], key, (counter << _TIE_BITS) | ns)
+                _sift_up2(heap, rec, rec[ns, _SLOT], key, (counter << _TIE_BITS) | ns)
             else:
-                _sift_up2(heap, pos, size, key, (counter << _TIE_BITS) | ns)
+                _sift_up2(heap, rec, size, key, (counter << _TIE_BITS) | ns)
                 size += 1
     scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS] = size, counter, expansions
     return status
 
 
 @njit(cache=True)
-def _walk_lattice(word: Any, mt: Any, start: int, goal: int) -> Any:
+def _walk_lattice(rec: Any, mt: Any, start: int, goal: int) -> Any:
     """The states from ``start`` to ``goal`` (``out[0]``), the move index into each (``out[1]``,
     -1 for the start) and the scaled duration of the path (``out[2, 0]``)."""
     n = 1
     s = goal
     while s != start:
-        pm = word[s] & _MOVE_MASK
+        pm = rec[s, _WORD] & _MOVE_MASK
         head = pm >> 8
         s = 4 * ((s >> 2) - mt[head, pm & 255, _DCELL]) + head
         n += 1
@@ -480,7 +496,7 @@ def _walk_lattice(word: Any, mt: Any, start: int, goal: int) -> Any:
     for i in range(n - 1, -1, -1):
         out[0, i] = s
         if i:
-            pm = word[s] & _MOVE_MASK
+            pm = rec[s, _WORD] & _MOVE_MASK
             head = pm >> 8
             k = pm & 255
             out[1, i] = k
@@ -559,8 +575,6 @@ _PENALTY: BoundedCache[tuple[Maze, int], tuple[npt.NDArray[np.int64], int]] = Bo
 _NO_PENALTY = np.zeros(1, dtype=np.int64)
 _NO_PENALTY.setflags(write=False)
 
-_LATTICE_ARRAYS = (("g", np.int64), ("mark", np.int32), ("pos", np.int32))
-"""Per lattice state: cost so far, word (stamp and move, see the module docstring), heap slot."""
 
 
 def plan_lattice(
@@ -604,7 +618,9 @@ def plan_lattice(
     mt = motion.table
     hmax = (int(hdist.max(initial=0)) if largest is None else largest) * rnum // rden
     shift = hmax.bit_length()  # heap key: (f << shift) | h, ordered as (f, h)
-    _check_int64(motion.dur_max, mt.shape[2] - _SW, pen_max, wmul, hmax, shift, n_states, len(moves))
+    f_max = _check_int64(
+        motion.dur_max, mt.shape[2] - _SW, pen_max, wmul, hmax, shift, n_states, len(moves)
+    )
     start = problem.start
     start_cell = (start.y + 1) * pw + start.x + 1
     start_state = 4 * start_cell + start.heading
@@ -612,13 +628,16 @@ def plan_lattice(
         return PlanStatus.UNSOLVABLE, (), (), 0, 0, 0
     goal_cell = (problem.goal[1] + 1) * pw + problem.goal[0] + 1
     goal_head = -1 if problem.goal_heading is None else int(problem.goal_heading)
-    scratch = _scratch("lattice", n_states, _LATTICE_ARRAYS, _LATTICE_MARK_MAX)
-    arrays = scratch.arrays
-    g, word, pos = arrays["g"], arrays["mark"], arrays["pos"]
+    narrow = f_max < 1 << 31  # 32-bit costs when every cost fits: 12 bytes a state, not 24
+    scratch = _records(
+        "lattice32" if narrow else "lattice64", n_states, np.int32 if narrow else np.int64,
+        _LATTICE_MARK_MAX,
+    )  # fmt: skip
+    rec = scratch.arrays["rec"]
     opened, _ = scratch.next_marks()
     h0 = int(hdist[start_cell]) * rnum // rden
     heap = _heap("lattice", np.int64, _FIRST_HEAP, 2)
-    g[start_state], word[start_state], pos[start_state] = 0, opened << _MOVE_BITS, 0
+    rec[start_state] = (0, opened << _MOVE_BITS, 0)
     heap[_BASE] = ((h0 << shift) | h0, start_state)
     scal = np.array([1, 0, 0, -1], dtype=np.int64)
     par = np.array([rnum, rden, wmul, goal_cell, goal_head, 0, opened, shift], dtype=np.int64)
@@ -628,7 +647,7 @@ def plan_lattice(
         nonlocal heap
         while True:
             par[5] = limit
-            code = int(_lattice(nbr, pen, hdist, mt, par, g, word, heap, scal, pos))
+            code = int(_lattice(nbr, pen, hdist, mt, par, rec, heap, scal))
             if code != _GROW:
                 return code
             heap = _heap("lattice", np.int64, 2 * heap.shape[0], 2)
@@ -638,9 +657,10 @@ def plan_lattice(
     if status is not PlanStatus.SOLVED:
         return status, (), (), 0, 0, expansions
     goal = int(scal[_FOUND])
-    walk = _walk_lattice(word, mt, start_state, goal)
+    walk = _walk_lattice(rec, mt, start_state, goal)
     actions = tuple(motion.moves[walk[1, 1:]].tolist())
-    return status, actions, _poses(maze, walk[0], pw), int(g[goal]), int(walk[2, 0]), expansions
+    cost = int(rec[goal, _G])
+    return status, actions, _poses(maze, walk[0], pw), cost, int(walk[2, 0]), expansions
 
 
 def _poses(maze: Maze, path: npt.NDArray[np.int64], pw: int) -> tuple[Pose, ...]:
@@ -671,17 +691,19 @@ def _check_int64(
     shift: int,
     n_states: int,
     n_moves: int,
-) -> None:
+) -> int:
     """Refuse problems whose heap keys ``(f << shift) | h`` could overflow int64 (``f`` is at most
     the largest step cost times the number of states plus the largest heuristic value), whose
     states overflow 31 bits or whose push counter (at most one push per move of each state)
-    overflows the 32 bits above the node in a heap record's tie word."""
+    overflows the 32 bits above the node in a heap record's tie word. Returns that bound on
+    ``f``."""
     step_max = dur_max + wmul * cells * pen_max
     f_max = step_max * n_states + hmax
     if shift >= 62 or f_max >= 1 << (62 - shift) or wmul >= 1 << 62 or n_states >= 1 << _TIE_BITS:
         raise OverflowError("the problem is too large for the integer kernel")
     if n_states * n_moves >= 1 << (63 - _TIE_BITS):
         raise OverflowError("the problem is too large for the integer kernel")
+    return f_max
 
 
 def _drive(
