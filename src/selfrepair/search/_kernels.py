@@ -195,7 +195,12 @@ def _sift_up2(heap: Any, rec: Any, i: int, key: int, tie: int) -> None:
 
 @njit(cache=True, _nrt=False)
 def _pop2(heap: Any, rec: Any, size: int) -> int:
-    """Remove the top record; ``size`` is the heap size before the pop. Returns the new size."""
+    """Remove the top record; ``size`` is the heap size before the pop. Returns the new size.
+
+    Bottom-up: the hole at the top moves down along the smallest children to a leaf (one
+    comparison fewer per level than a sift-down), then the last record moves up from there. The
+    heap is then arranged differently than after a sift-down, but holds the same records, and
+    the keys are unique, so the order of the pops is the same."""
     size -= 1
     if size > 0:
         key = heap[_BASE + size, 0]
@@ -213,15 +218,11 @@ def _pop2(heap: Any, rec: Any, size: int) -> int:
                 ot = heap[_BASE + other, 1]
                 if (ok < ck) | ((ok == ck) & (ot < ct)):
                     child, ck, ct = other, ok, ot
-            if (key < ck) | ((key == ck) & (tie < ct)):
-                break
             heap[_BASE + i, 0] = ck
             heap[_BASE + i, 1] = ct
             rec[ct & _TIE_MASK, _SLOT] = i
             i = child
-        heap[_BASE + i, 0] = key
-        heap[_BASE + i, 1] = tie
-        rec[tie & _TIE_MASK, _SLOT] = i
+        _sift_up2(heap, rec, i, key, tie)
     return size
 
 
