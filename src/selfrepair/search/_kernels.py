@@ -128,7 +128,8 @@ def _sift_up(heap: Any, pos: Any, i: int, f: Any, h: Any, c: Any, node: Any) -> 
 
 @njit(cache=True, _nrt=False)
 def _pop(heap: Any, pos: Any, size: int) -> int:
-    """Remove the top record; ``size`` is the heap size before the pop. Returns the new size."""
+    """Remove the top record; ``size`` is the heap size before the pop. Returns the new size.
+    Bottom-up, like :func:`_pop2`."""
     size -= 1
     if size > 0:
         f, h, c, node = heap[size, 0], heap[size, 1], heap[size, 2], heap[size, 3]
@@ -144,19 +145,13 @@ def _pop(heap: Any, pos: Any, size: int) -> int:
                     heap[child, 0], heap[child, 1], heap[child, 2],
                 ):  # fmt: skip
                     child = other
-            if not _less(heap[child, 0], heap[child, 1], heap[child, 2], f, h, c):
-                break
             heap[i, 0] = heap[child, 0]
             heap[i, 1] = heap[child, 1]
             heap[i, 2] = heap[child, 2]
             heap[i, 3] = heap[child, 3]
             pos[int(heap[i, 3])] = i
             i = child
-        heap[i, 0] = f
-        heap[i, 1] = h
-        heap[i, 2] = c
-        heap[i, 3] = node
-        pos[int(node)] = i
+        _sift_up(heap, pos, i, f, h, c, node)
     return size
 
 
@@ -742,6 +737,7 @@ def _grid(
     closed = opened + 1
     gx = goal % pw
     gy = goal // pw
+    inv = 1.0 / pw
     nmoves = 8 if diagonal else 4
     room = heap.shape[0] - nmoves
     sqrt2 = np.sqrt(2.0)
@@ -764,8 +760,9 @@ def _grid(
             status = _SOLVED
             break
         gp = g[p]
-        ex = p % pw - gx
-        ey = p // pw - gy
+        y = int((p + 0.5) * inv)  # p // pw without a division (exact: p is far below 2**40)
+        ex = p - y * pw - gx
+        ey = y - gy
         north, east, south, west = free[p - pw], free[p + 1], free[p + pw], free[p - 1]
         # N, E, S, W, then NE, SE, SW, NW (a diagonal needs both orthogonal cells free)
         if north:
