@@ -133,13 +133,14 @@ def _pop(heap: Any, pos: Any, size: int) -> int:
     size -= 1
     if size > 0:
         f, h, c, node = heap[size, 0], heap[size, 1], heap[size, 2], heap[size, 3]
+        heap[size, 0] = np.inf  # sentinel: slots size .. size + 3 never win (see _push)
         i = 0
         while True:
             first = 4 * i + 1
             if first >= size:
                 break
             child = first
-            for other in range(first + 1, min(first + 4, size)):
+            for other in range(first + 1, first + 4):
                 if _less(
                     heap[other, 0], heap[other, 1], heap[other, 2],
                     heap[child, 0], heap[child, 1], heap[child, 2],
@@ -739,7 +740,7 @@ def _grid(
     gy = goal // pw
     inv = 1.0 / pw
     nmoves = 8 if diagonal else 4
-    room = heap.shape[0] - nmoves
+    room = heap.shape[0] - nmoves - 4
     sqrt2 = np.sqrt(2.0)
     keys = (diagonal, sqrt2, opened, closed)
     arrays = (free, g, word, heap, pos)
@@ -822,6 +823,7 @@ def _relax(
     else:
         _sift_up(heap, pos, size, gn + hv, hv, float(counter), float(q))
         size += 1
+        heap[size + 3, 0] = np.inf
     return size, counter
 
 
@@ -879,6 +881,7 @@ def grid_search(
     h0 = grid_heuristic(start, goal, connectivity)
     g[s], word[s], pos[s] = 0.0, opened << 3, 0
     heap[0] = (h0, h0, 0.0, float(s))
+    heap[1:4, 0] = np.inf  # slots from the size on hold infinite f (the pop looks at 4 children)
     scal = np.array([1, 0, 0, -1], dtype=np.int64)
     diagonal = connectivity == 8
 
