@@ -166,6 +166,9 @@ def _pop(heap: Any, pos: Any, size: int) -> int:
 _BASE = 3
 _G, _WORD, _SLOT = 0, 1, 2
 """Columns of the lattice's per-state records: cost so far, word (stamp and move), heap slot."""
+_NO_KEY = (1 << 63) - 1
+"""The key of the sentinel records in the slots from the heap's size on: a pop compares four
+children without bounds checks, and these never win (real keys are below ``2**62``)."""
 _TIE_BITS = 31
 _TIE_MASK = (1 << _TIE_BITS) - 1
 
@@ -201,6 +204,7 @@ def _pop2(heap: Any, rec: Any, size: int) -> int:
     if size > 0:
         key = heap[_BASE + size, 0]
         tie = heap[_BASE + size, 1]
+        heap[_BASE + size, 0] = _NO_KEY  # sentinel (see _lattice's pushes)
         i = 0
         while True:
             first = 4 * i + 1
@@ -209,7 +213,7 @@ def _pop2(heap: Any, rec: Any, size: int) -> int:
             child = first
             ck = heap[_BASE + first, 0]
             ct = heap[_BASE + first, 1]
-            for other in range(first + 1, min(first + 4, size)):
+            for other in range(first + 1, first + 4):
                 ok = heap[_BASE + other, 0]
                 ot = heap[_BASE + other, 1]
                 if (ok < ck) | ((ok == ck) & (ot < ct)):
@@ -421,7 +425,7 @@ def _lattice(
     closed = opened + 1
     size, counter, expansions = scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS]
     nmoves = mt.shape[1]
-    room = heap.shape[0] - _BASE - nmoves
+    room = heap.shape[0] - _BASE - nmoves - 4
     status = _UNSOLVABLE
     while size > 0:
         if expansions >= limit:
@@ -472,6 +476,7 @@ def _lattice(
             else:
                 _sift_up2(heap, rec, size, key, (counter << _TIE_BITS) | ns)
                 size += 1
+                heap[_BASE + size + 3, 0] = _NO_KEY
     scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS] = size, counter, expansions
     return status
 
@@ -636,6 +641,7 @@ def plan_lattice(
     heap = _heap("lattice", np.int64, _FIRST_HEAP, 2)
     rec[start_state] = (0, opened << _MOVE_BITS, 0)
     heap[_BASE] = ((h0 << shift) | h0, start_state)
+    heap[_BASE + 1 : _BASE + 4, 0] = _NO_KEY  # slots from the size on never win a comparison
     scal = np.array([1, 0, 0, -1], dtype=np.int64)
     par = np.array([rnum, rden, wmul, goal_cell, goal_head, 0, opened, shift], dtype=np.int64)
     nbr = _neighbourhoods(maze)
