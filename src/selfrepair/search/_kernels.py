@@ -9,22 +9,25 @@ Layout: the grid is padded by one wall cell on every side and flattened, so a ce
 ``p = (y + 1) * (width + 2) + (x + 1)`` and every motion is a fixed integer offset; a lattice
 state is ``4 * p + heading``.
 
-The open list is an indexed 4-ary heap of records ``(f, h, counter, node)``, one row of a 2-D
-array each (one or two cache lines per sift level instead of four arrays), with decrease-key: a
-node whose ``g`` improves takes a new counter and moves up in place. The lattice, whose costs are
-integers, packs ``f`` and ``h`` into one key ``(f << s) | h`` (``s`` bits hold the largest ``h``)
-and the counter and node into a second word ``(counter << 31) | node``: records of two words (16
-bytes, four children in one cache line), ordered by the key and then by the counter. It pops exactly the entries
-that the lazy-deletion heap of :func:`selfrepair.search.astar.astar` pops, in the same order (the
-keys are unique), so both backends return the same plan.
+The open list is an indexed 4-ary heap with decrease-key: a node whose ``g`` improves takes a new
+counter and moves up in place. The grid's records are ``(f, h, counter, node)``, one row of a 2-D
+array each; the lattice, whose costs are integers, packs ``f`` and ``h`` into one key
+``(f << s) | h`` (``s`` bits hold the largest ``h``) and the counter and node into a second word
+``(counter << 31) | node``: records of two words (16 bytes, the four children of a slot in one
+cache line), ordered by the key and then by the counter. Pops are bottom-up (the hole goes down
+to a leaf, then the last record up), and the slots from the heap's size on hold sentinel records
+that never win, so a pop always compares four children. Whatever the arrangement inside the heap,
+it pops exactly the entries that the lazy-deletion heap of :func:`selfrepair.search.astar.astar`
+pops, in the same order (the keys are unique), so both backends return the same plan.
 
-Per-state scratch lives in arrays reused from one search to the next: ``g``, the heap slot, and a
-*word* holding a generation stamp and the move that reached the state (lattice: stamp above bit
-10, heading of the parent and move index below; grid: a stamp byte array and a move byte). Stamps
-are ``2k + 1`` (open) and ``2k + 2`` (closed) in search ``k``, anything lower is unvisited, so a
-new search clears nothing: only the states a search touches cost memory or time, which matters
-for a small search on a large map. Parents are not stored: the move and the parent's heading give
-the parent state.
+Per-state scratch is reused from one search to the next: ``g``, the heap slot, and a *word*
+holding a generation stamp and the move that reached the state (lattice: one record
+``[g, word, slot]`` per state, 32-bit when the problem's bound on ``f`` fits, so 12 bytes a
+touched state; stamp above bit 10, heading of the parent and move index below; grid: three
+arrays, the word a stamp above a move in 3 bits). Stamps are ``2k + 1`` (open) and ``2k + 2``
+(closed) in search ``k``, anything lower is unvisited, so a new search clears nothing: only the
+states a search touches cost memory or time, which matters for a small search on a large map.
+Parents are not stored: the move and the parent's heading give the parent state.
 
 The search kernels are compiled with ``_nrt=False`` (numba's reference counting off): they only
 read and write arrays handed in, never allocate, and with counting on numba surrounds every call
@@ -44,7 +47,7 @@ import time
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -68,6 +71,15 @@ except ImportError:  # pragma: no cover - depends on the environment
         if args and callable(args[0]):
             return args[0]
         return lambda f: f
+
+
+_Fn = TypeVar("_Fn", bound=Callable[..., Any])
+
+
+def _search_kernel(fn: _Fn) -> _Fn:
+    """Compile ``fn`` like the other kernels, without reference counting (see the module
+    docstring)."""
+    return njit(cache=True, _nrt=False)(fn)  # type: ignore[no-any-return,call-overload]
 
 
 __all__ = ["CHUNK", "NUMBA", "bfs_padded", "grid_search", "plan_lattice"]
@@ -105,7 +117,7 @@ def _less(f1: Any, h1: Any, c1: Any, f2: Any, h2: Any, c2: Any) -> bool:
     return bool(c1 < c2)
 
 
-@njit(cache=True, _nrt=False)
+@_search_kernel
 def _sift_up(heap: Any, pos: Any, i: int, f: Any, h: Any, c: Any, node: Any) -> None:
     """Place the record ``(f, h, c, node)`` at slot ``i`` or above (a push when ``i`` is the
     heap's size, a decrease-key when it is the node's slot)."""
@@ -126,7 +138,7 @@ def _sift_up(heap: Any, pos: Any, i: int, f: Any, h: Any, c: Any, node: Any) -> 
     pos[int(node)] = i
 
 
-@njit(cache=True, _nrt=False)
+@_search_kernel
 def _pop(heap: Any, pos: Any, size: int) -> int:
     """Remove the top record; ``size`` is the heap size before the pop. Returns the new size.
     Bottom-up, like :func:`_pop2`."""
@@ -173,7 +185,7 @@ _TIE_BITS = 31
 _TIE_MASK = (1 << _TIE_BITS) - 1
 
 
-@njit(cache=True, _nrt=False)
+@_search_kernel
 def _sift_up2(heap: Any, rec: Any, i: int, key: int, tie: int) -> None:
     """Place the record ``(key, tie)`` at slot ``i`` or above (a push when ``i`` is the heap's
     size, a decrease-key when it is the node's slot)."""
@@ -192,7 +204,7 @@ def _sift_up2(heap: Any, rec: Any, i: int, key: int, tie: int) -> None:
     rec[tie & _TIE_MASK, _SLOT] = i
 
 
-@njit(cache=True, _nrt=False)
+@_search_kernel
 def _pop2(heap: Any, rec: Any, size: int) -> int:
     """Remove the top record; ``size`` is the heap size before the pop. Returns the new size.
 
@@ -229,7 +241,7 @@ def _pop2(heap: Any, rec: Any, size: int) -> int:
 # --- breadth-first distances -------------------------------------------------------------------
 
 
-@njit(cache=True, _nrt=False)
+@_search_kernel
 def _bfs(pw: int, dist: Any, queue: Any, st: Any) -> int:
     """Breadth-first search on ``dist`` (-1 marks an unvisited free cell, -2 a wall) from the
     cells in the ring ``queue`` (``st``: head and count; the capacity is a power of two). Returns
@@ -415,7 +427,7 @@ _FIRST_QUEUE = 1 << 12
 # --- robot lattice -------------------------------------------------------------------------
 
 
-@njit(cache=True, _nrt=False)
+@_search_kernel
 def _lattice(
     nbr: Any, pen: Any, hdist: Any, mt: Any, par: Any,
     rec: Any, heap: Any, scal: Any,
@@ -735,7 +747,7 @@ def _drive(
 # --- plain grid ----------------------------------------------------------------------------
 
 
-@njit(cache=True, _nrt=False)
+@_search_kernel
 def _grid(
     free: Any, pw: int, diagonal: bool, goal: int, limit: int, opened: int,
     g: Any, word: Any, heap: Any, scal: Any, pos: Any,
