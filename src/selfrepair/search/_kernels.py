@@ -9,21 +9,30 @@ Layout: the grid is padded by one wall cell on every side and flattened, so a ce
 ``p = (y + 1) * (width + 2) + (x + 1)`` and every motion is a fixed integer offset; a lattice
 state is ``4 * p + heading``.
 
-The open list is an indexed 4-ary heap of records ``(f, h, counter, node)``, one row of a 2-D
-array each (one or two cache lines per sift level instead of four arrays), with decrease-key: a
-node whose ``g`` improves takes a new counter and moves up in place. The lattice, whose costs are
-integers, packs ``f`` and ``h`` into one key ``(f << s) | h`` (``s`` bits hold the largest ``h``)
-and leaves ``h`` at 0: the same order with one comparison less per tie. It pops exactly the entries
-that the lazy-deletion heap of :func:`selfrepair.search.astar.astar` pops, in the same order (the
-keys are unique), so both backends return the same plan.
+The open list is an indexed 4-ary heap with decrease-key: a node whose ``g`` improves takes a new
+counter and moves up in place. The grid's records are ``(f, h, counter, node)``, one row of a 2-D
+array each; the lattice, whose costs are integers, packs ``f`` and ``h`` into one key
+``(f << s) | h`` (``s`` bits hold the largest ``h``) and the counter and node into a second word
+``(counter << 31) | node``: records of two words (16 bytes, the four children of a slot in one
+cache line), ordered by the key and then by the counter. Pops are bottom-up (the hole goes down
+to a leaf, then the last record up), and the slots from the heap's size on hold sentinel records
+that never win, so a pop always compares four children. Whatever the arrangement inside the heap,
+it pops exactly the entries that the lazy-deletion heap of :func:`selfrepair.search.astar.astar`
+pops, in the same order (the keys are unique), so both backends return the same plan.
 
-Per-state scratch lives in arrays reused from one search to the next: ``g``, the heap slot, and a
-*word* holding a generation stamp and the move that reached the state (lattice: stamp above bit
-10, heading of the parent and move index below; grid: a stamp byte array and a move byte). Stamps
-are ``2k + 1`` (open) and ``2k + 2`` (closed) in search ``k``, anything lower is unvisited, so a
-new search clears nothing: only the states a search touches cost memory or time, which matters
-for a small search on a large map. Parents are not stored: the move and the parent's heading give
-the parent state.
+Per-state scratch is reused from one search to the next: ``g``, the heap slot, and a *word*
+holding a generation stamp and the move that reached the state (lattice: one record
+``[g, word, slot]`` per state, 32-bit when the problem's bound on ``f`` fits, so 12 bytes a
+touched state; stamp above bit 10, heading of the parent and move index below; grid: three
+arrays, the word a stamp above a move in 3 bits). Stamps are ``2k + 1`` (open) and ``2k + 2``
+(closed) in search ``k``, anything lower is unvisited, so a new search clears nothing: only the
+states a search touches cost memory or time, which matters for a small search on a large map.
+Parents are not stored: the move and the parent's heading give the parent state.
+
+The search kernels are compiled with ``_nrt=False`` (numba's reference counting off): they only
+read and write arrays handed in, never allocate, and with counting on numba surrounds every call
+and tuple of arrays in the hot loops with atomic reference-count updates, which took most of the
+grid kernel's time.
 
 Kernels are resumable: all search state lives in arrays, and a call stops after a given number of
 expansions (so that the Python wrapper can look at the clock between calls) or when the heap or
@@ -38,7 +47,7 @@ import time
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -62,6 +71,17 @@ except ImportError:  # pragma: no cover - depends on the environment
         if args and callable(args[0]):
             return args[0]
         return lambda f: f
+
+
+_Fn = TypeVar("_Fn", bound=Callable[..., Any])
+
+
+def _search_kernel(fn: _Fn) -> _Fn:
+    """Compile ``fn`` like the other kernels, without reference counting (see the module
+    docstring) and assuming no NaN (no value of the searches is one): a float comparison is then
+    one branch, not two."""
+    options: dict[str, Any] = {"cache": True, "_nrt": False, "fastmath": {"nnan"}}
+    return njit(**options)(fn)  # type: ignore[no-any-return]
 
 
 __all__ = ["CHUNK", "NUMBA", "bfs_padded", "grid_search", "plan_lattice"]
@@ -99,7 +119,7 @@ def _less(f1: Any, h1: Any, c1: Any, f2: Any, h2: Any, c2: Any) -> bool:
     return bool(c1 < c2)
 
 
-@njit(cache=True)
+@_search_kernel
 def _sift_up(heap: Any, pos: Any, i: int, f: Any, h: Any, c: Any, node: Any) -> None:
     """Place the record ``(f, h, c, node)`` at slot ``i`` or above (a push when ``i`` is the
     heap's size, a decrease-key when it is the node's slot)."""
@@ -120,44 +140,110 @@ def _sift_up(heap: Any, pos: Any, i: int, f: Any, h: Any, c: Any, node: Any) -> 
     pos[int(node)] = i
 
 
-@njit(cache=True)
+@_search_kernel
 def _pop(heap: Any, pos: Any, size: int) -> int:
-    """Remove the top record; ``size`` is the heap size before the pop. Returns the new size."""
+    """Remove the top record; ``size`` is the heap size before the pop. Returns the new size.
+    Bottom-up, like :func:`_pop2`."""
     size -= 1
     if size > 0:
         f, h, c, node = heap[size, 0], heap[size, 1], heap[size, 2], heap[size, 3]
+        heap[size, 0] = np.inf  # sentinel: slots size .. size + 3 never win (see _push)
         i = 0
         while True:
             first = 4 * i + 1
             if first >= size:
                 break
             child = first
-            for other in range(first + 1, min(first + 4, size)):
+            for other in range(first + 1, first + 4):
                 if _less(
                     heap[other, 0], heap[other, 1], heap[other, 2],
                     heap[child, 0], heap[child, 1], heap[child, 2],
                 ):  # fmt: skip
                     child = other
-            if not _less(heap[child, 0], heap[child, 1], heap[child, 2], f, h, c):
-                break
             heap[i, 0] = heap[child, 0]
             heap[i, 1] = heap[child, 1]
             heap[i, 2] = heap[child, 2]
             heap[i, 3] = heap[child, 3]
             pos[int(heap[i, 3])] = i
             i = child
-        heap[i, 0] = f
-        heap[i, 1] = h
-        heap[i, 2] = c
-        heap[i, 3] = node
-        pos[int(node)] = i
+        _sift_up(heap, pos, i, f, h, c, node)
+    return size
+
+
+# --- indexed 4-ary heap of two-word records (the lattice) ----------------------------------------
+# Row ``_BASE + i`` holds slot i: ``(key, tie)`` with ``tie = (counter << _TIE_BITS) | node``, so
+# the order of ties is that of counters (they are unique) and the node needs no column of its own:
+# 16 bytes a record. The array's rows ``_BASE + 4i + 1`` .. ``_BASE + 4i + 4`` (the children of slot
+# i) are rows ``4(i + 1)`` .. ``4(i + 1) + 3``: one 64-byte cache line when the array starts on one
+# (:func:`_heap` sees to that).
+
+_BASE = 3
+_G, _WORD, _SLOT = 0, 1, 2
+"""Columns of the lattice's per-state records: cost so far, word (stamp and move), heap slot."""
+_NO_KEY = (1 << 63) - 1
+"""The key of the sentinel records in the slots from the heap's size on: a pop compares four
+children without bounds checks, and these never win (real keys are below ``2**62``)."""
+_TIE_BITS = 31
+_TIE_MASK = (1 << _TIE_BITS) - 1
+
+
+@_search_kernel
+def _sift_up2(heap: Any, rec: Any, i: int, key: int, tie: int) -> None:
+    """Place the record ``(key, tie)`` at slot ``i`` or above (a push when ``i`` is the heap's
+    size, a decrease-key when it is the node's slot)."""
+    while i > 0:
+        up = (i - 1) >> 2
+        uk = heap[_BASE + up, 0]
+        ut = heap[_BASE + up, 1]
+        if key > uk or (key == uk and tie > ut):
+            break
+        heap[_BASE + i, 0] = uk
+        heap[_BASE + i, 1] = ut
+        rec[ut & _TIE_MASK, _SLOT] = i
+        i = up
+    heap[_BASE + i, 0] = key
+    heap[_BASE + i, 1] = tie
+    rec[tie & _TIE_MASK, _SLOT] = i
+
+
+@_search_kernel
+def _pop2(heap: Any, rec: Any, size: int) -> int:
+    """Remove the top record; ``size`` is the heap size before the pop. Returns the new size.
+
+    Bottom-up: the hole at the top moves down along the smallest children to a leaf (one
+    comparison fewer per level than a sift-down), then the last record moves up from there. The
+    heap is then arranged differently than after a sift-down, but holds the same records, and
+    the keys are unique, so the order of the pops is the same."""
+    size -= 1
+    if size > 0:
+        key = heap[_BASE + size, 0]
+        tie = heap[_BASE + size, 1]
+        heap[_BASE + size, 0] = _NO_KEY  # sentinel (see _lattice's pushes)
+        i = 0
+        while True:
+            first = 4 * i + 1
+            if first >= size:
+                break
+            child = first
+            ck = heap[_BASE + first, 0]
+            ct = heap[_BASE + first, 1]
+            for other in range(first + 1, first + 4):
+                ok = heap[_BASE + other, 0]
+                ot = heap[_BASE + other, 1]
+                if (ok < ck) | ((ok == ck) & (ot < ct)):
+                    child, ck, ct = other, ok, ot
+            heap[_BASE + i, 0] = ck
+            heap[_BASE + i, 1] = ct
+            rec[ct & _TIE_MASK, _SLOT] = i
+            i = child
+        _sift_up2(heap, rec, i, key, tie)
     return size
 
 
 # --- breadth-first distances -------------------------------------------------------------------
 
 
-@njit(cache=True)
+@_search_kernel
 def _bfs(pw: int, dist: Any, queue: Any, st: Any) -> int:
     """Breadth-first search on ``dist`` (-1 marks an unvisited free cell, -2 a wall) from the
     cells in the ring ``queue`` (``st``: head and count; the capacity is a power of two). Returns
@@ -243,15 +329,32 @@ def _scratch(tag: str, n: int, spec: tuple[tuple[str, Any], ...], mark_max: int)
     return entry
 
 
-def _heap(tag: str, dtype: Any, need: int) -> npt.NDArray[Any]:
-    """The per-thread heap array of ``tag``, at least ``need`` records long."""
+def _records(tag: str, n: int, dtype: Any, mark_max: int) -> _Scratch:
+    """Per-thread records of ``n`` lattice states (``[g, word, heap slot]`` rows, see
+    :data:`_G`), zeroed lazily by the OS and reused across searches like :func:`_scratch`'s
+    arrays; ``arrays["mark"]`` is the view of the words."""
+    cache = getattr(_local, "scratch", None)
+    if cache is None:
+        cache = _local.scratch = {}
+    entry = cache.get(tag)
+    if entry is None or not n <= entry.size <= 4 * n:
+        rec = np.zeros((n, 3), dtype=dtype)
+        entry = cache[tag] = _Scratch(n, {"rec": rec, "mark": rec[:, _WORD]}, mark_max)
+    return entry
+
+
+def _heap(tag: str, dtype: Any, need: int, columns: int = 4) -> npt.NDArray[Any]:
+    """The per-thread heap array of ``tag``, at least ``need`` records of ``columns`` words long,
+    starting on a 64-byte boundary."""
     cache = getattr(_local, "heaps", None)
     if cache is None:
         cache = _local.heaps = {}
     heap = cache.get(tag)
     if heap is None or heap.shape[0] < need:
         size = max(_FIRST_HEAP, need, 0 if heap is None else 2 * heap.shape[0])
-        fresh = np.empty((size, 4), dtype=dtype)
+        raw = np.empty(size * columns + 8, dtype=dtype)
+        skip = (-raw.ctypes.data % 64) // raw.itemsize
+        fresh = raw[skip : skip + size * columns].reshape(size, columns)
         if heap is not None:
             fresh[: heap.shape[0]] = heap
         heap = cache[tag] = fresh
@@ -326,17 +429,17 @@ _FIRST_QUEUE = 1 << 12
 # --- robot lattice -------------------------------------------------------------------------
 
 
-@njit(cache=True)
+@_search_kernel
 def _lattice(
     nbr: Any, pen: Any, hdist: Any, mt: Any, par: Any,
-    g: Any, word: Any, heap: Any, scal: Any, pos: Any,
+    rec: Any, heap: Any, scal: Any,
 ) -> int:  # fmt: skip
     rnum, rden, wmul = par[0], par[1], par[2]
     goal_cell, goal_head, limit, opened, shift = par[3], par[4], par[5], par[6], par[7]
     closed = opened + 1
     size, counter, expansions = scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS]
     nmoves = mt.shape[1]
-    room = heap.shape[0] - nmoves
+    room = heap.shape[0] - _BASE - nmoves - 4
     status = _UNSOLVABLE
     while size > 0:
         if expansions >= limit:
@@ -345,9 +448,9 @@ def _lattice(
         if size > room:
             status = _GROW
             break
-        s = heap[0, _NODE]
-        size = _pop(heap, pos, size)
-        word[s] = (closed << _MOVE_BITS) | (word[s] & _MOVE_MASK)
+        s = heap[_BASE, 1] & _TIE_MASK
+        size = _pop2(heap, rec, size)
+        rec[s, _WORD] = (closed << _MOVE_BITS) | (rec[s, _WORD] & _MOVE_MASK)
         expansions += 1
         cell = s >> 2
         head = s & 3
@@ -355,7 +458,7 @@ def _lattice(
             scal[_FOUND] = s
             status = _SOLVED
             break
-        gs = g[s]
+        gs = rec[s, _G]
         around = nbr[cell]
         for k in range(nmoves):
             need = mt[head, k, _NEED]
@@ -363,7 +466,7 @@ def _lattice(
                 continue
             nc = cell + mt[head, k, _DCELL]
             ns = 4 * nc + mt[head, k, _NHEAD]
-            m = word[ns] >> _MOVE_BITS
+            m = rec[ns, _WORD] >> _MOVE_BITS
             if m == closed:
                 continue
             gn = gs + mt[head, k, _DUR]
@@ -372,32 +475,34 @@ def _lattice(
                 for j in range(mt[head, k, _NSW]):
                     penalty += pen[cell + mt[head, k, _SW + j]]
                 gn += wmul * penalty
-            if m == opened and gn >= g[ns]:
+            if m == opened and gn >= rec[ns, _G]:
                 continue
             d = hdist[nc]
             if d < 0:
                 continue
             hv = d * rnum if rden == 1 else d * rnum // rden
             counter += 1
-            g[ns] = gn
-            word[ns] = (opened << _MOVE_BITS) | (head << 8) | k
+            rec[ns, _G] = gn
+            rec[ns, _WORD] = (opened << _MOVE_BITS) | (head << 8) | k
+            key = ((gn + hv) << shift) | hv
             if m == opened:
-                _sift_up(heap, pos, pos[ns], ((gn + hv) << shift) | hv, 0, counter, ns)
+                _sift_up2(heap, rec, rec[ns, _SLOT], key, (counter << _TIE_BITS) | ns)
             else:
-                _sift_up(heap, pos, size, ((gn + hv) << shift) | hv, 0, counter, ns)
+                _sift_up2(heap, rec, size, key, (counter << _TIE_BITS) | ns)
                 size += 1
+                heap[_BASE + size + 3, 0] = _NO_KEY
     scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS] = size, counter, expansions
     return status
 
 
 @njit(cache=True)
-def _walk_lattice(word: Any, mt: Any, start: int, goal: int) -> Any:
+def _walk_lattice(rec: Any, mt: Any, start: int, goal: int) -> Any:
     """The states from ``start`` to ``goal`` (``out[0]``), the move index into each (``out[1]``,
     -1 for the start) and the scaled duration of the path (``out[2, 0]``)."""
     n = 1
     s = goal
     while s != start:
-        pm = word[s] & _MOVE_MASK
+        pm = rec[s, _WORD] & _MOVE_MASK
         head = pm >> 8
         s = 4 * ((s >> 2) - mt[head, pm & 255, _DCELL]) + head
         n += 1
@@ -407,7 +512,7 @@ def _walk_lattice(word: Any, mt: Any, start: int, goal: int) -> Any:
     for i in range(n - 1, -1, -1):
         out[0, i] = s
         if i:
-            pm = word[s] & _MOVE_MASK
+            pm = rec[s, _WORD] & _MOVE_MASK
             head = pm >> 8
             k = pm & 255
             out[1, i] = k
@@ -486,8 +591,6 @@ _PENALTY: BoundedCache[tuple[Maze, int], tuple[npt.NDArray[np.int64], int]] = Bo
 _NO_PENALTY = np.zeros(1, dtype=np.int64)
 _NO_PENALTY.setflags(write=False)
 
-_LATTICE_ARRAYS = (("g", np.int64), ("mark", np.int32), ("pos", np.int32))
-"""Per lattice state: cost so far, word (stamp and move, see the module docstring), heap slot."""
 
 
 def plan_lattice(
@@ -531,7 +634,9 @@ def plan_lattice(
     mt = motion.table
     hmax = (int(hdist.max(initial=0)) if largest is None else largest) * rnum // rden
     shift = hmax.bit_length()  # heap key: (f << shift) | h, ordered as (f, h)
-    _check_int64(motion.dur_max, mt.shape[2] - _SW, pen_max, wmul, hmax, shift, n_states)
+    f_max = _check_int64(
+        motion.dur_max, mt.shape[2] - _SW, pen_max, wmul, hmax, shift, n_states, len(moves)
+    )
     start = problem.start
     start_cell = (start.y + 1) * pw + start.x + 1
     start_state = 4 * start_cell + start.heading
@@ -539,14 +644,18 @@ def plan_lattice(
         return PlanStatus.UNSOLVABLE, (), (), 0, 0, 0
     goal_cell = (problem.goal[1] + 1) * pw + problem.goal[0] + 1
     goal_head = -1 if problem.goal_heading is None else int(problem.goal_heading)
-    scratch = _scratch("lattice", n_states, _LATTICE_ARRAYS, _LATTICE_MARK_MAX)
-    arrays = scratch.arrays
-    g, word, pos = arrays["g"], arrays["mark"], arrays["pos"]
+    narrow = f_max < 1 << 31  # 32-bit costs when every cost fits: 12 bytes a state, not 24
+    scratch = _records(
+        "lattice32" if narrow else "lattice64", n_states, np.int32 if narrow else np.int64,
+        _LATTICE_MARK_MAX,
+    )  # fmt: skip
+    rec = scratch.arrays["rec"]
     opened, _ = scratch.next_marks()
     h0 = int(hdist[start_cell]) * rnum // rden
-    heap = _heap("lattice", np.int64, _FIRST_HEAP)
-    g[start_state], word[start_state], pos[start_state] = 0, opened << _MOVE_BITS, 0
-    heap[0] = ((h0 << shift) | h0, 0, 0, start_state)
+    heap = _heap("lattice", np.int64, _FIRST_HEAP, 2)
+    rec[start_state] = (0, opened << _MOVE_BITS, 0)
+    heap[_BASE] = ((h0 << shift) | h0, start_state)
+    heap[_BASE + 1 : _BASE + 4, 0] = _NO_KEY  # slots from the size on never win a comparison
     scal = np.array([1, 0, 0, -1], dtype=np.int64)
     par = np.array([rnum, rden, wmul, goal_cell, goal_head, 0, opened, shift], dtype=np.int64)
     nbr = _neighbourhoods(maze)
@@ -555,19 +664,20 @@ def plan_lattice(
         nonlocal heap
         while True:
             par[5] = limit
-            code = int(_lattice(nbr, pen, hdist, mt, par, g, word, heap, scal, pos))
+            code = int(_lattice(nbr, pen, hdist, mt, par, rec, heap, scal))
             if code != _GROW:
                 return code
-            heap = _heap("lattice", np.int64, 2 * heap.shape[0])
+            heap = _heap("lattice", np.int64, 2 * heap.shape[0], 2)
 
     status = _drive(run, scal, max_expansions, deadline_ns)
     expansions = int(scal[_EXPANSIONS])
     if status is not PlanStatus.SOLVED:
         return status, (), (), 0, 0, expansions
     goal = int(scal[_FOUND])
-    walk = _walk_lattice(word, mt, start_state, goal)
+    walk = _walk_lattice(rec, mt, start_state, goal)
     actions = tuple(motion.moves[walk[1, 1:]].tolist())
-    return status, actions, _poses(maze, walk[0], pw), int(g[goal]), int(walk[2, 0]), expansions
+    cost = int(rec[goal, _G])
+    return status, actions, _poses(maze, walk[0], pw), cost, int(walk[2, 0]), expansions
 
 
 def _poses(maze: Maze, path: npt.NDArray[np.int64], pw: int) -> tuple[Pose, ...]:
@@ -590,15 +700,27 @@ _HEADINGS = tuple(Heading)
 
 
 def _check_int64(
-    dur_max: int, cells: int, pen_max: int, wmul: int, hmax: int, shift: int, n_states: int
-) -> None:
+    dur_max: int,
+    cells: int,
+    pen_max: int,
+    wmul: int,
+    hmax: int,
+    shift: int,
+    n_states: int,
+    n_moves: int,
+) -> int:
     """Refuse problems whose heap keys ``(f << shift) | h`` could overflow int64 (``f`` is at most
-    the largest step cost times the number of states plus the largest heuristic value) or whose
-    states overflow int32."""
+    the largest step cost times the number of states plus the largest heuristic value), whose
+    states overflow 31 bits or whose push counter (at most one push per move of each state)
+    overflows the 32 bits above the node in a heap record's tie word. Returns that bound on
+    ``f``."""
     step_max = dur_max + wmul * cells * pen_max
     f_max = step_max * n_states + hmax
-    if shift >= 62 or f_max >= 1 << (62 - shift) or wmul >= 1 << 62 or n_states >= 1 << 31:
+    if shift >= 62 or f_max >= 1 << (62 - shift) or wmul >= 1 << 62 or n_states >= 1 << _TIE_BITS:
         raise OverflowError("the problem is too large for the integer kernel")
+    if n_states * n_moves >= 1 << (63 - _TIE_BITS):
+        raise OverflowError("the problem is too large for the integer kernel")
+    return f_max
 
 
 def _drive(
@@ -627,7 +749,7 @@ def _drive(
 # --- plain grid ----------------------------------------------------------------------------
 
 
-@njit(cache=True)
+@_search_kernel
 def _grid(
     free: Any, pw: int, diagonal: bool, goal: int, limit: int, opened: int,
     g: Any, word: Any, heap: Any, scal: Any, pos: Any,
@@ -636,8 +758,9 @@ def _grid(
     closed = opened + 1
     gx = goal % pw
     gy = goal // pw
+    inv = 1.0 / pw
     nmoves = 8 if diagonal else 4
-    room = heap.shape[0] - nmoves
+    room = heap.shape[0] - nmoves - 4
     sqrt2 = np.sqrt(2.0)
     keys = (diagonal, sqrt2, opened, closed)
     arrays = (free, g, word, heap, pos)
@@ -658,8 +781,9 @@ def _grid(
             status = _SOLVED
             break
         gp = g[p]
-        ex = p % pw - gx
-        ey = p // pw - gy
+        y = int((p + 0.5) * inv)  # p // pw without a division (exact: p is far below 2**40)
+        ex = p - y * pw - gx
+        ey = y - gy
         north, east, south, west = free[p - pw], free[p + 1], free[p + pw], free[p - 1]
         # N, E, S, W, then NE, SE, SW, NW (a diagonal needs both orthogonal cells free)
         if north:
@@ -719,6 +843,7 @@ def _relax(
     else:
         _sift_up(heap, pos, size, gn + hv, hv, float(counter), float(q))
         size += 1
+        heap[size + 3, 0] = np.inf
     return size, counter
 
 
@@ -776,6 +901,7 @@ def grid_search(
     h0 = grid_heuristic(start, goal, connectivity)
     g[s], word[s], pos[s] = 0.0, opened << 3, 0
     heap[0] = (h0, h0, 0.0, float(s))
+    heap[1:4, 0] = np.inf  # slots from the size on hold infinite f (the pop looks at 4 children)
     scal = np.array([1, 0, 0, -1], dtype=np.int64)
     diagonal = connectivity == 8
 
