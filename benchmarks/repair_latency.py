@@ -326,12 +326,10 @@ def memory_snapshot(into: dict[tuple[str, str, str], dict[str, int]]) -> None:
 
 def codes_bytes(maze: Maze, radius: int = 1) -> int:
     """The occupancy codes of the hand-written table (reach 1) on the mission grid (margin 2):
-    the list by buffer position, its rows (the same integers) and the distinct integers."""
-    grid = maze.free_grid(2)
-    codes = lookups.occupancy_codes(grid, radius)
-    rows = lookups.occupancy_rows(grid, radius)
-    distinct = {id(c): c for c in codes}
-    lists = sys.getsizeof(codes) + sys.getsizeof(rows) + sum(map(sys.getsizeof, rows))
+    the row lists and the distinct integers."""
+    rows = lookups.occupancy_rows(maze.free_grid(2), radius)
+    distinct = {id(c): c for row in rows for c in row}
+    lists = sys.getsizeof(rows) + sum(map(sys.getsizeof, rows))
     return lists + sum(sys.getsizeof(c) for c in distinct.values())
 
 
