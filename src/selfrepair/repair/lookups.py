@@ -57,7 +57,7 @@ import sys
 from collections.abc import Callable, Hashable, Iterable
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import Any, Final, Generic, TypeVar
+from typing import Any, Final, Generic, Literal, TypeVar
 
 import numpy as np
 
@@ -120,9 +120,15 @@ MAX_CODE_GRIDS = 16
 
 
 class Missing(Enum):
-    """The marker of a pattern not met yet (distinct from ``None``, "no valid candidate")."""
+    """The marker of a pattern not met yet (distinct from ``None``, "no valid candidate").
+
+    It is false, like ``None``, so that a caller whose answers are always true (a strategy's
+    :class:`tuple`-based repairs) tells a stored answer from both by one truth test."""
 
     MISSING = 0
+
+    def __bool__(self) -> Literal[False]:
+        return False
 
 
 MISSING: Final = Missing.MISSING

@@ -474,8 +474,8 @@ class ReplacementRepairer:
 
         The hot path of a warm hit, kept to a few dozen bytecodes: the request unpacked at once,
         the last faulty action's slot remembered by identity (a robot meets the same faulty
-        action again and again), then the pose's occupancy code by row and column, one ``&`` and
-        one dictionary look-up."""
+        action again and again), then the pose's occupancy code by row and column, one ``&``, one
+        dictionary look-up and one truth test."""
         pose, queue, known, _ = request
         if known is not self._known:
             self._use(known)
@@ -490,13 +490,13 @@ class ReplacementRepairer:
             entry = self._on_grid.slot(slot)
         mask, answers, rows = entry
         found: Repair | Missing | None = answers.get(rows[pose.y][pose.x] & mask, MISSING)
+        if found:  # a stored repair (a non-empty tuple); MISSING and None are false
+            return self._rewritten(request, found, slot) if self._rewrite else found
         if found is MISSING:
             found = self._on_grid.fill(slot, pose.x, pose.y, rows[pose.y][pose.x] & mask)
         if found is None:
             return _miss(self._context, request, action)
-        if self._rewrite:
-            return self._rewritten(request, found, slot)
-        return found
+        return self._rewritten(request, found, slot) if self._rewrite else found
 
     def _rewritten(self, request: RepairRequest, head: Repair, slot: int) -> Repair:
         """``head`` extended over the rest of the queue: every later faulty action with a valid
