@@ -26,7 +26,6 @@ from selfrepair.repair.lookups import (
     fault_lookups,
     lookup_memory,
     neighbourhood,
-    occupancy_codes,
     occupancy_rows,
 )
 from selfrepair.repair.replacement import (
@@ -207,18 +206,28 @@ def test_occupancy_codes_hold_the_free_cells_around_each_cell(
     rng = np.random.default_rng(seed)
     maze = Maze(rng.random((height, width)) < 0.4)
     grid = maze.free_grid(1)
-    codes = occupancy_codes(grid, radius)
     rows = occupancy_rows(grid, radius)
     assert [len(row) for row in rows] == [width] * height
     side = 2 * radius + 1
     for y in range(height):
         for x in range(width):
-            code = codes[grid.index(x, y)]
-            assert rows[y][x] is code
+            code = rows[y][x]
             for dy in range(-radius, radius + 1):
                 for dx in range(-radius, radius + 1):
                     bit = (dy + radius) * side + dx + radius
                     assert bool(code >> bit & 1) == grid.is_free(x + dx, y + dy)
+
+
+@pytest.mark.parametrize("radius", [1, 4])  # 4: 81 bits, codes past one 64-bit word
+def test_occupancy_codes_do_not_depend_on_the_band_they_are_made_in(
+    monkeypatch: pytest.MonkeyPatch, radius: int
+) -> None:
+    maze = Maze(np.random.default_rng(5).random((23, 9)) < 0.4)
+    grid = maze.free_grid(2)
+    whole = lookups._rows(grid, radius)
+    monkeypatch.setattr(lookups, "_BAND", 4)  # 23 rows: bands of 4, the last of 3
+    assert lookups._rows(grid, radius) == whole
+    assert len({id(code) for row in whole for code in row}) == len({c for r in whole for c in r})
 
 
 def test_pattern_budget_bounds_memory_and_keeps_answers(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -278,8 +287,6 @@ def test_fault_lookups_check_their_arguments() -> None:
         fault_lookups(bundled_table(), (), max_depth=-1, answer=lambda r: r)
     with pytest.raises(ProblemError, match="recursion mode"):
         fault_lookups(bundled_table(), (), mode="deep", answer=lambda r: r)
-    with pytest.raises(ProblemError, match="radius"):
-        occupancy_codes(Maze(np.zeros((2, 2), dtype=bool)).free_grid(1), -1)
     with pytest.raises(ProblemError, match="radius"):
         occupancy_rows(Maze(np.zeros((2, 2), dtype=bool)).free_grid(1), -1)
 

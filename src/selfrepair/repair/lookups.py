@@ -10,10 +10,9 @@ search is compiled into a map from the neighbourhood's occupancy bits to its ans
 
 * the map's key is the **occupancy code** of the pose masked to the neighbourhood: every cell of
   a ``(2r+1) x (2r+1)`` window around a cell is one bit, precomputed once per
-  :class:`~selfrepair.geometry.FreeGrid` and radius (:func:`occupancy_codes`, a list indexed like
-  ``FreeGrid.index``, and :func:`occupancy_rows`, the same by row; cells beyond the grid's
-  margin count as walls). A hit is then two list indices (row, column), one ``&`` and one
-  dictionary look-up with an integer key;
+  :class:`~selfrepair.geometry.FreeGrid` and radius (:func:`occupancy_rows`, ``rows[y][x]``;
+  cells beyond the grid's margin count as walls). A hit is then two list indices (row, column),
+  one ``&`` and one dictionary look-up with an integer key;
 * the map's value is the reference search's answer for that pattern, made pose-independent (the
   end pose is kept relative to the start cell). In flat mode, small neighbourhoods (at most
   :data:`ENUMERATE_BITS` cells besides the robot's own, which is always free) are enumerated on
@@ -34,12 +33,11 @@ What is kept, and the limits (all in :mod:`selfrepair.caching` caches, see :func
 * ``compiled look-ups on grids``: at most :data:`MAX_FAULT_LOOKUPS` :class:`GridLookups`, the
   per-(action, heading) references a hit reads on one grid (one list of ``4 x actions`` slots
   each; they may keep an evicted :class:`FaultLookups` or code list alive until evicted too).
-* ``occupancy codes``: at most :data:`MAX_CODE_GRIDS` (16) code lists (one per grid and radius),
-  one pointer per padded cell plus one integer object per distinct code (8 bytes a cell: a few
-  kilobytes on the bundled mazes, about 2.2 MB on a 512x512 map, so at most 16 x 8 bytes x the
-  largest grid's cells).
-* ``occupancy code rows``: at most :data:`MAX_CODE_GRIDS` row lists of the same codes
-  (:func:`occupancy_rows`; one more pointer per cell, 8 bytes, plus one list per row).
+* ``occupancy codes``: at most :data:`MAX_CODE_GRIDS` (16) code row lists (one per grid and
+  radius), one pointer per cell plus one list per row and one integer object per distinct code
+  (8 bytes a cell: a few kilobytes on the bundled mazes, about 2.1 MB on a 512x512 map, so at
+  most 16 x 8 bytes x the largest grid's cells). They are made a band of :data:`_BAND` rows at
+  a time, so making them needs little more than the lists themselves.
 
 Memory is measured by :func:`lookup_memory` with ``sys.getsizeof``: per :class:`FaultLookups`,
 its per-action lists, each per-heading map (hash table), its integer keys and each distinct
@@ -59,7 +57,7 @@ import sys
 from collections.abc import Callable, Hashable, Iterable
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import Any, Final, Generic, TypeVar
+from typing import Any, Final, Generic, Literal, TypeVar
 
 import numpy as np
 
@@ -99,7 +97,6 @@ __all__ = [
     "grid_lookups",
     "lookup_memory",
     "neighbourhood",
-    "occupancy_codes",
     "occupancy_rows",
 ]
 
@@ -123,9 +120,15 @@ MAX_CODE_GRIDS = 16
 
 
 class Missing(Enum):
-    """The marker of a pattern not met yet (distinct from ``None``, "no valid candidate")."""
+    """The marker of a pattern not met yet (distinct from ``None``, "no valid candidate").
+
+    It is false, like ``None``, so that a caller whose answers are always true (a strategy's
+    :class:`tuple`-based repairs) tells a stored answer from both by one truth test."""
 
     MISSING = 0
+
+    def __bool__(self) -> Literal[False]:
+        return False
 
 
 MISSING: Final = Missing.MISSING
@@ -145,7 +148,8 @@ class ActionIndex:
     to four times it: the first of the action's four per-heading slots); ``positions`` maps
     actions by equality (for equal copies). ``moves[i][h]`` is ``(dx, dy, heading)``: what
     action ``i`` does from heading ``h`` on an open plane; ``footprints[i][h]`` its footprint
-    cells relative to the start cell.
+    cells relative to the start cell. ``slot_moves[4 * i + h]`` is ``moves[i][h]`` (one index
+    per step in a walk over a plan).
     """
 
     domain: Domain[Any, Any]
@@ -154,14 +158,7 @@ class ActionIndex:
     moves: tuple[tuple[tuple[int, int, int], ...], ...]
     footprints: tuple[tuple[tuple[Cell, ...], ...], ...]
     quads: dict[int, int]
-
-    def steps(self, stride: int) -> tuple[tuple[int, int], ...]:
-        """Per slot ``4 * i + heading``: the change of buffer position (rows of ``stride``) and
-        the new heading of action ``i`` from that heading (kept for a few strides)."""
-        return _STEPS.get((self, stride), lambda: self._steps(stride))
-
-    def _steps(self, stride: int) -> tuple[tuple[int, int], ...]:
-        return tuple((dy * stride + dx, h) for per in self.moves for dx, dy, h in per)
+    slot_moves: tuple[tuple[int, int, int], ...]
 
     def of(self, action: Any) -> int:
         """The index of ``action`` in ``domain.actions``; :class:`ProblemError` if it has none."""
@@ -187,13 +184,11 @@ def _action_index(domain: Domain[Any, Any]) -> ActionIndex:
         tuple(moves),
         tuple(tuple(domain.footprint(s, a) for s in starts) for a in domain.actions),
         {id(a): 4 * i for i, a in enumerate(domain.actions)},
+        tuple(move for per in moves for move in per),
     )
 
 
 _INDEX: BoundedCache[Domain[Any, Any], ActionIndex] = BoundedCache("action index", 16)
-_STEPS: BoundedCache[tuple[ActionIndex, int], tuple[tuple[int, int], ...]] = BoundedCache(
-    "action steps by grid stride", 16
-)
 
 
 def action_index(domain: Domain[Any, Any]) -> ActionIndex:
@@ -300,59 +295,65 @@ def _bit(cell: Cell, radius: int) -> int:
 # --- occupancy codes ----------------------------------------------------------------------------
 
 
-def _codes(grid: FreeGrid, radius: int) -> list[int]:
-    rows = grid.height + 2 * grid.margin
-    cols = grid.stride
+_BAND = 64
+"""Grid rows whose codes are computed at once: bounds the temporary arrays to a band, so that a
+large grid's codes do not need several times their own size while they are made."""
+
+
+def _rows(grid: FreeGrid, radius: int) -> list[list[int]]:
+    rows, cols, margin = grid.height + 2 * grid.margin, grid.stride, grid.margin
     free = np.frombuffer(grid.data, dtype=np.uint8).reshape(rows, cols)
     padded = np.pad(free, radius)  # zeros: cells beyond the margin are walls
     side = 2 * radius + 1
-    chunks: list[np.ndarray[Any, np.dtype[np.uint64]]] = []
+    shared: dict[int, int] = {}  # one int object per distinct code: 8 bytes a cell
+    out: list[list[int]] = []
+    for top in range(margin, margin + grid.height, _BAND):
+        band = min(_BAND, margin + grid.height - top)
+        codes = _band_codes(padded, top, band, margin, grid.width, side)
+        out.extend([shared.setdefault(code, code) for code in row] for row in codes)
+    return out
+
+
+def _band_codes(
+    padded: np.ndarray[Any, np.dtype[np.uint8]],
+    top: int,
+    band: int,
+    left: int,
+    width: int,
+    side: int,
+) -> list[list[int]]:
+    """The codes of the cells of rows ``top`` to ``top + band - 1`` (buffer rows) and columns
+    ``left`` to ``left + width - 1``, as Python integers by row (64 bits per numpy chunk)."""
+    chunks = []
     for first in range(0, side * side, 64):
-        chunk = np.zeros((rows, cols), dtype=np.uint64)
+        chunk = np.zeros((band, width), dtype=np.uint64)
         for bit in range(first, min(first + 64, side * side)):
             dy, dx = divmod(bit, side)
-            window = padded[dy : dy + rows, dx : dx + cols].astype(np.uint64)
-            chunk |= window << np.uint64(bit - first)
-        chunks.append(chunk.ravel())
-    if len(chunks) == 1:  # share one int object per distinct code: 8 bytes a cell
-        distinct, inverse = np.unique(chunks[0], return_inverse=True)
-        values: list[int] = distinct.tolist()
-        return list(map(values.__getitem__, inverse.ravel().tolist()))
-    parts = [c.tolist() for c in chunks]
-    return [
-        sum(int(p) << (64 * k) for k, p in enumerate(cell)) for cell in zip(*parts, strict=True)
-    ]
+            window = padded[top + dy : top + dy + band, left + dx : left + dx + width]
+            chunk |= window.astype(np.uint64) << np.uint64(bit - first)
+        chunks.append(chunk.tolist())
+    if len(chunks) == 1:
+        found: list[list[int]] = chunks[0]
+        return found
+    return [[_join(cell) for cell in zip(*row, strict=True)] for row in zip(*chunks, strict=True)]
 
 
-_CODES: BoundedCache[tuple[FreeGrid, int], list[int]] = BoundedCache(
+def _join(parts: tuple[int, ...]) -> int:
+    """One code from its 64-bit parts, lowest first."""
+    return sum(part << (64 * k) for k, part in enumerate(parts))
+
+
+_ROWS: BoundedCache[tuple[FreeGrid, int], list[list[int]]] = BoundedCache(
     "occupancy codes", MAX_CODE_GRIDS
 )
 
 
-def occupancy_codes(grid: FreeGrid, radius: int) -> list[int]:
-    """Per padded cell of ``grid`` (indexed like ``grid.index``), the bits of the free cells in
-    the ``(2 radius + 1)``-wide window around it; bit ``(dy + r) * (2r + 1) + dx + r`` is cell
-    ``(x + dx, y + dy)``. Built once per grid and radius (a few are kept)."""
-    if radius < 0:
-        raise ProblemError(f"radius must be at least 0, got {radius}")
-    return _CODES.get((grid, radius), lambda: _codes(grid, radius))
-
-
-def _rows(grid: FreeGrid, radius: int) -> list[list[int]]:
-    codes = occupancy_codes(grid, radius)
-    first, stride, width = grid.margin * grid.stride + grid.margin, grid.stride, grid.width
-    return [codes[first + y * stride : first + y * stride + width] for y in range(grid.height)]
-
-
-_ROWS: BoundedCache[tuple[FreeGrid, int], list[list[int]]] = BoundedCache(
-    "occupancy code rows", MAX_CODE_GRIDS
-)
-
-
 def occupancy_rows(grid: FreeGrid, radius: int) -> list[list[int]]:
-    """:func:`occupancy_codes` of the grid's own cells by row: ``rows[y][x]`` is the code of cell
-    ``(x, y)`` (the same integer objects, so 8 more bytes a cell). A table hit reads a pose's code
-    as ``rows[pose.y][pose.x]``, two list indices instead of computing a buffer position."""
+    """Per cell ``(x, y)`` of ``grid`` (its own cells, not the margin), ``rows[y][x]``: the bits of
+    the free cells in the ``(2 radius + 1)``-wide window around it; bit
+    ``(dy + r) * (2r + 1) + dx + r`` is cell ``(x + dx, y + dy)`` (cells beyond the grid's
+    margin count as walls). Built once per grid and radius (a few are kept), a band of rows at a
+    time; equal codes share one integer object."""
     if radius < 0:
         raise ProblemError(f"radius must be at least 0, got {radius}")
     return _ROWS.get((grid, radius), lambda: _rows(grid, radius))
@@ -517,8 +518,8 @@ class FaultLookups(Generic[T]):
         """The answer for ``action`` at ``pose`` on ``grid`` (the convenient, slower entry: the
         strategies inline this)."""
         lookup = self.action(self.index.of(action))
-        codes = occupancy_codes(grid, lookup.radius)
-        key = codes[grid.index(pose.x, pose.y)] & lookup.masks[pose.heading]
+        rows = occupancy_rows(grid, lookup.radius)
+        key = rows[pose.y][pose.x] & lookup.masks[pose.heading]
         value = lookup.answers[pose.heading].get(key, MISSING)
         if value is MISSING:
             return self.fill(lookup, pose, key, grid)
@@ -645,46 +646,40 @@ def compiled_replacement(
 
 # --- look-ups read on one grid -------------------------------------------------------------------
 
-Slot = tuple[int, dict[int, Any], list[int], list[list[int]]]
+Slot = tuple[int, dict[int, Any], list[list[int]]]
 """What a hit reads for one (action, heading): the neighbourhood mask, the map from masked codes
-to answers, and the grid's occupancy codes at the look-up's radius, by buffer position (for walks
-that step through the buffer) and by row (:func:`occupancy_rows`, for a single pose)."""
+to answers, and the grid's occupancy codes at the look-up's radius by row
+(:func:`occupancy_rows`: ``rows[y][x]``)."""
 
 
 class GridLookups(Generic[T]):
     """The compiled look-ups of one fault set (:class:`FaultLookups`) as read on one grid.
 
     ``slots[4 * i + heading]`` holds what a hit of action ``i`` from ``heading`` reads
-    (:data:`Slot`), filled on first use, for all four headings at once; positions are buffer
-    indices of the grid (``offset + y * stride + x``). Shared by every mission on the same grid
-    under the same faults, so a mission does not refill them (mutable by nature; bounded by
-    the number of slots).
+    (:data:`Slot`), filled on first use, for all four headings at once. Shared by every mission
+    on the same grid under the same faults, so a mission does not refill them (mutable by
+    nature; bounded by the number of slots).
     """
 
-    __slots__ = ("grid", "lookups", "offset", "slots", "stride")
+    __slots__ = ("grid", "lookups", "slots")
 
     def __init__(self, lookups: FaultLookups[T], grid: FreeGrid) -> None:
         self.lookups = lookups
         self.grid = grid
-        self.stride = grid.stride
-        self.offset = grid.margin * grid.stride + grid.margin
         self.slots: list[Slot | None] = [None] * len(lookups.faulty_slots)
 
     def slot(self, slot: int) -> Slot:
         """Fill the four slots of the action of ``slot`` (compiling its look-up if need be)."""
         first = slot & ~3
         lookup = self.lookups.action(first >> 2)
-        codes = occupancy_codes(self.grid, lookup.radius)
         rows = occupancy_rows(self.grid, lookup.radius)
         for heading in range(4):
-            entry = (lookup.masks[heading], lookup.answers[heading], codes, rows)
-            self.slots[first + heading] = entry
-        return (lookup.masks[slot & 3], lookup.answers[slot & 3], codes, rows)
+            self.slots[first + heading] = (lookup.masks[heading], lookup.answers[heading], rows)
+        return (lookup.masks[slot & 3], lookup.answers[slot & 3], rows)
 
-    def fill(self, slot: int, position: int, key: int) -> T | None:
-        """Answer a pattern met for the first time at buffer ``position`` (see
+    def fill(self, slot: int, x: int, y: int, key: int) -> T | None:
+        """Answer a pattern met for the first time at cell ``(x, y)`` (see
         :meth:`FaultLookups.fill`)."""
-        y, x = divmod(position - self.offset, self.stride)
         lookups = self.lookups
         pose = Pose(x, y, Heading(slot & 3))
         found: T | None = lookups.fill(lookups.action(slot >> 2), pose, key, self.grid)

@@ -416,9 +416,8 @@ class ReplacementRepairer:
 
     State (per mission): the known faults of the last request and the compiled look-ups for them
     as read on the mission's grid (:class:`~selfrepair.repair.lookups.GridLookups`, shared with
-    other missions on the same grid). Poses are tracked as buffer positions of the grid and
-    actions by slot ``4 * index + heading``; ``steps[slot]`` is the position change and new
-    heading of an action from a heading.
+    other missions on the same grid). Actions are tracked by slot ``4 * index + heading``;
+    ``moves[slot]`` is the change of cell and the new heading of an action from a heading.
     """
 
     __slots__ = (
@@ -427,13 +426,12 @@ class ReplacementRepairer:
         "_index",
         "_known",
         "_last",
-        "_offset",
+        "_moves",
         "_on_grid",
         "_quads",
         "_rewrite",
+        "_size",
         "_slots",
-        "_steps",
-        "_stride",
     )
 
     def __init__(self, context: MissionContext) -> None:
@@ -446,10 +444,9 @@ class ReplacementRepairer:
         self._rewrite = context.options.rewrite
         self._index = action_index(context.domain)
         grid = context.grid
-        self._stride = grid.stride
-        self._offset = grid.margin * grid.stride + grid.margin
+        self._size = (grid.width, grid.height)
         self._quads = self._index.quads
-        self._steps = self._index.steps(grid.stride)
+        self._moves = self._index.slot_moves
         self._known: frozenset[Any] | None = None
         self._last: tuple[Any, int] = (None, -1)
         lookups = _lookups(context, frozenset())
@@ -477,8 +474,8 @@ class ReplacementRepairer:
 
         The hot path of a warm hit, kept to a few dozen bytecodes: the request unpacked at once,
         the last faulty action's slot remembered by identity (a robot meets the same faulty
-        action again and again), then the pose's occupancy code by row and column, one ``&`` and
-        one dictionary look-up."""
+        action again and again), then the pose's occupancy code by row and column, one ``&``, one
+        dictionary look-up and one truth test."""
         pose, queue, known, _ = request
         if known is not self._known:
             self._use(known)
@@ -491,28 +488,28 @@ class ReplacementRepairer:
         entry = self._slots[slot]
         if entry is None:
             entry = self._on_grid.slot(slot)
-        mask, answers, _, rows = entry
+        mask, answers, rows = entry
         found: Repair | Missing | None = answers.get(rows[pose.y][pose.x] & mask, MISSING)
+        if found:  # a stored repair (a non-empty tuple); MISSING and None are false
+            return self._rewritten(request, found, slot) if self._rewrite else found
         if found is MISSING:
-            position = self._offset + pose.y * self._stride + pose.x
-            found = self._on_grid.fill(slot, position, rows[pose.y][pose.x] & mask)
+            found = self._on_grid.fill(slot, pose.x, pose.y, rows[pose.y][pose.x] & mask)
         if found is None:
             return _miss(self._context, request, action)
-        if self._rewrite:
-            position = self._offset + pose.y * self._stride + pose.x
-            return self._rewritten(request, found, slot, position)
-        return found
+        return self._rewritten(request, found, slot) if self._rewrite else found
 
-    def _rewritten(self, request: RepairRequest, head: Repair, slot: int, position: int) -> Repair:
+    def _rewritten(self, request: RepairRequest, head: Repair, slot: int) -> Repair:
         """``head`` extended over the rest of the queue: every later faulty action with a valid
         replacement at its predicted pose substituted, up to the first one without (the robot
-        will replan there, dropping the rest). The actions after the last substitution stay
+        will replan there, dropping the rest) or the first predicted pose off the maze (a plan
+        that leaves it is not this walk's to mend). The actions after the last substitution stay
         queued as they are, so every action of the repair is available."""
         rest = request.queue[1:]
-        faulty, steps, slots = self._faulty, self._steps, self._slots
+        faulty, moves, slots = self._faulty, self._moves, self._slots
+        width, height = self._size
         quads = list(map(self._quads.get, map(id, rest)))  # in C; by identity (see _quad)
-        move, h = steps[slot]
-        position += move
+        dx, dy, h = moves[slot]
+        x, y = request.pose.x + dx, request.pose.y + dy
         parts: list[Sequence[Any]] = [head.actions]
         done = substituted = 0
         for k, quad in enumerate(quads):
@@ -520,11 +517,13 @@ class ReplacementRepairer:
                 quad = self._quad(rest[k])
             slot = quad + h
             if faulty[slot]:
-                mask, answers, codes, _ = slots[slot] or self._on_grid.slot(slot)
-                key = codes[position] & mask
+                if not (0 <= x < width and 0 <= y < height):
+                    break
+                mask, answers, rows = slots[slot] or self._on_grid.slot(slot)
+                key = rows[y][x] & mask
                 hit: Repair | Missing | None = answers.get(key, MISSING)
                 if hit is MISSING:
-                    hit = self._on_grid.fill(slot, position, key)
+                    hit = self._on_grid.fill(slot, x, y, key)
                 if hit is None:  # the robot will replan here: what follows would be dropped
                     break
                 if done < k:
@@ -532,8 +531,9 @@ class ReplacementRepairer:
                 parts.append(hit.actions)
                 done = k + 1
                 substituted += 1
-            move, h = steps[slot]
-            position += move
+            dx, dy, h = moves[slot]
+            x += dx
+            y += dy
         if not substituted:
             return head
         return Repair(  # built directly: NamedTuple._replace costs several microseconds
