@@ -490,12 +490,11 @@ class ReplacementRepairer:
             entry = self._on_grid.slot(slot)
         mask, answers, rows = entry
         found: Repair | Missing | None = answers.get(rows[pose.y][pose.x] & mask, MISSING)
-        if found:  # a stored repair (a non-empty tuple); MISSING and None are false
-            return self._rewritten(request, found, slot) if self._rewrite else found
-        if found is MISSING:
-            found = self._on_grid.fill(slot, pose.x, pose.y, rows[pose.y][pose.x] & mask)
-        if found is None:
-            return _miss(self._context, request, action)
+        if not found:  # a stored repair is a non-empty tuple; MISSING and None are false
+            if found is MISSING:
+                found = self._on_grid.fill(slot, pose.x, pose.y, rows[pose.y][pose.x] & mask)
+            if found is None:
+                return _miss(self._context, request, action)
         return self._rewritten(request, found, slot) if self._rewrite else found
 
     def _rewritten(self, request: RepairRequest, head: Repair, slot: int) -> Repair:
