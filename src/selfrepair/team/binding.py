@@ -444,6 +444,7 @@ def apply_binding(world: TeamWorld, incident: Incident, binding: Binding) -> set
         at = min(at, len(robot.queue))
         robot.queue = deque([*list(robot.queue)[:at], *new, *list(robot.queue)[at:]])
         changed.add(name)
-    for name in changed:
-        resource(world.robots[name])
+    for name in world.robots:  # scenario order, never a set's (hash-seed) order
+        if name in changed:
+            resource(world.robots[name])
     return changed

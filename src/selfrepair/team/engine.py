@@ -509,8 +509,9 @@ def _incident(
         t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
         plans0, expansions0 = world.plans, world.expansions
         decision = strategy(world, Incident(robot.name, entry, kind, load, item, t))
-        for name in decision.changed:
-            _prepare(world, world.robots[name], t)
+        for name in world.robots:  # scenario order: a frozenset's order depends on the hash seed
+            if name in decision.changed:
+                _prepare(world, world.robots[name], t)
         latency, cpu = time.perf_counter_ns() - t0, time.thread_time_ns() - c0
     finally:
         if collecting:
