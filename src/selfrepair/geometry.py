@@ -141,8 +141,9 @@ class FreeGrid:
         width, height, margin, data = self.width, self.height, self.margin, self.data
         stride = width + 2 * margin
         for x, y in cells:
-            if not (0 <= x < width and 0 <= y < height) or data[
-                (y + margin) * stride + x + margin
-            ] != 1:
+            if (
+                not (0 <= x < width and 0 <= y < height)
+                or data[(y + margin) * stride + x + margin] != 1
+            ):
                 return False
         return True

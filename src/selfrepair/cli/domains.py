@@ -1,7 +1,6 @@
 """``selfrepair domains``: the robots this installation knows (built-in, plug-ins, and files loaded
 with ``--plugin``)."""
 
-
 from typing import Annotated
 
 import typer

@@ -10,7 +10,6 @@ Times: the compiled kernels are loaded before the mission starts (reported apart
 planning time or a repair latency), and by default the mission runs once untimed first.
 """
 
-
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -385,9 +384,7 @@ def table_show(
 
 @table_app.command("check")
 def table_check(
-    spec: Annotated[
-        str, typer.Argument(metavar="TABLE", help="Table file or bundled table name.")
-    ],
+    spec: Annotated[str, typer.Argument(metavar="TABLE", help="Table file or bundled table name.")],
     max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
     max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:

@@ -8,7 +8,6 @@ Times: the compiled kernels are loaded (or compiled) before the search starts, a
 reported on its own line (``kernels loaded in ... ms``); the search time is the search alone.
 """
 
-
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any

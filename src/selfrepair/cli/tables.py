@@ -1,6 +1,5 @@
 """Commands that make and measure replacement tables: ``selfrepair table generate|coverage``."""
 
-
 import json
 import time
 from collections.abc import Iterable
@@ -126,9 +125,7 @@ def _mazes(names: list[str] | None, no_walls: bool, max_cells: int) -> "list[tup
 
 @table_app.command("coverage")
 def table_coverage(
-    spec: Annotated[
-        str, typer.Argument(metavar="TABLE", help="Table file or bundled table name.")
-    ],
+    spec: Annotated[str, typer.Argument(metavar="TABLE", help="Table file or bundled table name.")],
     faults: Annotated[
         str,
         typer.Option(
@@ -216,6 +213,7 @@ def _percent(value: float | None) -> str:
 
 def _summary_table(report: "CoverageReport") -> "Table":
     from rich.table import Table
+
     t: dict[str, Any] = report.totals()
     view = Table(
         title=f"{report.table}: {report.shape}, made by {report.made_by} "
@@ -253,6 +251,7 @@ def _summary_table(report: "CoverageReport") -> "Table":
 
 def _fault_table(report: "CoverageReport") -> "Table":
     from rich.table import Table
+
     view = Table(title="Per fault set (free space)")
     for column in ("faults", "disabled", "replaceable", "covered", "optimal", "max excess"):
         view.add_column(column, justify="left" if column == "faults" else "right")
@@ -270,6 +269,7 @@ def _fault_table(report: "CoverageReport") -> "Table":
 
 def _wall_table(report: "CoverageReport") -> "Table":
     from rich.table import Table
+
     view = Table(
         title="Next to walls (flat): executable (pose, fault set, action) triples with "
         "no fitting usable candidate"

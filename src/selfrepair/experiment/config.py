@@ -225,7 +225,6 @@ class FaultsConfig(_Frozen):
         return tuple(domain.format_faults(_reraise(domain.parse_faults, text)) for text in value)
 
 
-
 MazeNames = Annotated[tuple[str, ...], Field(min_length=1)] | None
 """A strategy's ``mazes``: the labels of the experiment's mazes it runs on (all when absent)."""
 
@@ -283,7 +282,6 @@ class ReplacementStrategy(_StrategyEntry):
         if isinstance(value, list | tuple) and not all(isinstance(v, bool) for v in value):
             raise ValueError(f"expected true, false or a list of them, got {value!r}")
         return value
-
 
     @model_validator(mode="after")
     def _rewrite_modes(self) -> ReplacementStrategy:

@@ -76,7 +76,6 @@ STYLE = {
 }
 
 
-
 @contextmanager
 def _figure(width: float, height: float, ncols: int = 1) -> Iterator[tuple[Any, Any]]:
     """A white figure with ``ncols`` axes in the report's style."""
@@ -473,9 +472,7 @@ def draw_steps(ax: Any, picture: MissionPicture, first: int, stop: int) -> None:
     for start, end, source in picture.steps[first:stop]:
         colour = SOURCE_COLOURS.get(source, "#000000")
         if source == "failed-attempt":
-            ax.plot(
-                start.x, start.y, marker="x", color=colour, markersize=7, zorder=4, gid="step"
-            )
+            ax.plot(start.x, start.y, marker="x", color=colour, markersize=7, zorder=4, gid="step")
         elif start.cell == end.cell:
             ax.plot(
                 start.x,

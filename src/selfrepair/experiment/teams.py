@@ -123,14 +123,12 @@ class TeamSettings(_Frozen):
     grippers: Annotated[tuple[GripperMix, ...], NonEmpty] = (GripperMix.ALL,)
 
 
-
 class TeamFaults(_Frozen):
     """Fault cases, persistences and the duration (ticks) of a transient fault."""
 
     cases: Annotated[tuple[FaultCase, ...], NonEmpty]
     persistence: Annotated[tuple[Persistence, ...], NonEmpty] = (Persistence.PERMANENT,)
     duration: Annotated[int, Field(ge=1, le=100_000)] | None = None
-
 
     @model_validator(mode="after")
     def _timing(self) -> TeamFaults:

@@ -69,6 +69,7 @@ class WallGrid(Protocol):
     @property
     def name(self) -> str: ...
 
+
 __all__ = [
     "CoverageReport",
     "FaultRow",

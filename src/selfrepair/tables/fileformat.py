@@ -378,8 +378,8 @@ def _read_bundled(name: str) -> ReplacementTable:
 
 
 _BUNDLED: BoundedCache[str, ReplacementTable] = BoundedCache("bundled tables", 8)
-_FILES: BoundedCache[tuple[str, int, int, int | None, int | None], ReplacementTable] = (
-    BoundedCache("table files", 8)
+_FILES: BoundedCache[tuple[str, int, int, int | None, int | None], ReplacementTable] = BoundedCache(
+    "table files", 8
 )
 
 
