@@ -153,7 +153,7 @@ def plan_command(
             "replacement (see `selfrepair tolerance`).",
         ),
     ] = None,
-    table: TableOpt = "handwritten",
+    table: TableOpt = None,
     recursion: Recursion = "flat",
 ) -> int:
     """Plan the robot's actions with exact A*.

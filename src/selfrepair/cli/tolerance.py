@@ -146,7 +146,7 @@ def tolerance_command(
     goal: Goal,
     k: K = 1,
     fault_set: FaultSets = None,
-    table: TableOpt = "handwritten",
+    table: TableOpt = None,
     recursion: Recursion = "flat",
     max_depth: MaxDepth = 2,
     rewrite: Rewrite = False,
@@ -170,7 +170,6 @@ def tolerance_command(
     from selfrepair.repair.replacement import RecursionMode
     from selfrepair.repair.strategies import StrategyOptions
     from selfrepair.robots.four_wheel import FOUR_WHEEL
-    from selfrepair.tables.fileformat import resolve_table
     from selfrepair.world.bundled import resolve_maze
 
     check_choice(recursion, tuple(RecursionMode), "--recursion")
@@ -183,7 +182,7 @@ def tolerance_command(
         start=parse_pose(start, source="--start"),
         goal=parse_cell(goal, source="--goal"),
         options=StrategyOptions(
-            table=resolve_table(find_input(table)),
+            table=_table(domain, table),
             recursion=RecursionMode(recursion),
             max_depth=max_depth,
             rewrite=rewrite,
@@ -215,7 +214,7 @@ def tolerance_command(
 
 
 def plan_tolerance_of(
-    problem: Any, result: "PlanResult", k: int, table: str, recursion: str
+    problem: Any, result: "PlanResult", k: int, table: str | None, recursion: str
 ) -> "PlanTolerance | None":
     """The tolerance of a ``plan`` command's result (``plan --tolerance K``) for the
     replacement strategy with ``table`` and flat or another ``recursion``."""
@@ -223,8 +222,6 @@ def plan_tolerance_of(
     from selfrepair.execution.tolerance import mission_tolerance
     from selfrepair.repair.replacement import RecursionMode
     from selfrepair.repair.strategies import StrategyOptions
-    from selfrepair.tables.fileformat import resolve_table
-
     check_choice(recursion, tuple(RecursionMode), "--recursion")
     if k < 1:
         raise InputError(f"expected K >= 1, got {k}", source="--tolerance")
@@ -234,7 +231,7 @@ def plan_tolerance_of(
         problem.goal,
         problem.goal_heading,
         options=StrategyOptions(
-            table=resolve_table(find_input(table)), recursion=RecursionMode(recursion)
+            table=_table(problem.domain, table), recursion=RecursionMode(recursion)
         ),
         clearance_weight=problem.clearance_weight,
         clearance_radius=problem.clearance_radius,
@@ -243,3 +240,10 @@ def plan_tolerance_of(
     from selfrepair.repair.tolerance import fault_model
 
     return mission_tolerance(spec, fault_model(problem.domain, k), result)[1]
+
+
+def _table(domain: "Domain[Any, Any]", table: str | None) -> Any:
+    """The ``--table`` named, or the robot's own (see ``default_table``)."""
+    from selfrepair.tables.fileformat import default_table, resolve_table
+
+    return default_table(domain) if table is None else resolve_table(find_input(table))
