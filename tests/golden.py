@@ -32,7 +32,9 @@ def rows_of(db: Path) -> dict[str, dict[str, object]]:
         return {str(r["key"]): without_timings(r) for r in store.rows()}
 
 
-def row_digests(rows: Mapping[str, Mapping[str, object]], columns: Iterable[str]) -> dict[str, str]:
+def row_digests(
+    rows: Mapping[str, Mapping[str, object]], columns: Iterable[str]
+) -> dict[str, str]:
     cols = list(columns)
     return {key: _digest(row, cols) for key, row in sorted(rows.items())}
 

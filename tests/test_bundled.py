@@ -58,7 +58,6 @@ def test_corridor_width_matches_the_catalogue(name: str) -> None:
     maze = bundled.load_bundled(name)
     corridor = bundled.describe(name).corridor
     free = ~maze.walls
-
     # Widest free square anywhere equals the corridor width (checked via the clearance of a
     # free square: a c x c free square exists, a (c+1) x (c+1) one does not).
     def has_square(size: int) -> bool:
@@ -97,12 +96,8 @@ def test_the_set_covers_narrow_wide_short_long_simple_complex() -> None:
     assert max(sizes) >= 8 * min(sizes)
     # Loops: a perfect maze's free cells form a tree of corridors; braided ones have cycles.
     loops = {n: _has_cycle(m, bundled.describe(n).corridor) for n, m in mazes.items()}
-    assert loops == {
-        "narrow-short": False,
-        "wide-short": False,
-        "narrow-long": True,
-        "wide-long": True,
-    }
+    assert loops == {"narrow-short": False, "wide-short": False, "narrow-long": True,
+                     "wide-long": True}
 
 
 def _has_cycle(maze: Maze, corridor: int) -> bool:
@@ -110,12 +105,10 @@ def _has_cycle(maze: Maze, corridor: int) -> bool:
     pitch = corridor + 1
     nx, ny = (maze.width - 1) // pitch, (maze.height - 1) // pitch
     edges = sum(
-        maze.is_free(1 + i * pitch + corridor, 1 + j * pitch)
-        for i in range(nx - 1)
+        maze.is_free(1 + i * pitch + corridor, 1 + j * pitch) for i in range(nx - 1)
         for j in range(ny)
     ) + sum(
-        maze.is_free(1 + i * pitch, 1 + j * pitch + corridor)
-        for i in range(nx)
+        maze.is_free(1 + i * pitch, 1 + j * pitch + corridor) for i in range(nx)
         for j in range(ny - 1)
     )
     return bool(edges > nx * ny - 1)
@@ -168,9 +161,5 @@ def test_bundled_data_is_package_data() -> None:
     data = Path(bundled.__file__).parent.parent / "data" / "mazes"
     files = sorted(p.name for p in data.iterdir())
     assert files == sorted([f"{n}.maze" for n in NAMES] + [f"{n}.routes" for n in NAMES])
-    assert all(
-        np.array_equal(
-            bundled.load_bundled(n).walls[0], np.ones(bundled.load_bundled(n).width, dtype=bool)
-        )
-        for n in NAMES
-    )
+    assert all(np.array_equal(bundled.load_bundled(n).walls[0], np.ones(
+        bundled.load_bundled(n).width, dtype=bool)) for n in NAMES)

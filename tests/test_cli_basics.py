@@ -35,14 +35,8 @@ def test_actions_json_has_81_rows(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, _ = run(capsys, "actions", "--json")
     rows = json.loads(out)
     assert code == 0 and len(rows) == 81
-    assert rows[0] == {
-        "action": "FFFF",
-        "l": 2,
-        "r": 2,
-        "motion": "forward",
-        "kind": "straight",
-        "duration": "1",
-    }
+    assert rows[0] == {"action": "FFFF", "l": 2, "r": 2, "motion": "forward", "kind": "straight",
+                       "duration": "1"}
     assert [r["action"] for r in rows] == [a.code for a in ACTIONS]
 
 
@@ -122,22 +116,8 @@ def test_maze_show_bad_input(capsys: pytest.CaptureFixture[str], tmp_path: Path)
 
 def test_maze_generate_to_file(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     out_file = tmp_path / "g.maze"
-    args = [
-        "maze",
-        "generate",
-        "--width",
-        "21",
-        "--height",
-        "15",
-        "--corridor",
-        "2",
-        "--braid",
-        "0.5",
-        "--seed",
-        "4",
-        "-o",
-        str(out_file),
-    ]
+    args = ["maze", "generate", "--width", "21", "--height", "15", "--corridor", "2",
+            "--braid", "0.5", "--seed", "4", "-o", str(out_file)]
     code, out, _ = run(capsys, *args)
     assert code == 0 and f"wrote {out_file}" in out
     expected = generate_maze(21, 15, corridor=2, braid=0.5, seed=4)

@@ -49,61 +49,30 @@ def _candidates() -> int:
 # (flag, value that refuses, value that fits, command)
 CASES = [
     ("--max-cells", "224", "225", lambda f: ["maze", "show", f["maze"]]),
-    (
-        "--max-cells",
-        "224",
-        "225",
-        lambda f: ["maze", "generate", "--width", "15", "--height", "15", "--seed", "1"],
-    ),
+    ("--max-cells", "224", "225", lambda f: ["maze", "generate", "--width", "15", "--height",
+                                              "15", "--seed", "1"]),
     ("--max-cells", "224", "225", lambda f: ["plan", f["maze"], *ROUTE]),
     ("--max-cells", "224", "225", lambda f: ["path", f["maze"], "--from", "1,1", "--to", "13,13"]),
     ("--max-cells", "224", "225", lambda f: ["run", f["maze"], *ROUTE, "--strategy", "replan"]),
-    (
-        "--max-cells",
-        "224",
-        "225",
-        lambda f: ["table", "coverage", "handwritten", "--faults", "singles", "--maze", f["maze"]],
-    ),
-    (
-        "--max-cells",
-        "224",
-        "225",
-        lambda f: ["experiment", f["toml"], "--jobs", "1", "--db", f["db"] + "/a.sqlite"],
-    ),
-    (
-        "--max-missions",
-        "1",
-        "2",
-        lambda f: ["experiment", f["toml"], "--jobs", "1", "--db", f["db"] + "/b.sqlite"],
-    ),
+    ("--max-cells", "224", "225", lambda f: ["table", "coverage", "handwritten", "--faults",
+                                              "singles", "--maze", f["maze"]]),
+    ("--max-cells", "224", "225", lambda f: ["experiment", f["toml"], "--jobs", "1", "--db",
+                                              f["db"] + "/a.sqlite"]),
+    ("--max-missions", "1", "2", lambda f: ["experiment", f["toml"], "--jobs", "1", "--db",
+                                             f["db"] + "/b.sqlite"]),
     ("--max-table-bytes", "1000", "table", lambda f: ["table", "show", f["table"]]),
     ("--max-table-bytes", "1000", "table", lambda f: ["table", "check", f["table"]]),
-    (
-        "--max-table-bytes",
-        "1000",
-        "table",
-        lambda f: ["table", "coverage", f["table"], "--faults", "singles", "--no-walls"],
-    ),
-    (
-        "--max-table-bytes",
-        "1000",
-        "table",
-        lambda f: ["run", "narrow-short", *ROUTE, "--table", f["table"]],
-    ),
+    ("--max-table-bytes", "1000", "table", lambda f: ["table", "coverage", f["table"],
+                                                       "--faults", "singles", "--no-walls"]),
+    ("--max-table-bytes", "1000", "table", lambda f: ["run", "narrow-short", *ROUTE,
+                                                       "--table", f["table"]]),
     ("--max-table-candidates", "10", "candidates", lambda f: ["table", "show", f["table"]]),
     ("--max-table-candidates", "10", "candidates", lambda f: ["table", "check", f["table"]]),
-    (
-        "--max-table-candidates",
-        "10",
-        "candidates",
-        lambda f: ["table", "coverage", f["table"], "--faults", "singles", "--no-walls"],
-    ),
-    (
-        "--max-table-candidates",
-        "10",
-        "candidates",
-        lambda f: ["run", "narrow-short", *ROUTE, "--table", f["table"]],
-    ),
+    ("--max-table-candidates", "10", "candidates", lambda f: ["table", "coverage", f["table"],
+                                                               "--faults", "singles",
+                                                               "--no-walls"]),
+    ("--max-table-candidates", "10", "candidates", lambda f: ["run", "narrow-short", *ROUTE,
+                                                               "--table", f["table"]]),
 ]
 
 
@@ -150,40 +119,15 @@ def test_defaults_are_the_documented_constants() -> None:
     ("flag", "low", "fits", "command"),
     [
         ("--max-cells", "224", "225", lambda f: ["maze", "routes", f["maze"], "-n", "1"]),
-        (
-            "--max-cells",
-            "224",
-            "225",
-            lambda f: ["compare", f["maze"], *ROUTE, "--strategies", "replan", "--no-warm-up"],
-        ),
-        (
-            "--max-table-bytes",
-            "1000",
-            "table",
-            lambda f: [
-                "compare",
-                "narrow-short",
-                *ROUTE,
-                "--table",
-                f["table"],
-                "--strategies",
-                "replacement",
-            ],
-        ),
-        (
-            "--max-table-candidates",
-            "10",
-            "candidates",
-            lambda f: [
-                "compare",
-                "narrow-short",
-                *ROUTE,
-                "--table",
-                f["table"],
-                "--strategies",
-                "replacement",
-            ],
-        ),
+        ("--max-cells", "224", "225", lambda f: ["compare", f["maze"], *ROUTE, "--strategies",
+                                                  "replan", "--no-warm-up"]),
+        ("--max-table-bytes", "1000", "table", lambda f: ["compare", "narrow-short", *ROUTE,
+                                                           "--table", f["table"],
+                                                           "--strategies", "replacement"]),
+        ("--max-table-candidates", "10", "candidates", lambda f: ["compare", "narrow-short",
+                                                                   *ROUTE, "--table", f["table"],
+                                                                   "--strategies",
+                                                                   "replacement"]),
     ],
 )
 def test_limit_flags_of_the_newer_commands(
@@ -209,23 +153,8 @@ def text_files(files: dict[str, str], tmp_path: Path) -> dict[str, str]:
     routes = Path(files["maze"]).with_suffix(".routes")
     assert main(["maze", "routes", files["maze"], "-n", "2", "--seed", "0", "-o", str(routes)]) == 0
     trace = tmp_path / "t.jsonl"
-    assert (
-        main(
-            [
-                "run",
-                "narrow-short",
-                *ROUTE,
-                "--faults",
-                "FL:F",
-                "--strategy",
-                "replan",
-                "--no-warm-up",
-                "--trace",
-                str(trace),
-            ]
-        )
-        == 0
-    )
+    assert main(["run", "narrow-short", *ROUTE, "--faults", "FL:F", "--strategy", "replan",
+                 "--no-warm-up", "--trace", str(trace)]) == 0
     team_trace = tmp_path / "team.jsonl"
     assert main(["team", "run", "three-robots", "--trace", str(team_trace)]) == 0
     return {
@@ -243,26 +172,17 @@ def text_files(files: dict[str, str], tmp_path: Path) -> dict[str, str]:
 BYTE_CASES = [
     ("--max-file-bytes", "routes", lambda f: ["maze", "show", f["maze"], "--routes"]),
     ("--max-file-bytes", "scen", lambda f: ["check-scen", f["scen"], "--sample", "1"]),
-    (
-        "--max-file-bytes",
-        "toml",
-        lambda f: ["experiment", f["toml"], "--jobs", "1", "--db", f["db"] + "/c.sqlite"],
-    ),
+    ("--max-file-bytes", "toml", lambda f: ["experiment", f["toml"], "--jobs", "1", "--db",
+                                             f["db"] + "/c.sqlite"]),
     ("--max-file-bytes", "team", lambda f: ["team", "run", f["team"]]),
     ("--max-file-bytes", "team", lambda f: ["team", "compare", f["team"]]),
     ("--max-trace-bytes", "trace", lambda f: ["replay", f["trace"]]),
     ("--max-trace-bytes", "trace", lambda f: ["view", f["trace"], "-o", f["out"] + "/v.html"]),
-    (
-        "--max-trace-bytes",
-        "trace",
-        lambda f: ["animate", f["trace"], "-o", f["out"] + "/a.gif", "--max-frames", "2"],
-    ),
+    ("--max-trace-bytes", "trace", lambda f: ["animate", f["trace"], "-o", f["out"] + "/a.gif",
+                                              "--max-frames", "2"]),
     ("--max-trace-bytes", "team_trace", lambda f: ["team", "replay", f["team_trace"]]),
-    (
-        "--max-trace-bytes",
-        "team_trace",
-        lambda f: ["team", "frame", f["team_trace"], "-o", f["out"] + "/f.png"],
-    ),
+    ("--max-trace-bytes", "team_trace", lambda f: ["team", "frame", f["team_trace"], "-o",
+                                                   f["out"] + "/f.png"]),
 ]
 
 

@@ -52,7 +52,9 @@ def scenarios(draw: st.DrawFn) -> tuple[MissionSpec, list[tuple[int, str]]]:
         clearance_weight=weight,
     )
     changes = draw(
-        st.lists(st.tuples(st.integers(0, 3), st.sampled_from(FAULT_TEXTS)), min_size=1, max_size=4)
+        st.lists(
+            st.tuples(st.integers(0, 3), st.sampled_from(FAULT_TEXTS)), min_size=1, max_size=4
+        )
     )
     return spec, changes
 

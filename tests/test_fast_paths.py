@@ -74,7 +74,9 @@ def schedules(draw: st.DrawFn, domain: object) -> FaultSchedule:
                 at=draw(st.integers(0, 6)),
                 clock=draw(st.sampled_from(list(Clock))),
                 persistence=persistence,
-                duration=draw(st.integers(1, 5)) if persistence is Persistence.TRANSIENT else None,
+                duration=draw(st.integers(1, 5))
+                if persistence is Persistence.TRANSIENT
+                else None,
                 probability=draw(st.sampled_from([0.0, 0.4, 1.0]))
                 if persistence is Persistence.INTERMITTENT
                 else None,
@@ -194,10 +196,9 @@ def test_kernels_agree_when_heap_queue_and_stamps_are_pushed_to_their_limits(
                 reference.cost,
                 reference.duration,
             )
-        assert (
-            bfs_distances(maze, free[-1], backend="numba")
-            == bfs_distances(maze, free[-1], backend="python")
-        ).all()
+        assert (bfs_distances(maze, free[-1], backend="numba") == bfs_distances(
+            maze, free[-1], backend="python"
+        )).all()
         path = grid_astar(maze, free[0], free[-1], backend="numba")
         assert path.path == grid_astar(maze, free[0], free[-1], backend="python").path
     finally:

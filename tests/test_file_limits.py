@@ -62,16 +62,8 @@ def _team(tmp_path: Path) -> Path:
 def _trace(tmp_path: Path) -> Path:
     route = bundled_routes("narrow-short")[0]
     schedule = FaultSchedule((FaultEvent(four_wheel.parse_fault("FL:F"), at=1),), "now")
-    result = run_mission(
-        MissionSpec(
-            load_bundled("narrow-short"),
-            route.start,
-            route.goal,
-            schedule=schedule,
-            strategy="replan",
-            seed=1,
-        )
-    )
+    result = run_mission(MissionSpec(load_bundled("narrow-short"), route.start, route.goal,
+                                     schedule=schedule, strategy="replan", seed=1))
     target = tmp_path / "mission.jsonl"
     write_trace(result, target)
     return target
@@ -85,7 +77,8 @@ CASES: list[tuple[str, Callable[[Path], Path], Reader]] = [
     ("max_file_bytes", _routes, lambda p, n: load_routes(p, max_file_bytes=n)),
     ("max_file_bytes", _experiment, lambda p, n: load_config(p, max_file_bytes=n)),
     ("max_file_bytes", _experiment, lambda p, n: load_experiment(p, max_file_bytes=n)),
-    ("max_file_bytes", _team, lambda p, n: load_team_scenario(p, limits=Limits(max_file_bytes=n))),
+    ("max_file_bytes", _team,
+     lambda p, n: load_team_scenario(p, limits=Limits(max_file_bytes=n))),
     ("max_trace_bytes", _trace, lambda p, n: read_trace(p, max_trace_bytes=n)),
 ]
 

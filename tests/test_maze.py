@@ -143,12 +143,8 @@ def test_save_and_load(tmp_path: Path) -> None:
 def brute_force_clearance(walls: np.ndarray) -> np.ndarray:
     """Chebyshev distance to the nearest wall cell or off-grid cell, by enumeration."""
     h, w = walls.shape
-    blocked = [
-        (x, y)
-        for y in range(-1, h + 1)
-        for x in range(-1, w + 1)
-        if not (0 <= x < w and 0 <= y < h) or walls[y, x]
-    ]
+    blocked = [(x, y) for y in range(-1, h + 1) for x in range(-1, w + 1)
+               if not (0 <= x < w and 0 <= y < h) or walls[y, x]]
     out = np.zeros((h, w), dtype=np.int64)
     for y in range(h):
         for x in range(w):

@@ -49,10 +49,7 @@ def test_hog2_scenario_generation() -> None:
     first = queries[0]
     assert (first.bucket, first.map_name) == (1, "maps/mazes/maze512-1-0.map")
     assert (first.start, first.goal, first.optimal_length, first.line) == (
-        (407, 136),
-        (405, 134),
-        4.0,
-        2,
+        (407, 136), (405, 134), 4.0, 2
     )
     assert all(maze.is_free(*q.start) and maze.is_free(*q.goal) for q in queries)
 

@@ -148,9 +148,7 @@ def test_a_repair_that_leaves_a_faulty_head_breaks_the_contract() -> None:
 def test_a_real_strategy_drives_to_the_goal() -> None:
     """The executor's replanner, asked step by step, reaches the goal on the open maze."""
     context = _context()
-    stepper = Stepper(
-        context, get_strategy("replan")(context), [], FL_F, move_table(FOUR_WHEEL, 1)
-    )
+    stepper = Stepper(context, get_strategy("replan")(context), [], FL_F, move_table(FOUR_WHEEL, 1))
     pose, step = START, 0
     while not context.at_goal(pose):
         entry = stepper.next_action(pose, step)

@@ -126,7 +126,9 @@ def test_repairs_carry_their_source_candidate_latency_and_path(
     for shown, line in zip(repairs, trace.repairs, strict=True):
         assert shown["step"] == line.step and _pose(shown["pose"]) == line.pose
         assert shown["latency_ns"] == line.latency_ns and shown["latency"].endswith("s")
-        assert shown["source"] == line.source and shown["actions"] == [a.code for a in line.actions]
+        assert shown["source"] == line.source and shown["actions"] == [
+            a.code for a in line.actions
+        ]
         pose = line.pose
         for segment, action in zip(shown["path"], line.actions, strict=True):
             assert _pose(segment["from"]) == pose

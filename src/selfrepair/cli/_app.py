@@ -255,10 +255,8 @@ def text_table(headers: Sequence[str], rows: Sequence[Sequence[str]], right: set
     widths = [max([len(h), *(len(r[i]) for r in rows)]) for i, h in enumerate(headers)]
 
     def line(cells: Sequence[str]) -> str:
-        parts = [
-            c.rjust(w) if i in right else c.ljust(w)
-            for i, (c, w) in enumerate(zip(cells, widths, strict=True))
-        ]
+        parts = [c.rjust(w) if i in right else c.ljust(w) for i, (c, w) in enumerate(
+            zip(cells, widths, strict=True))]
         return "  ".join(parts).rstrip()
 
     rule = "  ".join("-" * w for w in widths)

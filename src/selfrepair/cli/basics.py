@@ -1,6 +1,7 @@
 """Basic commands: ``selfrepair actions`` and the maze group (``maze show``, ``maze list``,
 ``maze generate``, ``maze routes``)."""
 
+
 import sys
 from collections.abc import Sequence
 from pathlib import Path

@@ -1,6 +1,7 @@
 """``selfrepair domains``: the robots this installation knows (built-in, plug-ins, and files loaded
 with ``--plugin``)."""
 
+
 from typing import Annotated
 
 import typer

@@ -1,5 +1,6 @@
 """Commands that make and measure replacement tables: ``selfrepair table generate|coverage``."""
 
+
 import json
 import time
 from collections.abc import Iterable
@@ -125,7 +126,9 @@ def _mazes(names: list[str] | None, no_walls: bool, max_cells: int) -> "list[tup
 
 @table_app.command("coverage")
 def table_coverage(
-    spec: Annotated[str, typer.Argument(metavar="TABLE", help="Table file or bundled table name.")],
+    spec: Annotated[
+        str, typer.Argument(metavar="TABLE", help="Table file or bundled table name.")
+    ],
     faults: Annotated[
         str,
         typer.Option(
@@ -213,7 +216,6 @@ def _percent(value: float | None) -> str:
 
 def _summary_table(report: "CoverageReport") -> "Table":
     from rich.table import Table
-
     t: dict[str, Any] = report.totals()
     view = Table(
         title=f"{report.table}: {report.shape}, made by {report.made_by} "
@@ -251,7 +253,6 @@ def _summary_table(report: "CoverageReport") -> "Table":
 
 def _fault_table(report: "CoverageReport") -> "Table":
     from rich.table import Table
-
     view = Table(title="Per fault set (free space)")
     for column in ("faults", "disabled", "replaceable", "covered", "optimal", "max excess"):
         view.add_column(column, justify="left" if column == "faults" else "right")
@@ -269,7 +270,6 @@ def _fault_table(report: "CoverageReport") -> "Table":
 
 def _wall_table(report: "CoverageReport") -> "Table":
     from rich.table import Table
-
     view = Table(
         title="Next to walls (flat): executable (pose, fault set, action) triples with "
         "no fitting usable candidate"

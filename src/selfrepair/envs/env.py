@@ -51,7 +51,6 @@ import numpy as np
 import numpy.typing as npt
 from gymnasium import spaces
 
-from selfrepair.caching import BoundedCache
 from selfrepair.envs.render import ansi_frame, check_cell_pixels, maze_frame, rgb_frame
 from selfrepair.envs.scenarios import (
     BUNDLED,
@@ -82,8 +81,7 @@ from selfrepair.repair.strategies import (
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import get_domain
 from selfrepair.search.astar import PlanStatus
-from selfrepair.tables.fileformat import bundled_table, bundled_table_names, resolve_table
-from selfrepair.tables.generate import generate_table
+from selfrepair.tables.fileformat import default_table, resolve_table
 from selfrepair.tables.model import ReplacementTable
 from selfrepair.world.bundled import resolve_maze
 from selfrepair.world.maze import Maze
@@ -107,25 +105,6 @@ class Rewards:
     goal_bonus: float = 100.0
     blocked_penalty: float = 1.0
     fault_penalty: float = 1.0
-
-
-_GENERATED: BoundedCache[Domain[Any, Any], ReplacementTable] = BoundedCache(
-    "generated environment tables", 4
-)
-
-
-def default_table(domain: Domain[Any, Any]) -> ReplacementTable:
-    """The table the guide and the replacement policy use when none is given: the paper's
-    hand-written one for the four-wheel robot, a bundled table named after the domain when there
-    is one (``three-action``), else a table generated for the domain (default options; made once
-    per process for a few domains)."""
-    if domain.name == "four-wheel":
-        return bundled_table("handwritten")
-    if domain.name in bundled_table_names():
-        table = bundled_table(domain.name)
-        if table.domain is domain:
-            return table
-    return _GENERATED.get(domain, lambda: generate_table(domain))
 
 
 class FaultyMazeEnv(gym.Env[Observation, np.int64]):

@@ -69,7 +69,6 @@ class WallGrid(Protocol):
     @property
     def name(self) -> str: ...
 
-
 __all__ = [
     "CoverageReport",
     "FaultRow",

@@ -592,6 +592,7 @@ _NO_PENALTY = np.zeros(1, dtype=np.int64)
 _NO_PENALTY.setflags(write=False)
 
 
+
 def plan_lattice(
     problem: PlanningProblem,
     moves: tuple[Any, ...],

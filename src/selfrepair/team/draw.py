@@ -45,6 +45,7 @@ _STYLE = {
 _MARKERS = {Heading.N: "^", Heading.E: ">", Heading.S: "v", Heading.W: "<"}
 
 
+
 def _load(path: str | Path, max_trace_bytes: int | None = MAX_TRACE_BYTES) -> TeamTrace:
     trace = read_team_trace(path, max_trace_bytes=max_trace_bytes)
     report = replay_team(trace)

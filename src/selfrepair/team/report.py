@@ -33,6 +33,7 @@ _STYLE = {
 }
 
 
+
 def _table(headers: Sequence[str], body: Sequence[Sequence[str]]) -> str:
     lines = ["| " + " | ".join(headers) + " |"]
     lines.append("|" + "|".join([":---"] + ["---:"] * (len(headers) - 1)) + "|")

@@ -87,7 +87,9 @@ def _check_options(width: int, height: int, corridor: int, braid: float) -> None
 
 def _neighbours(room: Room, nx: int, ny: int) -> list[Room]:
     i, j = room
-    return [(i + di, j + dj) for di, dj in _DIRECTIONS if 0 <= i + di < nx and 0 <= j + dj < ny]
+    return [
+        (i + di, j + dj) for di, dj in _DIRECTIONS if 0 <= i + di < nx and 0 <= j + dj < ny
+    ]
 
 
 def _edge(a: Room, b: Room) -> frozenset[Room]:

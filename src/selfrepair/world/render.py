@@ -56,7 +56,9 @@ def render_ascii(maze: Maze, layers: Sequence[Mapping[Cell, str]] = ()) -> str:
     Off-grid cells are skipped. A layer value that is not exactly one character raises
     :class:`ValueError` because it would shift the rest of the row.
     """
-    grid = [[WALL_CHAR if wall else FREE_CHAR for wall in row] for row in maze.walls.tolist()]
+    grid = [
+        [WALL_CHAR if wall else FREE_CHAR for wall in row] for row in maze.walls.tolist()
+    ]
     for layer in layers:
         for (x, y), char in layer.items():
             if len(char) != 1:

@@ -170,7 +170,9 @@ def load_routes(
     return parse_routes(text, source=str(path), maze=maze)
 
 
-def save_routes(routes: Iterable[Route], path: str | Path, *, comments: Sequence[str] = ()) -> None:
+def save_routes(
+    routes: Iterable[Route], path: str | Path, *, comments: Sequence[str] = ()
+) -> None:
     """Write ``routes`` to ``path`` in the route-file format."""
     Path(path).write_text(format_routes(routes, comments=comments), encoding="utf-8")
 
