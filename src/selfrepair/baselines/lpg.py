@@ -39,7 +39,6 @@ import importlib
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from enum import Enum
 from fractions import Fraction
 from types import ModuleType
 from typing import Any
@@ -57,6 +56,7 @@ from selfrepair.robots import four_wheel
 from selfrepair.robots.four_wheel import Action, FaultSet, MotionKind
 from selfrepair.search.lattice import plan_cost
 from selfrepair.search.problem import PlanningProblem
+from selfrepair.status import LpgStatus
 
 __all__ = [
     "LPG_MAX_OBJECTS",
@@ -77,15 +77,6 @@ constants!" after UP spent seconds writing the problem)."""
 
 MAX_LPG_TIME_LIMIT = 3600.0
 """Largest time limit (seconds) that :func:`lpg_adapt_repair` and :func:`lpg_plan` accept."""
-
-
-class LpgStatus(Enum):
-    """How an LPG call ended."""
-
-    SOLVED = "solved"
-    NO_PLAN = "no-plan"
-    TIMEOUT = "timeout"
-    ERROR = "error"
 
 
 @dataclass(frozen=True, slots=True)

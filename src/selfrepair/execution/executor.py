@@ -51,6 +51,7 @@ from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import Detection
 from selfrepair.execution.moves import available_moves
 from selfrepair.execution.result import (
+    STEP_OF_REPAIR,
     MissionResult,
     MissionSpec,
     MissionStatus,
@@ -76,6 +77,7 @@ from selfrepair.search.astar import PlanResult, PlanStatus
 from selfrepair.search.backend import use_numba
 from selfrepair.search.lattice import action_cost, cost_scale, plan
 from selfrepair.search.problem import PlanningProblem
+from selfrepair.status import mission_status
 from selfrepair.tables.model import ReplacementTable
 from selfrepair.world.maze import Maze, clearance_penalties
 
@@ -112,11 +114,6 @@ class _ActionView(Sequence[Any]):
 
 
 _ACTION = itemgetter(0)
-
-_STEP_SOURCES = {str(s): StepSource(s) for s in StepSource}
-"""Step sources by value: a dictionary look-up, where calling the enum costs a microsecond inside
-the timed repair."""
-
 
 def _splice(
     queue: deque[tuple[Any, StepSource]], consumed: int, actions: Sequence[Any], source: StepSource
@@ -214,7 +211,7 @@ class _Run:
         fallback = action is None  # the queue ran out away from the goal: plain replan
         repair = replan(self.context, request) if fallback else self.repairer.repair(request)
         if repair.status is RepairStatus.REPAIRED:
-            source = _STEP_SOURCES.get(repair.source) or StepSource(repair.source)
+            source = STEP_OF_REPAIR[repair.source]
             _splice(self.queue, repair.consumed, repair.actions, source)
         latency = time.perf_counter_ns() - t0
         self.repairs.append(RepairRecord(self.sim.steps, self.sim.pose, action, repair, latency))
@@ -299,7 +296,7 @@ def _loop(run: _Run) -> tuple[MissionStatus, str]:
         if not queue or queue[0][0] not in available:
             repair = run.repair(queue[0][0] if queue else None)
             if repair.status is not RepairStatus.REPAIRED:
-                return MissionStatus(repair.status), _why(repair, run)
+                return mission_status(repair.status), _why(repair, run)
             continue
         if (
             horizon
@@ -309,7 +306,7 @@ def _loop(run: _Run) -> tuple[MissionStatus, str]:
             early_at = sim.steps
             repair = run.repair(ahead[0])  # a known fault ahead: the repairer wants it early
             if repair.status is not RepairStatus.REPAIRED:
-                return MissionStatus(repair.status), _why(repair, run)
+                return mission_status(repair.status), _why(repair, run)
             continue
         action, source = queue[0]
         step = sim.steps

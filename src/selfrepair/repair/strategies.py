@@ -75,7 +75,8 @@ from selfrepair.repair.replacement import (
     Replacement,
 )
 from selfrepair.robots.domain import Domain, run_open
-from selfrepair.search.astar import PlanResult, PlanStatus
+from selfrepair.search.astar import PlanResult
+from selfrepair.status import REPAIR_OF_PLAN, PlanStatus, RepairStatus
 from selfrepair.tables.fileformat import resolve_table
 from selfrepair.tables.model import ReplacementTable
 
@@ -109,14 +110,6 @@ class StrategyName(StrEnum):
     LOOKAHEAD = "lookahead"
 
 
-class RepairStatus(StrEnum):
-    """How a repair ended: a repaired queue, no plan exists, or the planner's budget ran out."""
-
-    REPAIRED = "repaired"
-    STUCK = "stuck"
-    BUDGET_EXHAUSTED = "budget_exhausted"
-
-
 class RepairSource(StrEnum):
     """Where the actions of a repair came from."""
 
@@ -124,13 +117,6 @@ class RepairSource(StrEnum):
     LOOKAHEAD = "lookahead"
     REPLAN = "replan"
     PLAN_REPAIR = "plan-repair"
-
-
-_FROM_PLAN = {
-    PlanStatus.SOLVED: RepairStatus.REPAIRED,
-    PlanStatus.UNSOLVABLE: RepairStatus.STUCK,
-    PlanStatus.BUDGET_EXHAUSTED: RepairStatus.BUDGET_EXHAUSTED,
-}
 
 
 @dataclass(frozen=True, slots=True)
@@ -337,7 +323,7 @@ def replan(context: MissionContext, request: RepairRequest) -> Repair:
         request.pose, context.goal, context.goal_heading, request.known, context.replan_budget
     )
     return Repair(
-        _FROM_PLAN[result.status],
+        REPAIR_OF_PLAN[result.status],
         RepairSource.REPLAN,
         result.actions,
         len(request.queue),

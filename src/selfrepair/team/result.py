@@ -18,6 +18,7 @@ from selfrepair.execution.result import StepSource
 from selfrepair.geometry import Cell, Pose
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import RepairSource, RepairStatus, StrategyName
+from selfrepair.status import RepairOutcome, TeamStatus
 from selfrepair.team.model import (
     IncidentKind,
     Load,
@@ -50,24 +51,6 @@ class TeamSource(StrEnum):
     REALLOCATION = "reallocation"
     ALONE = "alone"
     YIELD = "yield"
-
-
-class TeamStatus(StrEnum):
-    """How a team mission ended: every task delivered; nothing more could happen (``stalled``:
-    the robots left with work cannot act and no fault will clear); or ``max_ticks`` passed."""
-
-    DELIVERED = "delivered"
-    STALLED = "stalled"
-    TIME_LIMIT = "time_limit"
-
-
-class RepairOutcome(StrEnum):
-    """What a team strategy did about an incident: changed the plan (``repaired``), let the robot
-    wait and try again (``deferred``), or gave the incident's task up (``lost``)."""
-
-    REPAIRED = "repaired"
-    DEFERRED = "deferred"
-    LOST = "lost"
 
 
 @dataclass(frozen=True, slots=True)
