@@ -35,7 +35,6 @@ What LPG is given, and why (each point found by running the binary)
 
 from __future__ import annotations
 
-import importlib
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -112,7 +111,7 @@ def lpg_available() -> bool:
 
 def _bridge() -> ModuleType:
     try:
-        unified = importlib.import_module("selfrepair.baselines.unified")
+        from selfrepair.baselines import unified
     except ImportError as exc:
         raise ProblemError(
             f"LPG needs the pddl extra (pip install 'selfrepair[pddl]'): {exc}"

@@ -46,8 +46,8 @@ __all__ = [
 class PolicyName(StrEnum):
     """The built-in baseline policies."""
 
-    REPLACEMENT = "replacement"
-    REPLAN = "replan"
+    REPLACEMENT = StrategyName.REPLACEMENT
+    REPLAN = StrategyName.REPLAN
     RANDOM = "random"
 
 

@@ -43,10 +43,10 @@ class StepSource(StrEnum):
     not know yet made fail."""
 
     PLAN = "plan"
-    REPLACEMENT = "replacement"
-    LOOKAHEAD = "lookahead"
-    REPLAN = "replan"
-    PLAN_REPAIR = "plan-repair"
+    REPLACEMENT = RepairSource.REPLACEMENT.value
+    LOOKAHEAD = RepairSource.LOOKAHEAD.value
+    REPLAN = RepairSource.REPLAN.value
+    PLAN_REPAIR = RepairSource.PLAN_REPAIR.value
     FAILED_ATTEMPT = "failed-attempt"
 
 

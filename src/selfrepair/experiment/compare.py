@@ -18,7 +18,13 @@ from selfrepair.errors import ProblemError
 from selfrepair.execution.executor import run_mission
 from selfrepair.execution.metrics import latency_stats, plan_distance
 from selfrepair.execution.result import MissionResult, MissionSpec
-from selfrepair.repair.strategies import RepairSource, RepairStatus, strategy_names, uses_table
+from selfrepair.repair.strategies import (
+    RepairSource,
+    RepairStatus,
+    StrategyName,
+    strategy_names,
+    uses_table,
+)
 
 __all__ = ["Comparison", "StrategyRun", "compare_strategies", "strategy_label", "verdict"]
 
@@ -30,7 +36,7 @@ def strategy_label(spec: MissionSpec) -> str:
         return str(spec.strategy)
     options = spec.options
     parts = [options.table_label, options.recursion.value]
-    if spec.strategy == "lookahead":
+    if spec.strategy == StrategyName.LOOKAHEAD:
         parts.append(f"k={options.window}")
     return f"{spec.strategy}[{','.join(parts)}]"
 

@@ -71,6 +71,7 @@ from selfrepair.execution.faults import Clock, Detection, Persistence
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CLEARANCE_WEIGHT, MAX_FILE_BYTES
 from selfrepair.repair.replacement import DEFERRING, RecursionMode
+from selfrepair.repair.strategies import MissionKind, StrategyName
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import get_domain, load_plugin
 from selfrepair.textio import read_text, strip_bom, text_lines
@@ -260,7 +261,7 @@ class ReplanStrategy(_StrategyEntry):
     (``auto``: the compiled kernels when numba is installed; ``python``: the pure-Python search,
     to compare with pure-Python strategies such as D* Lite)."""
 
-    name: Literal["replan"]
+    name: Literal[StrategyName.REPLAN]
     backend: Literal["auto", "numba", "python"] = "auto"
 
 
@@ -268,7 +269,7 @@ class ReplacementStrategy(_StrategyEntry):
     """Replacement tables with recursion mode; one variant per table, mode and ``rewrite``
     value (``true``: whole-plan rewriting, ``[false, true]``: both; default per encounter)."""
 
-    name: Literal["replacement"]
+    name: Literal[StrategyName.REPLACEMENT]
     tables: Annotated[tuple[str, ...], NonEmpty] = ("handwritten",)
     recursion: Annotated[tuple[RecursionMode, ...], NonEmpty] = (RecursionMode.GUARDED,)
     rewrite: tuple[bool, ...] = (False,)
@@ -301,7 +302,7 @@ class LookaheadStrategy(ReplacementStrategy):
     """Replace a window of ``window`` actions after the faulty one and, when the fault is known
     ahead, ``before`` actions before it; one variant per (window, before) pair."""
 
-    name: Literal["lookahead"]  # type: ignore[assignment]
+    name: Literal[StrategyName.LOOKAHEAD]  # type: ignore[assignment]
     window: tuple[Annotated[Int, Field(ge=0, le=64)], ...] = (3,)
     before: tuple[Annotated[Int, Field(ge=0, le=64)], ...] = (0,)
 
@@ -316,14 +317,14 @@ class LookaheadStrategy(ReplacementStrategy):
 class DStarLiteStrategy(_StrategyEntry):
     """D* Lite, incremental replanning (pure Python), keeping its search between repairs."""
 
-    name: Literal["dstar-lite"]
+    name: Literal[StrategyName.DSTAR_LITE]
 
 
 class LpgAdaptStrategy(_StrategyEntry):
     """Plan repair with LPG-adapt (``pddl`` extra, four-wheel robot): ``time_limit`` seconds per
     call, LPG's ``seed``; LPG's failures and time-outs fall back to replanning."""
 
-    name: Literal["lpg-adapt"]
+    name: Literal[StrategyName.LPG_ADAPT]
     time_limit: Annotated[Float, Field(gt=0, le=3600)] = 5.0
     seed: Annotated[Int, Field(ge=0, lt=2**31)] = 0
 
@@ -545,7 +546,7 @@ def config_error(exc: ValidationError, text: str, source: str) -> ConfigError:
     elif error["type"] == "union_tag_invalid":
         loc = (*loc, "name")
         key = _dotted(loc)
-        expected = error.get("ctx", {}).get("expected_tags", "")
+        expected = ", ".join(repr(str(name)) for name in StrategyName.of_kind(MissionKind.ROBOT))
         message = f"expected a strategy name, one of {expected}"
         got = error.get("input", {}).get("name") if isinstance(error.get("input"), dict) else None
         return ConfigError(
@@ -567,12 +568,16 @@ def config_error(exc: ValidationError, text: str, source: str) -> ConfigError:
     return ConfigError(f"key {key!r}: {message}", source=source, line=find_line(text, loc))
 
 
+_STRATEGY_TAGS = frozenset(StrategyName.of_kind(MissionKind.ROBOT))
+"""The tags of the strategy union, as pydantic writes them into error locations."""
+
+
 def _clean_loc(loc: tuple[Any, ...]) -> tuple[str | int, ...]:
     """Drop pydantic's union-member tags (e.g. ``'replacement'``, ``'int'``) from a location."""
     out: list[str | int] = []
     for part in loc:
         if isinstance(part, str) and (
-            part in ("replan", "replacement", "lookahead", "dstar-lite", "lpg-adapt")
+            part in _STRATEGY_TAGS
             or "[" in part
             or part in ("int", "str", "tuple", "float", "constrained-int", "function-after")
         ):
