@@ -101,23 +101,25 @@ class EpisodeEnd(StrEnum):
     GAVE_UP = "gave_up"
 
 
-POSITIVE_OUTCOMES: frozenset[Enum] = frozenset(
-    {
-        PlanStatus.SOLVED,
-        RepairStatus.REPAIRED,
-        MissionStatus.REACHED,
-        TeamStatus.DELIVERED,
-        RepairOutcome.REPAIRED,
-        LpgStatus.SOLVED,
-        EpisodeEnd.REACHED,
-    }
+POSITIVE_OUTCOMES: tuple[Enum, ...] = (
+    PlanStatus.SOLVED,
+    RepairStatus.REPAIRED,
+    MissionStatus.REACHED,
+    TeamStatus.DELIVERED,
+    RepairOutcome.REPAIRED,
+    LpgStatus.SOLVED,
+    EpisodeEnd.REACHED,
 )
-"""The success of each status enum (a deferred team repair or a truncated episode is not one)."""
+"""The success of each status enum (a deferred team repair or a truncated episode is not one).
+A tuple, not a set: string enums of different kinds with the same value compare equal."""
+
+_POSITIVE = frozenset((type(status), status.value) for status in POSITIVE_OUTCOMES)
 
 
 def is_positive(status: Enum) -> bool:
-    """Whether ``status`` is its enum's success (a member of :data:`POSITIVE_OUTCOMES`)."""
-    return status in POSITIVE_OUTCOMES
+    """Whether ``status`` is its enum's success (one of :data:`POSITIVE_OUTCOMES`, by kind and
+    value: a plain string ``"reached"`` is no status)."""
+    return (type(status), status.value) in _POSITIVE
 
 
 REPAIR_OF_PLAN: Mapping[PlanStatus, RepairStatus] = MappingProxyType(
