@@ -36,6 +36,7 @@ __all__ = [
     "OctileCost",
     "PlannerSettings",
     "PlanningProblem",
+    "StepTerm",
     "check_search_inputs",
     "grid_heuristic",
     "make_pose",
@@ -44,12 +45,52 @@ __all__ = [
 ]
 
 
+@dataclass(frozen=True, slots=True, eq=False)
+class StepTerm:
+    """A cost term per (pose, planning action), as data: ``counts[y, x, heading, k]`` is a
+    non-negative count for ``actions[k]`` started at ``(x, y, heading)`` (for the tolerant
+    planner: the fault sets under which that step would need a replan, see
+    :mod:`selfrepair.repair.tolerance_masks`).
+
+    ``penalty`` ``None`` is the **hard** mode: a step with a count above 0 is never taken, so
+    the plan found is the cheapest one whose every step counts 0 (``UNSOLVABLE``: none exists).
+    A :class:`~fractions.Fraction` is the **soft** mode: each counted unit costs ``penalty``
+    ticks, exactly (like the clearance weight). ``actions`` are the planning actions the counts
+    were made for (those of :func:`selfrepair.search.lattice.planning_actions` for the faults the
+    planner knows); the planner refuses a term made for others. Equality is identity (arrays).
+    """
+
+    actions: tuple[Any, ...]
+    counts: npt.NDArray[np.int32]
+    penalty: Fraction | None = None
+    label: str = "tolerant"
+
+    def __post_init__(self) -> None:
+        shape = self.counts.shape
+        if len(shape) != 4 or shape[2] != 4 or shape[3] != len(self.actions):
+            raise ProblemError(
+                f"step term counts must have shape (height, width, 4, {len(self.actions)}), "
+                f"got {shape}"
+            )
+        if self.penalty is not None and self.penalty < 0:
+            raise ProblemError(f"a step term penalty must be >= 0, got {self.penalty}")
+        if self.counts.size and int(self.counts.min()) < 0:
+            raise ProblemError("step term counts must be >= 0")
+
+    @property
+    def hard(self) -> bool:
+        """Whether counted steps are forbidden (rather than penalised)."""
+        return self.penalty is None
+
+
 @dataclass(frozen=True, slots=True)
 class PlanningProblem:
     """What to plan: from ``start`` to ``goal`` (any heading unless ``goal_heading``) on ``maze``,
     for the robot ``domain`` (the four-wheel robot unless given).
 
     ``faults`` are the faults the planner knows about; actions they forbid are never used.
+    ``step_term`` adds a cost term per (pose, action) (:class:`StepTerm`: the tolerant planner's
+    masks); ``None``, the default, costs nothing.
     """
 
     maze: Maze
@@ -60,6 +101,7 @@ class PlanningProblem:
     clearance_weight: Fraction | int = Fraction(0)
     clearance_radius: int = 2
     domain: Domain[Any, Any] = FOUR_WHEEL
+    step_term: StepTerm | None = None
 
     def at_goal(self, pose: Pose) -> bool:
         """Whether ``pose`` satisfies the goal."""
