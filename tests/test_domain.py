@@ -23,7 +23,7 @@ poses = st.builds(Pose, st.integers(-20, 20), st.integers(-20, 20), st.sampled_f
 def test_registry_names_both_domains() -> None:
     assert set(domain_names()) >= {"four-wheel", "three-action"}
     assert get_domain("three-action") is THREE_ACTION
-    with pytest.raises(InputError, match="four-wheel, .*three-action"):
+    with pytest.raises(InputError, match=r"four-wheel, .*three-action"):
         get_domain("hexapod")
 
 
