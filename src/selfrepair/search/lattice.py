@@ -417,7 +417,7 @@ def plan(
     """
     t0 = time.perf_counter_ns()
     _validate(problem, heuristic, max_expansions, time_limit, backend)
-    fast, load_ns = _load(backend)
+    fast, load_ns = _load(backend, problem.domain)
     if not isinstance(problem.clearance_weight, Fraction):
         problem = replace(problem, clearance_weight=Fraction(problem.clearance_weight))
     if problem.at_goal(problem.start):
@@ -466,12 +466,14 @@ def plan(
     )
 
 
-def _load(backend: str) -> tuple[bool, int]:
-    """Whether ``backend`` means the compiled kernels, and the nanoseconds spent now importing
-    numba and loading them (0 when this process already had)."""
+def _load(backend: str, domain: Domain[Any, Any] | None = None) -> tuple[bool, int]:
+    """Whether ``backend`` means the compiled kernels for ``domain`` (see
+    :func:`~selfrepair.search.backend.use_numba`: an explicit ``numba`` for a robot the kernels
+    cannot take is refused), and the nanoseconds spent now importing numba and loading them (0
+    when this process already had)."""
     t0 = time.perf_counter_ns()
     cold = "selfrepair.search._kernels" not in sys.modules
-    fast = use_numba(backend)
+    fast = use_numba(backend, domain)
     global _KERNELS_LOADED
     if fast and not _KERNELS_LOADED:
         _KERNELS_LOADED = cold = True
