@@ -47,7 +47,7 @@ from selfrepair.limits import MAX_LOOKUP_PATTERNS
 from selfrepair.repair.lookups import MISSING, action_index, fault_lookups, occupancy_rows
 from selfrepair.repair.replacement import DEFAULT_MAX_DEPTH, DEFERRING, RecursionMode, Replacement
 from selfrepair.repair.tolerance import FaultModel
-from selfrepair.search.problem import StepTerm
+from selfrepair.search.term import StepTerm
 from selfrepair.tables.model import ReplacementTable
 
 __all__ = ["ToleranceMasks", "tolerance_masks", "tolerance_term"]
