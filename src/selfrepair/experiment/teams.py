@@ -61,17 +61,15 @@ from selfrepair.experiment.config import (
     read_experiment_text,
     read_toml,
 )
-from selfrepair.experiment.missions import (
+from selfrepair.experiment.keys import (
     SCHEMA,
     Mission,
     canonical_json,
     derive_seed,
-    maze_identity,
-    maze_label,
-    maze_of,
     mission_key,
     portable,
 )
+from selfrepair.experiment.mazes import maze_identity, maze_label, maze_of
 from selfrepair.experiment.store import Value
 from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES, MAX_MISSIONS, MAX_ROBOTS, check_limit
 from selfrepair.repair.replacement import RecursionMode
