@@ -1,6 +1,6 @@
 """The Gymnasium environment ``selfrepair/FaultyMaze-v0``: Gymnasium's own checker (warnings are
 errors), seeding, rewards, termination, truncation, the guide's hints, rendering, the flattening
-wrapper, vector environments, scenario draws and the tabulated motion.
+wrapper, vector environments, scenario draws and the simulator's swept cells.
 
 These tests import Gymnasium unconditionally: without the ``gym`` extra they fail, they are never
 skipped (``make test`` installs the extra).
@@ -19,11 +19,11 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 from selfrepair.envs import ENV_ID, FaultSpec, FaultyMazeEnv, MazeGenerator, Rewards
-from selfrepair.envs.motion import tabulated
 from selfrepair.envs.render import FREE_RGB, ROBOT_RGB
 from selfrepair.envs.scenarios import draw_schedule, maze_sources
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.execution.faults import Detection, FaultEvent, FaultSchedule, Persistence
+from selfrepair.execution.simulator import Outcome, Simulator
 from selfrepair.geometry import Heading, Pose
 from selfrepair.repair.replacement import flat_replacement
 from selfrepair.robots.registry import get_domain, load_plugin
@@ -295,18 +295,21 @@ def test_make_vec_with_the_flattening_wrapper() -> None:
 
 
 @pytest.mark.parametrize("name", ["four-wheel", "three-action"])
-def test_tabulated_motion_equals_the_domain(name: str) -> None:
+def test_simulated_motion_equals_the_domain(name: str) -> None:
+    """The simulator moves by the move table (no motion of its own): every action from every
+    heading, at shifted cells, ends and sweeps where ``Domain.step`` says."""
     domain = get_domain(name)
-    fast = tabulated(domain)
-    for action, heading, (x, y) in itertools.product(
-        domain.actions, Heading, ((0, 0), (5, 9), (-3, 2))
-    ):
+    maze = generate_maze(21, 21, seed=1)
+    free = [(x, y) for y in range(maze.height) for x in range(maze.width) if maze.is_free(x, y)]
+    for action, heading, (x, y) in itertools.product(domain.actions, Heading, free[::40]):
         pose = Pose(x, y, heading)
-        assert fast.step(pose, action) == domain.step(pose, action)
-    for faults in (frozenset(), *domain.fault_sets):
-        for action in domain.actions:
-            assert fast.available(action, faults) == domain.available(action, faults)
-            assert fast.blocking(action, faults) == domain.blocking(action, faults)
+        outcome = Simulator(domain, maze, pose, FaultSchedule()).execute(action)
+        end, swept, _ = domain.step(pose, action)
+        assert outcome.swept == tuple(swept)
+        if outcome.status is Outcome.MOVED:
+            assert outcome.end == end
+        else:
+            assert outcome.status is Outcome.COLLISION and outcome.end == pose
 
 
 def test_maze_sources_generator_file_and_bundled(tmp_path: Path) -> None:

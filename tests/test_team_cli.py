@@ -107,11 +107,12 @@ def test_bad_scenario_keys_and_faults_are_one_line(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     for text, expected in (
-        (SCENARIO + "colour = 3\n", "unknown key 'colour'"),
-        (SCENARIO + '[[faults]]\nkind = "melted"\nrobot = "r1"\n', "key 'kind'"),
+        (SCENARIO + "colour = 3\n", "key 'tasks[0].colour': unknown key"),
+        ("colour = 3\n" + SCENARIO, "key 'colour': unknown key"),
+        (SCENARIO + '[[faults]]\nkind = "melted"\nrobot = "r1"\n', "key 'faults[0].kind'"),
         (SCENARIO + '[[faults]]\nkind = "gripper"\nrobot = "r9"\n', "unknown robot 'r9'"),
         (SCENARIO + '[[faults]]\nkind = "wheels"\nrobot = "r1"\nwheel_faults = "XX:F"\n', "XX:F"),
-        (SCENARIO.replace('"1,1,E"', '"1,1"'), "robot r1"),
+        (SCENARIO.replace('"1,1,E"', '"1,1"'), ":7: key 'robots[0].start'"),
         ("maze = [\n", "invalid TOML"),
     ):
         assert main(["team", "run", str(_write(tmp_path, text))]) == 2, expected

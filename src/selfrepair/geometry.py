@@ -15,7 +15,16 @@ from enum import IntEnum
 
 from selfrepair.errors import InputError
 
-__all__ = ["Cell", "FreeGrid", "Heading", "Pose", "parse_cell", "parse_pose", "relative_cell"]
+__all__ = [
+    "Cell",
+    "FreeGrid",
+    "Heading",
+    "Pose",
+    "parse_cell",
+    "parse_pose",
+    "relative_cell",
+    "turn_corner",
+]
 
 Cell = tuple[int, int]
 """A grid cell ``(x, y)``."""
@@ -69,6 +78,19 @@ def relative_cell(pose: Pose, forward: int, lateral: int) -> Cell:
     fx, fy = _HEADING_VECTORS[pose.heading]
     rx, ry = _HEADING_VECTORS[(pose.heading + 1) % 4]
     return (pose.x + forward * fx + lateral * rx, pose.y + forward * fy + lateral * ry)
+
+
+def turn_corner(start: Pose, end: Pose) -> Cell | None:
+    """The corner of a move from ``start`` to ``end`` that turns a quarter and leaves both the
+    line through ``start`` along its heading and the line through ``end`` along its heading: the
+    cell where those two lines cross (for the four-wheel robot's arcs, the cell it sweeps between
+    its start and end cells). ``None`` for every other move (in place, straight, sideways, a half
+    turn): those are drawn as straight segments, an arc as a quarter ellipse tangent to both
+    headings."""
+    if (end.heading - start.heading) % 2 == 0:
+        return None
+    corner = (end.x, start.y) if start.heading.vector[0] else (start.x, end.y)
+    return None if corner in (start.cell, end.cell) else corner
 
 
 # --- pose and cell text ------------------------------------------------------------------------
@@ -141,8 +163,9 @@ class FreeGrid:
         width, height, margin, data = self.width, self.height, self.margin, self.data
         stride = width + 2 * margin
         for x, y in cells:
-            if not (0 <= x < width and 0 <= y < height) or data[
-                (y + margin) * stride + x + margin
-            ] != 1:
+            if (
+                not (0 <= x < width and 0 <= y < height)
+                or data[(y + margin) * stride + x + margin] != 1
+            ):
                 return False
         return True

@@ -24,6 +24,7 @@ from selfrepair.cli import (  # noqa: F401
     planning,
     tables,
     team,
+    tolerance,
     view,
 )
 from selfrepair.cli._app import app

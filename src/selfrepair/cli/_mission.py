@@ -60,6 +60,7 @@ __all__ = [
     "mission_options",
     "mission_spec",
     "row_json",
+    "table_note",
 ]
 
 Goal = Annotated[str, typer.Option("--goal", metavar="X,Y", help="Goal cell.")]
@@ -88,12 +89,15 @@ Intermittent = Annotated[
     ),
 ]
 TableOpt = Annotated[
-    str,
+    str | None,
     typer.Option(
         "--table",
         metavar="TABLE",
         help="Replacement table: bundled name (handwritten, generated-agnostic, "
-        "generated-indexed) or a table file.",
+        "generated-indexed, three-action) or a table file. Default: the robot's own (handwritten "
+        "for four-wheel, the bundled three-action table), else one generated from the robot "
+        "model.",
+        show_default=False,
     ),
 ]
 Recursion = Annotated[
@@ -162,7 +166,7 @@ class MissionOptions:
     detect: Detect = "now"
     transient: Transient = None
     intermittent: Intermittent = None
-    table: TableOpt = "handwritten"
+    table: TableOpt = None
     recursion: Recursion = "flat"
     max_depth: MaxDepth = 2
     window: Window = 3
@@ -301,7 +305,7 @@ def mission_spec(
     from selfrepair.repair.strategies import StrategyOptions, strategy_names, uses_table
     from selfrepair.search.astar import BACKENDS
     from selfrepair.search.lattice import HEURISTICS
-    from selfrepair.tables.fileformat import resolve_table
+    from selfrepair.tables.fileformat import default_table, default_table_name, resolve_table
     from selfrepair.tables.model import ReplacementTable
     from selfrepair.world.bundled import resolve_maze
 
@@ -314,8 +318,12 @@ def mission_spec(
     check_choice(m.clock, tuple(Clock), "--clock")
     check_choice(m.heuristic, tuple(HEURISTICS), "--heuristic")
     check_choice(m.backend, BACKENDS, "--backend")
-    loaded: str | ReplacementTable = m.table
-    if any(uses_table(name) for name in (*strategies, strategy)):
+    loaded: str | ReplacementTable = default_table_name(domain) if m.table is None else m.table
+    if not any(uses_table(name) for name in (*strategies, strategy)):
+        pass
+    elif m.table is None:
+        loaded = default_table(domain)
+    else:
         loaded = resolve_table(
             find_input(m.table),
             max_table_bytes=m.max_table_bytes,
@@ -346,6 +354,25 @@ def mission_spec(
         initial_faults_known=m.plan_with_faults,
         domain=domain,
     )
+
+
+def table_note(mission: MissionOptions, spec: "MissionSpec") -> str | None:
+    """One line saying which table the robot got by default (``None`` when ``--table`` named
+    one, or when no strategy of the command uses a table)."""
+    from selfrepair.tables.fileformat import GENERATED_DEFAULT, default_table_name
+    from selfrepair.tables.model import ReplacementTable
+
+    if mission.table is not None or not isinstance(spec.options.table, ReplacementTable):
+        return None
+    name = default_table_name(spec.domain)
+    if name == GENERATED_DEFAULT:
+        what = (
+            f"generated from the {spec.domain.name} robot model (fault-agnostic, default "
+            "options: selfrepair table generate --help)"
+        )
+    else:
+        what = f"{name}, the {spec.domain.name} robot's bundled table"
+    return f"table: {what}; --table names another"
 
 
 _EXACT = ("ticks", "plan_cost_before", "plan_cost_after", "clearance_weight")

@@ -28,7 +28,14 @@ from selfrepair.cli._app import (
     table_app,
 )
 from selfrepair.cli._inputs import Json, find_input
-from selfrepair.cli._mission import MissionOptions, mission_options, mission_spec, row_json
+from selfrepair.cli._mission import (
+    MissionOptions,
+    domain_named,
+    mission_options,
+    mission_spec,
+    row_json,
+    table_note,
+)
 from selfrepair.cli.planning import kernel_load_ns
 from selfrepair.limits import MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES, MAX_TRACE_BYTES
 
@@ -171,6 +178,9 @@ def run(
     from rich.text import Text
 
     echo(mission_picture(result) + _picture_legend())
+    note = table_note(mission, spec)
+    if note is not None:
+        echo(note)
     metrics = Table(title=Text(f"Mission on {spec.maze.name or mission.maze}"))
     metrics.add_column("metric")
     metrics.add_column("value", justify="right")
@@ -200,7 +210,8 @@ def compare(
         typer.Option(
             "--strategies",
             metavar="NAMES",
-            help="Comma-separated strategies to run (default: every registered one).",
+            help="Comma-separated strategies to run (default: every registered one that can "
+            "run here; those that cannot are listed with the reason).",
             show_default=False,
         ),
     ] = "",
@@ -219,14 +230,13 @@ def compare(
     Takes every option of run but two: --strategies in place of --strategy, and no --trace
     (a trace holds one mission: write one per strategy with run --trace).
     """
-    from selfrepair.repair.strategies import strategy_names
+    from selfrepair.experiment.compare import compare_strategies, runnable_strategies
 
-    names = tuple(s.strip() for s in strategies.split(",") if s.strip()) or strategy_names()
+    given = tuple(s.strip() for s in strategies.split(",") if s.strip())
+    names = given or runnable_strategies(domain_named(mission.domain_name))[0]
     spec = mission_spec(mission, names[0], names)
-    from selfrepair.experiment.compare import compare_strategies
-
     load_ns = kernel_load_ns(mission.backend)
-    comparison = compare_strategies(spec, names, warm_up=mission.warm_up)
+    comparison = compare_strategies(spec, given or None, warm_up=mission.warm_up)
     if as_json:
         echo_json(_comparison_json(comparison, load_ns))
     else:
@@ -234,6 +244,9 @@ def compare(
             f"{spec.maze.name or mission.maze}: {spec.start} to {spec.goal[0]},{spec.goal[1]}, "
             f"faults {mission.faults or 'none'}"
         )
+        note = table_note(mission, spec)
+        if note is not None:
+            echo(note)
         _print_comparison(comparison, title, load_ns)
     return 0 if all(r.result.reached for r in comparison.runs) else 1
 
@@ -249,6 +262,7 @@ _COMPARE_HEADERS = (
     "latency median µs",
     "latency p99 µs",
     "plan distance",
+    "motion distance",
 )
 
 
@@ -275,9 +289,12 @@ def _print_comparison(comparison: "Comparison", title: str, load_ns: int) -> Non
             _us(r.latency_median_ns),
             _us(r.latency_p99_ns),
             str(r.plan_distance),
+            str(r.motion_distance),
         )
         view.add_row(*(Text(c) for c in cells))  # Text: "[...]" in a label is not markup
     console().print(view)
+    for name, reason in comparison.skipped:
+        echo(f"skipped {name}: {reason}")
     echo(f"verdict: {comparison.verdict}")
     echo(_timing_note(load_ns, comparison.warmed_up))
 
@@ -297,9 +314,11 @@ def _comparison_json(comparison: "Comparison", load_ns: int) -> dict[str, Any]:
                 "repair_latency_median_ns": r.latency_median_ns,
                 "repair_latency_p99_ns": r.latency_p99_ns,
                 "plan_distance": r.plan_distance,
+                "plan_distance_motion": r.motion_distance,
             }
             for r in comparison.runs
         ],
+        "skipped": [{"strategy": name, "reason": reason} for name, reason in comparison.skipped],
         "verdict": comparison.verdict,
         "warm_up": comparison.warmed_up,
         "kernel_load_ms": round(load_ns / 1e6, 3),

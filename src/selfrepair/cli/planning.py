@@ -8,7 +8,6 @@ Times: the compiled kernels are loaded (or compiled) before the search starts, a
 reported on its own line (``kernels loaded in ... ms``); the search time is the search alone.
 """
 
-
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -37,6 +36,7 @@ from selfrepair.cli._inputs import (
     find_input,
     parse_weight,
 )
+from selfrepair.cli._mission import Recursion, TableOpt
 from selfrepair.errors import InputError
 from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES
 
@@ -144,6 +144,17 @@ def plan_command(
     backend: Backend = "auto",
     as_json: Json = False,
     max_cells: MaxCells = MAX_CELLS,
+    tolerance_k: Annotated[
+        int | None,
+        typer.Option(
+            "--tolerance",
+            metavar="K",
+            help="Also show, per step, the sets of 1 to K faults the plan does not survive by "
+            "replacement (see `selfrepair tolerance`).",
+        ),
+    ] = None,
+    table: TableOpt = None,
+    recursion: Recursion = "flat",
 ) -> int:
     """Plan the robot's actions with exact A*.
 
@@ -175,10 +186,24 @@ def plan_command(
         time_limit=time_limit,
         backend=backend,
     )
+    tolerance = None
+    if tolerance_k is not None and result.status is PlanStatus.SOLVED:
+        from selfrepair.cli.tolerance import plan_tolerance_of
+
+        tolerance = plan_tolerance_of(problem, result, tolerance_k, table, recursion)
     if as_json:
-        echo_json(plan_json(result, load_ns))
+        out = plan_json(result, load_ns)
+        if tolerance is not None:
+            from selfrepair.cli.tolerance import tolerance_json
+
+            out["tolerance"] = tolerance_json(problem.domain, tolerance)
+        echo_json(out)
     else:
         _print_plan(problem, result, load_ns)
+        if tolerance is not None:
+            from selfrepair.cli.tolerance import print_tolerance
+
+            print_tolerance(problem.domain, tolerance, per_step=True)
     return 0 if result.status is PlanStatus.SOLVED else 1
 
 

@@ -3,8 +3,8 @@
 The robot is any registered :class:`~selfrepair.robots.domain.Domain` (``domain=``, default
 ``four-wheel``); an action is an index into ``domain.actions``. Motion and faults are the project's
 own world model: every command goes to a :class:`~selfrepair.execution.simulator.Simulator`, which
-moves the robot by ``Domain.step`` (of the domain's tabulated copy, :mod:`selfrepair.envs.motion`)
-and holds the true faults of the episode's :class:`~selfrepair.execution.faults.FaultSchedule`.
+moves the robot by the domain's move table (:mod:`selfrepair.execution.moves`) and holds the true
+faults of the episode's :class:`~selfrepair.execution.faults.FaultSchedule`.
 The agent sees only what the executor would:
 
 ``window``
@@ -32,10 +32,10 @@ Episodes are drawn by :mod:`selfrepair.envs.scenarios` from the environment's ``
 Every ``info`` has ``outcome`` (the simulator's :class:`~selfrepair.execution.simulator.Outcome`,
 ``""`` at reset), ``pose`` (``"x,y,H"``), ``known_faults`` (their text) and ``ticks`` (elapsed);
 the reset ``info`` also describes the episode's draw. With ``guide=True``, ``info`` carries the
-*guide*'s hints: a
-:class:`~selfrepair.envs.guide.Navigator` with the ``replacement`` strategy and the environment's
-table, which plans from the start without knowing any fault (as the executor does) and follows the
-robot. ``planned_action`` is what it would command now; when its next planned action is faulty under
+*guide*'s hints: a :class:`~selfrepair.execution.stepper.Stepper` (the executor's own loop, asked
+one step at a time) with the ``replacement`` strategy and the environment's table, which plans
+from the start without knowing any fault (as the executor does) and follows the robot.
+``planned_action`` is what it would command now; when its next planned action is faulty under
 the known faults, ``faulty_action`` is that action and ``replacement`` the table's suggestion (the
 first valid candidate, as action indices). Off the plan the guide replans, which costs a planner
 call per deviating step, so the guide is off unless ``guide=True``.
@@ -51,9 +51,6 @@ import numpy as np
 import numpy.typing as npt
 from gymnasium import spaces
 
-from selfrepair.caching import BoundedCache
-from selfrepair.envs.guide import Navigator
-from selfrepair.envs.motion import tabulated
 from selfrepair.envs.render import ansi_frame, check_cell_pixels, maze_frame, rgb_frame
 from selfrepair.envs.scenarios import (
     BUNDLED,
@@ -69,20 +66,27 @@ from selfrepair.envs.scenarios import (
 from selfrepair.errors import ProblemError, choice
 from selfrepair.execution.executor import mission_context
 from selfrepair.execution.faults import Detection, FaultSchedule
-from selfrepair.execution.result import MissionSpec
+from selfrepair.execution.result import MissionSpec, RepairRecord, StepSource
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS, Outcome, Simulator, StepOutcome
+from selfrepair.execution.stepper import Entry, Stepper
 from selfrepair.geometry import Cell, Heading, Pose, parse_cell, parse_pose
 from selfrepair.repair.replacement import RecursionMode
-from selfrepair.repair.strategies import RepairSource, StrategyName, StrategyOptions, uses_table
+from selfrepair.repair.strategies import (
+    RepairSource,
+    StrategyName,
+    StrategyOptions,
+    get_strategy,
+    uses_table,
+)
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import get_domain
-from selfrepair.tables.fileformat import bundled_table, bundled_table_names, resolve_table
-from selfrepair.tables.generate import generate_table
+from selfrepair.search.astar import PlanStatus
+from selfrepair.tables.fileformat import default_table, resolve_table
 from selfrepair.tables.model import ReplacementTable
 from selfrepair.world.bundled import resolve_maze
 from selfrepair.world.maze import Maze
 
-__all__ = ["MAX_VIEW_RADIUS", "FaultyMazeEnv", "Rewards", "default_table"]
+__all__ = ["MAX_VIEW_RADIUS", "FaultyMazeEnv", "Rewards", "ask", "default_table"]
 
 MAX_VIEW_RADIUS = 32
 """The largest ``view_radius`` accepted (the window has ``(2r+1)**2`` cells)."""
@@ -101,25 +105,6 @@ class Rewards:
     goal_bonus: float = 100.0
     blocked_penalty: float = 1.0
     fault_penalty: float = 1.0
-
-
-_GENERATED: BoundedCache[Domain[Any, Any], ReplacementTable] = BoundedCache(
-    "generated environment tables", 4
-)
-
-
-def default_table(domain: Domain[Any, Any]) -> ReplacementTable:
-    """The table the guide and the replacement policy use when none is given: the paper's
-    hand-written one for the four-wheel robot, a bundled table named after the domain when there
-    is one (``three-action``), else a table generated for the domain (default options; made once
-    per process for a few domains)."""
-    if domain.name == "four-wheel":
-        return bundled_table("handwritten")
-    if domain.name in bundled_table_names():
-        table = bundled_table(domain.name)
-        if table.domain is domain:
-            return table
-    return _GENERATED.get(domain, lambda: generate_table(domain))
 
 
 class FaultyMazeEnv(gym.Env[Observation, np.int64]):
@@ -205,7 +190,8 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         self._padded: npt.NDArray[np.int8] = np.zeros((0, 0), dtype=np.int8)
         self._fault_views: dict[frozenset[Any], tuple[npt.NDArray[np.int8], str]] = {}
         self._base_frame: npt.NDArray[np.uint8] | None = None
-        self._guide: Navigator | None = None
+        self._guide: Stepper | None = None
+        self._guided: Entry | None = None
 
     def _table(self, table: str | ReplacementTable | None) -> ReplacementTable:
         resolved = default_table(self.domain) if table is None else (
@@ -286,12 +272,25 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
             domain=self.domain,
         )
 
-    def navigator(self, strategy: str) -> Navigator:
-        """A :class:`Navigator` for ``strategy`` that plans from the robot's pose now, knowing no
-        fault (as the executor's initial plan does)."""
+    def stepper(self, strategy: str) -> Stepper:
+        """A :class:`~selfrepair.execution.stepper.Stepper` for ``strategy`` that plans from the
+        robot's pose now, knowing no fault (as the executor's initial plan does); stopped when no
+        plan exists. Ask it with :func:`ask`; tell it what each command did with
+        :meth:`Stepper.observe <selfrepair.execution.stepper.Stepper.observe>`."""
         spec = self.mission_spec(strategy)
         context = mission_context(spec, self.table if uses_table(strategy) else None)
-        return Navigator(context, strategy, self.pose, frozenset())
+        sim = self._simulator()
+        initial = context.plan(
+            sim.pose, context.goal, context.goal_heading, frozenset(), context.replan_budget
+        )
+        return Stepper(
+            context,
+            get_strategy(strategy)(context),
+            initial.actions,
+            frozenset(),
+            sim.table,
+            stopped=initial.status is not PlanStatus.SOLVED,
+        )
 
     # --- the Gymnasium API --------------------------------------------------------------------
 
@@ -348,7 +347,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
             reward += rewards.goal_bonus
         truncated = not terminated and self._steps >= self._limit
         if self._guide is not None:
-            self._guide.record(command, status)
+            self._guide.observe(outcome, _followed(self._guided, command))
         return self._observe(pose), reward, terminated, truncated, self._info(pose, status)
 
     def render(self) -> str | npt.NDArray[np.uint8] | None:
@@ -399,7 +398,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         self._scenario = scenario
         maze = scenario.maze
         self._sim = Simulator(
-            tabulated(self.domain), maze, scenario.start, scenario.schedule, scenario.fault_seed
+            self.domain, maze, scenario.start, scenario.schedule, scenario.fault_seed
         )
         self._senses = scenario.schedule.detection is Detection.NOW
         self._known = self._sim.sense()
@@ -413,7 +412,8 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         self._padded = np.frombuffer(grid.data, dtype=np.int8).reshape(rows, cols)
         self._fault_views = {}
         self._base_frame = None
-        self._guide = self.navigator(StrategyName.REPLACEMENT) if self.guide else None
+        self._guide = self.stepper(StrategyName.REPLACEMENT) if self.guide else None
+        self._guided = None
 
     def _observe(self, pose: Pose) -> Observation:
         x, y = pose.x, pose.y
@@ -450,15 +450,17 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
             info.update(self._hints(self._guide, pose, self._simulator().steps))
         return info
 
-    def _hints(self, guide: Navigator, pose: Pose, steps: int) -> dict[str, Any]:
-        planned = guide.next_action(pose, self._known, steps)
-        repair = guide.last_repair
+    def _hints(self, guide: Stepper, pose: Pose, steps: int) -> dict[str, Any]:
+        planned, record = ask(guide, pose, self._known, steps)
+        self._guided = planned
+        repair = None if record is None else record.repair
+        faulty = None if record is None else record.action
         suggested: tuple[int, ...] = ()
         if repair is not None and repair.source is RepairSource.REPLACEMENT:
             suggested = tuple(self._index[a] for a in repair.actions)
         return {
-            "planned_action": -1 if planned is None else self._index[planned],
-            "faulty_action": -1 if guide.last_faulty is None else self._index[guide.last_faulty],
+            "planned_action": -1 if planned is None else self._index[planned[0]],
+            "faulty_action": -1 if faulty is None else self._index[faulty],
             "replacement": suggested,
             "repair_source": "" if repair is None else repair.source.value,
         }
@@ -479,6 +481,27 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         }
 
 
+def ask(
+    stepper: Stepper, pose: Pose, known: frozenset[Any], step: int
+) -> tuple[Entry | None, RepairRecord | None]:
+    """What ``stepper`` commands at ``pose`` knowing exactly ``known`` after ``step`` commands
+    (``None`` at the goal or when no repair exists), and the last repair it made to answer
+    (``None`` when it made none)."""
+    if stepper.context.at_goal(pose):
+        return None, None
+    stepper.learn(known)
+    before = len(stepper.repairs)
+    entry = stepper.next_action(pose, step)
+    return entry, stepper.repairs[-1] if len(stepper.repairs) > before else None
+
+
+def _followed(entry: Entry | None, command: Any) -> StepSource:
+    """The source of ``command``: that of the stepper's answer when the agent followed it."""
+    if entry is not None and entry[0] == command:
+        return entry[1]
+    return StepSource.PLAN
+
+
 def _pose(value: Pose | str) -> Pose:
     return value if isinstance(value, Pose) else parse_pose(str(value), source="reset option start")
 
@@ -487,4 +510,3 @@ def _cell(value: Cell | str) -> Cell:
     if isinstance(value, tuple):
         return (int(value[0]), int(value[1]))
     return parse_cell(str(value), source="reset option goal")
-

@@ -13,8 +13,9 @@ random one.
 
 A policy is started for each episode with :meth:`Policy.reset` (after the environment's reset)
 and then called with each observation and info. The planner policies are *privileged*: they read
-the environment's maze, pose and known faults (a :class:`~selfrepair.envs.guide.Navigator` on the
-unwrapped environment), as the executor does; they are references to compare learned policies with,
+the environment's maze, pose and known faults (a :class:`~selfrepair.execution.stepper.Stepper`
+made by the unwrapped environment, asked with :func:`~selfrepair.envs.env.ask`), as the executor
+does; they are references to compare learned policies with,
 not agents that see only the observation. A policy answers ``None`` when it gives up (no plan
 exists under the known faults), as the executor stops a stuck mission.
 """
@@ -27,9 +28,9 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from selfrepair.envs.env import FaultyMazeEnv
-from selfrepair.envs.guide import Navigator
+from selfrepair.envs.env import FaultyMazeEnv, ask
 from selfrepair.errors import ProblemError
+from selfrepair.execution.stepper import Entry, Stepper
 from selfrepair.repair.strategies import StrategyName
 
 __all__ = [
@@ -73,26 +74,26 @@ class PlannerPolicy:
         self.strategy = strategy
         self.name = name or strategy
         self._env: FaultyMazeEnv | None = None
-        self._navigator: Navigator | None = None
-        self._pending: Any | None = None
+        self._stepper: Stepper | None = None
+        self._pending: Entry | None = None
 
     def reset(self, env: FaultyMazeEnv, seed: int) -> None:
         """Plan from the robot's start, knowing no fault."""
         self._env = env
-        self._navigator = env.navigator(self.strategy)
+        self._stepper = env.stepper(self.strategy)
         self._pending = None
 
     def __call__(self, observation: dict[str, Any], info: dict[str, Any]) -> int | None:
-        """The navigator's next action after recording what the previous command did."""
-        env, navigator = self._env, self._navigator
-        if env is None or navigator is None:
+        """The stepper's next action after recording what the previous command did."""
+        env, stepper = self._env, self._stepper
+        if env is None or stepper is None:
             raise ProblemError(f"policy {self.name!r}: call reset(env, seed) before acting")
         outcome = env.last_outcome
         if self._pending is not None and outcome is not None:
-            navigator.record(self._pending, outcome.status)
-        action = navigator.next_action(env.pose, env.known, env.steps)
-        self._pending = action
-        return None if action is None else env.action_index(action)
+            stepper.observe(outcome, self._pending[1])
+        entry, _ = ask(stepper, env.pose, env.known, env.steps)
+        self._pending = entry
+        return None if entry is None else env.action_index(entry[0])
 
 
 class RandomPolicy:

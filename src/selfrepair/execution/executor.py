@@ -1,23 +1,24 @@
-"""The fault-tolerant executor: plan, execute step by step, repair when the next action is faulty.
+"""The fault-tolerant executor: plan, then drive the mission's stepper against its simulator.
 
 :func:`run_mission` takes a :class:`MissionSpec` (everything needed to run the mission again) and
 returns a :class:`MissionResult` (status, every executed step, every repair, and the metrics).
 
-The loop, per step:
-
 The strategy is started once per mission (its factory gets a
 :class:`~selfrepair.repair.strategies.MissionContext` built here: the planner, the free-cell test
-and the step cost on this mission's map) and then asked for each repair.
+and the step cost on this mission's map). The initial plan, the strategy and the known faults go
+into a :class:`~selfrepair.execution.stepper.Stepper`, which holds the queue, repairs and splices
+it, and records the steps and repairs. :func:`run_mission` runs it to the end; per step:
 
-1. Update the known faults: with detection ``now`` the simulator's sensors report the active
-   faults; with ``on-use`` the known faults are those revealed by failed attempts so far.
-2. If the next queued action is unavailable under the known faults, ask the strategy for a repair
-   (timed with ``time.perf_counter_ns``: the repair latency runs from meeting the faulty action to
-   having the next executable action) and splice it into the queue. A strategy with a
-   ``horizon`` (lookahead with a window before the faulty action) is asked as soon as one of the
-   next ``horizon`` actions after the first is known to be faulty.
-3. Send the next action to the simulator. A failed attempt (a fault the executor did not know
-   yet) is recorded as a step with source ``failed-attempt`` and reveals its blocking faults.
+1. Stop at the goal or at the step limit.
+2. With detection ``now`` the simulator's sensors report the active faults to the stepper; with
+   ``on-use`` the known faults are those revealed by failed attempts so far.
+3. Ask the stepper for the next command (it repairs the queue first when its next action, or
+   with a ``horizon`` one of the next few, is unavailable under the known faults; the repair
+   latency runs from meeting the faulty action to having the next executable action). A failed
+   repair ends the mission (``stuck`` or ``budget_exhausted``).
+4. Send the command to the simulator and tell the stepper what it did. A failed attempt (a fault
+   the robot did not know yet) is recorded as a step with source ``failed-attempt`` and reveals
+   its blocking faults.
 
 The initial plan is made, by default, before any fault is known (``initial_faults_known=False``),
 as in the original experiment. The executor holds only detected faults; the true ones live in the
@@ -36,40 +37,27 @@ from __future__ import annotations
 
 import time
 from array import array
-from collections import Counter, deque
-from collections.abc import Container, Iterator, Sequence
+from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
-from itertools import islice, repeat
-from operator import itemgetter
-from typing import Any, overload
+from typing import Any
 
 import numpy as np
 
 from selfrepair.caching import BoundedCache
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import Detection
-from selfrepair.execution.moves import available_moves
-from selfrepair.execution.result import (
-    MissionResult,
-    MissionSpec,
-    MissionStatus,
-    MissionTally,
-    RepairRecord,
-    StepSource,
-    TraceStep,
-)
+from selfrepair.execution.result import MissionResult, MissionSpec, MissionStatus, MissionTally
 from selfrepair.execution.simulator import Outcome, Simulator
+from selfrepair.execution.stepper import Stepper
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.repair.replacement import FreeTest, table_reach
 from selfrepair.repair.strategies import (
     MissionContext,
     Repair,
-    Repairer,
-    RepairRequest,
     RepairStatus,
     get_strategy,
-    replan,
     uses_table,
 )
 from selfrepair.search.astar import PlanResult, PlanStatus
@@ -80,59 +68,6 @@ from selfrepair.tables.model import ReplacementTable
 from selfrepair.world.maze import Maze, clearance_penalties
 
 __all__ = ["mission_context", "run_mission"]
-
-
-class _ActionView(Sequence[Any]):
-    """A read-only view of the queue's actions, so a repair request costs O(1) to build."""
-
-    __slots__ = ("_queue",)
-
-    def __init__(self, queue: deque[tuple[Any, StepSource]]) -> None:
-        self._queue = queue
-
-    def __len__(self) -> int:
-        return len(self._queue)
-
-    def __iter__(self) -> Iterator[Any]:
-        return map(_ACTION, self._queue)
-
-    @overload
-    def __getitem__(self, index: int) -> Any: ...
-
-    @overload
-    def __getitem__(self, index: slice) -> tuple[Any, ...]: ...
-
-    def __getitem__(self, index: int | slice) -> Any:
-        if isinstance(index, slice):
-            start, stop, stride = index.indices(len(self._queue))
-            if stride == 1:  # in C: a deque is slow to index in the middle
-                return tuple(islice(map(_ACTION, self._queue), start, max(start, stop)))
-            return tuple(self._queue[i][0] for i in range(start, stop, stride))
-        return self._queue[index][0]
-
-
-_ACTION = itemgetter(0)
-
-_STEP_SOURCES = {str(s): StepSource(s) for s in StepSource}
-"""Step sources by value: a dictionary look-up, where calling the enum costs a microsecond inside
-the timed repair."""
-
-
-def _splice(
-    queue: deque[tuple[Any, StepSource]], consumed: int, actions: Sequence[Any], source: StepSource
-) -> None:
-    """Replace the first ``consumed`` queued actions by ``actions`` marked ``source``, in place.
-    A short repair pops and pushes at the front; one that covers much of the queue (a whole-plan
-    rewrite) rebuilds it in C, which is cheaper than popping item by item."""
-    if 3 * consumed > len(queue):
-        rest = list(islice(queue, consumed, None))
-        queue.clear()
-        queue.extend(zip(actions, repeat(source)))
-        queue.extend(rest)
-        return
-    for _ in range(consumed):
-        queue.popleft()
-    queue.extendleft(zip(reversed(actions), repeat(source)))
 
 
 def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> MissionContext:
@@ -190,40 +125,13 @@ def free_test(grid: FreeGrid) -> FreeTest:
 
 
 @dataclass(slots=True)
-class _Run:
-    """Mutable state of one mission run."""
+class _Tally:
+    """What the mission loop sums on the way, for the metrics (mutable)."""
 
-    spec: MissionSpec
-    sim: Simulator
-    context: MissionContext
-    repairer: Repairer
-    queue: deque[tuple[Any, StepSource]]
-    known: frozenset[Any] = frozenset()
-    steps: list[TraceStep] = field(default_factory=list)
-    repairs: list[RepairRecord] = field(default_factory=list)
     moved: list[int] = field(default_factory=list)
     """Per executed step, its (start state, action) as one integer (for the plan distance)."""
     executed_units: int = 0
     penalty: int = 0
-
-    def repair(self, action: Any | None) -> Repair:
-        """Ask the strategy (or, with an empty queue off the goal, a plain replan) for a repair
-        and splice it into the queue; the latency covers both."""
-        t0 = time.perf_counter_ns()
-        request = RepairRequest(self.sim.pose, _ActionView(self.queue), self.known, self.sim.steps)
-        fallback = action is None  # the queue ran out away from the goal: plain replan
-        repair = replan(self.context, request) if fallback else self.repairer.repair(request)
-        if repair.status is RepairStatus.REPAIRED:
-            source = _STEP_SOURCES.get(repair.source) or StepSource(repair.source)
-            _splice(self.queue, repair.consumed, repair.actions, source)
-        latency = time.perf_counter_ns() - t0
-        self.repairs.append(RepairRecord(self.sim.steps, self.sim.pose, action, repair, latency))
-        return repair
-
-
-_new_tuple = tuple.__new__
-"""Builds the :class:`TraceStep` of each step without the ``NamedTuple`` constructor's Python
-frame (the same value)."""
 
 
 def run_mission(spec: MissionSpec) -> MissionResult:
@@ -239,13 +147,16 @@ def run_mission(spec: MissionSpec) -> MissionResult:
         spec.start, spec.goal, spec.goal_heading, initial_known, context.replan_budget
     )
     planning_ns = time.perf_counter_ns() - t0
-    queue = deque((a, StepSource.PLAN) for a in initial.actions)
-    run = _Run(spec, sim, context, factory(context), queue, initial_known)
+    stepper = Stepper(context, factory(context), initial.actions, initial_known, sim.table)
+    tally = _Tally()
     if initial.status is not PlanStatus.SOLVED:
         reason = f"initial plan: {initial.status.value}"
-        return _result(run, initial, planning_ns, MissionStatus.NO_INITIAL_PLAN, reason)
-    status, reason = _loop(run)
-    return _result(run, initial, planning_ns, status, reason)
+        return _result(spec, sim, stepper, tally, initial, planning_ns, NO_PLAN, reason)
+    status, reason = _loop(spec, sim, stepper, tally)
+    return _result(spec, sim, stepper, tally, initial, planning_ns, status, reason)
+
+
+NO_PLAN = MissionStatus.NO_INITIAL_PLAN
 
 
 def _prepare(spec: MissionSpec, table: ReplacementTable | None) -> None:
@@ -264,79 +175,56 @@ def _prepare(spec: MissionSpec, table: ReplacementTable | None) -> None:
         ensure_warm()
 
 
-def _loop(run: _Run) -> tuple[MissionStatus, str]:
-    """Execute until the goal, a failed repair, the step limit or a collision.
+def _loop(
+    spec: MissionSpec, sim: Simulator, stepper: Stepper, tally: _Tally
+) -> tuple[MissionStatus, str]:
+    """Drive ``stepper`` against ``sim`` until the goal, a failed repair, the step limit or a
+    collision.
 
-    The hot path of every experiment: it keeps what it reads on each step in locals, tests
-    availability against the moves available under the known faults (one look-up per step) and
-    records each step as a light :class:`TraceStep`.
+    The hot path of every experiment: it keeps what it reads on each step in locals and sums the
+    metrics' tallies (plan-distance keys, executed time, clearance penalty) as it goes.
     """
-    spec, sim, queue, steps = run.spec, run.sim, run.queue, run.steps
     limit = spec.step_limit()
     goal, goal_heading = spec.goal, spec.goal_heading
     sense_now = spec.schedule.detection is Detection.NOW
-    table = sim.table
     weight = bool(Fraction(spec.clearance_weight))
     margin, stride = sim.grid.margin, sim.grid.stride
     penalty = penalty_buffer(sim.grid, spec.maze, spec.clearance_radius) if weight else b""
-    moved = run.moved
+    moved = tally.moved
     n_actions = len(spec.domain.actions)
-    known = run.known
-    available = available_moves(table, known)
-    horizon = int(getattr(run.repairer, "horizon", 0))
-    early_at = -1  # the step of the last early repair: at most one per step, so none can loop
+    next_action, record, learn, advance, sense = (
+        stepper.next_action, stepper.record, stepper.learn, sim.advance, sim.sense
+    )  # fmt: skip
     while True:
         pose = sim.pose
         if pose.cell == goal and (goal_heading is None or pose.heading == goal_heading):
             return MissionStatus.REACHED, "goal reached"
-        if sim.steps >= limit:
+        step = sim.steps
+        if step >= limit:
             return MissionStatus.STEP_LIMIT, f"{limit} steps without reaching the goal"
         if sense_now:
-            sensed = sim.sense()
-            if sensed is not known:
-                run.known = known = sensed
-                available = available_moves(table, known)
-        if not queue or queue[0][0] not in available:
-            repair = run.repair(queue[0][0] if queue else None)
-            if repair.status is not RepairStatus.REPAIRED:
-                return MissionStatus(repair.status), _why(repair, run)
-            continue
-        if (
-            horizon
-            and early_at != sim.steps
-            and (ahead := _faulty_ahead(queue, available, horizon))
-        ):
-            early_at = sim.steps
-            repair = run.repair(ahead[0])  # a known fault ahead: the repairer wants it early
-            if repair.status is not RepairStatus.REPAIRED:
-                return MissionStatus(repair.status), _why(repair, run)
-            continue
-        action, source = queue[0]
-        step = sim.steps
-        outcome = sim.advance(action)
+            learn(sense())
+        entry = next_action(pose, step)
+        if entry is None:
+            failure = stepper.failure
+            assert failure is not None
+            return MissionStatus(failure.status), _why(failure, spec, sim, stepper)
+        action, source = entry
+        outcome = advance(action)
         if outcome is Outcome.MOVED:
-            queue.popleft()
             move = sim.last_move
             assert move is not None
-            run.executed_units += move.units
+            tally.executed_units += move.units
             moved.append(
                 (((pose.y << 32) + 4 * pose.x + pose.heading) * n_actions) + move.action_index
             )
             if weight:
                 base = (pose.y + margin) * stride + pose.x + margin
-                run.penalty += sum([penalty[base + offset] for offset in move.cells])
-        elif outcome is Outcome.FAILED_ATTEMPT:
-            run.known = known | sim.last_blocking
-            source = StepSource.FAILED_ATTEMPT
-        else:
+                tally.penalty += sum([penalty[base + offset] for offset in move.cells])
+        elif outcome is Outcome.COLLISION:
             name = spec.domain.format_action(action)
             return MissionStatus.COLLISION, f"{name} at {sim.pose} would sweep a wall"
-        steps.append(
-            _new_tuple(TraceStep, (step, action, pose, sim.pose, sim.last_duration, source, known))
-        )
-        if run.known is not known:
-            known = run.known
-            available = available_moves(table, known)
+        record(step, action, source, outcome, pose, sim.pose, sim.last_duration, sim.last_blocking)
 
 
 def penalty_buffer(grid: FreeGrid, maze: Maze, radius: int) -> Sequence[int]:
@@ -360,65 +248,62 @@ _PENALTIES: BoundedCache[tuple[Maze, int, int], Sequence[int]] = BoundedCache(
 )
 
 
-def _faulty_ahead(
-    queue: deque[tuple[Any, StepSource]], available: Container[Any], horizon: int
-) -> tuple[Any] | None:
-    """The first of the ``horizon`` queued actions after the front that is unavailable under the
-    known faults (not in ``available``, the moves available under them), in a 1-tuple (``None``
-    when all are available)."""
-    for i in range(1, min(horizon + 1, len(queue))):
-        if queue[i][0] not in available:
-            return (queue[i][0],)
-    return None
-
-
-def _why(repair: Repair, run: _Run) -> str:
+def _why(repair: Repair, spec: MissionSpec, sim: Simulator, stepper: Stepper) -> str:
     tried = " then ".join(repair.attempts)
     what = "no plan exists" if repair.status is RepairStatus.STUCK else "the planner budget ran out"
-    known = run.spec.domain.format_faults(run.known) or "none"
-    return f"at {run.sim.pose} with known faults {known}: tried {tried}; {what}"
+    known = spec.domain.format_faults(stepper.known) or "none"
+    return f"at {sim.pose} with known faults {known}: tried {tried}; {what}"
 
 
 def _result(
-    run: _Run, initial: PlanResult, planning_ns: int, status: MissionStatus, reason: str
+    spec: MissionSpec,
+    sim: Simulator,
+    stepper: Stepper,
+    tally: _Tally,
+    initial: PlanResult,
+    planning_ns: int,
+    status: MissionStatus,
+    reason: str,
 ) -> MissionResult:
-    removed, added, motion_removed, motion_added = _plan_distances(run, initial)
-    tally = MissionTally(
-        len(run.moved),
-        run.executed_units,
-        run.sim.unit,
-        run.penalty,
+    removed, added, motion_removed, motion_added = _plan_distances(spec, sim, tally, initial)
+    sums = MissionTally(
+        len(tally.moved),
+        tally.executed_units,
+        sim.unit,
+        tally.penalty,
         removed,
         added,
         motion_removed,
         motion_added,
     )
     return MissionResult(
-        run.spec,
+        spec,
         status,
         reason,
-        tuple(run.steps),
-        tuple(run.repairs),
+        tuple(stepper.steps),
+        tuple(stepper.repairs),
         initial,
         planning_ns,
-        run.sim.pose,
-        run.sim.ticks,
-        tally,
+        sim.pose,
+        sim.ticks,
+        sums,
     )
 
 
-def _plan_distances(run: _Run, initial: PlanResult) -> tuple[int, int, int, int]:
+def _plan_distances(
+    spec: MissionSpec, sim: Simulator, tally: _Tally, initial: PlanResult
+) -> tuple[int, int, int, int]:
     """Removed and added actions between the initial plan and the executed steps, as multisets
     of (start state, action) encoded as integers (the same keys the loop recorded), then the same
     by motion class (each action index replaced by that of the first action of its motion)."""
-    moves = run.sim.table.moves
-    domain = run.spec.domain
+    moves = sim.table.moves
+    domain = spec.domain
     n_actions = len(domain.actions)
     planned = [
         (((p.y << 32) + 4 * p.x + p.heading) * n_actions) + moves[a][0].action_index
         for p, a in zip(initial.poses, initial.actions, strict=False)
     ]
-    executed = run.moved
+    executed = tally.moved
     removed, added = _multiset_distance(planned, executed)
     first_of: dict[str, int] = {}
     motion = [first_of.setdefault(domain.motion_class(a), i) for i, a in enumerate(domain.actions)]

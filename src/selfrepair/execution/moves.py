@@ -24,7 +24,7 @@ from fractions import Fraction
 from typing import Any, NamedTuple
 
 from selfrepair.caching import BoundedCache
-from selfrepair.geometry import Heading, Pose
+from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain
 
 __all__ = [
@@ -57,7 +57,9 @@ class MoveTable:
     ``stride`` bytes per row; ``reach`` is the largest Chebyshev distance of a footprint cell or
     end cell from the start cell; ``unit`` the domain's time unit (see the module docstring);
     ``ends_covered`` whether every move's end cell lies in its footprint (then a move whose
-    footprint is free ends on a free cell). ``moves`` is read-only by convention."""
+    footprint is free ends on a free cell). ``moves`` is read-only by convention, as is
+    ``shapes``: per action and heading, the footprint as cell offsets ``(dx, dy)`` from the start
+    cell (what a caller that reports the swept cells shifts)."""
 
     domain: Domain[Any, Any]
     stride: int
@@ -65,6 +67,7 @@ class MoveTable:
     reach: int
     ends_covered: bool
     moves: dict[Any, tuple[Move, ...]]
+    shapes: dict[Any, tuple[tuple[Cell, ...], ...]]
 
 
 def time_unit(domain: Domain[Any, Any]) -> int:
@@ -87,10 +90,12 @@ def move_table(domain: Domain[Any, Any], stride: int) -> MoveTable:
 def _move_table(domain: Domain[Any, Any], stride: int) -> MoveTable:
     unit = time_unit(domain)
     moves: dict[Any, tuple[Move, ...]] = {}
+    shapes: dict[Any, tuple[tuple[Cell, ...], ...]] = {}
     reach = 0
     covered = True
     for index, action in enumerate(domain.actions):
         per_heading = []
+        footprints = []
         duration = Fraction(domain.duration(action))
         units = duration * unit
         assert units.denominator == 1  # the unit is a multiple of every denominator
@@ -101,11 +106,13 @@ def _move_table(domain: Domain[Any, Any], stride: int) -> MoveTable:
             reach = max(reach, abs(end.x), abs(end.y), *(max(abs(x), abs(y)) for x, y in cells))
             covered = covered and end.cell in cells
             offsets = tuple(y * stride + x for x, y in cells)
+            footprints.append(tuple(cells))
             per_heading.append(
                 Move(end.x, end.y, end.heading, offsets, units.numerator, duration, index)
             )
         moves[action] = tuple(per_heading)
-    return MoveTable(domain, stride, unit, reach, covered, moves)
+        shapes[action] = tuple(footprints)
+    return MoveTable(domain, stride, unit, reach, covered, moves, shapes)
 
 
 _TABLES: BoundedCache[tuple[Domain[Any, Any], int], MoveTable] = BoundedCache(

@@ -122,8 +122,10 @@ class Simulator:
         status = self.advance(action)
         if status is Outcome.FAILED_ATTEMPT:
             swept: tuple[Cell, ...] = (start.cell,)
-        else:
-            swept = self.domain.footprint(start, action)
+        else:  # the footprint of the move table, shifted (a collision moves nothing)
+            x, y = start.x, start.y
+            shape = self.table.shapes[action][start.heading]
+            swept = tuple([(x + dx, y + dy) for dx, dy in shape])
         return StepOutcome(
             status, step, action, start, self.pose, swept, self.last_duration, self.last_blocking
         )

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from selfrepair.experiment.config import ExperimentConfig
+from selfrepair.experiment.schema import ExperimentConfig
 from selfrepair.robots.registry import load_plugin
 
 __all__ = [

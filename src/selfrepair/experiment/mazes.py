@@ -15,8 +15,8 @@ from typing import Any
 
 from selfrepair.caching import BoundedCache
 from selfrepair.errors import ConfigError
-from selfrepair.experiment.config import MazeConfig
 from selfrepair.experiment.keys import canonical_json, derive_seed, portable
+from selfrepair.experiment.schema import MazeConfig
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CELLS, check_limit, maze_file_bytes
 from selfrepair.world.maze import Maze

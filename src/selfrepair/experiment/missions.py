@@ -22,7 +22,6 @@ from selfrepair.errors import ConfigError
 from selfrepair.execution.faults import FaultEvent, FaultSchedule, canonical_order
 from selfrepair.execution.result import MissionSpec
 from selfrepair.experiment.axes import Axis, cross
-from selfrepair.experiment.config import ExperimentConfig
 from selfrepair.experiment.faultsets import fault_profile
 from selfrepair.experiment.keys import (
     SCHEMA,
@@ -41,6 +40,7 @@ from selfrepair.experiment.mazes import (
     route_count,
     routes_of,
 )
+from selfrepair.experiment.schema import ExperimentConfig
 from selfrepair.experiment.variants import (
     maze_filter,
     short_table,

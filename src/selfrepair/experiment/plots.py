@@ -8,13 +8,15 @@ Functions take result rows (dicts from the store) and a path, and return the pat
 
 from __future__ import annotations
 
+import itertools
 import math
+import textwrap
 from collections import defaultdict
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from fractions import Fraction
-from pathlib import Path
+from pathlib import Path, PurePath
 from typing import Any
 
 import numpy as np
@@ -29,7 +31,7 @@ from selfrepair.experiment.findings import (
 )
 from selfrepair.experiment.scale import Crossover
 from selfrepair.experiment.summary import is_reference_replan
-from selfrepair.geometry import Cell, Pose
+from selfrepair.geometry import Cell, Pose, turn_corner
 from selfrepair.optional import matplotlib
 from selfrepair.world.maze import Maze
 
@@ -43,6 +45,8 @@ __all__ = [
     "figure_latency",
     "figure_latency_vs_size",
     "figure_mission",
+    "fit_title",
+    "move_points",
     "picture_from_trace",
 ]
 
@@ -74,7 +78,6 @@ STYLE = {
     "legend.framealpha": 1.0,
     "legend.facecolor": "white",
 }
-
 
 
 @contextmanager
@@ -397,11 +400,12 @@ def picture_from_trace(trace: Any) -> MissionPicture:
     faults = domain.format_faults(spec.schedule.all_faults()) or "none"
     strategy = str(spec.strategy)
     if strategy != "replan":
-        strategy += f" [{spec.options.table_label}, {spec.options.recursion.value}]"
+        table = short_name(spec.options.table_label)
+        strategy += f" [{table}, {spec.options.recursion.value}]"
     summary = trace.summary or {}
     status = summary.get("status", "?")
     title = (
-        f"{spec.maze.name or 'maze'}: {spec.start} -> {spec.goal[0]},{spec.goal[1]}, "
+        f"{short_name(spec.maze.name or 'maze')}: {spec.start} -> {spec.goal[0]},{spec.goal[1]}, "
         f"faults {faults}\n{strategy}, clearance weight {spec.clearance_weight}: {status}"
     )
     steps = tuple((s.start, s.end, s.source) for s in trace.steps)
@@ -417,6 +421,42 @@ def picture_from_trace(trace: Any) -> MissionPicture:
     return MissionPicture(
         spec.maze, spec.start, spec.goal, tuple(poses), steps, faults, title, repairs
     )
+
+
+def short_name(label: str) -> str:
+    """A file's name without its folders (a table or maze given by path), else ``label``."""
+    return PurePath(label).name if "/" in label or "\\" in label else label
+
+
+ARC_SAMPLES = 9
+"""Points drawn along one arc (a quarter ellipse), ends included."""
+
+
+def move_points(start: Pose, end: Pose) -> list[tuple[float, float]]:
+    """The drawn path of one move from ``start`` to ``end``, both as the domain's ``apply``
+    gives them: a quarter ellipse tangent to both headings when the move turns as it goes
+    (:func:`~selfrepair.geometry.turn_corner`; a quarter circle for the four-wheel robot's
+    arcs), else the straight segment."""
+    corner = turn_corner(start, end)
+    if corner is None:
+        return [(start.x, start.y), (end.x, end.y)]
+    cx, cy = start.x + end.x - corner[0], start.y + end.y - corner[1]
+    angles = np.linspace(0.0, math.pi / 2, ARC_SAMPLES)
+    return [
+        (
+            float(cx + (start.x - cx) * math.cos(t) + (end.x - cx) * math.sin(t)),
+            float(cy + (start.y - cy) * math.cos(t) + (end.y - cy) * math.sin(t)),
+        )
+        for t in angles
+    ]
+
+
+def path_points(poses: Sequence[Pose]) -> list[tuple[float, float]]:
+    """The drawn path through consecutive ``poses`` (one move between each two)."""
+    points = [(float(poses[0].x), float(poses[0].y))] if poses else []
+    for start, end in itertools.pairwise(poses):
+        points += move_points(start, end)[1:]
+    return points
 
 
 def draw_background(ax: Any, picture: MissionPicture) -> None:
@@ -437,9 +477,10 @@ def draw_background(ax: Any, picture: MissionPicture) -> None:
     ax.set_yticks([])
     # The initial plan is drawn thin and dashed ABOVE the executed path (which is wider), so
     # both stay visible where they coincide.
+    plan = path_points(picture.planned)
     ax.plot(
-        [p.x for p in picture.planned],
-        [p.y for p in picture.planned],
+        [x for x, _ in plan],
+        [y for _, y in plan],
         color=PLAN_COLOUR,
         linestyle=(0, (3, 2)),
         linewidth=1.3,
@@ -473,9 +514,7 @@ def draw_steps(ax: Any, picture: MissionPicture, first: int, stop: int) -> None:
     for start, end, source in picture.steps[first:stop]:
         colour = SOURCE_COLOURS.get(source, "#000000")
         if source == "failed-attempt":
-            ax.plot(
-                start.x, start.y, marker="x", color=colour, markersize=7, zorder=4, gid="step"
-            )
+            ax.plot(start.x, start.y, marker="x", color=colour, markersize=7, zorder=4, gid="step")
         elif start.cell == end.cell:
             ax.plot(
                 start.x,
@@ -488,9 +527,10 @@ def draw_steps(ax: Any, picture: MissionPicture, first: int, stop: int) -> None:
                 gid="step",
             )
         else:
+            points = move_points(start, end)
             ax.plot(
-                [start.x, end.x],
-                [start.y, end.y],
+                [x for x, _ in points],
+                [y for _, y in points],
                 color=colour,
                 linewidth=width,
                 solid_capstyle="round",
@@ -587,13 +627,41 @@ def mission_legend(fig: Any, picture: MissionPicture, *, with_robot: bool = Fals
     fig.legend(handles=handles, loc="outside right upper", fontsize=8)
 
 
+def fit_title(fig: Any, ax: Any, text: str, *, fontsize: float = 9, smallest: float = 6.5) -> Any:
+    """Set ``text`` as the title of ``ax`` so that it fits: centred on the axes, between the
+    figure's left edge and its legend (or right edge). The font shrinks from ``fontsize`` to
+    ``smallest`` as needed; a title still too wide is wrapped at spaces. Measured with
+    matplotlib's renderer after the layout is done; returns the title artist."""
+    title = ax.set_title(text, fontsize=fontsize)
+    lines = text.splitlines()
+    width = max(map(len, lines), default=0)
+    for _ in range(8):
+        fig.draw_without_rendering()  # the constrained layout moves the axes as the title changes
+        box = title.get_window_extent()
+        frame = ax.get_window_extent()
+        centre = (frame.x0 + frame.x1) / 2
+        right = min((legend.get_window_extent().x0 for legend in fig.legends), default=fig.bbox.x1)
+        room = 2 * min(centre - fig.bbox.x0, right - centre) - 8  # a few pixels clear
+        if box.width <= room and box.y1 <= fig.bbox.y1:
+            break
+        ratio = room / box.width
+        size = title.get_fontsize()
+        if size > smallest:
+            title.set_fontsize(max(smallest, size * min(ratio, 0.95)))
+        else:
+            width = max(12, int(width * min(ratio, 0.9)))
+            wrapped = [part for line in lines for part in textwrap.wrap(line, width) or [""]]
+            title.set_text("\n".join(wrapped))
+    return title
+
+
 def figure_mission(picture: MissionPicture, path: Path) -> Path:
     """One mission: maze, planned and executed paths, repairs and replaced segments."""
     size = 7.0 * min(1.0, max(0.6, picture.maze.width / 40))
     with _figure(size + 2.6, size * picture.maze.height / picture.maze.width + 0.8) as (fig, (ax,)):
         draw_mission(ax, picture)
         mission_legend(fig, picture)
-        ax.set_title(picture.title, fontsize=9)
+        fit_title(fig, ax, picture.title)
         return _save(fig, path)
 
 

@@ -45,22 +45,11 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, model_validator
 
 from selfrepair.errors import ConfigError
 from selfrepair.execution.faults import Persistence
-from selfrepair.experiment.config import (
-    ExperimentConfig,
-    GeneratedMaze,
-    MazeConfig,
-    NonEmpty,
-    _Frozen,
-    config_error,
-    find_line,
-    parse_config,
-    read_experiment_text,
-    read_toml,
-)
+from selfrepair.experiment.config import parse_config, read_experiment_text
 from selfrepair.experiment.keys import (
     SCHEMA,
     Mission,
@@ -70,13 +59,16 @@ from selfrepair.experiment.keys import (
     portable,
 )
 from selfrepair.experiment.mazes import maze_identity, maze_label, maze_of
+from selfrepair.experiment.schema import ExperimentConfig, GeneratedMaze, MazeConfig
 from selfrepair.experiment.store import Value
 from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES, MAX_MISSIONS, MAX_ROBOTS, check_limit
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.team.experiment import FaultCase, TeamCase, case_row
+from selfrepair.team.grid import components
 from selfrepair.team.model import TeamStrategyName, TeamTableName
+from selfrepair.team.randomteam import GripperMix
 from selfrepair.team.result import TeamOptions
-from selfrepair.team.scenario import GripperMix, components
+from selfrepair.tomlfile import Frozen, NonEmpty, find_line, read_toml, validate
 
 __all__ = [
     "TeamExperimentConfig",
@@ -91,7 +83,7 @@ TEAM_KIND = "team"
 """The ``kind`` of a team experiment file (a file without ``kind`` is a single-robot one)."""
 
 
-class TeamMaze(_Frozen):
+class TeamMaze(Frozen):
     """Where a team maze comes from: exactly one of ``bundled``, ``file``, ``generate``."""
 
     bundled: str | None = None
@@ -113,7 +105,7 @@ class TeamMaze(_Frozen):
         return MazeConfig(bundled=self.bundled, file=self.file, generate=self.generate, routes=1)
 
 
-class TeamSettings(_Frozen):
+class TeamSettings(Frozen):
     """Team sizes, task loads (tasks per robot) and equipment mixes to cross."""
 
     sizes: Annotated[tuple[Annotated[int, Field(ge=1, le=MAX_ROBOTS)], ...], NonEmpty]
@@ -122,7 +114,7 @@ class TeamSettings(_Frozen):
 
 
 
-class TeamFaults(_Frozen):
+class TeamFaults(Frozen):
     """Fault cases, persistences and the duration (ticks) of a transient fault."""
 
     cases: Annotated[tuple[FaultCase, ...], NonEmpty]
@@ -139,7 +131,7 @@ class TeamFaults(_Frozen):
         return self
 
 
-class RobotSettings(_Frozen):
+class RobotSettings(Frozen):
     """How each robot handles its own wheel faults (a single-robot strategy and table)."""
 
     strategy: Literal["replacement", "replan", "lookahead"] = "replacement"
@@ -147,14 +139,14 @@ class RobotSettings(_Frozen):
     recursion: RecursionMode = RecursionMode.FLAT
 
 
-class TeamStrategyConfig(_Frozen):
+class TeamStrategyConfig(Frozen):
     """One team strategy; team replacement once per table."""
 
     name: TeamStrategyName
     tables: tuple[TeamTableName, ...] = (TeamTableName.HANDWRITTEN,)
 
 
-class TeamExperimentConfig(_Frozen):
+class TeamExperimentConfig(Frozen):
     """A whole team experiment: mazes x team sizes x loads x equipment x fault cases x
     persistences x strategies x repeats (see the module docstring)."""
 
@@ -195,10 +187,9 @@ def load_experiment(
         return parse_config(text, source=source)
     if "source" in data:
         raise ConfigError("unknown key 'source' (it is set by the loader)", source=source)
-    try:
-        config = TeamExperimentConfig.model_validate({**data, "source": source})
-    except ValidationError as exc:
-        raise config_error(exc, text, source) from None
+    config = validate(
+        TeamExperimentConfig, {**data, "source": source}, text=text, source=source
+    )
     _check_sizes(config, text)
     return config
 

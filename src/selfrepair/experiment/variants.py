@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from selfrepair.errors import ConfigError, LimitError
-from selfrepair.experiment.config import (
+from selfrepair.experiment.schema import (
     ExperimentConfig,
     LookaheadStrategy,
     LpgAdaptStrategy,

@@ -19,14 +19,18 @@ one of four headings; a robot without a heading simply keeps ``N``). A domain su
 * ``motion_class`` (actions of one class have the same effect: the planner keeps only the fastest
   available one of each) and ``level`` (0 for primitive actions, higher for complex ones; see the
   ``layered`` and ``primitive`` recursion modes);
-* ``footprint_connected``: whether every action's footprint contains a 4-connected path between its
-  start and end cells. Only then is the grid-distance heuristic admissible for it (see
-  docs/planner.md); without it the planner refuses that heuristic.
+* ``footprint_connected``: whether every action's footprint, from every heading, contains a
+  4-connected path from its start cell to its end cell that is no longer than their Manhattan
+  distance (a shortest grid path: each step goes from a footprint cell to an edge-adjacent
+  footprint cell; an action that stays in its cell passes trivially). Only then is the
+  grid-distance heuristic admissible for it (see docs/planner.md); without it the planner refuses
+  that heuristic.
 
 The contract, checked by :func:`check_domain` when a domain is registered: ``apply`` and
 ``footprint`` commute with translation (an action does the same thing in every cell), the footprint
-starts at the start cell, durations are positive, and the text forms round-trip. Nothing else is
-assumed: actions and faults may be any hashable values.
+starts at the start cell, durations are positive, the text forms round-trip, and a domain that
+declares ``footprint_connected`` has such footprints. Nothing else is assumed: actions and faults
+may be any hashable values.
 """
 
 from __future__ import annotations
@@ -178,6 +182,8 @@ def check_domain(domain: Domain[Any, Any]) -> None:
             raise fail(f"action {text} has duration {duration!r}; expected a positive Fraction")
         for probe in _PROBES:
             _check_translation(domain, action, text, probe, fail)
+            if domain.footprint_connected:
+                _check_connected(domain, action, text, probe, fail)
     for faults in (frozenset(), *domain.fault_sets):
         text = domain.format_faults(faults)
         if domain.parse_faults(text) != faults:
@@ -200,3 +206,33 @@ def _check_translation(
     want_cells = tuple((x + dx, y + dy) for x, y in cells)
     if domain.apply(shifted, action) != want_end or domain.footprint(shifted, action) != want_cells:
         raise fail(f"action {text} does not act the same in every cell (translation)")
+
+
+def _check_connected(
+    domain: Domain[Any, Any],
+    action: Any,
+    text: str,
+    probe: Pose,
+    fail: Callable[[str], ProblemError],
+) -> None:
+    """Fail unless the footprint of ``action`` from ``probe`` holds a 4-connected path from the
+    start cell to the end cell of exactly their Manhattan length (breadth-first inside the
+    footprint, neighbours in a fixed order)."""
+    start, goal = probe.cell, domain.apply(probe, action).cell
+    cells = set(domain.footprint(probe, action))
+    want = abs(goal[0] - start[0]) + abs(goal[1] - start[1])
+    frontier, seen = [start], {start}
+    for _ in range(want):
+        reached: list[Cell] = []
+        for x, y in frontier:
+            for nxt in ((x, y - 1), (x + 1, y), (x, y + 1), (x - 1, y)):
+                if nxt in cells and nxt not in seen:
+                    seen.add(nxt)
+                    reached.append(nxt)
+        frontier = reached
+    if goal not in seen:
+        raise fail(
+            f"footprint_connected=True, but the footprint of action {text} from "
+            f"{probe.heading.name} holds no 4-connected path of {want} steps from its start cell "
+            f"{start} to its end cell {goal} (footprint {domain.footprint(probe, action)})"
+        )

@@ -37,6 +37,7 @@ from selfrepair.errors import InputError, TableError
 from selfrepair.limits import MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES, check_limit
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import domain_names, get_domain
+from selfrepair.tables.generate import generate_table
 from selfrepair.tables.model import FORMAT_NAME, Candidate, ReplacementTable, TableEntry
 from selfrepair.textio import read_text, strip_bom
 
@@ -44,6 +45,8 @@ __all__ = [
     "MAX_JSON_DEPTH",
     "bundled_table",
     "bundled_table_names",
+    "default_table",
+    "default_table_name",
     "dump_table",
     "load_table",
     "parse_table",
@@ -414,3 +417,33 @@ def resolve_table(
         max_table_candidates,
     )
     return _FILES.get(key, load)
+
+
+GENERATED_DEFAULT = "generated"
+"""What :func:`default_table_name` calls a table generated for a robot that ships none."""
+
+
+def default_table_name(domain: Domain[Any, Any]) -> str:
+    """Which table :func:`default_table` gives ``domain``: ``"handwritten"`` (the paper's, for
+    the four-wheel robot), the name of a bundled table named after the domain
+    (``"three-action"``), else :data:`GENERATED_DEFAULT`."""
+    if domain.name == "four-wheel":
+        return "handwritten"
+    if domain.name in bundled_table_names() and bundled_table(domain.name).domain is domain:
+        return domain.name
+    return GENERATED_DEFAULT
+
+
+def default_table(domain: Domain[Any, Any]) -> ReplacementTable:
+    """The table a robot gets when none is named (the command line, the Gymnasium environment):
+    the bundled table :func:`default_table_name` names, else one generated for the domain with
+    the default options (fault-agnostic; made once per process for a few domains)."""
+    name = default_table_name(domain)
+    if name != GENERATED_DEFAULT:
+        return bundled_table(name)
+    return _GENERATED.get(domain, lambda: generate_table(domain))
+
+
+_GENERATED: BoundedCache[Domain[Any, Any], ReplacementTable] = BoundedCache(
+    "generated default tables", 4
+)

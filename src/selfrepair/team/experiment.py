@@ -29,10 +29,11 @@ from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.team.allocation import Job, Worker, allocate, distance_maps
 from selfrepair.team.engine import run_team
+from selfrepair.team.grid import components
 from selfrepair.team.metrics import team_row
 from selfrepair.team.model import TeamFault, TeamFaultKind, TeamScenario, TeamStrategyName, Trigger
+from selfrepair.team.randomteam import GripperMix, random_scenario
 from selfrepair.team.result import TeamOptions, TeamResult
-from selfrepair.team.scenario import GripperMix, components, random_scenario
 from selfrepair.world.maze import Maze
 
 __all__ = ["FaultCase", "TeamCase", "build_scenario", "case_row", "run_case"]

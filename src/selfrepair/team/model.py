@@ -30,7 +30,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from enum import StrEnum
 from fractions import Fraction
 from typing import Any
@@ -218,8 +218,12 @@ class TeamFault:
 @dataclass(frozen=True, slots=True)
 class TeamScenario:
     """A whole team mission's world: maze, robots, tasks and team faults, for the robot
-    ``domain`` (every robot is of the same kind; equipment may differ). ``source`` names the
-    file it came from. Checked by :func:`selfrepair.team.scenario.check_scenario`."""
+    ``domain`` (every robot is of the same kind; equipment may differ). ``table`` is the
+    robots' own replacement table for their wheel faults (a bundled name, ``"generated"`` or a
+    table file; ``""``: the domain's default, see
+    :func:`selfrepair.tables.fileformat.default_table`). ``source`` names the file it came from
+    and ``digest`` is the SHA-256 of that file's text (``""`` for a scenario built in code).
+    Checked by :func:`selfrepair.team.check.check_scenario`."""
 
     maze: Maze
     robots: tuple[RobotSpec, ...]
@@ -228,6 +232,8 @@ class TeamScenario:
     domain: Domain[Any, Any] = FOUR_WHEEL
     name: str = ""
     source: str = "<scenario>"
+    table: str = ""
+    digest: str = ""
     _index: dict[str, int] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -250,9 +256,7 @@ class TeamScenario:
 
     def without_faults(self) -> TeamScenario:
         """The same scenario with no team fault (the fault-free baseline)."""
-        return TeamScenario(
-            self.maze, self.robots, self.tasks, (), self.domain, self.name, self.source
-        )
+        return replace(self, faults=())
 
 
 # --- higher-level actions ----------------------------------------------------------------------

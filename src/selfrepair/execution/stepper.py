@@ -1,0 +1,290 @@
+"""The one execution loop's body: the queue of planned actions, the strategy that repairs it, the
+splice, and the record of what happened.
+
+A :class:`Stepper` serves one robot's mission. It holds the queue of ``(action, StepSource)``,
+the :class:`~selfrepair.repair.strategies.Repairer` started for the mission, and the faults the
+robot knows. It never knows who drives it or what the world is: a caller asks it for the next
+command (:meth:`Stepper.next_action`), sends the command to its world, and tells it what happened
+(:meth:`Stepper.record`). Three callers drive it:
+
+- :func:`selfrepair.execution.executor.run_mission` runs it to the end against a
+  :class:`~selfrepair.execution.simulator.Simulator`;
+- the Gymnasium environment (:mod:`selfrepair.envs.env`) exposes it one step at a time (its
+  guide's hints and the planner policies are steppers that follow the agent's commands);
+- the team engine (:mod:`selfrepair.team.engine`) drives one stepper per robot drive, each robot
+  with its own simulator, interleaved by the reservation table.
+
+Before each command, :meth:`Stepper.next_action`:
+
+1. if the queue is empty (away from the goal: the caller checks the goal), replans (the
+   defensive replan, recorded with ``action=None``);
+2. if the queue's first action is unavailable under the known faults, asks the strategy for a
+   repair and splices it into the queue (:func:`splice`, the one splice of the code base);
+3. if the strategy has a ``horizon`` (lookahead with a window before the faulty action), asks it
+   as soon as one of the next ``horizon`` actions after the first is known to be faulty (at most
+   once per step, so it cannot loop);
+4. answers the queue's first entry, or ``None`` when a repair failed (:attr:`Stepper.failure`
+   says how; the stepper then answers ``None`` until the robot moves off the plan).
+
+Each repair is timed with ``time.perf_counter_ns`` from the request to the spliced queue (the
+repair latency) and recorded as a :class:`~selfrepair.execution.result.RepairRecord`.
+
+After the command, :meth:`Stepper.record` is told its outcome: a move of the queue's first action
+consumes it; a move of another action (an agent that does not follow the plan) empties the queue,
+so the next question replans from where the robot is; a failed attempt reveals the faults that
+blocked it (detection on use); each command is recorded as a
+:class:`~selfrepair.execution.result.TraceStep`. What the robot senses between commands (detection
+``now``) comes in through :meth:`Stepper.learn`.
+"""
+
+from __future__ import annotations
+
+import time
+from collections import deque
+from collections.abc import Container, Iterable, Iterator, Sequence
+from fractions import Fraction
+from itertools import islice, repeat
+from operator import itemgetter
+from typing import Any, overload
+
+from selfrepair.errors import ProblemError
+from selfrepair.execution.moves import MoveTable, available_moves
+from selfrepair.execution.result import RepairRecord, StepSource, TraceStep
+from selfrepair.execution.simulator import Outcome, StepOutcome
+from selfrepair.geometry import Pose
+from selfrepair.repair.strategies import (
+    MissionContext,
+    Repair,
+    Repairer,
+    RepairRequest,
+    RepairStatus,
+    replan,
+)
+
+__all__ = ["MAX_REPAIRS_PER_STEP", "Entry", "Stepper", "splice"]
+
+MAX_REPAIRS_PER_STEP = 64
+"""Repairs one question may ask for before the strategy is taken to break its contract (every
+action of a repair is available under the known faults, so a correct strategy needs one, a
+deferring recursion mode a few)."""
+
+Entry = tuple[Any, StepSource]
+"""One queued action and where it came from."""
+
+_ACTION = itemgetter(0)
+
+_STEP_SOURCES = {str(s): StepSource(s) for s in StepSource}
+"""Step sources by value: a dictionary look-up, where calling the enum costs a microsecond inside
+the timed repair."""
+
+_new_tuple = tuple.__new__
+"""Builds the :class:`TraceStep` of each step without the ``NamedTuple`` constructor's Python
+frame (the same value)."""
+
+
+class _ActionView(Sequence[Any]):
+    """A read-only view of the queue's actions, so a repair request costs O(1) to build."""
+
+    __slots__ = ("_queue",)
+
+    def __init__(self, queue: deque[Entry]) -> None:
+        self._queue = queue
+
+    def __len__(self) -> int:
+        return len(self._queue)
+
+    def __iter__(self) -> Iterator[Any]:
+        return map(_ACTION, self._queue)
+
+    @overload
+    def __getitem__(self, index: int) -> Any: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> tuple[Any, ...]: ...
+
+    def __getitem__(self, index: int | slice) -> Any:
+        if isinstance(index, slice):
+            start, stop, stride = index.indices(len(self._queue))
+            if stride == 1:  # in C: a deque is slow to index in the middle
+                return tuple(islice(map(_ACTION, self._queue), start, max(start, stop)))
+            return tuple(self._queue[i][0] for i in range(start, stop, stride))
+        return self._queue[index][0]
+
+
+def splice(queue: deque[Entry], consumed: int, actions: Sequence[Any], source: StepSource) -> None:
+    """Replace the first ``consumed`` queued actions by ``actions`` marked ``source``, in place.
+    A short repair pops and pushes at the front; one that covers much of the queue (a whole-plan
+    rewrite) rebuilds it in C, which is cheaper than popping item by item."""
+    if 3 * consumed > len(queue):
+        rest = list(islice(queue, consumed, None))
+        queue.clear()
+        queue.extend(zip(actions, repeat(source)))
+        queue.extend(rest)
+        return
+    for _ in range(consumed):
+        queue.popleft()
+    queue.extendleft(zip(reversed(actions), repeat(source)))
+
+
+class Stepper:
+    """The queue, strategy and record of one robot's mission (see the module docstring).
+    Mutable: one per mission (or per team drive).
+
+    ``actions`` is the initial plan (marked ``source``), ``known`` the faults known at the start,
+    ``table`` the robot's move table (availability is looked up in it per fault set).
+    ``stopped`` starts the stepper given up (an initial plan that failed): it answers ``None``
+    until the robot moves off the plan.
+    """
+
+    __slots__ = (
+        "_available",
+        "_early_at",
+        "_table",
+        "context",
+        "failure",
+        "horizon",
+        "known",
+        "queue",
+        "repairer",
+        "repairs",
+        "steps",
+        "stopped",
+    )
+
+    def __init__(
+        self,
+        context: MissionContext,
+        repairer: Repairer,
+        actions: Iterable[Any],
+        known: frozenset[Any],
+        table: MoveTable,
+        *,
+        source: StepSource = StepSource.PLAN,
+        stopped: bool = False,
+    ) -> None:
+        self.context = context
+        self.repairer = repairer
+        self.queue: deque[Entry] = deque(zip(actions, repeat(source)))
+        self.known = known
+        self._table = table
+        self._available: Container[Any] = available_moves(table, known)
+        self.horizon = int(getattr(repairer, "horizon", 0))
+        self._early_at = -1  # the step of the last early repair: at most one per step
+        self.steps: list[TraceStep] = []
+        self.repairs: list[RepairRecord] = []
+        self.failure: Repair | None = None
+        """The repair that failed (then :meth:`next_action` answers ``None``)."""
+        self.stopped = stopped
+
+    def learn(self, known: frozenset[Any]) -> None:
+        """The robot now knows exactly ``known`` (what its sensors report, detection ``now``)."""
+        if known is not self.known:
+            self.known = known
+            self._available = available_moves(self._table, known)
+
+    def available(self, action: Any) -> bool:
+        """Whether ``action`` is available under the known faults."""
+        return action in self._available
+
+    def next_action(self, pose: Pose, step: int) -> Entry | None:
+        """The next command at ``pose`` (``step`` commands so far) and its source, repairing the
+        queue first when needed (see the module docstring); ``None`` when a repair failed or the
+        stepper is stopped."""
+        queue = self.queue
+        if queue and queue[0][0] in self._available and not (self.horizon or self.stopped):
+            return queue[0]  # the hot path: nothing to repair
+        if self.stopped:
+            return None
+        for _ in range(MAX_REPAIRS_PER_STEP):
+            if not queue or queue[0][0] not in self._available:
+                repair = self._repair(pose, step, queue[0][0] if queue else None)
+            elif (
+                self.horizon
+                and self._early_at != step
+                and (ahead := self._faulty_ahead()) is not None
+            ):
+                self._early_at = step
+                repair = self._repair(pose, step, ahead)  # a known fault ahead: repair it early
+            else:
+                return queue[0]
+            if repair.status is not RepairStatus.REPAIRED:
+                self.failure, self.stopped = repair, True
+                return None
+        raise ProblemError(
+            f"strategy repaired the queue {MAX_REPAIRS_PER_STEP} times at {pose} and its first "
+            "action is still unavailable: a repair must start with an available action"
+        )
+
+    def _faulty_ahead(self) -> Any | None:
+        """The first of the ``horizon`` queued actions after the front that is unavailable under
+        the known faults (``None`` when all are available)."""
+        queue, available = self.queue, self._available
+        for i in range(1, min(self.horizon + 1, len(queue))):
+            action = queue[i][0]
+            if action not in available:
+                return action
+        return None
+
+    def _repair(self, pose: Pose, step: int, action: Any | None) -> Repair:
+        """Ask the strategy (or, with an empty queue, a plain replan) for a repair of ``action``
+        and splice it into the queue; the latency covers both."""
+        t0 = time.perf_counter_ns()
+        queue = self.queue
+        request = RepairRequest(pose, _ActionView(queue), self.known, step)
+        fallback = action is None  # the queue ran out away from the goal: plain replan
+        repair = replan(self.context, request) if fallback else self.repairer.repair(request)
+        if repair.status is RepairStatus.REPAIRED:
+            source = _STEP_SOURCES.get(repair.source) or StepSource(repair.source)
+            splice(queue, repair.consumed, repair.actions, source)
+        latency = time.perf_counter_ns() - t0
+        self.repairs.append(RepairRecord(step, pose, action, repair, latency))
+        return repair
+
+    def observe(self, outcome: StepOutcome, source: StepSource = StepSource.PLAN) -> None:
+        """:meth:`record` a command that :meth:`Simulator.execute
+        <selfrepair.execution.simulator.Simulator.execute>` reported as ``outcome``; ``source``
+        is where the command came from (the one :meth:`next_action` gave, when it was followed)."""
+        self.record(
+            outcome.step,
+            outcome.action,
+            source,
+            outcome.status,
+            outcome.start,
+            outcome.end,
+            outcome.duration,
+            outcome.blocking,
+        )
+
+    def record(
+        self,
+        step: int,
+        action: Any,
+        source: StepSource,
+        outcome: Outcome,
+        start: Pose,
+        end: Pose,
+        duration: Fraction,
+        blocking: frozenset[Any] = frozenset(),
+    ) -> None:
+        """Tell the stepper what command ``action`` (number ``step``, of ``source``) did: a move
+        from ``start`` to ``end`` in ``duration``, a failed attempt revealing ``blocking``, or a
+        refused command (a collision: nothing changes, nothing is recorded). See the module
+        docstring."""
+        known = self.known
+        if outcome is Outcome.MOVED:
+            queue = self.queue
+            if queue and ((head := queue[0][0]) is action or head == action):
+                queue.popleft()
+            else:  # off the plan: the next question replans from the new pose
+                queue.clear()
+                self.stopped, self.failure = False, None
+        elif outcome is Outcome.FAILED_ATTEMPT:
+            source = StepSource.FAILED_ATTEMPT
+            if not blocking <= known:
+                self.known = known | blocking
+                self._available = available_moves(self._table, self.known)
+        else:
+            return
+        self.steps.append(
+            _new_tuple(TraceStep, (step, action, start, end, duration, source, known))
+        )

@@ -1,0 +1,339 @@
+"""The schema of an experiment file: frozen pydantic models of every section.
+
+The file format is described in ``docs/experiments.md`` and in :mod:`selfrepair.experiment.config`,
+which reads a file into an :class:`ExperimentConfig`. Validators that need the robot (fault
+texts, profiles, LPG-adapt's availability) get it from the validation context (key ``domain``),
+set by :func:`selfrepair.experiment.config.parse_config` after the plug-ins are loaded.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+from pydantic import Field, ValidationInfo, field_validator, model_validator
+
+from selfrepair.errors import InputError
+from selfrepair.execution.faults import Clock, Detection, Persistence
+from selfrepair.geometry import parse_cell, parse_pose
+from selfrepair.limits import MAX_CLEARANCE_WEIGHT
+from selfrepair.repair.replacement import DEFERRING, RecursionMode
+from selfrepair.robots.domain import Domain
+from selfrepair.robots.fromfile import DEFAULT_DOMAIN
+from selfrepair.robots.registry import get_domain
+from selfrepair.tomlfile import Float, Frozen, Int, NonEmpty
+from selfrepair.world.routes import MAX_ROUTES
+
+__all__ = [
+    "FAULT_PROFILES",
+    "STRATEGY_TAGS",
+    "DStarLiteStrategy",
+    "ExperimentConfig",
+    "FaultsConfig",
+    "GeneratedMaze",
+    "LookaheadStrategy",
+    "LpgAdaptStrategy",
+    "MazeConfig",
+    "PlannerConfig",
+    "ReplacementStrategy",
+    "ReplanStrategy",
+    "RouteConfig",
+    "StrategyConfig",
+]
+
+FAULT_PROFILES = ("paper", "singles", "doubles", "all")
+"""Named fault-set profiles; see :func:`selfrepair.experiment.faultsets.fault_profile`."""
+
+PAPER_ONLY = frozenset({"paper"})
+"""Profiles defined for the four-wheel robot only."""
+
+
+
+class GeneratedMaze(Frozen):
+    """Options of :func:`selfrepair.world.mazegen.generate_maze`."""
+
+    width: Annotated[Int, Field(ge=5, le=1024)]
+    height: Annotated[Int, Field(ge=5, le=1024)]
+    corridor: Annotated[Int, Field(ge=1, le=64)] = 1
+    braid: Annotated[Float, Field(ge=0.0, le=1.0)] = 0.0
+    seed: Int = 0
+
+
+class RouteConfig(Frozen):
+    """One explicit route: a start pose ``"X,Y,H"`` and a goal cell ``"X,Y"``."""
+
+    start: str
+    goal: str
+    name: str | None = None
+
+    @field_validator("start")
+    @classmethod
+    def _pose(cls, value: str) -> str:
+        return str(_reraise(parse_pose, value))
+
+    @field_validator("goal")
+    @classmethod
+    def _cell(cls, value: str) -> str:
+        x, y = _reraise(parse_cell, value)
+        return f"{x},{y}"
+
+
+class MazeConfig(Frozen):
+    """Where a maze comes from (exactly one of ``bundled``, ``file``, ``generate``) and its routes.
+
+    ``routes`` is ``"bundled"`` (the bundled maze's route file), a number of random routes (drawn
+    from the experiment seed), or a list of explicit routes.
+    """
+
+    bundled: str | None = None
+    file: str | None = None
+    generate: GeneratedMaze | None = None
+    routes: (
+        Literal["bundled"]
+        | Annotated[Int, Field(ge=1, le=MAX_ROUTES)]
+        | Annotated[tuple[RouteConfig, ...], Field(min_length=1)]
+    ) = "bundled"
+
+    @model_validator(mode="after")
+    def _one_source(self) -> MazeConfig:
+        given = [k for k in ("bundled", "file", "generate") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(
+                "expected exactly one of 'bundled', 'file' or 'generate', got "
+                + (", ".join(repr(k) for k in given) or "none")
+            )
+        if self.routes == "bundled" and self.bundled is None:
+            raise ValueError(
+                'routes = "bundled" needs a bundled maze; give a number of random routes or a '
+                "list of {start, goal} tables"
+            )
+        return self
+
+
+class FaultsConfig(Frozen):
+    """Which fault sets, when they appear (``at``, in steps or ticks per ``clock``), how long they
+    last (``persistence`` with ``duration`` or ``probability``) and how they are detected."""
+
+    sets: Literal["paper", "singles", "doubles", "all"] | tuple[str, ...] = "paper"
+    at: Annotated[tuple[Annotated[Int, Field(ge=0)], ...], NonEmpty] = (0,)
+    clock: Clock = Clock.STEP
+    detection: Annotated[tuple[Detection, ...], NonEmpty] = (Detection.NOW,)
+    persistence: Persistence = Persistence.PERMANENT
+    duration: Annotated[Int, Field(ge=1)] | None = None
+    probability: Annotated[Float, Field(ge=0.0, le=1.0)] | None = None
+
+    @model_validator(mode="after")
+    def _persistence_options(self) -> FaultsConfig:
+        if self.persistence is Persistence.TRANSIENT and self.duration is None:
+            raise ValueError("persistence = \"transient\" needs a 'duration' (>= 1)")
+        if self.persistence is Persistence.INTERMITTENT and self.probability is None:
+            raise ValueError("persistence = \"intermittent\" needs a 'probability' in [0, 1]")
+        return self
+
+    @field_validator("sets")
+    @classmethod
+    def _sets(cls, value: str | tuple[str, ...], info: ValidationInfo) -> str | tuple[str, ...]:
+        domain = _domain(info)
+        if isinstance(value, str):
+            if value in PAPER_ONLY and domain.name != "four-wheel":
+                raise ValueError(
+                    f'the "{value}" profile is defined for the four-wheel robot; for '
+                    f"{domain.name!r} use singles, doubles, all or a list of fault sets"
+                )
+            return value
+        if not value:
+            raise ValueError("expected at least one fault set")
+        return tuple(domain.format_faults(_reraise(domain.parse_faults, text)) for text in value)
+
+
+MazeNames = Annotated[tuple[str, ...], Field(min_length=1)] | None
+"""A strategy's ``mazes``: the labels of the experiment's mazes it runs on (all when absent)."""
+
+
+class PlannerConfig(Frozen):
+    """Planner options shared by every strategy unless a strategy overrides the weights."""
+
+    clearance_weights: tuple[str, ...] = ("0",)
+    clearance_radius: Annotated[Int, Field(ge=0, le=64)] = 2
+
+    @field_validator("clearance_weights", mode="before")
+    @classmethod
+    def _weights(cls, value: Any) -> Any:
+        return _weights(value)
+
+
+class _StrategyEntry(Frozen):
+    """What every strategy entry has: its own clearance weights (else the planner's) and the
+    labels of the mazes it runs on (else all)."""
+
+    clearance_weights: tuple[str, ...] | None = None
+    mazes: MazeNames = None
+
+    @field_validator("clearance_weights", mode="before")
+    @classmethod
+    def _weights(cls, value: Any) -> Any:
+        return _weights(value)
+
+
+class ReplanStrategy(_StrategyEntry):
+    """The baseline: replan from scratch at every faulty encounter, with the planner ``backend``
+    (``auto``: the compiled kernels when numba is installed; ``python``: the pure-Python search,
+    to compare with pure-Python strategies such as D* Lite)."""
+
+    name: Literal["replan"]
+    backend: Literal["auto", "numba", "python"] = "auto"
+
+
+class ReplacementStrategy(_StrategyEntry):
+    """Replacement tables with recursion mode; one variant per table, mode and ``rewrite``
+    value (``true``: whole-plan rewriting, ``[false, true]``: both; default per encounter)."""
+
+    name: Literal["replacement"]
+    tables: Annotated[tuple[str, ...], NonEmpty] = ("handwritten",)
+    recursion: Annotated[tuple[RecursionMode, ...], NonEmpty] = (RecursionMode.GUARDED,)
+    rewrite: tuple[bool, ...] = (False,)
+
+    @field_validator("rewrite", mode="before")
+    @classmethod
+    def _rewrite(cls, value: Any) -> Any:
+        if isinstance(value, bool):
+            return (value,)
+        if isinstance(value, list | tuple) and not value:
+            raise ValueError("expected true, false or a non-empty list of them")
+        if isinstance(value, list | tuple) and not all(isinstance(v, bool) for v in value):
+            raise ValueError(f"expected true, false or a list of them, got {value!r}")
+        return value
+
+    @model_validator(mode="after")
+    def _rewrite_modes(self) -> ReplacementStrategy:
+        deferring = [str(m) for m in self.recursion if m in DEFERRING]
+        if any(self.rewrite) and deferring:
+            raise ValueError(
+                f"rewrite is not available with {', '.join(deferring)} recursion (its "
+                "replacements may keep faulty actions for later); list those modes in a "
+                "strategy without rewrite"
+            )
+        return self
+
+
+class LookaheadStrategy(ReplacementStrategy):
+    """Replace a window of ``window`` actions after the faulty one and, when the fault is known
+    ahead, ``before`` actions before it; one variant per (window, before) pair."""
+
+    name: Literal["lookahead"]  # type: ignore[assignment]
+    window: tuple[Annotated[Int, Field(ge=0, le=64)], ...] = (3,)
+    before: tuple[Annotated[Int, Field(ge=0, le=64)], ...] = (0,)
+
+    @field_validator("rewrite")
+    @classmethod
+    def _no_rewrite(cls, value: tuple[bool, ...]) -> tuple[bool, ...]:
+        if any(value):
+            raise ValueError("rewrite applies to the replacement strategy only")
+        return value
+
+
+class DStarLiteStrategy(_StrategyEntry):
+    """D* Lite, incremental replanning (pure Python), keeping its search between repairs."""
+
+    name: Literal["dstar-lite"]
+
+
+class LpgAdaptStrategy(_StrategyEntry):
+    """Plan repair with LPG-adapt (``pddl`` extra, four-wheel robot): ``time_limit`` seconds per
+    call, LPG's ``seed``; LPG's failures and time-outs fall back to replanning."""
+
+    name: Literal["lpg-adapt"]
+    time_limit: Annotated[Float, Field(gt=0, le=3600)] = 5.0
+    seed: Annotated[Int, Field(ge=0, lt=2**31)] = 0
+
+    @field_validator("name")
+    @classmethod
+    def _runnable(cls, value: str, info: ValidationInfo) -> str:
+        """Refuse the strategy before any mission runs where it cannot run (extra, robot)."""
+        from selfrepair.baselines.adapt import check_lpg_adapt
+        from selfrepair.errors import ProblemError
+
+        try:
+            check_lpg_adapt(_domain(info).name)
+        except ProblemError as exc:
+            raise ValueError(str(exc)) from None
+        return value
+
+
+STRATEGY_TAGS = ("replan", "replacement", "lookahead", "dstar-lite", "lpg-adapt")
+"""The ``name`` values that select a strategy entry's model (the discriminator of
+:data:`StrategyConfig`)."""
+
+StrategyConfig = Annotated[
+    ReplanStrategy | ReplacementStrategy | LookaheadStrategy | DStarLiteStrategy | LpgAdaptStrategy,
+    Field(discriminator="name"),
+]
+
+
+class ExperimentConfig(Frozen):
+    """A whole experiment: the cross product of mazes x routes x fault settings x strategies x
+    clearance weights x repeats, for the robot ``domain`` (a name in the domain registry).
+    ``source`` is the file it was read from (for error messages and for resolving relative
+    paths). ``crossover``: the experiment command also estimates the maze size where
+    replacement's repair compute per mission falls below 1/10 of the replanner's
+    (:mod:`selfrepair.experiment.scale`); it does not change any mission. ``timing_repeats``:
+    warm timing runs per mission (the command line's ``--repeats`` overrides it)."""
+
+    name: Annotated[str, Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")]
+    description: str = ""
+    domain: str = DEFAULT_DOMAIN
+    plugins: tuple[str, ...] = ()
+    seed: Int = 0
+    repeats: Annotated[Int, Field(ge=1, le=1000)] = 1
+    crossover: bool = False
+    timing_repeats: Annotated[Int, Field(ge=1, le=1000)] = 1
+    mazes: Annotated[tuple[MazeConfig, ...], Field(min_length=1)]
+    faults: FaultsConfig = FaultsConfig()
+    planner: PlannerConfig = PlannerConfig()
+    strategies: Annotated[tuple[StrategyConfig, ...], Field(min_length=1)]
+    source: str = "<string>"
+
+    @property
+    def base_dir(self) -> Path:
+        """The directory relative paths in the file are resolved against."""
+        return Path(self.source).parent if not self.source.startswith("<") else Path.cwd()
+
+
+def _weights(value: Any) -> Any:
+    """Clearance weights as canonical exact strings (``0.5`` -> ``"1/2"``), each from 0 to
+    :data:`~selfrepair.limits.MAX_CLEARANCE_WEIGHT`."""
+    if value is None:
+        return None
+    if not isinstance(value, list | tuple):
+        raise ValueError("expected a list of non-negative numbers such as [0, 1, 2.5]")
+    if not value:
+        raise ValueError("expected a non-empty list")
+    out = []
+    for item in value:
+        if isinstance(item, bool) or not isinstance(item, int | float | str):
+            raise ValueError(f"expected a non-negative number, got {item!r}")
+        try:
+            weight = Fraction(str(item))
+        except (ValueError, ZeroDivisionError):
+            raise ValueError(f"expected a non-negative number, got {item!r}") from None
+        if weight < 0:
+            raise ValueError(f"expected a non-negative number, got {item!r}")
+        if weight > MAX_CLEARANCE_WEIGHT:
+            raise ValueError(f"expected a weight of at most {MAX_CLEARANCE_WEIGHT:,}, got {item!r}")
+        out.append(str(weight))
+    return tuple(out)
+
+
+def _domain(info: ValidationInfo) -> Domain[Any, Any]:
+    context = info.context or {}
+    domain = context.get("domain")
+    return domain if isinstance(domain, Domain) else get_domain(DEFAULT_DOMAIN)
+
+
+def _reraise(parser: Any, text: str) -> Any:
+    """Run a robot-model parser, turning its InputError into a plain ValueError for pydantic."""
+    try:
+        return parser(text)
+    except InputError as exc:
+        raise ValueError(exc.reason) from None

@@ -1,0 +1,296 @@
+"""Tolerance of a plan: which faults, appearing at which step, a plan survives by replacement.
+
+Fault-tolerant planning (Jensen, Veloso and Bryant, ICAPS 2004) asks whether a plan stays
+executable if a likely fault appears at any step. Here the question is asked of the
+``replacement`` strategy itself: given a plan (its poses and actions), the mission's
+:class:`~selfrepair.repair.strategies.MissionContext` (table, recursion mode, whole-plan rewriting
+or not, the map as a free test) and a :class:`FaultModel` (a list of fault sets), a pair
+``(step i, fault set F)`` is **covered** when ``F`` appearing permanently before step ``i``, and
+detected at once, lets the robot reach the goal from there with replacements only: no replan.
+
+How it is decided (exactly, by running the strategy):
+
+* Before step ``i`` nothing is faulty, so the robot is at the plan's pose ``i`` with the plan's
+  actions ``i..`` queued. From there :func:`runs_without_replan` runs the real repairer of the
+  ``replacement`` strategy (:func:`~selfrepair.repair.strategies.get_strategy`) with ``F`` known:
+  every action the faults forbid is sent to ``repairer.repair``; a repair that asks for a replan
+  (``Repair.replans > 0``) means the pair is uncovered. Its planner is never run (the context's
+  ``plan`` answers "no plan" at once), so the check costs table look-ups only.
+* In a non-deferring recursion mode (``flat``, ``guarded``, ``layered``) a replacement ends where
+  the replaced action ends and uses healthy actions only, so the robot stays on the plan's poses
+  and each encounter is decided by the faulty step alone: step ``j`` **needs a replan** under
+  ``F`` exactly when its action is unavailable under ``F`` and the strategy finds no valid
+  replacement at pose ``j`` (:func:`needs_replan`, a local property of (pose, action, F)). Then
+  ``(i, F)`` is covered exactly when no step ``j >= i`` needs a replan under ``F``; whole-plan
+  rewriting substitutes the same replacements earlier, so it covers the same pairs. This is what
+  :func:`plan_tolerance` computes (one look-up per faulty step and fault set), and what the
+  tolerant planner's masks are made of (:mod:`selfrepair.repair.tolerance_masks`).
+* In a deferring mode (``primitive``) a replacement may keep a faulty complex action for later,
+  with a guard set carried over execution, so a step's answer depends on the replacement it came
+  from: :func:`plan_tolerance` then runs the strategy from the first faulty step of each suffix
+  (the pair's answer only depends on that step) and the local test is only an approximation.
+
+Tests check both against a brute-force re-simulation with the executor (a mission whose fault
+schedule makes ``F`` appear at step ``i``).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from fractions import Fraction
+from itertools import combinations
+from typing import Any
+
+from selfrepair.errors import ProblemError
+from selfrepair.geometry import Cell, Heading, Pose
+from selfrepair.repair.replacement import DEFERRING
+from selfrepair.repair.strategies import (
+    MissionContext,
+    Repairer,
+    RepairRequest,
+    RepairStatus,
+    StrategyName,
+    get_strategy,
+)
+from selfrepair.robots.domain import Domain
+from selfrepair.search.astar import PlanResult, PlanStatus
+
+__all__ = [
+    "FaultModel",
+    "PlanTolerance",
+    "StepTolerance",
+    "fault_model",
+    "needs_replan",
+    "plan_tolerance",
+    "runs_without_replan",
+    "without_replans",
+]
+
+
+@dataclass(frozen=True, slots=True)
+class FaultModel:
+    """The fault sets a plan should tolerate, in a fixed order (bit ``b`` of a tolerance mask is
+    ``fault_sets[b]``). ``label`` names the model in tables (``"k=1"``, ``"k=2"`` or the sets)."""
+
+    fault_sets: tuple[frozenset[Any], ...]
+    label: str
+
+    def __post_init__(self) -> None:
+        if not self.fault_sets:
+            raise ProblemError("a fault model needs at least one fault set")
+        if any(not f for f in self.fault_sets):
+            raise ProblemError("a fault model's fault sets may not be empty")
+        if len(set(self.fault_sets)) != len(self.fault_sets):
+            raise ProblemError("a fault model lists a fault set twice")
+
+    @property
+    def max_size(self) -> int:
+        """The largest fault set's size (the ``k`` of k-fault tolerance)."""
+        return max(len(f) for f in self.fault_sets)
+
+
+def fault_model(domain: Domain[Any, Any], k: int) -> FaultModel:
+    """Every fault set of the domain with 1 to ``k`` faults: ``domain.fault_sets`` (singles,
+    then pairs) for ``k <= 2``, combinations of ``domain.faults`` (in their order) beyond."""
+    if k < 1:
+        raise ProblemError(f"k must be at least 1, got {k}")
+    if k <= 2:
+        sets = tuple(f for f in domain.fault_sets if len(f) <= k)
+    else:
+        sets = tuple(
+            frozenset(c) for size in range(1, k + 1) for c in combinations(domain.faults, size)
+        )
+    return FaultModel(sets, f"k={k}")
+
+
+@dataclass(frozen=True, slots=True)
+class StepTolerance:
+    """One step of a plan under a fault model: ``needs_replan`` lists the fault sets (in the
+    model's order) under which this step itself would need a replan (its action is faulty and
+    has no valid replacement at its pose); ``uncovered`` those that, appearing before this step,
+    lead to a replan at this step or later."""
+
+    step: int
+    pose: Pose
+    action: Any
+    needs_replan: tuple[frozenset[Any], ...]
+    uncovered: tuple[frozenset[Any], ...]
+
+
+@dataclass(frozen=True, slots=True)
+class PlanTolerance:
+    """A plan's tolerance: per step, and over all ``(step, fault set)`` pairs.
+
+    ``covered`` of ``pairs`` pairs are covered; ``met`` counts the pairs whose fault set forbids
+    some action of the rest of the plan (the others are covered trivially). ``tolerant``: every
+    pair is covered (the plan is ``model.max_size``-fault tolerant for the model's sets).
+    ``exact_local``: whether the local per-step test decides every pair exactly (non-deferring
+    recursion modes, see the module docstring)."""
+
+    model: FaultModel
+    steps: tuple[StepTolerance, ...]
+    pairs: int
+    covered: int
+    met: int
+    exact_local: bool
+
+    @property
+    def share(self) -> Fraction:
+        """Covered pairs over all pairs (1 for an empty plan)."""
+        return Fraction(self.covered, self.pairs) if self.pairs else Fraction(1)
+
+    @property
+    def tolerant(self) -> bool:
+        """Whether every (step, fault set) pair is covered."""
+        return self.covered == self.pairs
+
+    @property
+    def replan_steps(self) -> int:
+        """The (step, fault set) pairs at which the step itself would need a replan: what the
+        tolerant planner's soft mode counts."""
+        return sum(len(s.needs_replan) for s in self.steps)
+
+
+def _no_plan(
+    start: Pose, goal: Cell, heading: Heading | None, known: frozenset[Any], budget: int | None
+) -> PlanResult:
+    """A planner that finds nothing: a repair that falls back to replanning is seen at once."""
+    return PlanResult(PlanStatus.UNSOLVABLE, (), (), None, Fraction(0), 0, 0)
+
+
+def without_replans(context: MissionContext) -> MissionContext:
+    """``context`` with a planner that answers "no plan" at once: a strategy run on it shows a
+    fall-back to replanning (``Repair.replans``) without paying for the search."""
+    return replace(context, plan=_no_plan, replan_budget=0)
+
+
+def _repairer(context: MissionContext) -> Repairer:
+    if context.table is None:
+        raise ProblemError("plan tolerance needs the replacement strategy's table")
+    return get_strategy(StrategyName.REPLACEMENT)(without_replans(context))
+
+
+def needs_replan(
+    context: MissionContext, pose: Pose, action: Any, faults: frozenset[Any],
+    repairer: Repairer | None = None,
+) -> bool:  # fmt: skip
+    """Whether the ``replacement`` strategy of ``context`` would replan when it meets ``action``
+    at ``pose`` with ``faults`` known: the action is unavailable and no valid replacement exists
+    there (the local test; exact per encounter in non-deferring recursion modes)."""
+    if context.domain.available(action, faults):
+        return False
+    fixer = repairer if repairer is not None else _repairer(context)
+    repair = fixer.repair(RepairRequest(pose, (action,), faults, 0))
+    return repair.replans > 0 or repair.status is not RepairStatus.REPAIRED
+
+
+def runs_without_replan(
+    context: MissionContext,
+    pose: Pose,
+    actions: Sequence[Any],
+    faults: frozenset[Any],
+    max_steps: int | None = None,
+) -> bool:
+    """Whether the ``replacement`` strategy of ``context``, started at ``pose`` with ``actions``
+    queued and ``faults`` known (permanent), reaches the goal without a replan: the strategy's own
+    repairer is asked at every faulty action, as the executor does. ``max_steps`` bounds the
+    executed steps (default: ``20 * len(actions) + 100``)."""
+    domain = context.domain
+    repairer = _repairer(context)
+    queue: deque[Any] = deque(actions)
+    limit = 20 * len(actions) + 100 if max_steps is None else max_steps
+    executed = 0
+    while queue:
+        action = queue[0]
+        if not domain.available(action, faults):
+            repair = repairer.repair(RepairRequest(pose, tuple(queue), faults, executed))
+            if repair.replans or repair.status is not RepairStatus.REPAIRED:
+                return False
+            for _ in range(repair.consumed):
+                queue.popleft()
+            queue.extendleft(reversed(repair.actions))
+            continue
+        if executed >= limit or not context.free(domain.footprint(pose, action)):
+            return False
+        pose = domain.apply(pose, action)
+        queue.popleft()
+        executed += 1
+    return context.at_goal(pose)
+
+
+def plan_tolerance(
+    context: MissionContext,
+    poses: Sequence[Pose],
+    actions: Sequence[Any],
+    model: FaultModel,
+) -> PlanTolerance:
+    """The tolerance of the plan ``actions`` (from ``poses[0]``; ``poses[j]`` is the pose before
+    step ``j``) for the ``replacement`` strategy of ``context`` under ``model`` (see the module
+    docstring): exact for every recursion mode."""
+    if len(poses) < len(actions):
+        raise ProblemError(f"a plan of {len(actions)} actions needs {len(actions)} poses")
+    if context.options.recursion in DEFERRING:
+        return _by_runs(context, poses, actions, model)
+    repairer = _repairer(context)
+    n = len(actions)
+    local = [
+        tuple(f for f in model.fault_sets if needs_replan(context, poses[j], a, f, repairer))
+        for j, a in enumerate(actions)
+    ]
+    bad_from: list[tuple[frozenset[Any], ...]] = [()] * n
+    later: dict[frozenset[Any], None] = {}  # insertion-ordered: fault sets failing at j or later
+    for j in range(n - 1, -1, -1):
+        later.update(dict.fromkeys(local[j]))
+        bad_from[j] = tuple(f for f in model.fault_sets if f in later)
+    return _summary(context.domain, poses, actions, model, local, bad_from, exact_local=True)
+
+
+def _by_runs(
+    context: MissionContext, poses: Sequence[Pose], actions: Sequence[Any], model: FaultModel
+) -> PlanTolerance:
+    """Deferring recursion modes: the strategy run from the first faulty step of each suffix."""
+    domain = context.domain
+    n = len(actions)
+    local = [  # a fresh repairer each time: a deferring one keeps state between repairs
+        tuple(f for f in model.fault_sets if needs_replan(context, poses[j], actions[j], f))
+        for j in range(n)
+    ]
+    verdict: dict[tuple[int, frozenset[Any]], bool] = {}
+    bad_from: list[tuple[frozenset[Any], ...]] = []
+    for i in range(n):
+        bad = []
+        for f in model.fault_sets:
+            first = next((j for j in range(i, n) if not domain.available(actions[j], f)), None)
+            if first is None:
+                continue
+            key = (first, f)
+            if key not in verdict:
+                verdict[key] = runs_without_replan(context, poses[first], actions[first:], f)
+            if not verdict[key]:
+                bad.append(f)
+        bad_from.append(tuple(bad))
+    return _summary(domain, poses, actions, model, local, bad_from, exact_local=False)
+
+
+def _summary(
+    domain: Domain[Any, Any],
+    poses: Sequence[Pose],
+    actions: Sequence[Any],
+    model: FaultModel,
+    local: list[tuple[frozenset[Any], ...]],
+    bad_from: list[tuple[frozenset[Any], ...]],
+    *,
+    exact_local: bool,
+) -> PlanTolerance:
+    n = len(actions)
+    steps = tuple(StepTolerance(j, poses[j], actions[j], local[j], bad_from[j]) for j in range(n))
+    met = 0
+    faulty_later: set[frozenset[Any]] = set()
+    for j in range(n - 1, -1, -1):
+        faulty_later.update(f for f in model.fault_sets if not domain.available(actions[j], f))
+        met += len(faulty_later)
+    pairs = n * len(model.fault_sets)
+    uncovered = sum(len(b) for b in bad_from)
+    return PlanTolerance(model, steps, pairs, pairs - uncovered, met, exact_local)

@@ -1,0 +1,124 @@
+"""What new users hit (issue 29): commands on a plug-in robot and right after ``make demo``.
+
+The plug-in robot is ``tests/data/robots/hopper.py``: its ``hop`` leaves the 3x3 cells around
+the robot (the compiled planner cannot take it) and selfrepair ships no table for it.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from selfrepair.cli import main
+from selfrepair.robots.registry import load_plugin
+
+HOPPER = Path(__file__).parent / "data" / "robots" / "hopper.py"
+P = ["--plugin", str(HOPPER)]
+HOP_ROUTE = ["narrow-short", "--domain", "hopper", "--start", "7,13,W", "--goal", "1,8"]
+ROUTE = ["narrow-short", "--start", "1,1,E", "--goal", "13,13"]
+
+
+@pytest.fixture(autouse=True)
+def _hopper() -> None:
+    load_plugin(HOPPER)
+
+
+def _no_pddl(monkeypatch: pytest.MonkeyPatch) -> None:
+    """This installation as ``make demo`` leaves it: no ``pddl`` extra."""
+    from selfrepair.baselines import adapt
+
+    monkeypatch.setattr(adapt, "lpg_available", lambda: False)
+
+
+# --- 1. compare runs every strategy that can run here ---------------------------------------
+
+
+def test_compare_without_the_pddl_extra_skips_lpg_adapt_and_says_why(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    _no_pddl(monkeypatch)
+    assert main(["compare", *ROUTE, "--faults", "FL:F", "--no-warm-up"]) == 0
+    out = capsys.readouterr().out
+    assert "skipped lpg-adapt: the lpg-adapt strategy needs the pddl extra" in out
+    assert "dstar-lite" in out and "replacement[handwritten,flat]" in out
+
+
+def test_compare_on_a_plug_in_robot_runs_all_but_lpg_adapt(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main([*P, "compare", *HOP_ROUTE, "--faults", "HOP", "--no-warm-up", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert [r["strategy"].split("[")[0] for r in data["runs"]] == [
+        "replan",
+        "replacement",
+        "lookahead",
+        "dstar-lite",
+    ]
+    assert [s["strategy"] for s in data["skipped"]] == ["lpg-adapt"]
+    assert "four-wheel robot only" in data["skipped"][0]["reason"]
+
+
+def test_compare_asked_for_a_strategy_that_cannot_run_is_exit_2(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    args = [*P, "compare", *HOP_ROUTE, "--faults", "HOP", "--strategies", "replan,lpg-adapt"]
+    assert main(args) == 2
+    assert "lpg-adapt" in capsys.readouterr().err
+
+
+# --- 5. a robot without a hand-written table gets a generated one --------------------------
+
+
+def test_run_on_a_plug_in_robot_needs_no_table_option(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main([*P, "run", *HOP_ROUTE, "--faults", "HOP", "--no-warm-up"]) == 0
+    out = capsys.readouterr().out
+    assert "table: generated from the hopper robot model" in out
+    assert "replacements" in out
+
+
+def test_the_four_wheel_robot_still_gets_the_hand_written_table(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    assert main(["run", *ROUTE, "--faults", "FL:F", "--no-warm-up"]) == 0
+    assert "table: handwritten, the four-wheel robot's bundled table" in capsys.readouterr().out
+    assert main(["run", *ROUTE, "--faults", "FL:F", "--no-warm-up", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["table"] == "handwritten"
+    assert main(["run", *ROUTE, "--table", "generated-indexed", "--no-warm-up"]) == 0
+    assert "table:" not in capsys.readouterr().out.split("\n┏")[0]
+
+
+def test_the_three_action_robot_gets_its_bundled_table(capsys: pytest.CaptureFixture[str]) -> None:
+    args = ["run", "narrow-short", "--domain", "three-action", "--start", "1,1,E"]
+    assert main([*args, "--goal", "13,13", "--faults", "R", "--no-warm-up", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["table"] == "three-action"
+
+
+# --- 10. the compare verdict names what it names -------------------------------------------
+
+
+def test_verdict_ties_are_ties(capsys: pytest.CaptureFixture[str]) -> None:
+    args = [*P, "compare", *HOP_ROUTE, "--faults", "HOP", "--strategies", "replan,replacement"]
+    assert main([*args, "--json", "--no-warm-up"]) == 0
+    verdict = json.loads(capsys.readouterr().out)["verdict"]
+    assert "fewest ticks: a tie at 20 (every strategy)" in verdict
+
+
+def test_verdict_names_the_most_as_such_and_uses_the_motion_distance(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    # Rear-left wheel cannot go forward: the hand-written table swaps each blocked move for a
+    # slower one of the same motion, so the path is kept (motion distance 0) while the plain
+    # plan distance ties with replanning's (54).
+    args = ["compare", *ROUTE, "--faults", "RL:F", "--strategies", "replan,replacement"]
+    assert main([*args, "--json", "--no-warm-up"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert [r["plan_distance"] for r in data["runs"]] == [54, 54]
+    assert [r["plan_distance_motion"] for r in data["runs"]] == [46, 0]
+    verdict = data["verdict"]
+    assert "fewest ticks: replan (51), most: replacement[handwritten,flat] (76)" in verdict
+    assert "closest to the initial plan by motion: replacement[handwritten,flat] (distance 0)" in (
+        verdict
+    )
+    assert "faster than the slowest, " in verdict
