@@ -35,7 +35,7 @@ from selfrepair.execution.moves import available_moves, move_table, time_unit
 from selfrepair.execution.result import MissionSpec
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS, Outcome, Simulator
 from selfrepair.geometry import Heading, Pose
-from selfrepair.repair.strategies import STRATEGIES, StrategyOptions
+from selfrepair.repair.strategies import StrategyName, StrategyOptions
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.robots.three_action import THREE_ACTION
 from selfrepair.search import _kernels
@@ -45,6 +45,9 @@ from selfrepair.search.lattice import bfs_distances, plan
 from selfrepair.search.problem import PlanningProblem, make_pose, pose_table
 from selfrepair.world.maze import Maze
 from selfrepair.world.mazegen import generate_maze
+
+STRATEGIES = (StrategyName.REPLAN, StrategyName.REPLACEMENT, StrategyName.LOOKAHEAD)
+"""The strategies every mission test runs (the baselines have their own tests)."""
 
 PROPERTY = settings(
     max_examples=int(os.environ.get("SELFREPAIR_EXAMPLES", "40")),

@@ -384,8 +384,10 @@ def _print_crossover(rows: "list[dict[str, Value]]", figure: Path) -> None:
     """The crossover analysis of every replacement variant, and its figure when matplotlib is
     installed."""
     from selfrepair.experiment.scale import crossover
+    from selfrepair.repair.strategies import StrategyName
 
-    variants = sorted({str(r["variant"]) for r in rows if r.get("strategy") == "replacement"})
+    replacing = StrategyName.REPLACEMENT
+    variants = sorted({str(r["variant"]) for r in rows if r.get("strategy") == replacing})
     results = [crossover(rows, v) for v in variants]
     echo(
         "Crossover: the maze side where repair compute per mission falls below 1/10 of the "

@@ -190,20 +190,22 @@ def team_compare(
     from rich.table import Table
     from rich.text import Text
 
+    from selfrepair.repair.strategies import StrategyName
     from selfrepair.team.engine import run_team
-    from selfrepair.team.model import TeamStrategyName, TeamTableName
+    from selfrepair.team.model import TeamTableName
     from selfrepair.team.scenario import Limits, resolve_scenario
 
     parsed = resolve_scenario(
         scenario, limits=Limits(max_robots, max_tasks, max_cells, max_file_bytes)
     )
     variants = [
-        (TeamStrategyName.TEAM_REPLACEMENT, TeamTableName.HANDWRITTEN),
-        (TeamStrategyName.TEAM_REPLACEMENT, TeamTableName.GENERATED),
-        (TeamStrategyName.REALLOCATION, TeamTableName.HANDWRITTEN),
-        (TeamStrategyName.ALONE, TeamTableName.HANDWRITTEN),
+        (StrategyName.TEAM_REPLACEMENT, TeamTableName.HANDWRITTEN),
+        (StrategyName.TEAM_REPLACEMENT, TeamTableName.GENERATED),
+        (StrategyName.REALLOCATION, TeamTableName.HANDWRITTEN),
+        (StrategyName.ALONE, TeamTableName.HANDWRITTEN),
     ]
-    baseline = run_team(parsed.without_faults(), _options("alone", "handwritten", None, backend))
+    calm = _options(StrategyName.ALONE, "handwritten", None, backend)
+    baseline = run_team(parsed.without_faults(), calm)
     view = Table(title=f"{parsed.name}: fault-free makespan {baseline.makespan} ticks")
     for column in (
         "strategy", "delivered", "makespan", "vs fault-free", "first repair µs (median)",

@@ -64,6 +64,7 @@ from selfrepair.search.astar import PlanResult, PlanStatus
 from selfrepair.search.backend import use_numba
 from selfrepair.search.lattice import action_cost, cost_scale, plan
 from selfrepair.search.problem import PlanningProblem
+from selfrepair.status import mission_status
 from selfrepair.tables.model import ReplacementTable
 from selfrepair.world.maze import Maze, clearance_penalties
 
@@ -169,7 +170,7 @@ def _prepare(spec: MissionSpec, table: ReplacementTable | None) -> None:
             f"table {spec.options.table_label!r} is for the {table.domain.name!r} domain; "
             f"this mission's robot is {spec.domain.name!r}"
         )
-    if use_numba(spec.backend):
+    if use_numba(spec.backend, spec.domain):
         from selfrepair.search.warmup import ensure_warm
 
         ensure_warm()
@@ -208,7 +209,7 @@ def _loop(
         if entry is None:
             failure = stepper.failure
             assert failure is not None
-            return MissionStatus(failure.status), _why(failure, spec, sim, stepper)
+            return mission_status(failure.status), _why(failure, spec, sim, stepper)
         action, source = entry
         outcome = advance(action)
         if outcome is Outcome.MOVED:

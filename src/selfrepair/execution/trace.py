@@ -48,7 +48,7 @@ from selfrepair.execution.result import (
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.limits import MAX_TRACE_BYTES
-from selfrepair.repair.strategies import RepairSource, RepairStatus, StrategyOptions
+from selfrepair.repair.strategies import RepairSource, RepairStatus, StrategyName, StrategyOptions
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import get_domain
 from selfrepair.textio import read_text
@@ -449,7 +449,7 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
             goal=(int(gx), int(gy)),
             goal_heading=None if heading is None else Heading[heading],
             schedule=FaultSchedule.from_json(header.get("schedule", {}), domain, source),
-            strategy=str(header.get("strategy", "replacement")),
+            strategy=str(header.get("strategy", StrategyName.REPLACEMENT)),
             options=StrategyOptions(
                 table=str(options.get("table", "handwritten")),
                 recursion=str(options.get("recursion", "flat")),  # type: ignore[arg-type]

@@ -45,6 +45,7 @@ from selfrepair.experiment.findings import situation
 from selfrepair.experiment.stats import Interval, bootstrap_interval
 from selfrepair.experiment.store import Value
 from selfrepair.experiment.summary import Row, group_label, met_fault, num, strategy_order
+from selfrepair.repair.strategies import StrategyName
 
 __all__ = [
     "BASELINE_STRATEGIES",
@@ -60,10 +61,10 @@ __all__ = [
     "per_maze",
 ]
 
-BASELINE_STRATEGIES = ("dstar-lite", "lpg-adapt")
+BASELINE_STRATEGIES = (StrategyName.DSTAR_LITE, StrategyName.LPG_ADAPT)
 """The strategies from neighbouring fields; rows with one of them switch the comparison on."""
 
-REFERENCE = "replan"
+REFERENCE = StrategyName.REPLAN
 """The variant plan quality is measured against: A* replanning with the default backend."""
 
 FIRST_REPAIR = "first_repair_ns"
@@ -74,7 +75,7 @@ REPAIR_COMPUTE = "repair_compute_ns"
 
 
 _TIMEOUT = "lpg-adapt:timeout"
-_NO_EFFORT = frozenset({"lpg-adapt"})
+_NO_EFFORT = frozenset({StrategyName.LPG_ADAPT})
 """Strategies whose own search effort is not counted in expansions."""
 
 
@@ -143,7 +144,7 @@ class BaselineLine:
             _text(self.over_reference, 2),
             _text(self.plan_distance),
             f"{self.fallbacks}/{self.repairs}",
-            str(self.timeouts) if self.label.startswith("lpg-adapt") else "-",
+            str(self.timeouts) if self.label.startswith(StrategyName.LPG_ADAPT) else "-",
         )
 
 

@@ -66,6 +66,7 @@ from selfrepair.experiment.summary import (
     summarize,
 )
 from selfrepair.experiment.variants import REWRITE_LABEL
+from selfrepair.repair.strategies import RepairSource, StrategyName
 
 __all__ = [
     "ALPHA",
@@ -177,7 +178,7 @@ CLAIMS = {
 }
 
 
-REPLANNERS = frozenset({"replan", "dstar-lite", "lpg-adapt"})
+REPLANNERS = frozenset({StrategyName.REPLAN, StrategyName.DSTAR_LITE, StrategyName.LPG_ADAPT})
 """Strategies that answer a fault with a new plan to the goal (their variants, other than the
 reference ``replan``, are named by :func:`reference_note`)."""
 
@@ -246,7 +247,7 @@ def _combine(outcomes: Sequence[Outcome]) -> Outcome:
 
 
 def _is_replacement(row: Row) -> bool:
-    return row.get("strategy") == "replacement"
+    return row.get("strategy") == StrategyName.REPLACEMENT
 
 
 def is_rewrite(row: Row) -> bool:
@@ -356,7 +357,7 @@ def _finding_1b(rows: Sequence[Row]) -> Finding:
 
 def _replan_ns(row: Row) -> float:
     """Time a mission spent in repairs that ended in a replan (table misses included)."""
-    return float(sum(lat for src, lat in repairs_of(row) if src == "replan"))
+    return float(sum(lat for src, lat in repairs_of(row) if src == RepairSource.REPLAN))
 
 
 # --- paired yes/no comparisons -----------------------------------------------------------------

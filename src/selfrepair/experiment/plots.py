@@ -33,6 +33,7 @@ from selfrepair.experiment.scale import Crossover
 from selfrepair.experiment.summary import is_reference_replan
 from selfrepair.geometry import Cell, Pose, turn_corner
 from selfrepair.optional import matplotlib
+from selfrepair.repair.strategies import RepairSource, StrategyName
 from selfrepair.world.maze import Maze
 
 __all__ = [
@@ -114,7 +115,7 @@ def figure_latency(rows: Sequence[Row], path: Path) -> Path:
             continue
         label = group_label(row)
         for source, latency in repairs_of(row):
-            key = label if row.get("strategy") == "replan" else f"{label}: {source}"
+            key = label if row.get("strategy") == StrategyName.REPLAN else f"{label}: {source}"
             groups[key].append(latency / 1000)
     labels = sorted(groups, key=lambda k: median(groups[k]) or 0)
     with _figure(9.5, 1.2 + 0.42 * max(1, len(labels))) as (fig, (ax,)):
@@ -131,7 +132,7 @@ def figure_latency(rows: Sequence[Row], path: Path) -> Path:
                 medianprops={"color": "#111111", "linewidth": 1.5},
             )
             for patch, label in zip(box["boxes"], labels, strict=True):
-                source = label.rsplit(": ", 1)[-1] if ": " in label else "replan"
+                source = label.rsplit(": ", 1)[-1] if ": " in label else RepairSource.REPLAN
                 patch.set_facecolor(SOURCE_COLOURS.get(source, "#999999"))
                 patch.set_alpha(0.8)
             ax.set_yticks(range(1, len(labels) + 1), [f"{k} (n={len(groups[k])})" for k in labels])
@@ -160,9 +161,12 @@ def figure_latency_vs_size(rows: Sequence[Row], path: Path) -> Path:
         if not isinstance(cells, int):
             continue
         for source, latency in repairs_of(row):
-            if is_reference_replan(row) and source == "replan":
+            if is_reference_replan(row) and source == RepairSource.REPLAN:
                 series["replan (replanning robot)"][cells].append(latency / 1000)
-            elif row.get("strategy") == "replacement" and source == "replacement":
+            elif (
+                row.get("strategy") == StrategyName.REPLACEMENT
+                and source == RepairSource.REPLACEMENT
+            ):
                 series["table hit (replacing robot)"][cells].append(latency / 1000)
             else:
                 continue
@@ -207,7 +211,7 @@ def figure_clearance(rows: Sequence[Row], path: Path) -> Path | None:
     replacement variant ran at two weights or more: there would be nothing to draw."""
     groups: dict[str, dict[Fraction, list[Row]]] = defaultdict(lambda: defaultdict(list))
     for row in rows:
-        if row.get("strategy") == "replacement":
+        if row.get("strategy") == StrategyName.REPLACEMENT:
             groups[str(row.get("variant"))][_weight(row)].append(row)
     groups = {k: v for k, v in groups.items() if len(v) > 1}
     if not groups:
@@ -253,7 +257,7 @@ def heatmap_variant(rows: Sequence[Row]) -> str | None:
     for wanted in ("replacement[handwritten,flat]", "replacement[handwritten,guarded]"):
         if wanted in variants:
             return wanted
-    replacing = [v for v in variants if v.startswith("replacement")]
+    replacing = [v for v in variants if v.startswith(StrategyName.REPLACEMENT)]
     chosen = replacing or variants
     return chosen[0] if chosen else None
 
@@ -399,7 +403,7 @@ def picture_from_trace(trace: Any) -> MissionPicture:
         poses.append(domain.apply(poses[-1], domain.parse_action(code)))
     faults = domain.format_faults(spec.schedule.all_faults()) or "none"
     strategy = str(spec.strategy)
-    if strategy != "replan":
+    if strategy != StrategyName.REPLAN:
         table = short_name(spec.options.table_label)
         strategy += f" [{table}, {spec.options.recursion.value}]"
     summary = trace.summary or {}

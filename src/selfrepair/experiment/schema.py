@@ -19,6 +19,7 @@ from selfrepair.execution.faults import Clock, Detection, Persistence
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CLEARANCE_WEIGHT
 from selfrepair.repair.replacement import DEFERRING, RecursionMode
+from selfrepair.repair.strategies import MissionKind, StrategyName
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN
 from selfrepair.robots.registry import get_domain
@@ -181,7 +182,7 @@ class ReplanStrategy(_StrategyEntry):
     (``auto``: the compiled kernels when numba is installed; ``python``: the pure-Python search,
     to compare with pure-Python strategies such as D* Lite)."""
 
-    name: Literal["replan"]
+    name: Literal[StrategyName.REPLAN]
     backend: Literal["auto", "numba", "python"] = "auto"
 
 
@@ -189,7 +190,7 @@ class ReplacementStrategy(_StrategyEntry):
     """Replacement tables with recursion mode; one variant per table, mode and ``rewrite``
     value (``true``: whole-plan rewriting, ``[false, true]``: both; default per encounter)."""
 
-    name: Literal["replacement"]
+    name: Literal[StrategyName.REPLACEMENT]
     tables: Annotated[tuple[str, ...], NonEmpty] = ("handwritten",)
     recursion: Annotated[tuple[RecursionMode, ...], NonEmpty] = (RecursionMode.GUARDED,)
     rewrite: tuple[bool, ...] = (False,)
@@ -221,7 +222,7 @@ class LookaheadStrategy(ReplacementStrategy):
     """Replace a window of ``window`` actions after the faulty one and, when the fault is known
     ahead, ``before`` actions before it; one variant per (window, before) pair."""
 
-    name: Literal["lookahead"]  # type: ignore[assignment]
+    name: Literal[StrategyName.LOOKAHEAD]  # type: ignore[assignment]
     window: tuple[Annotated[Int, Field(ge=0, le=64)], ...] = (3,)
     before: tuple[Annotated[Int, Field(ge=0, le=64)], ...] = (0,)
 
@@ -236,14 +237,14 @@ class LookaheadStrategy(ReplacementStrategy):
 class DStarLiteStrategy(_StrategyEntry):
     """D* Lite, incremental replanning (pure Python), keeping its search between repairs."""
 
-    name: Literal["dstar-lite"]
+    name: Literal[StrategyName.DSTAR_LITE]
 
 
 class LpgAdaptStrategy(_StrategyEntry):
     """Plan repair with LPG-adapt (``pddl`` extra, four-wheel robot): ``time_limit`` seconds per
     call, LPG's ``seed``; LPG's failures and time-outs fall back to replanning."""
 
-    name: Literal["lpg-adapt"]
+    name: Literal[StrategyName.LPG_ADAPT]
     time_limit: Annotated[Float, Field(gt=0, le=3600)] = 5.0
     seed: Annotated[Int, Field(ge=0, lt=2**31)] = 0
 
@@ -261,7 +262,7 @@ class LpgAdaptStrategy(_StrategyEntry):
         return value
 
 
-STRATEGY_TAGS = ("replan", "replacement", "lookahead", "dstar-lite", "lpg-adapt")
+STRATEGY_TAGS: tuple[StrategyName, ...] = StrategyName.of_kind(MissionKind.ROBOT)
 """The ``name`` values that select a strategy entry's model (the discriminator of
 :data:`StrategyConfig`)."""
 

@@ -42,6 +42,7 @@ from typing import ClassVar
 
 from selfrepair.experiment.stats import Interval, bootstrap_interval
 from selfrepair.experiment.store import Value
+from selfrepair.repair.strategies import RepairSource, StrategyName
 
 __all__ = [
     "STRATEGY_ORDER",
@@ -98,7 +99,10 @@ def is_reference_replan(row: Row) -> bool:
     """Whether ``row`` is a mission of the replanning robot the findings compare with: strategy
     ``replan`` with the default planner backend (variant ``replan``; an experiment may also run
     ``replan[python]``, the pure-Python search, which is not the reference)."""
-    return row.get("strategy") == "replan" and row.get("variant", "replan") == "replan"
+    return (
+        row.get("strategy") == StrategyName.REPLAN
+        and row.get("variant", StrategyName.REPLAN) == StrategyName.REPLAN
+    )
 
 
 def met_fault(row: Row) -> bool:
@@ -217,7 +221,13 @@ def summarize(rows: Iterable[Row]) -> list[StrategySummary]:
     return [_summary(label, groups[label]) for label in sorted(groups, key=strategy_order)]
 
 
-STRATEGY_ORDER = ("replan", "dstar-lite", "lpg-adapt", "replacement", "lookahead")
+STRATEGY_ORDER = (
+    StrategyName.REPLAN,
+    StrategyName.DSTAR_LITE,
+    StrategyName.LPG_ADAPT,
+    StrategyName.REPLACEMENT,
+    StrategyName.LOOKAHEAD,
+)
 """The order of strategies in tables: the replanners first (the reference, then the baselines
 from neighbouring fields), then the table-based strategies; other strategies after them."""
 
@@ -258,7 +268,7 @@ def _summary(label: str, rows: list[Row]) -> StrategySummary:
     )
 
 
-_HIT = "replacement"
+_HIT = RepairSource.REPLACEMENT
 """The ``repair_sources`` entry of a table hit (``RepairSource.REPLACEMENT``)."""
 
 

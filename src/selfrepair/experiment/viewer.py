@@ -35,7 +35,7 @@ from selfrepair.execution.result import MissionSpec, StepSource, TraceStep
 from selfrepair.execution.trace import Trace, TraceRepair, parse_trace, replay, spec_from_header
 from selfrepair.geometry import Cell, Pose
 from selfrepair.limits import MAX_TRACE_BYTES
-from selfrepair.repair.strategies import uses_table
+from selfrepair.repair.strategies import RepairSource, uses_table
 from selfrepair.robots.domain import Domain
 from selfrepair.world.maze import Maze
 
@@ -229,10 +229,10 @@ def fault_timeline(
 
 def _how(repair: TraceRepair) -> str:
     """Where a repair came from, in words, with the strategies that found nothing before it."""
-    if repair.source == "replacement":
+    if repair.source == RepairSource.REPLACEMENT:
         depth = f", nested depth {repair.depth}" if repair.depth else ""
         how = f"table candidate index {repair.candidate_index}{depth}"
-    elif repair.source == "lookahead":
+    elif repair.source == RepairSource.LOOKAHEAD:
         plural = "" if repair.consumed == 1 else "s"
         how = f"lookahead window over the next {repair.consumed} queued action{plural}"
     elif repair.action is None:

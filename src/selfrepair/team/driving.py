@@ -22,7 +22,7 @@ from collections import deque
 from enum import StrEnum
 
 from selfrepair.execution.executor import mission_context
-from selfrepair.execution.result import MissionSpec, StepSource
+from selfrepair.execution.result import STEP_OF_REPAIR, MissionSpec, StepSource
 from selfrepair.geometry import Cell
 from selfrepair.repair.strategies import (
     RepairRequest,
@@ -202,7 +202,7 @@ def own_repair(world: TeamWorld, robot: RobotState, at: int) -> bool:
     )  # fmt: skip
     if repair.status is not RepairStatus.REPAIRED:
         return False
-    source = StepSource(repair.source)
+    source = STEP_OF_REPAIR[repair.source]
     drive.primitives = [(a, source) for a in repair.actions] + drive.primitives[repair.consumed :]
     place(world, robot, at)
     return True

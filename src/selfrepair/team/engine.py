@@ -42,6 +42,7 @@ from typing import Any
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import Persistence
 from selfrepair.geometry import Cell
+from selfrepair.repair.strategies import StrategyName
 from selfrepair.search.backend import use_numba
 from selfrepair.search.lattice import planning_actions
 from selfrepair.team.allocation import Job, Worker, allocate, distance_maps, job_plan
@@ -64,7 +65,6 @@ from selfrepair.team.model import (
     TeamFault,
     TeamFaultKind,
     TeamScenario,
-    TeamStrategyName,
     Trigger,
     time_scale,
 )
@@ -122,7 +122,7 @@ def run_team(scenario: TeamScenario, options: TeamOptions | None = None) -> Team
     options = options or TeamOptions()
     check_scenario(scenario)
     get_team_strategy(options.strategy)  # fails fast on a bad name
-    if options.strategy is TeamStrategyName.TEAM_REPLACEMENT:
+    if options.strategy is StrategyName.TEAM_REPLACEMENT:
         get_team_table(options.table)  # a generated table is made before anything is timed
     if use_numba(options.backend):
         from selfrepair.search.warmup import ensure_warm
@@ -502,13 +502,13 @@ def _incident(
         world.broadcast(robot.name)
     if robot.drive is not None:
         cancel_drive(world, robot, t)
-    strategy = get_team_strategy(world.options.strategy)
+    repairer = get_team_strategy(world.options.strategy)(world)  # stateless: started per incident
     collecting = gc.isenabled()
     gc.disable()  # a collection's pause belongs to no repair: it runs after the timed part
     try:
         t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
         plans0, expansions0 = world.plans, world.expansions
-        decision = strategy(world, Incident(robot.name, entry, kind, load, item, t))
+        decision = repairer.repair(Incident(robot.name, entry, kind, load, item, t))
         for name in world.robots:  # scenario order: a frozenset's order depends on the hash seed
             if name in decision.changed:
                 _prepare(world, world.robots[name], t)

@@ -14,6 +14,7 @@ from fractions import Fraction
 
 import numpy as np
 
+from selfrepair.repair.strategies import RepairSource, StrategyName
 from selfrepair.team.result import RepairOutcome, TeamResult, TeamSource
 
 __all__ = ["TEAM_COLUMNS", "team_row"]
@@ -94,7 +95,9 @@ def team_row(
         "grippers": sum(r.gripper for r in scenario.robots),
         "tasks": len(scenario.tasks),
         "strategy": str(options.strategy),
-        "team_table": str(options.table) if options.strategy == "team-replacement" else None,
+        "team_table": (
+            str(options.table) if options.strategy == StrategyName.TEAM_REPLACEMENT else None
+        ),
         "variant": options.label,
         "fault_kinds": ",".join(sorted({str(f.kind) for f in scenario.faults})),
         "status": str(result.status),
@@ -130,7 +133,7 @@ def team_row(
         "expansions": result.expansions,
         "yields": result.yields,
         "own_repairs": len(result.own_repairs),
-        "own_replacements": sum(r.source == "replacement" for r in result.own_repairs),
+        "own_replacements": sum(r.source == RepairSource.REPLACEMENT for r in result.own_repairs),
         "moves": len(result.moves),
         "acts": len(result.acts),
         "allocation_ns": result.allocation_ns,

@@ -56,7 +56,6 @@ __all__ = [
     "TeamFault",
     "TeamFaultKind",
     "TeamScenario",
-    "TeamStrategyName",
     "TeamTableName",
     "Trigger",
     "drive",
@@ -124,14 +123,6 @@ class Load(StrEnum):
 
     EMPTY = "empty"
     CARRYING = "carrying"
-
-
-class TeamStrategyName(StrEnum):
-    """The team strategies compared (see :mod:`selfrepair.team.strategies`)."""
-
-    TEAM_REPLACEMENT = "team-replacement"
-    REALLOCATION = "reallocation"
-    ALONE = "alone"
 
 
 class TeamTableName(StrEnum):

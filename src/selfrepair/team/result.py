@@ -17,13 +17,13 @@ from selfrepair.errors import ProblemError, choice
 from selfrepair.execution.result import StepSource
 from selfrepair.geometry import Cell, Pose
 from selfrepair.repair.replacement import RecursionMode
-from selfrepair.repair.strategies import RepairSource, RepairStatus, StrategyName
+from selfrepair.repair.strategies import MissionKind, RepairSource, RepairStatus, StrategyName
+from selfrepair.status import RepairOutcome, TeamStatus
 from selfrepair.team.model import (
     IncidentKind,
     Load,
     TeamAction,
     TeamScenario,
-    TeamStrategyName,
     TeamTableName,
 )
 
@@ -46,35 +46,18 @@ class TeamSource(StrEnum):
     """Where a queued higher-level action came from."""
 
     PLAN = "plan"
-    TEAM_REPLACEMENT = "team-replacement"
-    REALLOCATION = "reallocation"
-    ALONE = "alone"
+    TEAM_REPLACEMENT = StrategyName.TEAM_REPLACEMENT.value
+    REALLOCATION = StrategyName.REALLOCATION.value
+    ALONE = StrategyName.ALONE.value
     YIELD = "yield"
-
-
-class TeamStatus(StrEnum):
-    """How a team mission ended: every task delivered; nothing more could happen (``stalled``:
-    the robots left with work cannot act and no fault will clear); or ``max_ticks`` passed."""
-
-    DELIVERED = "delivered"
-    STALLED = "stalled"
-    TIME_LIMIT = "time_limit"
-
-
-class RepairOutcome(StrEnum):
-    """What a team strategy did about an incident: changed the plan (``repaired``), let the robot
-    wait and try again (``deferred``), or gave the incident's task up (``lost``)."""
-
-    REPAIRED = "repaired"
-    DEFERRED = "deferred"
-    LOST = "lost"
 
 
 @dataclass(frozen=True, slots=True)
 class TeamOptions:
     """How a team mission is run.
 
-    ``strategy`` is a team strategy (:class:`TeamStrategyName`) and ``table`` its team
+    ``strategy`` is a team strategy (a team member of
+    :class:`~selfrepair.repair.strategies.StrategyName`) and ``table`` its team
     replacement table. Each robot handles its own wheel faults first with the single-robot
     strategy ``robot_strategy`` (a name in :mod:`selfrepair.repair.strategies`), table
     ``robot_table`` and ``recursion``. ``max_depth`` bounds nested team replacements (the
@@ -85,7 +68,7 @@ class TeamOptions:
     draws nothing at random; scenarios are drawn from it).
     """
 
-    strategy: str = TeamStrategyName.TEAM_REPLACEMENT
+    strategy: str = StrategyName.TEAM_REPLACEMENT
     table: str = TeamTableName.HANDWRITTEN
     robot_strategy: str = StrategyName.REPLACEMENT
     robot_table: str = "handwritten"
@@ -98,9 +81,7 @@ class TeamOptions:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        object.__setattr__(
-            self, "strategy", choice(TeamStrategyName, self.strategy, "team strategy")
-        )
+        object.__setattr__(self, "strategy", StrategyName.of(self.strategy, MissionKind.TEAM))
         object.__setattr__(self, "table", choice(TeamTableName, self.table, "team table"))
         object.__setattr__(
             self, "recursion", choice(RecursionMode, self.recursion, "recursion mode")
@@ -117,7 +98,7 @@ class TeamOptions:
     @property
     def label(self) -> str:
         """A short readable variant such as ``team-replacement[handwritten]``."""
-        if self.strategy is TeamStrategyName.TEAM_REPLACEMENT:
+        if self.strategy is StrategyName.TEAM_REPLACEMENT:
             return f"{self.strategy}[{self.table}]"
         return str(self.strategy)
 

@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from selfrepair.repair.strategies import MissionKind, StrategyName
+
 __all__ = ["TeamSummary", "by_fault_case", "summarize_team"]
 
 Row = Mapping[str, object]
@@ -95,7 +97,9 @@ def summarize_team(rows: Sequence[Row]) -> list[TeamSummary]:
     groups: dict[str, list[Row]] = defaultdict(list)
     for row in rows:
         groups[str(row.get("variant"))].append(row)
-    order = {"team-replacement": 0, "reallocation": 1, "alone": 2}
+    order: dict[str, int] = {
+        name: i for i, name in enumerate(StrategyName.of_kind(MissionKind.TEAM))
+    }
     out = []
     for variant in sorted(groups, key=lambda v: (order.get(v.split("[")[0], 9), v)):
         group = groups[variant]
