@@ -36,6 +36,7 @@ from selfrepair.search.astar import PlanStatus
 from selfrepair.search.backend import backend_ran
 from selfrepair.search.lattice import action_cost, plan
 from selfrepair.search.problem import PlanningProblem
+from selfrepair.stats import lower_median, percentile
 
 __all__ = [
     "ROW_COLUMNS",
@@ -122,22 +123,16 @@ class LatencyStats:
     total_ns: int
 
 
-def _nearest_rank(ordered: Sequence[int], fraction: float) -> int:
-    """The nearest-rank percentile: the smallest value with at least ``fraction`` of the data at
-    or below it."""
-    rank = max(1, -(-round(fraction * 10_000) * len(ordered) // 10_000))
-    return ordered[min(rank, len(ordered)) - 1]
-
-
 def latency_stats(latencies_ns: Iterable[int]) -> LatencyStats:
-    """Count, median (lower median), nearest-rank 99th percentile, maximum and total."""
+    """Count, lower median, 99th percentile, maximum and total (the percentile and median of
+    :mod:`selfrepair.stats`)."""
     ordered = sorted(latencies_ns)
     if not ordered:
         return LatencyStats(0, None, None, None, 0)
     return LatencyStats(
         len(ordered),
-        ordered[(len(ordered) - 1) // 2],
-        _nearest_rank(ordered, 0.99),
+        lower_median(ordered),
+        percentile(ordered, 0.99),
         ordered[-1],
         sum(ordered),
     )

@@ -42,6 +42,7 @@ from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionResult
 from selfrepair.experiment.keys import Mission
 from selfrepair.experiment.store import Finished, ResultStore, Value
+from selfrepair.stats import lower_median
 
 __all__ = [
     "BACKENDS",
@@ -176,19 +177,14 @@ def _median_timings(runs: Sequence[MissionResult]) -> MissionResult:
     if len(runs) == 1:
         return first
     counts = {len(r.repairs) for r in runs}
-    planning = _lower_median([r.initial_planning_ns for r in runs])
+    planning = lower_median([r.initial_planning_ns for r in runs])
     if counts != {len(first.repairs)}:  # never expected: missions are deterministic
         return replace(first, initial_planning_ns=planning)
     repairs = tuple(
-        record._replace(latency_ns=_lower_median([r.repairs[i].latency_ns for r in runs]))
+        record._replace(latency_ns=lower_median([r.repairs[i].latency_ns for r in runs]))
         for i, record in enumerate(first.repairs)
     )
     return replace(first, repairs=repairs, initial_planning_ns=planning)
-
-
-def _lower_median(values: Sequence[int]) -> int:
-    ordered = sorted(values)
-    return ordered[(len(ordered) - 1) // 2]
 
 
 def _work(execute: MissionFunction, mission: Mission) -> _Result:
