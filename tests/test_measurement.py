@@ -19,9 +19,9 @@ from selfrepair.execution.metrics import mission_row, motion_distance, optimum_t
 from selfrepair.execution.result import MissionSpec
 from selfrepair.experiment.faultsets import PAPER_FAULT_SETS, biting_fault_sets
 from selfrepair.experiment.keys import Mission, canonical_json
-from selfrepair.experiment.runner import execute_mission
 from selfrepair.experiment.scale import crossover
 from selfrepair.experiment.stats import sign_test
+from selfrepair.experiment.timing import execute_mission
 from selfrepair.geometry import Heading, Pose
 from selfrepair.repair.replacement import (
     RecursionMode,

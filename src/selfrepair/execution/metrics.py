@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, NamedTuple
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
 from selfrepair.repair.strategies import RepairSource, RepairStatus
@@ -85,7 +85,7 @@ def motion_distance(
 
 
 _OPTIMUM: BoundedCache[tuple[Hashable, ...], Fraction | None] = BoundedCache(
-    "fault-free optimum ticks", 1024
+    "fault-free optimum ticks", 1024, kind=CacheKind.REFERENCE
 )
 
 
@@ -238,7 +238,7 @@ def _schedule_texts(schedule: FaultSchedule, domain: Domain[Any, Any]) -> tuple[
 
 
 _SCHEDULE_TEXTS: BoundedCache[tuple[FaultSchedule, Domain[Any, Any]], tuple[str, str]] = (
-    BoundedCache("fault schedule texts", 256)
+    BoundedCache("fault schedule texts", 256, kind=CacheKind.RECORD)
 )
 
 

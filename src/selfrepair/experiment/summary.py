@@ -19,7 +19,7 @@ mission that never meets a faulty action says nothing about repair.
   over missions with its interval. The initial plan is left out: every strategy of a situation
   makes the same one;
 * *first repair cold / warm*: the first repair of the mission when every derived-data cache of the
-  process was emptied, and the same repair in a warm run (see ``runner.execute_mission``); medians
+  process was emptied, and the same repair in a warm run (see ``timing.execute_mission``); medians
   over missions with intervals;
 * *repair latency median, p99*: over every repair of every mission (pooled; descriptive only,
   repairs of one mission are not independent);

@@ -42,7 +42,7 @@ from typing import Any, Protocol
 import numpy as np
 import numpy.typing as npt
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import TableError
 from selfrepair.geometry import Cell, Heading, Pose, relative_cell
 from selfrepair.repair.replacement import find_replacement
@@ -68,6 +68,7 @@ class WallGrid(Protocol):
 
     @property
     def name(self) -> str: ...
+
 
 __all__ = [
     "CoverageReport",
@@ -561,7 +562,7 @@ _HEADINGS = tuple(Heading)
 
 
 _OPTIMA: BoundedCache[tuple[Domain[Any, Any], frozenset[Any]], dict[Any, Fraction | None]] = (
-    BoundedCache("exact optimal replacements", 256)
+    BoundedCache("exact optimal replacements", 256, kind=CacheKind.REPAIR)
 )
 
 

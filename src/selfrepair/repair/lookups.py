@@ -61,7 +61,7 @@ from typing import Any, Final, Generic, Literal, TypeVar
 
 import numpy as np
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError, choice
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.limits import MAX_LOOKUP_PATTERNS
@@ -188,7 +188,9 @@ def _action_index(domain: Domain[Any, Any]) -> ActionIndex:
     )
 
 
-_INDEX: BoundedCache[Domain[Any, Any], ActionIndex] = BoundedCache("action index", 16)
+_INDEX: BoundedCache[Domain[Any, Any], ActionIndex] = BoundedCache(
+    "action index", 16, kind=CacheKind.REPAIR
+)
 
 
 def action_index(domain: Domain[Any, Any]) -> ActionIndex:
@@ -344,7 +346,7 @@ def _join(parts: tuple[int, ...]) -> int:
 
 
 _ROWS: BoundedCache[tuple[FreeGrid, int], list[list[int]]] = BoundedCache(
-    "occupancy codes", MAX_CODE_GRIDS
+    "occupancy codes", MAX_CODE_GRIDS, kind=CacheKind.REPAIR
 )
 
 
@@ -576,7 +578,7 @@ def _key(mode: RecursionMode, max_depth: int) -> int:
 _LOOKUPS: BoundedCache[
     tuple[ReplacementTable, frozenset[Any], RecursionMode, int, Hashable, frozenset[Any], int],
     FaultLookups[Any],
-] = BoundedCache("compiled replacement look-ups", MAX_FAULT_LOOKUPS)
+] = BoundedCache("compiled replacement look-ups", MAX_FAULT_LOOKUPS, kind=CacheKind.REPAIR)
 
 
 def fault_lookups(
@@ -687,7 +689,7 @@ class GridLookups(Generic[T]):
 
 
 _ON_GRIDS: BoundedCache[tuple[FaultLookups[Any], FreeGrid], GridLookups[Any]] = BoundedCache(
-    "compiled look-ups on grids", MAX_FAULT_LOOKUPS
+    "compiled look-ups on grids", MAX_FAULT_LOOKUPS, kind=CacheKind.REPAIR
 )
 
 
