@@ -137,10 +137,11 @@ def neighbourhood_walk(
 class NeighbourhoodWalk:
     """The symbolic search behind :func:`neighbourhood` (mutable: memoises sub-neighbourhoods).
 
-    It mirrors ``replacement._Search`` but follows every candidate whatever the walls: a
-    candidate is followed until a step must fail in any case (a guarded action, a faulty one
-    that may not be replaced, or a deferrable one that would run first). A deferred action
-    (``deferrable``: the faulty complex actions of a deferring mode such as ``primitive``) adds
+    It mirrors the core's search (:class:`~selfrepair.repair.core.CoreSearch`) but follows every
+    candidate whatever the walls: a candidate is followed until a step must fail in any case (a
+    guarded action, a faulty one that may not be replaced, or a deferrable one that would run
+    first). A deferred action (``deferrable``: the faulty complex actions of a deferring mode
+    such as ``primitive``) adds
     no cell, as the search does not test it, but the walk goes on after it. Sub-neighbourhoods
     are relative to their start cell (actions commute with translation), so each (action,
     heading, guard set, depth, whether it runs first) is walked once.
