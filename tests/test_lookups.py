@@ -355,7 +355,7 @@ def test_repairer_finds_equal_copies_of_actions() -> None:
 @st.composite
 def missions(draw: st.DrawFn) -> MissionSpec:
     """A generated maze, a random route, permanent faults from a random step, detected at once."""
-    from selfrepair.experiment.missions import random_routes
+    from selfrepair.world.routes import random_routes
 
     seed = draw(st.integers(0, 10_000))
     size = draw(st.sampled_from([9, 13, 17]))
@@ -438,7 +438,7 @@ def test_rewrite_substitutes_every_later_occurrence_at_once() -> None:
 def test_rewrite_rechecks_faults_that_become_known_later(detection: Detection) -> None:
     """Faults learned on use or appearing later trigger a new rewrite; the mission still holds."""
     from selfrepair.execution.faults import FaultEvent
-    from selfrepair.experiment.missions import random_routes
+    from selfrepair.world.routes import random_routes
 
     maze = generate_maze(21, 21, braid=0.3, seed=5)
     (route,) = random_routes(maze, 1, 7)

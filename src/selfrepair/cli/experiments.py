@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     from rich.table import Table
 
     from selfrepair.experiment.findings import Finding, StrategySummary
-    from selfrepair.experiment.missions import Mission
+    from selfrepair.experiment.keys import Mission
     from selfrepair.experiment.store import Value
     from selfrepair.experiment.summary import FaultSetBite
 

@@ -170,7 +170,7 @@ def _prepare(spec: MissionSpec, table: ReplacementTable | None) -> None:
             f"table {spec.options.table_label!r} is for the {table.domain.name!r} domain; "
             f"this mission's robot is {spec.domain.name!r}"
         )
-    if use_numba(spec.backend):
+    if use_numba(spec.backend, spec.domain):
         from selfrepair.search.warmup import ensure_warm
 
         ensure_warm()

@@ -33,6 +33,7 @@ from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord
 from selfrepair.repair.strategies import RepairSource, RepairStatus
 from selfrepair.robots.domain import Domain
 from selfrepair.search.astar import PlanStatus
+from selfrepair.search.backend import backend_ran
 from selfrepair.search.lattice import action_cost, plan
 from selfrepair.search.problem import PlanningProblem
 
@@ -287,6 +288,7 @@ def mission_row(result: MissionResult, *, optimum: Fraction | None = None) -> Ro
         "clearance_radius": spec.clearance_radius,
         "heuristic": spec.heuristic,
         "backend": spec.backend,
+        "backend_ran": backend_ran(spec.backend, spec.domain),
         "status": result.status.value,
         "reached": int(result.reached),
         "reason": result.reason,
@@ -365,6 +367,7 @@ ROW_COLUMNS: tuple[str, ...] = (
     "clearance_radius",
     "heuristic",
     "backend",
+    "backend_ran",
     "status",
     "reached",
     "reason",

@@ -50,7 +50,6 @@ from dataclasses import dataclass
 from enum import StrEnum
 from fractions import Fraction
 
-from selfrepair.experiment.missions import REWRITE_LABEL
 from selfrepair.experiment.stats import Interval, bootstrap_interval, sign_test, wilcoxon_greater
 from selfrepair.experiment.store import Value
 from selfrepair.experiment.summary import (
@@ -66,6 +65,7 @@ from selfrepair.experiment.summary import (
     repairs_of,
     summarize,
 )
+from selfrepair.experiment.variants import REWRITE_LABEL
 from selfrepair.repair.strategies import RepairSource, StrategyName
 
 __all__ = [

@@ -42,7 +42,7 @@ from selfrepair.experiment.findings import (
     reference_note,
     summarize,
 )
-from selfrepair.experiment.missions import Mission
+from selfrepair.experiment.keys import Mission
 from selfrepair.experiment.store import ResultStore
 from selfrepair.experiment.summary import fault_set_bite
 

@@ -40,7 +40,7 @@ from typing import Any, Protocol
 from selfrepair.errors import InputError, ProblemError, SelfRepairError
 from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionResult
-from selfrepair.experiment.missions import Mission
+from selfrepair.experiment.keys import Mission
 from selfrepair.experiment.store import Finished, ResultStore, Value
 
 __all__ = [

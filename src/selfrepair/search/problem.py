@@ -25,6 +25,7 @@ from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import BACKENDS, MAX_TIME_LIMIT, PlanStatus
+from selfrepair.search.term import StepTerm
 from selfrepair.world.maze import Maze
 
 __all__ = [
@@ -36,6 +37,7 @@ __all__ = [
     "OctileCost",
     "PlannerSettings",
     "PlanningProblem",
+    "StepTerm",
     "check_search_inputs",
     "grid_heuristic",
     "make_pose",
@@ -50,6 +52,8 @@ class PlanningProblem:
     for the robot ``domain`` (the four-wheel robot unless given).
 
     ``faults`` are the faults the planner knows about; actions they forbid are never used.
+    ``step_term`` adds a cost term per (pose, action) (:class:`StepTerm`: the tolerant planner's
+    masks); ``None``, the default, costs nothing.
     """
 
     maze: Maze
@@ -60,6 +64,7 @@ class PlanningProblem:
     clearance_weight: Fraction | int = Fraction(0)
     clearance_radius: int = 2
     domain: Domain[Any, Any] = FOUR_WHEEL
+    step_term: StepTerm | None = None
 
     def at_goal(self, pose: Pose) -> bool:
         """Whether ``pose`` satisfies the goal."""
