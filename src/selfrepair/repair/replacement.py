@@ -46,7 +46,9 @@ Recursion modes (:class:`RecursionMode`; registry :data:`RECURSION_MODES` of the
     replacement, or a faulty arc inside anything), and a faulty primitive action has only its
     all-healthy candidates, as in ``flat``.
 
-The search is greedy but complete within each mode: every sub-replacement of an action ``b`` from a
+The search is the replacement core's (:mod:`selfrepair.repair.core`, the same validity test a team's
+replacement uses) over :class:`RobotWorld`, the robot's primitive actions. It is greedy but
+complete within each mode: every sub-replacement of an action ``b`` from a
 state ends in the same state, so the first valid sub-replacement found is as good as any other for
 the rest of the candidate.
 """
@@ -54,13 +56,14 @@ the rest of the candidate.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from enum import StrEnum
-from typing import Any, NamedTuple
+from typing import Any
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError, choice
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
+from selfrepair.repair.core import CoreSearch, RecurseRule, Replacement
 from selfrepair.robots.domain import Domain
 from selfrepair.tables.model import ReplacementTable
 
@@ -68,8 +71,10 @@ __all__ = [
     "DEFAULT_MAX_DEPTH",
     "RECURSION_MODES",
     "FreeTest",
+    "RecurseRule",
     "RecursionMode",
     "Replacement",
+    "RobotWorld",
     "complex_actions",
     "find_replacement",
     "flat_replacement",
@@ -93,30 +98,6 @@ class RecursionMode(StrEnum):
     PRIMITIVE = "primitive"
 
 
-class Replacement(NamedTuple):
-    """A valid replacement found at run time.
-
-    ``candidate`` is the table's candidate (index ``index`` in the looked-up list); ``actions`` the
-    executable sequence after nested replacements are expanded (equal to ``candidate`` when
-    ``depth`` is 0). ``depth`` counts nested replacement levels below this one; ``examined`` the
-    candidates looked at in total, nested ones included. ``end`` is the state reached.
-    ``deferred`` lists the positions in ``actions`` of faulty complex actions left unreplaced
-    (``primitive`` mode only; never position 0): they are replaced when the robot reaches them.
-    An immutable ``NamedTuple`` (cheaper to build than a frozen dataclass on the hot path).
-    """
-
-    action: Any
-    candidate: tuple[Any, ...]
-    actions: tuple[Any, ...]
-    position: int
-    depth: int
-    examined: int
-    end: Pose
-    deferred: tuple[int, ...] = ()
-
-
-RecurseRule = Callable[[Any, Any, int], bool]
-"""Whether faulty action ``b`` inside a candidate for ``a`` may be replaced at depth ``d``."""
 
 ModeRule = Callable[[Domain[Any, Any], int], RecurseRule]
 """A recursion mode: given the domain and the depth bound, its recursion rule."""
@@ -177,85 +158,27 @@ _COMPLEX: BoundedCache[tuple[ReplacementTable, frozenset[Any]], frozenset[Any]] 
 )
 
 
-@dataclass(slots=True)
-class _Search:
-    """One look-up in progress (mutable: counts candidates and memoises sub-problems)."""
+@dataclass(frozen=True, slots=True)
+class RobotWorld:
+    """One robot's primitive actions as the replacement core sees them
+    (:class:`~selfrepair.repair.core.LiftedWorld`): an action is healthy when the known faults
+    leave it available, and executable from a pose when its footprint there is free; it binds to
+    itself and leads to the pose the domain says."""
 
-    table: ReplacementTable
+    domain: Domain[Any, Any]
     known: frozenset[Any]
     free: FreeTest
-    may_recurse: RecurseRule
-    deferrable: frozenset[Any] = frozenset()
-    examined: int = 0
-    memo: dict[tuple[Any, Pose, frozenset[Any], int, bool], Replacement | None] = field(
-        default_factory=dict
-    )
 
-    def replace(
-        self, action: Any, state: Pose, replacing: frozenset[Any], depth: int, first: bool = True
-    ) -> Replacement | None:
-        """The first valid replacement; nested results are memoised per (action, state, guard set,
-        depth, whether it runs first), so a sub-problem met again in another candidate is not
-        searched twice."""
-        key = (action, state, replacing, depth, first)
-        if key in self.memo:
-            return self.memo[key]
-        found = self._first(action, state, replacing, depth, first)
-        self.memo[key] = found
-        return found
+    def healthy(self, action: Any, state: Pose) -> bool:
+        """Whether the known faults leave ``action`` available."""
+        return self.domain.available(action, self.known)
 
-    def _first(
-        self, action: Any, state: Pose, replacing: frozenset[Any], depth: int, first: bool
-    ) -> Replacement | None:
-        for position, candidate in enumerate(self.table.candidates(action, self.known)):
-            self.examined += 1
-            found = self._expand(action, candidate, state, replacing, depth, first)
-            if found is not None:
-                actions, end, nested, deferred = found
-                return Replacement(
-                    action, candidate, actions, position, nested, self.examined, end, deferred
-                )
-        return None
-
-    def _expand(
-        self,
-        action: Any,
-        candidate: tuple[Any, ...],
-        state: Pose,
-        replacing: frozenset[Any],
-        depth: int,
-        first: bool,
-    ) -> tuple[tuple[Any, ...], Pose, int, tuple[int, ...]] | None:
-        dom = self.table.domain
-        out: list[Any] = []
-        deferred: list[int] = []
-        nested = 0
-        for b in candidate:
-            if b in replacing:
-                return None
-            runs_first = first and not out
-            if dom.available(b, self.known):
-                if not self.free(dom.footprint(state, b)):
-                    return None
-                out.append(b)
-                state = dom.apply(state, b)
-            elif b in self.deferrable:  # a faulty complex action: replaced when reached
-                if runs_first:
-                    return None
-                deferred.append(len(out))
-                out.append(b)
-                state = dom.apply(state, b)
-            elif self.may_recurse(b, action, depth):
-                sub = self.replace(b, state, replacing | {b}, depth + 1, runs_first)
-                if sub is None:
-                    return None
-                deferred.extend(len(out) + i for i in sub.deferred)
-                out.extend(sub.actions)
-                state = sub.end
-                nested = max(nested, sub.depth + 1)
-            else:
-                return None
-        return tuple(out), state, nested, tuple(deferred)
+    def advance(self, action: Any, state: Pose) -> tuple[tuple[Any, ...], Pose] | None:
+        """``((action,), end)`` when ``action``'s footprint at ``state`` is free, else ``None``."""
+        domain = self.domain
+        if not self.free(domain.footprint(state, action)):
+            return None
+        return (action,), domain.apply(state, action)
 
 
 def find_replacement(
@@ -284,7 +207,14 @@ def find_replacement(
         raise ProblemError(f"max_depth must be at least 0, got {max_depth}")
     known = frozenset(known_faults)
     deferrable = complex_actions(table, known) if chosen in DEFERRING else frozenset()
-    search = _Search(table, known, free, rule(table.domain, max_depth), deferrable)
+    domain = table.domain
+    search: CoreSearch[Any, Pose] = CoreSearch(
+        RobotWorld(domain, known, free),
+        lambda a: table.candidates(a, known),
+        rule(domain, max_depth),
+        deferrable,
+        domain.apply,
+    )
     return search.replace(action, state, frozenset(guard) | {action}, 0)
 
 
