@@ -18,6 +18,7 @@ REGISTRIES = {
     # user registered, and clearing them would lose it
     ("robots/registry.py", "_REGISTERED"),
     ("robots/registry.py", "_PLUGINS"),
+    ("robots/registry.py", "_ORIGINS"),
     ("repair/strategies/registry.py", "_REGISTRY"),
 }
 
