@@ -31,7 +31,7 @@ from selfrepair.execution.faults import (
     Persistence,
 )
 from selfrepair.execution.metrics import mission_row
-from selfrepair.execution.moves import available_moves, move_table, time_unit
+from selfrepair.execution.moves import available_moves, move_table
 from selfrepair.execution.result import MissionSpec
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS, Outcome, Simulator
 from selfrepair.geometry import Heading, Pose
@@ -131,7 +131,7 @@ def test_fault_clock_equals_the_schedule(data: st.DataObject, seed: int) -> None
 
 
 def test_time_units_and_move_tables() -> None:
-    assert time_unit(FOUR_WHEEL) == 3  # durations are multiples of 1/3 tick
+    assert FOUR_WHEEL.time_unit == 3  # durations are multiples of 1/3 tick
     table = move_table(FOUR_WHEEL, 20)
     for action in FOUR_WHEEL.actions:
         for heading in Heading:

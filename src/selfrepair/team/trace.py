@@ -54,7 +54,6 @@ from selfrepair.team.model import (
     TeamScenario,
     Trigger,
     parse_team_action,
-    time_scale,
 )
 from selfrepair.team.result import MoveRecord, TeamOptions, TeamResult
 from selfrepair.team.spacetime import units
@@ -403,8 +402,8 @@ def _header(f: TraceFields) -> tuple[TeamScenario, TeamOptions, int]:
         str(f.data.get("scenario", "")), f.source,
     )  # fmt: skip
     scale = f.integer("scale", minimum=1)
-    if scale != time_scale(domain):
-        raise f.fail(f"expected 'scale' {time_scale(domain)} for domain {domain.name}, got {scale}")
+    if scale != domain.time_unit:
+        raise f.fail(f"expected 'scale' {domain.time_unit} for domain {domain.name}, got {scale}")
     return scenario, options, scale
 
 
