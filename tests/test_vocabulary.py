@@ -30,3 +30,17 @@ def test_every_time_scale_is_the_domain_time_unit() -> None:
         table = move_table(domain, 64)
         moves = [m for ms in table.moves.values() for m in ms]
         assert moves and all(m.units == m.duration * domain.time_unit for m in moves)
+
+
+def test_every_step_source_has_one_colour_used_by_figures_and_viewer() -> None:
+    from selfrepair.execution.result import StepSource
+    from selfrepair.experiment import missionplot, plots, viewer
+    from selfrepair.experiment.figstyle import SOURCE_COLOURS, colour_of
+    from selfrepair.repair.strategies import RepairSource
+
+    assert set(SOURCE_COLOURS) == set(StepSource)
+    assert len(set(SOURCE_COLOURS.values())) == len(StepSource)
+    assert all(colour_of(s, "?") == SOURCE_COLOURS[StepSource(s)] for s in RepairSource)
+    assert colour_of("failed", "#123456") == "#123456"
+    for module in (plots, missionplot, viewer):
+        assert "SOURCE_COLOURS" not in vars(module) or module.SOURCE_COLOURS is SOURCE_COLOURS
