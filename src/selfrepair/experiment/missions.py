@@ -45,10 +45,12 @@ from selfrepair.experiment.config import (
     ReplanStrategy,
     StrategyConfig,
 )
+from selfrepair.experiment.faultsteps import random_fault_step
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, check_limit, maze_file_bytes
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import StrategyOptions
+from selfrepair.repair.tolerance import OPTIMAL, parse_objective
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.robots.registry import get_domain, load_plugin
@@ -331,17 +333,20 @@ def _strategy_variants(
             for recursion in strategy.recursion:
                 for window, before in windows:
                     for rewrite in strategy.rewrite:
-                        options: dict[str, Any] = {
-                            **_table_identity(table, config),
-                            "recursion": recursion,
-                        }
-                        if window is not None:
-                            options["window"] = window
-                        if before:  # absent when 0, so older mission keys stay valid
-                            options["before"] = before
-                        if rewrite:  # absent when false, so older mission keys stay valid
-                            options["rewrite"] = True
-                        yield {"strategy": strategy.name, "options": options}, weights
+                        for objective in strategy.objectives:
+                            options: dict[str, Any] = {
+                                **_table_identity(table, config),
+                                "recursion": recursion,
+                            }
+                            if window is not None:
+                                options["window"] = window
+                            if before:  # absent when 0, so older mission keys stay valid
+                                options["before"] = before
+                            if rewrite:  # absent when false, so older mission keys stay valid
+                                options["rewrite"] = True
+                            if objective != OPTIMAL:  # absent when optimal, likewise
+                                options["objective"] = objective
+                            yield {"strategy": strategy.name, "options": options}, weights
     else:
         yield {"strategy": strategy.name, "options": _plain_options(strategy)}, weights
 
@@ -476,7 +481,19 @@ def variant_label(strategy: str, options: dict[str, Any]) -> str:
         parts.append(f"seed={options['lpg_seed']}")
     if options.get("rewrite"):
         parts.append(REWRITE_LABEL)
+    if options.get("objective"):
+        parts.append(str(options["objective"]))
     return f"{strategy}[{','.join(parts)}]"
+
+
+def objective_label(options: dict[str, Any], weight: str) -> str:
+    """The ``objective`` column: ``optimal``, ``clearance W``, ``tolerant k=K``, ``tolerant soft
+    L k=K`` (with ``, clearance W`` when a tolerant objective also has a weight)."""
+    clearance = "" if Fraction(weight) == 0 else f"clearance {weight}"
+    tolerant = str(options.get("objective") or "")
+    if not tolerant:
+        return clearance or OPTIMAL
+    return f"{tolerant}, {clearance}" if clearance else tolerant
 
 
 # --- expansion ---------------------------------------------------------------------------------
@@ -522,6 +539,7 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
                 * len(strategy.recursion)
                 * windows
                 * len(strategy.rewrite)
+                * len(strategy.objectives)
                 * weights
             )
         else:
@@ -536,7 +554,7 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
         if filtered
         else (all_routes, "routes"),
         (len(fault_profile(faults.sets, get_domain(config.domain))), "fault sets"),
-        (len(faults.at), "fault times"),
+        (1 if faults.at_random else len(faults.at), "fault times"),
         (len(faults.detection), "detections"),
         (config.repeats, "repeats"),
     ]
@@ -589,7 +607,7 @@ def expand(
         routes = routes_of(entry, identity, config.seed, config.source, index, max_cells)
         for route in routes:
             for faults in fault_sets:
-                for at in config.faults.at:
+                for at in _fault_steps(config, identity, route, faults, domain):
                     for detection in config.faults.detection:
                         for replicate in range(config.repeats):
                             situation: dict[str, Any] = {
@@ -600,6 +618,7 @@ def expand(
                                 "goal": f"{route.goal[0]},{route.goal[1]}",
                                 "faults": faults,
                                 "fault_at": at,
+                                **({"fault_at_random": True} if config.faults.at_random else {}),
                                 "fault_clock": config.faults.clock,
                                 "persistence": config.faults.persistence,
                                 "fault_duration": config.faults.duration,
@@ -659,8 +678,25 @@ def _mission(
         ("recursion", options.get("recursion")),
         ("window", options.get("window")),
         ("clearance_weight", weight),
+        ("objective", objective_label(options, weight)),
     )
     return Mission(key, config.name, seed, text, labels)
+
+
+def _fault_steps(
+    config: ExperimentConfig,
+    identity: dict[str, Any],
+    route: Route,
+    faults: str,
+    domain: Domain[Any, Any],
+) -> tuple[int, ...]:
+    """When the faults of one situation appear: each of ``faults.at``, or with ``at_random``
+    one step drawn from the route's optimal plan (:func:`random_fault_step`)."""
+    if not config.faults.at_random:
+        return tuple(config.faults.at)
+    where = portable({"maze": identity, "route": route.name, "faults": faults, "at": "random"})
+    maze = maze_of(canonical_json(identity))
+    return (random_fault_step(maze, route, domain, derive_seed(config.seed, where)),)
 
 
 def _short_table(table: Any) -> str | None:
@@ -708,6 +744,7 @@ def to_spec(mission: Mission) -> MissionSpec:
             lpg_seed=options.get("lpg_seed", 0),
             rewrite=options.get("rewrite", False),
         ),
+        objective=parse_objective(options.get("objective", OPTIMAL)),
         clearance_weight=Fraction(s["clearance_weight"]),
         clearance_radius=s["clearance_radius"],
         seed=mission.seed,
