@@ -287,6 +287,15 @@ def test_the_robot_file_given_with_plugin_enters_the_mission_keys(tmp_path: Path
     first = _cli(*args, cwd=tmp_path)
     assert first.returncode == 0, first.stderr
     assert "20 missions, 0 already stored, 20 run" in first.stdout
+    # 10. the findings that do not apply to this experiment are left out, one line each
+    out = " ".join(first.stdout.split())
+    assert "Nothing to compare" not in out and "INCONCLUSIVE" not in out
+    assert "Finding 2 left out: it compares a replacement variant at clearance weight 0" in out
+    for number in ("3", "4"):
+        assert (
+            f"Finding {number} left out: it is about the paper's hand-written table, which is "
+            "the four-wheel robot's; this experiment's robot is hopper." in out
+        )
     again = _cli(*args, cwd=tmp_path)
     assert "20 missions, 20 already stored, 0 run" in again.stdout, again.stdout
     back = '"back": (-1, 0, Fraction({}))'

@@ -437,6 +437,9 @@ def render_markdown(
     if note is not None:
         parts += [f"*{note}*", ""]
     for f in findings:
+        if not f.applies:  # left out, with the one line saying why
+            parts += [f"*{f.headline}*", ""]
+            continue
         parts.append(
             f"**Finding {f.number}: {f.verdict.upper()}.** {f.claim[:1].upper()}{f.claim[1:]}."
         )
