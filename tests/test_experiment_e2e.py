@@ -289,7 +289,7 @@ def test_terminal_summary_never_truncates_a_number(
 
     monkeypatch.setenv("COLUMNS", str(width))
     monkeypatch.setattr(sys.stdout, "isatty", lambda: True)
-    from selfrepair.experiment.stats import Interval
+    from selfrepair.stats import Interval
 
     summary = StrategySummary(
         label="replacement[generated-agnostic,guarded] w=1/3",
@@ -317,7 +317,7 @@ def test_terminal_summary_never_truncates_a_number(
 
 def _long_summary(label: str) -> object:
     from selfrepair.experiment.findings import StrategySummary
-    from selfrepair.experiment.stats import Interval
+    from selfrepair.stats import Interval
 
     return StrategySummary(
         label=label,

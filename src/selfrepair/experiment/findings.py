@@ -50,7 +50,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 from fractions import Fraction
 
-from selfrepair.experiment.stats import Interval, bootstrap_interval, sign_test, wilcoxon_greater
+from selfrepair.experiment.stats import sign_test, wilcoxon_greater
 from selfrepair.experiment.store import Value
 from selfrepair.experiment.summary import (
     Row,
@@ -58,15 +58,14 @@ from selfrepair.experiment.summary import (
     group_label,
     is_reference_replan,
     local_share,
-    median,
     met_fault,
     num,
-    percentile,
     repairs_of,
     summarize,
 )
 from selfrepair.experiment.variants import REWRITE_LABEL
 from selfrepair.repair.strategies import RepairSource, StrategyName
+from selfrepair.stats import Interval, bootstrap_interval, lower_median
 
 __all__ = [
     "ALPHA",
@@ -82,8 +81,6 @@ __all__ = [
     "group_label",
     "is_rewrite",
     "local_share",
-    "median",
-    "percentile",
     "reference_note",
     "repairs_of",
     "summarize",
@@ -346,8 +343,8 @@ def _ratio_line(
 ) -> str:
     if interval is None:
         return f"{label}: no pair: {outcome.value}."
-    ours = median([num(r, "repair_count") for r, _ in pairs]) or 0
-    theirs = median([num(p, "repair_count") for _, p in pairs]) or 0
+    ours = lower_median([num(r, "repair_count") for r, _ in pairs]) if pairs else 0
+    theirs = lower_median([num(p, "repair_count") for _, p in pairs]) if pairs else 0
     return (
         f"{label}: {interval.text(3)} over {interval.n} pairs ({ours:g} repairs per mission "
         f"against {theirs:g}): {outcome.value}."
