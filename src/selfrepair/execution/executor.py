@@ -45,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import Detection
 from selfrepair.execution.result import MissionResult, MissionSpec, MissionStatus, MissionTally
@@ -277,7 +277,7 @@ def _penalty_buffer(grid: FreeGrid, maze: Maze, radius: int) -> Sequence[int]:
 
 
 _PENALTIES: BoundedCache[tuple[Maze, int, int], Sequence[int]] = BoundedCache(
-    "clearance penalties in free-grid layout", 8
+    "clearance penalties in free-grid layout", 8, kind=CacheKind.PLAN
 )
 
 

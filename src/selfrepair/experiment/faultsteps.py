@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.robots.domain import Domain
 from selfrepair.search.lattice import plan
 from selfrepair.search.problem import PlanningProblem
@@ -35,7 +35,7 @@ def optimum_steps(maze: Maze, route: Route, domain: Domain[Any, Any]) -> int:
 
 
 _STEPS: BoundedCache[tuple[Maze, Route, Domain[Any, Any]], int] = BoundedCache(
-    "optimal plan steps per route", 256
+    "optimal plan steps per route", 256, kind=CacheKind.REFERENCE
 )
 
 

@@ -25,8 +25,6 @@ from selfrepair.experiment.findings import (
     NEGLIGIBLE,
     Row,
     group_label,
-    median,
-    percentile,
     repairs_of,
 )
 from selfrepair.experiment.scale import Crossover
@@ -34,6 +32,7 @@ from selfrepair.experiment.summary import is_reference_replan
 from selfrepair.geometry import Cell, Pose, turn_corner
 from selfrepair.optional import matplotlib
 from selfrepair.repair.strategies import RepairSource, StrategyName
+from selfrepair.stats import lower_median, percentile
 from selfrepair.world.maze import Maze
 
 __all__ = [
@@ -117,7 +116,7 @@ def figure_latency(rows: Sequence[Row], path: Path) -> Path:
         for source, latency in repairs_of(row):
             key = label if row.get("strategy") == StrategyName.REPLAN else f"{label}: {source}"
             groups[key].append(latency / 1000)
-    labels = sorted(groups, key=lambda k: median(groups[k]) or 0)
+    labels = sorted(groups, key=lambda k: lower_median(groups[k]) if groups[k] else 0)
     with _figure(9.5, 1.2 + 0.42 * max(1, len(labels))) as (fig, (ax,)):
         if not labels:
             ax.text(0.5, 0.5, "no repairs in these results", ha="center", transform=ax.transAxes)
@@ -176,7 +175,7 @@ def figure_latency_vs_size(rows: Sequence[Row], path: Path) -> Path:
             sizes = sorted(by_size)
             if not sizes:
                 continue
-            med = np.array([median(by_size[s]) for s in sizes], dtype=float)
+            med = np.array([lower_median(by_size[s]) for s in sizes], dtype=float)
             p99 = np.array([percentile(by_size[s], 0.99) for s in sizes], dtype=float)
             ax.errorbar(
                 sizes,

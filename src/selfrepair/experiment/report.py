@@ -42,7 +42,7 @@ from selfrepair.experiment.findings import (
     reference_note,
     summarize,
 )
-from selfrepair.experiment.missions import Mission
+from selfrepair.experiment.keys import Mission
 from selfrepair.experiment.store import ResultStore
 from selfrepair.experiment.summary import fault_set_bite
 from selfrepair.experiment.tolerance_findings import tolerance_findings
@@ -438,6 +438,9 @@ def render_markdown(
     if note is not None:
         parts += [f"*{note}*", ""]
     for f in findings:
+        if not f.applies:  # left out, with the one line saying why
+            parts += [f"*{f.headline}*", ""]
+            continue
         parts.append(
             f"**Finding {f.number}: {f.verdict.upper()}.** {f.claim[:1].upper()}{f.claim[1:]}."
         )

@@ -45,7 +45,7 @@ __all__ = [
 ]
 
 FAULT_PROFILES = ("paper", "singles", "doubles", "all")
-"""Named fault-set profiles; see :func:`selfrepair.experiment.missions.fault_profile`."""
+"""Named fault-set profiles; see :func:`selfrepair.experiment.faultsets.fault_profile`."""
 
 PAPER_ONLY = frozenset({"paper"})
 """Profiles defined for the four-wheel robot only."""

@@ -73,4 +73,8 @@ def tolerance_findings(rows: Sequence[Row]) -> list[Finding]:
         if 0 in weights:
             extra.append(_tick_cost(f"{base} {objective}", _pairs(weights[Fraction(0)], group)))
             extra.append(_tick_cost(f"{base} w={top}", _pairs(weights[Fraction(0)], weights[top])))
-    return [_judge("2t", judged, _PAIRED, [line for line in extra if line])]
+    missing = (
+        "No variant run with a tolerant objective is also run at a clearance weight above 0, "
+        "so tolerance cannot be compared with clearance."
+    )
+    return [_judge("2t", judged, _PAIRED, [line for line in extra if line], missing=missing)]

@@ -61,7 +61,7 @@ from typing import Any, Protocol
 import numpy as np
 import numpy.typing as npt
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.limits import MAX_CLEARANCE_WEIGHT
@@ -140,7 +140,7 @@ def _make_setup(domain: Domain[Any, Any], faults: frozenset[Any]) -> _Setup:
 
 
 _SETUPS: BoundedCache[tuple[Domain[Any, Any], frozenset[Any]], _Setup] = BoundedCache(
-    "planner actions per fault set", 1024
+    "planner actions per fault set", 1024, kind=CacheKind.PLAN
 )
 
 
@@ -155,7 +155,7 @@ def progress_rate(domain: Domain[Any, Any], actions: Sequence[Any]) -> Fraction:
 
 
 _RATES: BoundedCache[tuple[Domain[Any, Any], tuple[Any, ...]], Fraction] = BoundedCache(
-    "planner progress rates", 1024
+    "planner progress rates", 1024, kind=CacheKind.PLAN
 )
 
 
@@ -176,7 +176,9 @@ def _duration_scale(domain: Domain[Any, Any]) -> int:
     )
 
 
-_SCALES: BoundedCache[Domain[Any, Any], int] = BoundedCache("domain duration scales", 64)
+_SCALES: BoundedCache[Domain[Any, Any], int] = BoundedCache(
+    "domain duration scales", 64, kind=CacheKind.PLAN
+)
 
 
 def _zero_distances(maze: Maze, goal: Cell, backend: str) -> npt.NDArray[np.int32]:
@@ -248,10 +250,10 @@ _SMALL_MAZE = 1 << 18
 
 _Distances = tuple[npt.NDArray[np.int32], int]
 _DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], _Distances] = BoundedCache(
-    "goal distances (mazes up to 512x512)", 32
+    "goal distances (mazes up to 512x512)", 32, kind=CacheKind.PLAN
 )
 _LARGE_DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], _Distances] = BoundedCache(
-    "goal distances (larger mazes)", 4
+    "goal distances (larger mazes)", 4, kind=CacheKind.PLAN
 )
 
 

@@ -15,7 +15,7 @@ from enum import StrEnum
 from fractions import Fraction
 from typing import Any
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import TableError, choice
 from selfrepair.geometry import Cell
 from selfrepair.robots.domain import Domain, run_open
@@ -83,7 +83,9 @@ class DomainClasses:
     scale: int
 
 
-_CLASSES: BoundedCache[Domain[Any, Any], DomainClasses] = BoundedCache("domain motion classes", 16)
+_CLASSES: BoundedCache[Domain[Any, Any], DomainClasses] = BoundedCache(
+    "domain motion classes", 16, kind=CacheKind.REPAIR
+)
 
 
 def motion_classes(domain: Domain[Any, Any]) -> tuple[MotionClass, ...]:
