@@ -45,6 +45,7 @@ from selfrepair.experiment.findings import (
 from selfrepair.experiment.keys import Mission
 from selfrepair.experiment.store import ResultStore
 from selfrepair.experiment.summary import fault_set_bite
+from selfrepair.experiment.tolerance_findings import tolerance_findings
 
 if TYPE_CHECKING:
     from selfrepair.execution.result import MissionResult
@@ -232,7 +233,7 @@ def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = N
         render_markdown(
             rows,
             summarize(rows),
-            check_findings(rows),
+            [*check_findings(rows), *tolerance_findings(rows)],
             chosen,
             str(db),
             heatmap_variant=plots.heatmap_variant(rows),
@@ -437,6 +438,9 @@ def render_markdown(
     if note is not None:
         parts += [f"*{note}*", ""]
     for f in findings:
+        if not f.applies:  # left out, with the one line saying why
+            parts += [f"*{f.headline}*", ""]
+            continue
         parts.append(
             f"**Finding {f.number}: {f.verdict.upper()}.** {f.claim[:1].upper()}{f.claim[1:]}."
         )
