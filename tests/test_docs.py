@@ -6,7 +6,9 @@ import builtins
 import importlib
 import importlib.util
 import re
+import shlex
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -267,3 +269,96 @@ def test_the_geometry_example_of_docs_extending_holds() -> None:
     match = re.search(r"```python\n(from selfrepair.geometry import .*?)```", text, re.S)
     assert match is not None, "docs/extending.md has no geometry example"
     exec(compile(match.group(1), "extending.md", "exec"), {})
+
+
+# --- every command line the docs give names commands and options that exist -------------------
+
+COMMAND_SPAN = re.compile(r"`(selfrepair [^`\n]+)`")
+COMMAND_LINE = re.compile(r"^\s*(?:\$ )?selfrepair\b|\bselfrepair \$\w+ ")
+SHELL_BREAK = ("|", "||", "&&", ";", ">", ">>", "2>", "<")
+
+
+def _options(command: Any) -> set[str]:
+    names = {"--help"}
+    for parameter in command.params:
+        names |= {*parameter.opts, *parameter.secondary_opts}
+    return names
+
+
+def stale_options(line: str, root: Any) -> list[str]:
+    """The commands and options of one ``selfrepair ...`` command line that the CLI does not
+    have. ``A|B`` is either; upper-case words, ``[...]`` and ``$VAR`` are placeholders."""
+    try:
+        words = shlex.split(line, comments=True)
+    except ValueError:
+        words = line.split()
+    words = [w.strip("[]()") for w in words]
+    if "selfrepair" not in words:
+        return []
+    index, globals_ = words.index("selfrepair") + 1, _options(root)
+    while index < len(words) and (words[index] in globals_ or words[index].startswith("$")):
+        index += 2 if words[index] == "--plugin" else 1
+    commands, path = [root], []
+    while index < len(words) and not words[index].startswith("-"):
+        groups = [c for c in commands if hasattr(c, "commands")]
+        if not groups or words[index].isupper() or words[index] == "...":
+            break
+        names = words[index].split("|")
+        missing = [n for n in names if not any(n in g.commands for g in groups)]
+        if missing:
+            return [f"selfrepair {' '.join([*path, *missing])}"]
+        commands = [g.commands[n] for g in groups for n in names if n in g.commands]
+        path.append(words[index])
+        index += 1
+    if any(hasattr(c, "commands") for c in commands):
+        return []
+    known = globals_.union(*(_options(c) for c in commands))
+    stale = []
+    for word in words[index:]:
+        if word in SHELL_BREAK:
+            break
+        for option in (part.split("=")[0] for part in word.split("|")):
+            if re.fullmatch(r"--?[a-z][\w-]*", option) and option not in known:
+                stale.append(f"selfrepair {' '.join(path)} {option}")
+    return stale
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_every_command_line_the_docs_give_runs_here(page: Path) -> None:
+    import typer
+
+    from selfrepair.cli import app
+
+    root = typer.main.get_command(app)
+    found, in_code, held = [], False, ""
+    for number, text in enumerate(page.read_text(encoding="utf-8").splitlines(), 1):
+        if text.startswith("```"):
+            in_code = not in_code
+            continue
+        if in_code and text.endswith("\\"):  # a shell line continued on the next
+            held += text[:-1] + " "
+            continue
+        line, held = held + text, ""
+        lines = [line] if in_code and COMMAND_LINE.search(line) else []
+        lines += [] if in_code else COMMAND_SPAN.findall(line)
+        found += [
+            f"{page.name}:{number}: {name}" for text in lines for name in stale_options(text, root)
+        ]
+    assert found == []
+
+
+def test_the_command_check_finds_what_is_gone() -> None:
+    import typer
+
+    from selfrepair.cli import app
+
+    root = typer.main.get_command(app)
+    assert stale_options("selfrepair run narrow-long --strategy replan --trace t.jsonl", root) == []
+    assert stale_options("selfrepair table show|check FILE", root) == []
+    assert (
+        stale_options("selfrepair --plugin r.py table generate -o FILE  # a --comment", root) == []
+    )
+    assert stale_options("selfrepair run MAZE --no-such-flag", root) == [
+        "selfrepair run --no-such-flag"
+    ]
+    assert stale_options("selfrepair table shwo FILE", root) == ["selfrepair table shwo"]

@@ -11,7 +11,8 @@ import pytest
 from extras import need
 from selfrepair.errors import ProblemError
 from selfrepair.experiment.config import parse_config
-from selfrepair.experiment.missions import Mission, expand
+from selfrepair.experiment.keys import Mission
+from selfrepair.experiment.missions import expand
 from selfrepair.experiment.runner import run_missions
 from selfrepair.experiment.store import ResultStore, without_timings
 

@@ -50,17 +50,15 @@ from pydantic import BeforeValidator, Field, model_validator
 from selfrepair.errors import ConfigError
 from selfrepair.execution.faults import Persistence
 from selfrepair.experiment.config import parse_config, read_experiment_text
-from selfrepair.experiment.missions import (
+from selfrepair.experiment.keys import (
     SCHEMA,
     Mission,
     canonical_json,
     derive_seed,
-    maze_identity,
-    maze_label,
-    maze_of,
     mission_key,
     portable,
 )
+from selfrepair.experiment.mazes import maze_identity, maze_label, maze_of
 from selfrepair.experiment.schema import ExperimentConfig, GeneratedMaze, MazeConfig
 from selfrepair.experiment.store import Value
 from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES, MAX_MISSIONS, MAX_ROBOTS, check_limit

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from selfrepair.errors import TraceError
+from selfrepair.experiment.figstyle import SOURCE_COLOURS
 from selfrepair.experiment.viewpage import pose_json, wall_runs, write_page
 from selfrepair.geometry import Cell, Pose
 from selfrepair.limits import MAX_TRACE_BYTES
@@ -34,8 +35,8 @@ TEAM_VIEWER_VERSION = 1
 ROBOT_COLOURS = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#F0E442")
 """Robot colours, by the robot's place in the scenario (Okabe-Ito, colour-blind safe)."""
 
-MOVE_COLOURS = {"plan": "#8c8c8c", "replacement": "#009E73", "replan": "#E69F00"}
-"""Move colours on the timeline by step source (planned moves grey, repaired ones coloured)."""
+MOVE_COLOURS = {str(source): colour for source, colour in SOURCE_COLOURS.items()}
+"""Move colours on the timeline by step source: the figures' and the mission page's."""
 
 
 def _tick(units: int, scale: int) -> str:

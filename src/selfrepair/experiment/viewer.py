@@ -29,6 +29,7 @@ from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.faults import Detection, canonical_order
 from selfrepair.execution.result import MissionSpec, StepSource, TraceStep
 from selfrepair.execution.trace import Trace, TraceRepair, parse_trace, replay, spec_from_header
+from selfrepair.experiment.figstyle import SOURCE_COLOURS
 from selfrepair.experiment.viewpage import pose_json, render_html, wall_runs, write_page
 from selfrepair.geometry import Cell, Pose
 from selfrepair.limits import MAX_TRACE_BYTES
@@ -53,16 +54,6 @@ VIEWER_VERSION = 1
 MAX_VIEW_STEPS = 50_000
 """Default bound on the steps of a viewed mission (about 400 bytes of page each); raise it with
 ``selfrepair view --max-steps``."""
-
-SOURCE_COLOURS = {
-    "plan": "#0072B2",
-    "replacement": "#009E73",
-    "lookahead": "#CC79A7",
-    "replan": "#E69F00",
-    "plan-repair": "#56B4E9",
-    "failed-attempt": "#D55E00",
-}
-"""Step colours by source: those of the report's figures (Okabe-Ito, colour-blind safe)."""
 
 REPAIR_SOURCE_NAMES = {
     "replacement": "table replacement",
@@ -348,7 +339,7 @@ def mission_payload(
         },
         "schedule": spec.schedule.describe(),
         "detection": spec.schedule.detection.value,
-        "colours": SOURCE_COLOURS,
+        "colours": {str(source): colour for source, colour in SOURCE_COLOURS.items()},
         "plan": plan,
         "steps": [_step_json(domain, s, t) for s, t in zip(steps, ticks, strict=False)],
         "frames": [

@@ -66,7 +66,6 @@ from selfrepair.team.model import (
     TeamFaultKind,
     TeamScenario,
     Trigger,
-    time_scale,
 )
 from selfrepair.team.reservations import FOREVER
 from selfrepair.team.result import (
@@ -167,7 +166,7 @@ def run_team(scenario: TeamScenario, options: TeamOptions | None = None) -> Team
 def _world(scenario: TeamScenario, options: TeamOptions) -> TeamWorld:
     robots = {r.name: RobotState(r, r.start, deque()) for r in scenario.robots}
     items = {t.item: ItemState(t.pickup) for t in scenario.tasks}
-    world = TeamWorld(scenario, options, time_scale(scenario.domain), robots, items)
+    world = TeamWorld(scenario, options, scenario.domain.time_unit, robots, items)
     for robot in robots.values():
         world.reservations.park(robot.name, robot.pose.cell, 0)
     return world

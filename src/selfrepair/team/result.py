@@ -1,7 +1,8 @@
 """The values of a team mission run: its options (:class:`TeamOptions`), what happened
 (:class:`TeamResult` and its records) and the vocabularies they use.
 
-Times are integer units (``scale`` units per tick, see :func:`selfrepair.team.model.time_scale`).
+Times are integer units (``scale`` units per tick, see
+:attr:`selfrepair.robots.domain.Domain.time_unit`).
 Records come in the order they happened; traces (:mod:`selfrepair.team.trace`) and metrics
 (:mod:`selfrepair.team.metrics`) read them.
 """

@@ -25,7 +25,6 @@ from selfrepair.team.model import (
     TeamScenario,
     Trigger,
     parse_team_action,
-    time_scale,
 )
 from selfrepair.team.result import TeamOptions
 from selfrepair.team.traceformat import (
@@ -172,8 +171,8 @@ def _header(f: TraceFields) -> tuple[TeamScenario, TeamOptions, int]:
         str(f.data.get("scenario", "")), f.source,
     )  # fmt: skip
     scale = f.integer("scale", minimum=1)
-    if scale != time_scale(domain):
-        raise f.fail(f"expected 'scale' {time_scale(domain)} for domain {domain.name}, got {scale}")
+    if scale != domain.time_unit:
+        raise f.fail(f"expected 'scale' {domain.time_unit} for domain {domain.name}, got {scale}")
     return scenario, options, scale
 
 

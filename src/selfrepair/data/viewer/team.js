@@ -181,7 +181,8 @@
     html("span", null, "swatch", item).style.background = r.colour;
     html("span", " " + r.name + (r.gripper ? "" : " (no gripper)"), null, item);
   }
-  for (const source of Object.keys(data.move_colours)) {
+  const sources = new Set(data.lanes.flatMap((lane) => lane.moves.map((m) => m[2])));
+  for (const source of Object.keys(data.move_colours).filter((s) => sources.has(s))) {
     const item = html("span", null, null, legend);
     html("span", null, "swatch", item).style.background = data.move_colours[source];
     html("span", " move: " + source, null, item);
