@@ -19,7 +19,9 @@ from __future__ import annotations
 
 import time
 from collections import deque
+from collections.abc import Mapping
 from enum import StrEnum
+from types import MappingProxyType
 
 from selfrepair.execution.executor import mission_context
 from selfrepair.execution.result import STEP_OF_REPAIR, MissionSpec, StepSource
@@ -33,6 +35,7 @@ from selfrepair.repair.strategies import (
 )
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.lattice import bfs_distances, planning_actions
+from selfrepair.team.model import IncidentKind
 from selfrepair.team.model import drive as drive_action
 from selfrepair.team.reservations import FOREVER, TimedStep
 from selfrepair.team.result import OwnRepairRecord, TeamSource
@@ -64,6 +67,12 @@ class DriveStart(StrEnum):
     WAITING = "waiting"
     STUCK = "stuck"
     BLOCKED = "blocked"
+
+
+INCIDENT_OF_START: Mapping[DriveStart, IncidentKind] = MappingProxyType(
+    {DriveStart.STUCK: IncidentKind.STUCK, DriveStart.BLOCKED: IncidentKind.BLOCKED}
+)
+"""The incident a drive that could not start raises (an explicit mapping, never by value)."""
 
 
 def cancel_drive(world: TeamWorld, robot: RobotState, at: int) -> None:
