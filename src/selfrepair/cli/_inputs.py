@@ -101,9 +101,7 @@ TimeLimit = Annotated[
 def checkout_root() -> Path | None:
     """The source checkout this package runs from (``src/selfrepair`` under a folder with
     ``pyproject.toml``), or ``None`` for an installed package."""
-    import selfrepair
-
-    package = Path(selfrepair.__file__).resolve().parent
+    package = Path(__file__).resolve().parent.parent  # src/selfrepair
     root = package.parent.parent
     if package.parent.name == "src" and (root / "pyproject.toml").is_file():
         return root
