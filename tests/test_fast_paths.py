@@ -31,7 +31,7 @@ from selfrepair.execution.faults import (
     Persistence,
 )
 from selfrepair.execution.metrics import mission_row
-from selfrepair.execution.moves import available_moves, move_table, time_unit
+from selfrepair.execution.moves import available_moves, move_table
 from selfrepair.execution.result import MissionSpec
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS, Outcome, Simulator
 from selfrepair.geometry import Heading, Pose
@@ -131,7 +131,7 @@ def test_fault_clock_equals_the_schedule(data: st.DataObject, seed: int) -> None
 
 
 def test_time_units_and_move_tables() -> None:
-    assert time_unit(FOUR_WHEEL) == 3  # durations are multiples of 1/3 tick
+    assert FOUR_WHEEL.time_unit == 3  # durations are multiples of 1/3 tick
     table = move_table(FOUR_WHEEL, 20)
     for action in FOUR_WHEEL.actions:
         for heading in Heading:
@@ -261,7 +261,7 @@ def test_cold_runs_keep_the_simulators_move_tables_and_empty_the_planners_caches
     from selfrepair.cli.experiments import resolve_experiment
     from selfrepair.experiment.config import load_config
     from selfrepair.experiment.missions import expand
-    from selfrepair.experiment.runner import execute_mission
+    from selfrepair.experiment.timing import execute_mission
 
     mission = expand(load_config(resolve_experiment("paper")))[0]
     kept = move_table(FOUR_WHEEL, 40)
@@ -273,21 +273,23 @@ def test_cold_runs_keep_the_simulators_move_tables_and_empty_the_planners_caches
 
 
 def test_cold_runs_keep_the_candidate_geometry_every_mission_computes_before_timing() -> None:
-    from selfrepair.caching import cache_stats
+    from selfrepair.caching import CacheKind, cache_stats
     from selfrepair.cli.experiments import resolve_experiment
     from selfrepair.experiment.config import load_config
     from selfrepair.experiment.missions import expand
-    from selfrepair.experiment.runner import execute_mission
-    from selfrepair.repair.replacement import PREFILLED_CACHES
+    from selfrepair.experiment.timing import execute_mission
+
+    prefilled = sorted(s.name for s in cache_stats() if s.kind is CacheKind.PREFILLED)
 
     def stats() -> dict[str, tuple[int, int]]:
-        return {s.name: (s.size, s.hits) for s in cache_stats() if s.name in PREFILLED_CACHES}
+        return {s.name: (s.size, s.hits) for s in cache_stats() if s.name in prefilled}
 
     missions = expand(load_config(resolve_experiment("paper")))
     mission = next(m for m in missions if dict(m.labels).get("strategy") == "replacement")
     execute_mission(mission)
     before = stats()
-    assert set(before) == set(PREFILLED_CACHES) and all(size for size, _ in before.values())
+    assert set(before) == {"table reach", "candidate geometry"}
+    assert all(size for size, _ in before.values())
     execute_mission(mission)  # its cold run empties the other caches, not these
     after = stats()
     # kept: the same entries (the geometry is only computed with the reach, so an emptied
@@ -295,5 +297,5 @@ def test_cold_runs_keep_the_candidate_geometry_every_mission_computes_before_tim
     assert {name: size for name, (size, _) in after.items()} == {
         name: size for name, (size, _) in before.items()
     }
-    reach = PREFILLED_CACHES[0]  # the table reach, looked up by every mission
+    reach = "table reach"  # looked up by every mission
     assert after[reach][1] > before[reach][1]

@@ -19,6 +19,7 @@ from selfrepair.execution.result import MissionSpec, MissionStatus
 from selfrepair.execution.trace import parse_trace, replay, trace_lines
 from selfrepair.geometry import Heading, Pose
 from selfrepair.repair import lookups
+from selfrepair.repair import neighbourhood as codes
 from selfrepair.repair.lookups import (
     MAX_FAULT_LOOKUPS,
     action_index,
@@ -224,9 +225,9 @@ def test_occupancy_codes_do_not_depend_on_the_band_they_are_made_in(
 ) -> None:
     maze = Maze(np.random.default_rng(5).random((23, 9)) < 0.4)
     grid = maze.free_grid(2)
-    whole = lookups._rows(grid, radius)
-    monkeypatch.setattr(lookups, "_BAND", 4)  # 23 rows: bands of 4, the last of 3
-    assert lookups._rows(grid, radius) == whole
+    whole = codes._rows(grid, radius)
+    monkeypatch.setattr(codes, "BAND", 4)  # 23 rows: bands of 4, the last of 3
+    assert codes._rows(grid, radius) == whole
     assert len({id(code) for row in whole for code in row}) == len({c for r in whole for c in r})
 
 

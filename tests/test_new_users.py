@@ -6,7 +6,11 @@ the robot (the compiled planner cannot take it) and selfrepair ships no table fo
 
 from __future__ import annotations
 
+import hashlib
 import json
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -203,3 +207,99 @@ def test_help_lists_the_registered_robots_and_their_fault_examples(
     out = " ".join(capsys.readouterr().out.split())
     for example in ("FL:F,RR:B (four-wheel)", "STEP,RIGHT (hopper)", "F,R (three-action)"):
         assert example in out
+
+
+# --- 3. a trace of a plug-in robot stands alone -------------------------------------------
+
+
+def _cli(*argv: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    """The command line in a fresh process (a process keeps the robot it loaded first)."""
+    code = "import sys\nfrom selfrepair.cli import main\nsys.exit(main(sys.argv[1:]))\n"
+    return subprocess.run(
+        [sys.executable, "-c", code, *argv], capture_output=True, text=True, cwd=cwd, check=False
+    )
+
+
+def test_replay_and_view_load_the_plug_in_the_trace_records(tmp_path: Path) -> None:
+    robot = tmp_path / "robot.py"
+    shutil.copy(HOPPER, robot)
+    trace = tmp_path / "t.jsonl"
+    route = [*HOP_ROUTE, "--faults", "HOP", "--no-warm-up", "--trace", str(trace)]
+    assert _cli("--plugin", str(robot), "run", *route, cwd=tmp_path).returncode == 0
+    header = json.loads(trace.read_text().splitlines()[0])
+    assert header["plugin"] == {
+        "path": str(robot.resolve()),
+        "sha256": hashlib.sha256(robot.read_bytes()).hexdigest(),
+    }
+    done = _cli("replay", str(trace), cwd=tmp_path)
+    assert done.returncode == 0 and "ok: all 20 steps hold" in done.stdout, done.stderr
+    assert _cli("view", str(trace), "-o", str(tmp_path / "t.html"), cwd=tmp_path).returncode == 0
+    back = '"back": (-1, 0, Fraction({}))'
+    robot.write_text(robot.read_text().replace(back.format(2), back.format(3)))
+    for command in (["replay", str(trace)], ["view", str(trace), "-o", str(tmp_path / "u.html")]):
+        done = _cli(*command, cwd=tmp_path)
+        assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+        assert "changed since the trace was written" in done.stderr
+        assert "pass --plugin FILE with the hopper robot" in done.stderr
+    robot.unlink()
+    done = _cli("replay", str(trace), cwd=tmp_path)
+    assert done.returncode == 2 and "cannot be read here" in done.stderr
+    assert _cli("--plugin", str(HOPPER), "replay", str(trace), cwd=tmp_path).returncode == 0
+
+
+def test_a_trace_of_another_version_of_a_loaded_robot_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    trace = tmp_path / "t.jsonl"
+    route = [*HOP_ROUTE, "--faults", "HOP", "--no-warm-up", "--trace", str(trace)]
+    assert main([*P, "run", *route]) == 0
+    lines = trace.read_text().splitlines()
+    header = json.loads(lines[0])
+    header["plugin"]["sha256"] = "0" * 64
+    trace.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
+    capsys.readouterr()
+    assert main(["replay", str(trace)]) == 2
+    assert "but this process loaded 'hopper'" in capsys.readouterr().err
+
+
+# --- 2. editing a robot given with --plugin never reuses its old results -----------------
+
+EXPERIMENT = """\
+name = "hopper"
+domain = "hopper"
+seed = 3
+[[mazes]]
+bundled = "narrow-short"
+[faults]
+sets = "singles"
+[[strategies]]
+name = "replan"
+"""
+
+
+def test_the_robot_file_given_with_plugin_enters_the_mission_keys(tmp_path: Path) -> None:
+    robot = tmp_path / "robot.py"
+    shutil.copy(HOPPER, robot)
+    config = tmp_path / "hopper.toml"
+    config.write_text(EXPERIMENT)
+    db = tmp_path / "r.sqlite"
+    args = ["--plugin", str(robot), "experiment", str(config), "--db", str(db), "--jobs", "1"]
+    first = _cli(*args, cwd=tmp_path)
+    assert first.returncode == 0, first.stderr
+    assert "20 missions, 0 already stored, 20 run" in first.stdout
+    # 10. the findings that do not apply to this experiment are left out, one line each
+    out = " ".join(first.stdout.split())
+    assert "Nothing to compare" not in out and "INCONCLUSIVE" not in out
+    assert "Finding 2 left out: it compares a replacement variant at clearance weight 0" in out
+    for number in ("3", "4"):
+        assert (
+            f"Finding {number} left out: it is about the paper's hand-written table, which is "
+            "the four-wheel robot's; this experiment's robot is hopper." in out
+        )
+    again = _cli(*args, cwd=tmp_path)
+    assert "20 missions, 20 already stored, 0 run" in again.stdout, again.stdout
+    back = '"back": (-1, 0, Fraction({}))'
+    robot.write_text(robot.read_text().replace(back.format(2), back.format(3)))
+    edited = _cli(*args, cwd=tmp_path)
+    assert edited.returncode == 0, edited.stderr
+    assert "20 missions, 0 already stored, 20 run" in edited.stdout, edited.stdout

@@ -101,7 +101,9 @@ TimeLimit = Annotated[
 def checkout_root() -> Path | None:
     """The source checkout this package runs from (``src/selfrepair`` under a folder with
     ``pyproject.toml``), or ``None`` for an installed package."""
-    package = Path(__file__).resolve().parent.parent  # src/selfrepair
+    import selfrepair
+
+    package = Path(selfrepair.__file__).resolve().parent
     root = package.parent.parent
     if package.parent.name == "src" and (root / "pyproject.toml").is_file():
         return root

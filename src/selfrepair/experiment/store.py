@@ -40,7 +40,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, TypeVar
 
-from selfrepair._version import package_version
+from selfrepair import __version__
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.experiment.keys import Mission
 
@@ -511,7 +511,7 @@ def _row(mission: Mission, metrics: Mapping[str, Value], worker_seconds: float) 
         "key": mission.key,
         "experiment": mission.experiment,
         "seed": mission.seed,
-        "version": package_version(),
+        "version": __version__,
         "config": mission.config,
         "finished_at": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
         "worker_seconds": float(worker_seconds),

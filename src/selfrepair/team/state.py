@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.execution.result import StepSource
 from selfrepair.geometry import Cell, Pose
 from selfrepair.repair.strategies import Repairer
@@ -199,7 +199,9 @@ class TeamWorld:
         self.messages += len(self.robots) - 1
 
 
-_KNOWN: BoundedCache[tuple[Maze, frozenset[Cell]], Maze] = BoundedCache("team known maps", 64)
+_KNOWN: BoundedCache[tuple[Maze, frozenset[Cell]], Maze] = BoundedCache(
+    "team known maps", 64, kind=CacheKind.PLAN
+)
 
 
 def known_maze(maze: Maze, extra: frozenset[Cell]) -> Maze:

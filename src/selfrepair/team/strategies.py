@@ -50,7 +50,7 @@ from selfrepair.team.allocation import (
     distance_maps,
     job_plan,
 )
-from selfrepair.team.binding import Incident, Maps, apply_binding, choose, mobile
+from selfrepair.team.binding import apply_binding, choose
 from selfrepair.team.driving import RETRY_TICKS
 from selfrepair.team.model import (
     DROP_TICKS,
@@ -62,6 +62,7 @@ from selfrepair.team.model import (
 )
 from selfrepair.team.result import RepairOutcome, TeamSource
 from selfrepair.team.state import Entry, RobotState, TeamWorld, resource
+from selfrepair.team.steps import Incident, Maps, mobile
 from selfrepair.team.table import get_team_table
 
 __all__ = ["TEAM", "Decision", "TeamStrategy", "get_team_strategy"]
