@@ -78,6 +78,7 @@ from selfrepair.team.result import (
     TeamResult,
     TeamStatus,
 )
+from selfrepair.team.robottable import robot_table
 from selfrepair.team.scenario import check_scenario
 from selfrepair.team.spacetime import clear_cost_to_go
 from selfrepair.team.state import Entry, ItemState, RobotState, TeamWorld, item_task_of
@@ -123,6 +124,7 @@ def run_team(scenario: TeamScenario, options: TeamOptions | None = None) -> Team
     get_team_strategy(options.strategy)  # fails fast on a bad name
     if options.strategy is StrategyName.TEAM_REPLACEMENT:
         get_team_table(options.table)  # a generated table is made before anything is timed
+    robot_table(scenario, options)  # so is the robots' own (and a table for another robot fails)
     if use_numba(options.backend):
         from selfrepair.search.warmup import ensure_warm
 

@@ -238,8 +238,9 @@ class TeamScenario:
         raise ProblemError(f"no task delivers item {item!r}")
 
     def without_faults(self) -> TeamScenario:
-        """The same scenario with no team fault (the fault-free baseline)."""
-        return replace(self, faults=())
+        """The same scenario with no team fault (the fault-free baseline; no longer the file's
+        content, so without its digest)."""
+        return replace(self, faults=(), digest="")
 
 
 # --- higher-level actions ----------------------------------------------------------------------

@@ -61,18 +61,19 @@ class TeamOptions:
     :class:`~selfrepair.repair.strategies.StrategyName`) and ``table`` its team
     replacement table. Each robot handles its own wheel faults first with the single-robot
     strategy ``robot_strategy`` (a name in :mod:`selfrepair.repair.strategies`), table
-    ``robot_table`` and ``recursion``. ``max_depth`` bounds nested team replacements (the
-    recursion guard's depth). ``max_ticks`` ends the mission (default: see
-    :func:`selfrepair.team.engine.default_max_ticks`). ``max_wait_ticks`` is the longest wait
-    :func:`~selfrepair.team.spacetime.schedule_path` accepts before cooperative A* is tried, with
-    ``spacetime_expansions`` nodes at most. ``seed`` is recorded with the results (the engine
-    draws nothing at random; scenarios are drawn from it).
+    ``robot_table`` (a bundled name or a file; ``""``: the scenario's ``table``, else the
+    robot's default, see :mod:`selfrepair.team.robottable`) and ``recursion``. ``max_depth``
+    bounds nested team replacements (the recursion guard's depth). ``max_ticks`` ends the
+    mission (default: see :func:`selfrepair.team.engine.default_max_ticks`). ``max_wait_ticks``
+    is the longest wait :func:`~selfrepair.team.spacetime.schedule_path` accepts before
+    cooperative A* is tried, with ``spacetime_expansions`` nodes at most. ``seed`` is recorded
+    with the results (the engine draws nothing at random; scenarios are drawn from it).
     """
 
     strategy: str = StrategyName.TEAM_REPLACEMENT
     table: str = TeamTableName.HANDWRITTEN
     robot_strategy: str = StrategyName.REPLACEMENT
-    robot_table: str = "handwritten"
+    robot_table: str = ""
     recursion: RecursionMode = RecursionMode.FLAT
     max_depth: int = 2
     backend: str = "auto"
