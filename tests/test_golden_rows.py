@@ -17,7 +17,10 @@ from selfrepair.cli import main
 
 GOLDEN = Path(__file__).parent / "data" / "golden"
 
-CHANGED: dict[str, str] = {}
+CHANGED: dict[str, str] = {
+    "own_replacements": "issue 29 item 17: counts the own replacements whose actions ran, not "
+    "those a later cooperative A* placement threw away before they ran",
+}
 """Columns left out of the comparison, each with why its values changed on purpose."""
 
 

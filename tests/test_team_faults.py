@@ -190,3 +190,23 @@ def test_the_scenario_detection_reaches_the_robots() -> None:
     now = run_team(_scenario(Detection.NOW))
     on_use = run_team(replace(_scenario(Detection.NOW), detection=Detection.ON_USE))
     assert now.discoveries[0].delay == 0 and on_use.discoveries[0].delay == 7 * SCALE
+
+
+def test_own_replacements_count_only_replacements_that_ran() -> None:
+    """Issue 29 item 17: robot r1 (wheel faults RL:B,RL:F from tick 9) replaces BBBB by BBSS at
+    19,11 (unit 27), but the repaired drive cannot be placed around r2 and cooperative A* plans
+    it again: the replacement never runs, and the row does not count it."""
+    from selfrepair.team.experiment import FaultCase, TeamCase, build_scenario
+    from selfrepair.team.randomteam import GripperMix
+    from selfrepair.world.bundled import load_bundled
+
+    case = TeamCase(2, 4, GripperMix.ALL, FaultCase.WHEELS, seed=5)
+    result = run_team(build_scenario(load_bundled("wide-short"), case))
+    assert result.all_delivered
+    [own] = result.own_repairs
+    assert (own.robot, own.at, FOUR_WHEEL.format_action(own.action)) == ("r1", 27, "BBBB")
+    assert [FOUR_WHEEL.format_action(a) for a in own.actions] == ["BBSS"]
+    after = [m for m in result.moves if m.robot == "r1" and m.start >= own.at]
+    assert after and all(m.source is StepSource.REPLAN for m in after[:10])
+    row = team_row(result)
+    assert row["own_repairs"] == 1 and row["own_replacements"] == 0
