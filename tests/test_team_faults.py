@@ -210,3 +210,32 @@ def test_own_replacements_count_only_replacements_that_ran() -> None:
     assert after and all(m.source is StepSource.REPLAN for m in after[:10])
     row = team_row(result)
     assert row["own_repairs"] == 1 and row["own_replacements"] == 0
+
+
+@pytest.mark.parametrize("strategy", ["team-replacement", "reallocation", "alone"])
+def test_an_item_given_up_during_a_blockage_is_offered_again(strategy: str, tmp_path: Path) -> None:
+    """Issue 29 item 14: item i7 lies on 6,2, blocked from tick 3 to 83. Robot r2's drive there
+    meets the blockage at tick 6; team replacement falls back to re-allocation, which cannot
+    reach i7 on the known map and gives it to nobody. When the cell opens at tick 83 the item is
+    offered again and delivered (as ``alone``, which waits, always did)."""
+    walls = np.zeros((7, 11), dtype=bool)
+    walls[0, :] = walls[-1, :] = walls[:, 0] = walls[:, -1] = True
+    blocked = TeamFault(
+        TeamFaultKind.BLOCKED, cells=((6, 2),), at=3, persistence=Persistence.TRANSIENT,
+        duration=80,
+    )  # fmt: skip
+    scenario = TeamScenario(
+        Maze(walls, name="room"),
+        (RobotSpec("r1", Pose(1, 1, Heading.E)), RobotSpec("r2", Pose(1, 5, Heading.E))),
+        (Task("i1", (3, 1), (3, 5)), Task("i7", (6, 2), (1, 3))),
+        (blocked,),
+        name="room",
+    )
+    result = run_team(scenario, TeamOptions(strategy=strategy))
+    assert [(i.at, i.robot, i.kind.value) for i in result.incidents] == [(18, "r2", "blocked")]
+    assert result.all_delivered, result.reason
+    picked = [
+        a.start for a in result.acts if a.action.kind.value == "pick" and a.action.item == "i7"
+    ]
+    assert picked and min(picked) >= 83 * SCALE  # not before the cell opened
+    _replayed(result, tmp_path)

@@ -43,15 +43,13 @@ from __future__ import annotations
 import gc
 import time
 from collections import deque
-from typing import Any
 
 from selfrepair.errors import ProblemError
-from selfrepair.execution.faults import Detection, FaultSchedule, Persistence
+from selfrepair.execution.faults import Detection, FaultSchedule
 from selfrepair.execution.result import StepSource
 from selfrepair.execution.simulator import Outcome, Simulator
 from selfrepair.geometry import Cell
 from selfrepair.search.backend import use_numba
-from selfrepair.search.lattice import planning_actions
 from selfrepair.team.allocation import Job, Worker, allocate, distance_maps, job_plan
 from selfrepair.team.binding import Incident
 from selfrepair.team.driving import (
@@ -62,6 +60,7 @@ from selfrepair.team.driving import (
     own_repair,
     place,
 )
+from selfrepair.team.faults import fault_times, faults_due, know
 from selfrepair.team.model import (
     DROP_TICKS,
     HANDOVER_TICKS,
@@ -69,7 +68,6 @@ from selfrepair.team.model import (
     ActionKind,
     IncidentKind,
     Load,
-    TeamFault,
     TeamFaultKind,
     TeamScenario,
     TeamStrategyName,
@@ -79,8 +77,6 @@ from selfrepair.team.model import (
 from selfrepair.team.reservations import FOREVER, TimedStep
 from selfrepair.team.result import (
     ActRecord,
-    DiscoveryRecord,
-    FaultRecord,
     IncidentRecord,
     MoveRecord,
     TeamOptions,
@@ -217,7 +213,7 @@ def _loop(world: TeamWorld) -> tuple[TeamStatus, str]:
     t = forgotten = 0
     while True:
         world.now = t
-        _faults(world, clocks, t)
+        faults_due(world, clocks, t)
         pending = list(world.robots)
         for _ in range(_ROUNDS):
             world.dirty.clear()
@@ -233,7 +229,7 @@ def _loop(world: TeamWorld) -> tuple[TeamStatus, str]:
             return TeamStatus.DELIVERED, "every item delivered"
         if t >= limit:
             return TeamStatus.TIME_LIMIT, f"{limit // scale} ticks passed (max_ticks)"
-        upcoming = [c for c in _fault_times(clocks) if c > t]
+        upcoming = [c for c in fault_times(clocks) if c > t]
         if t - world.last_progress > STALL_TICKS * scale and not upcoming:
             return TeamStatus.STALLED, _stall_reason(world)
         candidates = [w for w in wake.values() if w > t] + upcoming
@@ -250,76 +246,6 @@ def _stall_reason(world: TeamWorld) -> str:
         f"{len(left)} items undelivered ({', '.join(left) or 'none'}); robots with work left: "
         f"{', '.join(waiting) or 'none'}"
     )
-
-
-def _fault_times(clocks: list[FaultState]) -> list[int]:
-    times = []
-    for c in clocks:
-        if not c.active and not c.done and c.on is not None:
-            times.append(c.on)
-        if c.active and c.off is not None:
-            times.append(c.off)
-    return times
-
-
-def _faults(world: TeamWorld, clocks: list[FaultState], t: int) -> None:
-    """Start and clear the team faults due at ``t`` and apply their effects."""
-    changed = False
-    for clock in clocks:
-        fault = clock.fault
-        if clock.on is None and fault.trigger is Trigger.PICK:
-            first = world.robots[fault.robot].first_pick
-            if first is not None:
-                clock.on = first + fault.at * world.scale
-        if not clock.active and not clock.done and clock.on is not None and clock.on <= t:
-            clock.active, changed = True, True
-            if fault.persistence is Persistence.TRANSIENT:
-                assert fault.duration is not None
-                clock.off = clock.on + fault.duration * world.scale
-            world.fault_log.append(FaultRecord(t, clock.index, True))
-        elif clock.active and clock.off is not None and clock.off <= t:
-            clock.active, clock.done, changed = False, True, True
-            world.fault_log.append(FaultRecord(t, clock.index, False))
-    if changed:
-        _apply_faults(world, [c.fault for c in clocks if c.active])
-
-
-def _apply_faults(world: TeamWorld, active: list[TeamFault]) -> None:
-    """The team faults active now take effect: each robot senses its wheel faults (detection
-    ``now``; with ``on-use`` it knows only what failed commands taught it), grippers fail or work
-    again, cells block or open."""
-    domain = world.scenario.domain
-    blocked: set[Cell] = set()
-    t = world.now
-    for robot in world.robots.values():
-        gripper = not any(f.robot == robot.name and f.kind is TeamFaultKind.GRIPPER for f in active)
-        known = robot.sim.sense() if world.scenario.detection is Detection.NOW else robot.faults
-        if known != robot.faults or gripper != robot.gripper_ok:
-            _know(world, robot, known, t)
-            robot.gripper_ok = gripper
-            robot.deferred = None
-            if robot.stuck and planning_actions(domain, robot.faults):
-                robot.stuck = False  # it can move again: the team hears of it
-                world.broadcast(robot.name)
-    for fault in active:
-        if fault.kind is TeamFaultKind.BLOCKED:
-            blocked.update(fault.cells)
-    world.blocked = blocked
-    world.known_blocked &= blocked  # a blocked cell that opened again is reported
-
-
-def _know(world: TeamWorld, robot: RobotState, known: frozenset[Any], t: int) -> None:
-    """``robot`` now knows exactly the domain faults ``known`` (its drive's stepper too); a team
-    fault of its own that it had not noticed and that ``known`` shows is discovered at ``t``."""
-    robot.faults = known
-    if robot.drive is not None:
-        robot.drive.stepper.learn(known)
-    for state in robot.clock.states():
-        if state.on is None or state.index in robot.discovered or state.on > t:
-            continue
-        if robot.clock.effect(state.index) & known:
-            robot.discovered.add(state.index)
-            world.discoveries.append(DiscoveryRecord(t, robot.name, state.index, t - state.on))
 
 
 def _advance(world: TeamWorld, robot: RobotState, t: int) -> int:
@@ -384,7 +310,7 @@ def _drive(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> int | No
     if world.scenario.detection is Detection.NOW:
         sensed = sim.sense()  # the robot senses its faults before every command
         if sensed is not robot.faults and sensed != robot.faults:
-            _know(world, robot, sensed, t)
+            know(world, robot, sensed, t)
     if not stepper.available(step.action):
         if not own_repair(world, robot, t):
             _incident(world, robot, head, IncidentKind.STUCK, t)
@@ -421,7 +347,7 @@ def _command(world: TeamWorld, robot: RobotState, step: TimedStep, t: int) -> in
         world.moves.append(
             MoveRecord(robot.name, t, end, step.action, pose, pose, StepSource.FAILED_ATTEMPT)
         )
-        _know(world, robot, stepper.known, t)
+        know(world, robot, stepper.known, t)
         _hold(world, robot, t)
         return end
     if outcome is not Outcome.MOVED or sim.pose != step.after or sim.units != step.end:
