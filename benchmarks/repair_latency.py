@@ -52,7 +52,7 @@ from selfrepair.caching import clear_caches
 from selfrepair.execution.executor import mission_context, run_mission
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.result import MissionResult, MissionSpec
-from selfrepair.experiment.missions import PAPER_FAULT_SETS, random_routes
+from selfrepair.experiment.faultsets import PAPER_FAULT_SETS
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.repair import lookups
 from selfrepair.repair.strategies import (
@@ -71,6 +71,7 @@ from selfrepair.world.bundled import bundled_routes, load_bundled, maze_names
 from selfrepair.world.maze import Maze
 from selfrepair.world.mazegen import generate_maze
 from selfrepair.world.movingai import load_map, load_scenario
+from selfrepair.world.routes import random_routes
 
 ROOT = Path(__file__).resolve().parents[1]
 MAP_CANDIDATES = (

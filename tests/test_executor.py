@@ -24,7 +24,7 @@ from selfrepair.execution.result import MissionResult, MissionSpec, MissionStatu
 from selfrepair.execution.trace import parse_trace, replay, trace_lines
 from selfrepair.geometry import Heading, Pose
 from selfrepair.repair.replacement import RecursionMode
-from selfrepair.repair.strategies import STRATEGIES, StrategyOptions
+from selfrepair.repair.strategies import StrategyName, StrategyOptions
 from selfrepair.robots import four_wheel
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import PlanStatus
@@ -32,6 +32,9 @@ from selfrepair.search.lattice import plan
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.world.bundled import bundled_routes, load_bundled
 from selfrepair.world.maze import Maze
+
+STRATEGIES = (StrategyName.REPLAN, StrategyName.REPLACEMENT, StrategyName.LOOKAHEAD)
+"""The strategies every mission test runs (the baselines have their own tests)."""
 
 FAULT_SETS = (frozenset(), *FOUR_WHEEL.fault_sets)
 PROPERTY = settings(

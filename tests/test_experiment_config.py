@@ -13,12 +13,8 @@ from hypothesis import strategies as st
 from selfrepair.cli import main
 from selfrepair.errors import ConfigError, LimitError, TableError
 from selfrepair.experiment.config import load_config, parse_config
-from selfrepair.experiment.missions import (
-    PAPER_FAULT_SETS,
-    count_missions,
-    expand,
-    fault_profile,
-)
+from selfrepair.experiment.faultsets import PAPER_FAULT_SETS, fault_profile
+from selfrepair.experiment.missions import count_missions, expand
 
 GOOD = """\
 name = "tiny"

@@ -11,7 +11,8 @@ import pytest
 from extras import need
 from selfrepair.errors import ProblemError
 from selfrepair.experiment.config import parse_config
-from selfrepair.experiment.missions import Mission, expand
+from selfrepair.experiment.keys import Mission
+from selfrepair.experiment.missions import expand
 from selfrepair.experiment.runner import run_missions
 from selfrepair.experiment.store import ResultStore, without_timings
 
@@ -143,7 +144,7 @@ def test_backend_misuse_is_a_problem_error(tmp_path: Path) -> None:
 
 @pytest.mark.ray
 def test_ray_backend_matches_local(tmp_path: Path) -> None:
-    ray = pytest.importorskip("ray")
+    ray = need("ray", "ray")
     missions = _missions()
     with ResultStore(tmp_path / "local.sqlite") as store:
         run_missions(missions, store, jobs=1)  # the real executor, as Ray workers run it

@@ -14,7 +14,8 @@ from pathlib import Path
 import pytest
 
 from selfrepair.experiment.config import parse_config
-from selfrepair.experiment.missions import Mission, expand
+from selfrepair.experiment.keys import Mission
+from selfrepair.experiment.missions import expand
 from selfrepair.experiment.store import ResultStore, without_timings
 
 pytestmark = pytest.mark.skipif(sys.platform != "linux", reason="uses signals and /proc")

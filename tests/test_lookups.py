@@ -19,6 +19,7 @@ from selfrepair.execution.result import MissionSpec, MissionStatus
 from selfrepair.execution.trace import parse_trace, replay, trace_lines
 from selfrepair.geometry import Heading, Pose
 from selfrepair.repair import lookups
+from selfrepair.repair import neighbourhood as codes
 from selfrepair.repair.lookups import (
     MAX_FAULT_LOOKUPS,
     action_index,
@@ -224,9 +225,9 @@ def test_occupancy_codes_do_not_depend_on_the_band_they_are_made_in(
 ) -> None:
     maze = Maze(np.random.default_rng(5).random((23, 9)) < 0.4)
     grid = maze.free_grid(2)
-    whole = lookups._rows(grid, radius)
-    monkeypatch.setattr(lookups, "_BAND", 4)  # 23 rows: bands of 4, the last of 3
-    assert lookups._rows(grid, radius) == whole
+    whole = codes._rows(grid, radius)
+    monkeypatch.setattr(codes, "BAND", 4)  # 23 rows: bands of 4, the last of 3
+    assert codes._rows(grid, radius) == whole
     assert len({id(code) for row in whole for code in row}) == len({c for r in whole for c in r})
 
 
@@ -354,7 +355,7 @@ def test_repairer_finds_equal_copies_of_actions() -> None:
 @st.composite
 def missions(draw: st.DrawFn) -> MissionSpec:
     """A generated maze, a random route, permanent faults from a random step, detected at once."""
-    from selfrepair.experiment.missions import random_routes
+    from selfrepair.world.routes import random_routes
 
     seed = draw(st.integers(0, 10_000))
     size = draw(st.sampled_from([9, 13, 17]))
@@ -437,7 +438,7 @@ def test_rewrite_substitutes_every_later_occurrence_at_once() -> None:
 def test_rewrite_rechecks_faults_that_become_known_later(detection: Detection) -> None:
     """Faults learned on use or appearing later trigger a new rewrite; the mission still holds."""
     from selfrepair.execution.faults import FaultEvent
-    from selfrepair.experiment.missions import random_routes
+    from selfrepair.world.routes import random_routes
 
     maze = generate_maze(21, 21, braid=0.3, seed=5)
     (route,) = random_routes(maze, 1, 7)

@@ -17,15 +17,11 @@ from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.metrics import mission_row, motion_distance, optimum_ticks
 from selfrepair.execution.result import MissionSpec
-from selfrepair.experiment.missions import (
-    PAPER_FAULT_SETS,
-    Mission,
-    biting_fault_sets,
-    canonical_json,
-)
-from selfrepair.experiment.runner import execute_mission
+from selfrepair.experiment.faultsets import PAPER_FAULT_SETS, biting_fault_sets
+from selfrepair.experiment.keys import Mission, canonical_json
 from selfrepair.experiment.scale import crossover
-from selfrepair.experiment.stats import bootstrap_interval, sign_test
+from selfrepair.experiment.stats import sign_test
+from selfrepair.experiment.timing import execute_mission
 from selfrepair.geometry import Heading, Pose
 from selfrepair.repair.replacement import (
     RecursionMode,
@@ -37,6 +33,7 @@ from selfrepair.repair.strategies import StrategyOptions
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.lattice import plan
 from selfrepair.search.problem import PlanningProblem
+from selfrepair.stats import bootstrap_interval
 from selfrepair.tables.fileformat import bundled_table
 from selfrepair.tables.model import ReplacementTable, TableEntry
 from selfrepair.world.bundled import bundled_routes, load_bundled
@@ -421,7 +418,8 @@ def test_crossover_of_a_known_power_law() -> None:
 def test_scale_experiment_is_shipped_offline() -> None:
     from selfrepair.cli.experiments import resolve_experiment
     from selfrepair.experiment.config import load_config
-    from selfrepair.experiment.missions import expand, maze_of
+    from selfrepair.experiment.mazes import maze_of
+    from selfrepair.experiment.missions import expand
 
     config = load_config(resolve_experiment("scale"))
     assert config.crossover and config.timing_repeats >= 1

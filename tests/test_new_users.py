@@ -6,11 +6,16 @@ the robot (the compiled planner cannot take it) and selfrepair ships no table fo
 
 from __future__ import annotations
 
+import hashlib
 import json
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
+from extras import need
 from selfrepair.cli import main
 from selfrepair.robots.registry import load_plugin
 
@@ -122,3 +127,180 @@ def test_verdict_names_the_most_as_such_and_uses_the_motion_distance(
         verdict
     )
     assert "faster than the slowest, " in verdict
+
+
+# --- 4. the backend that ran ----------------------------------------------------------------
+
+
+def test_explicit_numba_on_a_robot_the_kernels_cannot_take_is_refused(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    need("numba", "fast")
+    for command in (["run"], ["plan"]):
+        args = [*P, *command, *HOP_ROUTE, "--faults", "HOP", "--backend", "numba"]
+        assert main(args) == 2
+        err = capsys.readouterr().err
+        assert "hop facing N leaves the 3x3 cells" in err and err.count("\n") == 1
+
+
+def test_auto_falls_back_and_the_row_says_which_backend_ran(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    need("numba", "fast")
+    assert main([*P, "run", *HOP_ROUTE, "--faults", "HOP", "--no-warm-up", "--json"]) == 0
+    row = json.loads(capsys.readouterr().out)
+    assert (row["backend"], row["backend_ran"]) == ("auto", "python")
+    assert row["kernel_load_ms"] == 0  # no kernel is loaded for a robot they cannot take
+    assert main(["run", *ROUTE, "--no-warm-up", "--json"]) == 0
+    row = json.loads(capsys.readouterr().out)
+    assert (row["backend"], row["backend_ran"]) == ("auto", "numba")
+    assert main(["run", *ROUTE, "--no-warm-up", "--json", "--backend", "python"]) == 0
+    assert json.loads(capsys.readouterr().out)["backend_ran"] == "python"
+
+
+def test_kernel_refusal_names_the_action() -> None:
+    from selfrepair.robots.registry import get_domain
+    from selfrepair.search.backend import kernel_refusal
+
+    assert kernel_refusal(get_domain("four-wheel")) is None
+    assert kernel_refusal(get_domain("three-action")) is None
+    expected = "action hop facing N leaves the 3x3 cells around the robot"
+    assert kernel_refusal(get_domain("hopper")) == expected
+
+
+# --- 8. every command takes the robot; help names the robots --------------------------------
+
+
+def test_plan_and_actions_take_a_domain(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main([*P, "plan", *HOP_ROUTE, "--faults", "HOP", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert "hop" not in data["actions"]
+    assert set(data["actions"]) <= {"step", "back", "left", "right"}
+    assert main([*P, "plan", *HOP_ROUTE, "--faults", "FL:F"]) == 2
+    assert "--faults" in capsys.readouterr().err
+    assert main([*P, "actions", "--domain", "hopper", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert rows[1] == {
+        "action": "hop", "motion": "hop", "level": 0, "duration": "1", "end": "0,-2,N",
+        "cells": "0,0 0,-1 0,-2",
+    }  # fmt: skip
+    assert main(["actions", "--domain", "omni-wheel"]) == 2
+    assert "--domain" in capsys.readouterr().err
+
+
+def test_pddl_refuses_another_robot_clearly(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    assert main([*P, "pddl", *HOP_ROUTE, "-o", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "--domain: the PDDL export encodes the four-wheel robot only" in err
+    assert not list(tmp_path.iterdir())
+
+
+def test_help_lists_the_registered_robots_and_their_fault_examples(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    for command in (["run"], ["plan"], ["table", "generate"]):
+        assert main([*P, *command, "--help"]) == 0
+        out = " ".join(capsys.readouterr().out.split())
+        assert "four-wheel, hopper, three-action" in out, command
+    assert main([*P, "compare", "--help"]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    for example in ("FL:F,RR:B (four-wheel)", "STEP,RIGHT (hopper)", "F,R (three-action)"):
+        assert example in out
+
+
+# --- 3. a trace of a plug-in robot stands alone -------------------------------------------
+
+
+def _cli(*argv: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    """The command line in a fresh process (a process keeps the robot it loaded first)."""
+    code = "import sys\nfrom selfrepair.cli import main\nsys.exit(main(sys.argv[1:]))\n"
+    return subprocess.run(
+        [sys.executable, "-c", code, *argv], capture_output=True, text=True, cwd=cwd, check=False
+    )
+
+
+def test_replay_and_view_load_the_plug_in_the_trace_records(tmp_path: Path) -> None:
+    robot = tmp_path / "robot.py"
+    shutil.copy(HOPPER, robot)
+    trace = tmp_path / "t.jsonl"
+    route = [*HOP_ROUTE, "--faults", "HOP", "--no-warm-up", "--trace", str(trace)]
+    assert _cli("--plugin", str(robot), "run", *route, cwd=tmp_path).returncode == 0
+    header = json.loads(trace.read_text().splitlines()[0])
+    assert header["plugin"] == {
+        "path": str(robot.resolve()),
+        "sha256": hashlib.sha256(robot.read_bytes()).hexdigest(),
+    }
+    done = _cli("replay", str(trace), cwd=tmp_path)
+    assert done.returncode == 0 and "ok: all 20 steps hold" in done.stdout, done.stderr
+    assert _cli("view", str(trace), "-o", str(tmp_path / "t.html"), cwd=tmp_path).returncode == 0
+    back = '"back": (-1, 0, Fraction({}))'
+    robot.write_text(robot.read_text().replace(back.format(2), back.format(3)))
+    for command in (["replay", str(trace)], ["view", str(trace), "-o", str(tmp_path / "u.html")]):
+        done = _cli(*command, cwd=tmp_path)
+        assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+        assert "changed since the trace was written" in done.stderr
+        assert "pass --plugin FILE with the hopper robot" in done.stderr
+    robot.unlink()
+    done = _cli("replay", str(trace), cwd=tmp_path)
+    assert done.returncode == 2 and "cannot be read here" in done.stderr
+    assert _cli("--plugin", str(HOPPER), "replay", str(trace), cwd=tmp_path).returncode == 0
+
+
+def test_a_trace_of_another_version_of_a_loaded_robot_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    trace = tmp_path / "t.jsonl"
+    route = [*HOP_ROUTE, "--faults", "HOP", "--no-warm-up", "--trace", str(trace)]
+    assert main([*P, "run", *route]) == 0
+    lines = trace.read_text().splitlines()
+    header = json.loads(lines[0])
+    header["plugin"]["sha256"] = "0" * 64
+    trace.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
+    capsys.readouterr()
+    assert main(["replay", str(trace)]) == 2
+    assert "but this process loaded 'hopper'" in capsys.readouterr().err
+
+
+# --- 2. editing a robot given with --plugin never reuses its old results -----------------
+
+EXPERIMENT = """\
+name = "hopper"
+domain = "hopper"
+seed = 3
+[[mazes]]
+bundled = "narrow-short"
+[faults]
+sets = "singles"
+[[strategies]]
+name = "replan"
+"""
+
+
+def test_the_robot_file_given_with_plugin_enters_the_mission_keys(tmp_path: Path) -> None:
+    robot = tmp_path / "robot.py"
+    shutil.copy(HOPPER, robot)
+    config = tmp_path / "hopper.toml"
+    config.write_text(EXPERIMENT)
+    db = tmp_path / "r.sqlite"
+    args = ["--plugin", str(robot), "experiment", str(config), "--db", str(db), "--jobs", "1"]
+    first = _cli(*args, cwd=tmp_path)
+    assert first.returncode == 0, first.stderr
+    assert "20 missions, 0 already stored, 20 run" in first.stdout
+    # 10. the findings that do not apply to this experiment are left out, one line each
+    out = " ".join(first.stdout.split())
+    assert "Nothing to compare" not in out and "INCONCLUSIVE" not in out
+    assert "Finding 2 left out: it compares a replacement variant at clearance weight 0" in out
+    for number in ("3", "4"):
+        assert (
+            f"Finding {number} left out: it is about the paper's hand-written table, which is "
+            "the four-wheel robot's; this experiment's robot is hopper." in out
+        )
+    again = _cli(*args, cwd=tmp_path)
+    assert "20 missions, 20 already stored, 0 run" in again.stdout, again.stdout
+    back = '"back": (-1, 0, Fraction({}))'
+    robot.write_text(robot.read_text().replace(back.format(2), back.format(3)))
+    edited = _cli(*args, cwd=tmp_path)
+    assert edited.returncode == 0, edited.stderr
+    assert "20 missions, 0 already stored, 20 run" in edited.stdout, edited.stdout

@@ -133,14 +133,14 @@ def test_schedule_path_waits_for_a_crossing_robot() -> None:
 def test_generated_table_contains_every_hand_written_candidate() -> None:
     generated = generate_table()
     for key, template in HANDWRITTEN.rows():
-        shapes = {_canonical(t.steps): t.name for t in generated.candidates(key)}
+        shapes = {_canonical(t.steps): t.name for t in generated.entries.get(key, ())}
         assert shapes.get(_canonical(template.steps)) == template.name, (key, template.name)
 
 
 def test_generated_candidates_never_use_the_blocked_drive_or_an_immobile_robot() -> None:
     generated = generate_table()
     for key in KEYS:
-        for template in generated.candidates(key):
+        for template in generated.entries.get(key, ()):
             mine = [s for s in template.steps if s.role is Role.FAULTY and s.kind == "drive"]
             if key[1] is IncidentKind.STUCK:
                 assert not mine, template
@@ -224,7 +224,7 @@ def test_bind_respects_the_recursion_guard_and_equipment(three: TeamScenario) ->
     entry = Entry(drive("r2", (1, 22), (20, 22)))
     incident = Incident("r2", entry, IncidentKind.STUCK, Load.CARRYING, "i2", 0)
     maps = Maps(world.known_map("r2"), "auto")
-    template = HANDWRITTEN.candidates(incident.key)[0]
+    template = HANDWRITTEN.candidates(incident.entry.action.kind, incident.known)[0]
     found = bind(world, incident, template, "r1", maps)
     assert found is not None and found.template.name == "handover-deliver"
     reach = next(a for a in dict(found.actions)["r1"] if a.kind == "drive")

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from selfrepair.cli import main
-from selfrepair.experiment.missions import Mission
+from selfrepair.experiment.keys import Mission
 from selfrepair.experiment.teams import expand_team, load_experiment
 
 SCENARIO = """
@@ -214,7 +214,8 @@ def test_team_experiment_report_and_resume(
 
 
 def _replays(mission: Mission, tmp_path: Path) -> str:
-    from selfrepair.experiment.missions import canonical_json, maze_of
+    from selfrepair.experiment.keys import canonical_json
+    from selfrepair.experiment.mazes import maze_of
     from selfrepair.experiment.teams import _case_of, _options_of
     from selfrepair.team.experiment import run_case
     from selfrepair.team.trace import read_team_trace, replay_team, write_team_trace

@@ -147,7 +147,10 @@ def validation_error(
     elif error["type"] == "union_tag_invalid":
         loc = (*loc, "name")
         key = dotted(loc)
-        expected = error.get("ctx", {}).get("expected_tags", "")
+        # the tags as written in the file (pydantic writes enum tags as their reprs)
+        expected = ", ".join(repr(str(tag)) for tag in tags) or error.get("ctx", {}).get(
+            "expected_tags", ""
+        )
         message = f"expected a {tag_name}, one of {expected}"
         got = error.get("input", {}).get("name") if isinstance(error.get("input"), dict) else None
         return ConfigError(

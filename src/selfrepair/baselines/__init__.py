@@ -5,4 +5,11 @@ unified-planning (:mod:`selfrepair.baselines.lpg`). This package sits above ``re
 :mod:`selfrepair.geometry` and :mod:`selfrepair.errors`, never ``execution``, ``experiment`` or
 ``cli``. The PDDL export needs nothing beyond the core dependencies; the LPG call needs the ``pddl``
 extra (``pip install 'selfrepair[pddl]'``).
+
+Importing the package registers the ``lpg-adapt`` strategy (:mod:`selfrepair.baselines.adapt`;
+the extra is needed only to start it).
 """
+
+import selfrepair.baselines.adapt  # noqa: F401  (registers lpg-adapt)
+
+__all__: list[str] = []

@@ -46,6 +46,8 @@ from selfrepair.repair.strategies import (
     RepairRequest,
     RepairSource,
     RepairStatus,
+    StrategyName,
+    register_strategy,
     replan,
 )
 from selfrepair.robots.four_wheel import FOUR_WHEEL
@@ -54,7 +56,7 @@ from selfrepair.world.maze import Maze
 
 __all__ = ["LPG_ADAPT", "LpgAdaptRepairer", "check_lpg_adapt", "lpg_objects", "start_lpg_adapt"]
 
-LPG_ADAPT = "lpg-adapt"
+LPG_ADAPT = StrategyName.LPG_ADAPT
 """The strategy's name in the registry and in ``Repair.attempts``."""
 
 _CONSTANTS = len(HEADING_NAMES) + len(WHEEL_NAMES) + len(MODE_NAMES)
@@ -140,3 +142,6 @@ def check_lpg_adapt(domain: str) -> None:
             "the lpg-adapt strategy needs the pddl extra (unified-planning and up-lpg): "
             "pip install 'selfrepair[pddl]'"
         )
+
+
+register_strategy(LPG_ADAPT, start_lpg_adapt)

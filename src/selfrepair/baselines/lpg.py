@@ -35,11 +35,9 @@ What LPG is given, and why (each point found by running the binary)
 
 from __future__ import annotations
 
-import importlib
 import time
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from enum import Enum
 from fractions import Fraction
 from types import ModuleType
 from typing import Any
@@ -57,6 +55,7 @@ from selfrepair.robots import four_wheel
 from selfrepair.robots.four_wheel import Action, FaultSet, MotionKind
 from selfrepair.search.lattice import plan_cost
 from selfrepair.search.problem import PlanningProblem
+from selfrepair.status import LpgStatus
 
 __all__ = [
     "LPG_MAX_OBJECTS",
@@ -77,15 +76,6 @@ constants!" after UP spent seconds writing the problem)."""
 
 MAX_LPG_TIME_LIMIT = 3600.0
 """Largest time limit (seconds) that :func:`lpg_adapt_repair` and :func:`lpg_plan` accept."""
-
-
-class LpgStatus(Enum):
-    """How an LPG call ended."""
-
-    SOLVED = "solved"
-    NO_PLAN = "no-plan"
-    TIMEOUT = "timeout"
-    ERROR = "error"
 
 
 @dataclass(frozen=True, slots=True)
@@ -121,7 +111,7 @@ def lpg_available() -> bool:
 
 def _bridge() -> ModuleType:
     try:
-        unified = importlib.import_module("selfrepair.baselines.unified")
+        from selfrepair.baselines import unified
     except ImportError as exc:
         raise ProblemError(
             f"LPG needs the pddl extra (pip install 'selfrepair[pddl]'): {exc}"

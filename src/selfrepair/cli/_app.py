@@ -61,9 +61,38 @@ def _quick(param: Any) -> None:
     param._selfrepair_quick = True
 
 
+DOMAINS = "{domains}"
+"""In an option's help: replaced, when help is shown, by the registered robot domains (with
+the files given to ``--plugin``, which are loaded before a command's help is made)."""
+FAULT_EXAMPLES = "{fault_examples}"
+"""In an option's help: replaced, when help is shown, by an example fault set of each robot."""
+
+
+def robot_help(text: str) -> str:
+    """``text`` with :data:`DOMAINS` and :data:`FAULT_EXAMPLES` filled in from the domain
+    registry (only when the text holds one: the registry is not imported otherwise)."""
+    if DOMAINS not in text and FAULT_EXAMPLES not in text:
+        return text
+    from selfrepair.errors import SelfRepairError
+    from selfrepair.robots.registry import domain_names, get_domain
+
+    names = domain_names()
+    examples = []
+    for name in names:
+        try:
+            domain = get_domain(name)
+        except SelfRepairError:  # a broken installed plug-in: its own error comes on use
+            continue
+        if domain.faults:
+            first, last = domain.faults[0], domain.faults[-1]
+            example = domain.format_faults([first, last] if last != first else [first])
+            examples.append(f"{example} ({name})")
+    return text.replace(DOMAINS, ", ".join(names)).replace(FAULT_EXAMPLES, "; ".join(examples))
+
+
 class _QuickHelp:
-    """Two small changes to Typer's commands: options that were not given cost no import, and
-    help has no type labels.
+    """Three small changes to Typer's commands: options that were not given cost no import,
+    help has no type labels, and help names the robots this process knows (:func:`robot_help`).
 
     See :func:`_quick` for the first (so ``selfrepair --help`` and ``selfrepair actions`` import
     no pydantic). For the second, the help of an argument shows its metavar alone (``MAZE``),
@@ -77,6 +106,14 @@ class _QuickHelp:
             if isinstance(param, TyperArgument):
                 param.display_type_rich = _no_type_label  # type: ignore[method-assign]
         return params
+
+    def format_help(self, ctx: Any, formatter: Any) -> None:
+        for param in self.get_params(ctx):
+            template = getattr(param, "_selfrepair_help", None) or getattr(param, "help", None)
+            if template and (DOMAINS in template or FAULT_EXAMPLES in template):
+                param._selfrepair_help = template
+                param.help = robot_help(template)
+        super().format_help(ctx, formatter)  # type: ignore[misc]
 
 
 class _Command(_QuickHelp, TyperCommand):

@@ -13,15 +13,19 @@ from __future__ import annotations
 
 from fractions import Fraction
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from selfrepair.errors import InputError
 
+if TYPE_CHECKING:
+    from selfrepair.robots.domain import Domain
+
 __all__ = [
     "Backend",
     "ClearanceWeight",
+    "DomainOpt",
     "Faults",
     "Heuristic",
     "Json",
@@ -30,7 +34,9 @@ __all__ = [
     "Start",
     "TimeLimit",
     "checkout_root",
+    "domain_named",
     "find_input",
+    "parse_faults",
     "parse_weight",
 ]
 
@@ -48,7 +54,15 @@ Start = Annotated[
 Faults = Annotated[
     str,
     typer.Option(
-        "--faults", metavar="FAULTS", help="Faults, comma-separated, e.g. FL:F,RR:B (none: '')."
+        "--faults",
+        metavar="FAULTS",
+        help="The robot's faults, comma-separated (none: ''), e.g. {fault_examples}.",
+    ),
+]
+DomainOpt = Annotated[
+    str,
+    typer.Option(
+        "--domain", metavar="NAME", help="The robot: a registered domain name ({domains})."
     ),
 ]
 ClearanceWeight = Annotated[
@@ -132,3 +146,21 @@ def parse_weight(text: str, option: str = "--clearance-weight") -> Fraction:
             source=option,
         )
     return weight
+
+
+def domain_named(name: str) -> Domain[Any, Any]:
+    """The registered domain ``name`` (bad names are an error on ``--domain``)."""
+    from selfrepair.robots.registry import get_domain
+
+    try:
+        return get_domain(name)
+    except InputError as exc:
+        raise InputError(exc.reason, source="--domain") from None
+
+
+def parse_faults(domain: Domain[Any, Any], text: str) -> frozenset[Any]:
+    """The fault set ``text`` names for ``domain`` (bad text is an error on ``--faults``)."""
+    try:
+        return domain.parse_faults(text)
+    except InputError as exc:
+        raise InputError(exc.reason, source="--faults") from None

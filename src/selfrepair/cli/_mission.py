@@ -31,10 +31,12 @@ from selfrepair.cli._app import (
 from selfrepair.cli._inputs import (
     Backend,
     ClearanceWeight,
+    DomainOpt,
     Faults,
     Heuristic,
     MazeArg,
     Start,
+    domain_named,
     find_input,
     parse_weight,
 )
@@ -56,7 +58,6 @@ if TYPE_CHECKING:
 __all__ = [
     "MissionOptions",
     "check_choice",
-    "domain_named",
     "mission_options",
     "mission_spec",
     "row_json",
@@ -137,9 +138,6 @@ PlanWithFaults = Annotated[
 ]
 Seed = Annotated[
     int, typer.Option("--seed", metavar="S", help="Seed of intermittent faults.", min=0)
-]
-DomainOpt = Annotated[
-    str, typer.Option("--domain", metavar="NAME", help="The robot: a registered domain name.")
 ]
 WarmUp = Annotated[
     bool,
@@ -224,16 +222,6 @@ def mission_options(command: "Callable[..., int]") -> "Callable[..., int]":
     with_mission_options.__annotations__ = {p.name: p.annotation for p in params}
     with_mission_options.__annotations__["return"] = int
     return with_mission_options
-
-
-def domain_named(name: str) -> "Domain[Any, Any]":
-    """The registered domain ``name`` (bad names are an error on ``--domain``)."""
-    from selfrepair.robots.registry import get_domain
-
-    try:
-        return get_domain(name)
-    except InputError as exc:
-        raise InputError(exc.reason, source="--domain") from None
 
 
 def check_choice(value: str, choices: "Sequence[str]", option: str) -> None:

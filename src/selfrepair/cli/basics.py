@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from selfrepair.cli._app import MaxCells, MaxFileBytes, app, echo, echo_json, maze_app, text_table
-from selfrepair.cli._inputs import MazeArg, find_input
+from selfrepair.cli._inputs import MazeArg, domain_named, find_input
 from selfrepair.errors import InputError
 from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES
 
@@ -27,13 +27,29 @@ def actions(
         bool, typer.Option("--json", help="Print JSON rows instead of a table.")
     ] = False,
     as_markdown: Annotated[
-        bool, typer.Option("--markdown", help="Print the Markdown table of docs/robot.md.")
+        bool,
+        typer.Option(
+            "--markdown", help="Print the Markdown table of docs/robot.md (four-wheel only)."
+        ),
     ] = False,
+    domain_name: Annotated[
+        str | None,
+        typer.Option(
+            "--domain",
+            metavar="NAME",
+            help="The robot: a registered domain name ({domains}); default four-wheel.",
+            show_default=False,
+        ),
+    ] = None,
 ) -> int:
-    """Print the 81 actions of the four-wheel robot.
+    """Print a robot's actions (default: the four-wheel robot's 81).
 
-    Each row gives the wheel code, the side drives l and r, the motion and the duration in ticks.
+    For the four-wheel robot each row gives the wheel code, the side drives l and r, the motion
+    and the duration in ticks; for any other robot the action, its motion class, level and
+    duration, and where it goes from 0,0 facing N (end pose and every cell it sweeps).
     """
+    if domain_name not in (None, "four-wheel"):
+        return _domain_actions(domain_name, as_json, as_markdown)
     from selfrepair.robots.four_wheel_docs import (
         ACTION_COLUMNS,
         action_rows,
@@ -50,6 +66,37 @@ def actions(
     echo("The 81 actions of the four-wheel robot")
     cells = [[str(row[c]) for c in ACTION_COLUMNS] for row in rows]
     sys.stdout.write(text_table(ACTION_COLUMNS, cells, right={1, 2, 4}))
+    return 0
+
+
+def _domain_actions(name: str, as_json: bool, as_markdown: bool) -> int:
+    """``actions --domain NAME`` for a robot other than the four-wheel one."""
+    from selfrepair.geometry import Heading, Pose
+
+    domain = domain_named(name)
+    if as_markdown:
+        raise InputError("the Markdown table is the four-wheel robot's only", source="--markdown")
+    origin = Pose(0, 0, Heading.N)
+    rows: list[dict[str, object]] = []
+    for action in domain.actions:
+        end = domain.apply(origin, action)
+        rows.append(
+            {
+                "action": domain.format_action(action),
+                "motion": str(domain.motion_class(action)),
+                "level": domain.level(action),
+                "duration": str(domain.duration(action)),
+                "end": f"{end.x},{end.y},{end.heading.name}",
+                "cells": " ".join(f"{x},{y}" for x, y in domain.footprint(origin, action)),
+            }
+        )
+    if as_json:
+        echo_json(rows)
+        return 0
+    echo(f"The {len(rows)} actions of the {domain.name} robot (from 0,0 facing N)")
+    columns = ("action", "motion", "level", "duration", "end", "cells")
+    cells = [[str(row[c]) for c in columns] for row in rows]
+    sys.stdout.write(text_table(columns, cells, right={2, 3}))
     return 0
 
 

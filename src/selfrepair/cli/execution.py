@@ -27,10 +27,9 @@ from selfrepair.cli._app import (
     number_json,
     table_app,
 )
-from selfrepair.cli._inputs import Json, find_input
+from selfrepair.cli._inputs import Json, domain_named, find_input
 from selfrepair.cli._mission import (
     MissionOptions,
-    domain_named,
     mission_options,
     mission_spec,
     row_json,
@@ -163,7 +162,7 @@ def run(
     from selfrepair.execution.trace import write_trace
 
     spec = mission_spec(mission, strategy)
-    load_ns = kernel_load_ns(mission.backend)
+    load_ns = kernel_load_ns(mission.backend, domain=spec.domain)
     warm_up = mission.warm_up
     if warm_up:
         run_mission(spec)
@@ -235,7 +234,7 @@ def compare(
     given = tuple(s.strip() for s in strategies.split(",") if s.strip())
     names = given or runnable_strategies(domain_named(mission.domain_name))[0]
     spec = mission_spec(mission, names[0], names)
-    load_ns = kernel_load_ns(mission.backend)
+    load_ns = kernel_load_ns(mission.backend, domain=spec.domain)
     comparison = compare_strategies(spec, given or None, warm_up=mission.warm_up)
     if as_json:
         echo_json(_comparison_json(comparison, load_ns))

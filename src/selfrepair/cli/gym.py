@@ -145,7 +145,7 @@ def _fault_sets(faults: list[str] | None, domain: str) -> tuple[str, ...] | None
     if not faults:
         return None
     if faults == [PAPER_FAULTS]:
-        from selfrepair.experiment.missions import PAPER_FAULT_SETS
+        from selfrepair.experiment.faultsets import PAPER_FAULT_SETS
 
         if domain != "four-wheel":
             raise InputError("the paper fault sets are for the four-wheel robot", source="--faults")

@@ -13,7 +13,8 @@ from typing import Annotated
 import typer
 
 from selfrepair.cli._app import app, echo
-from selfrepair.cli._inputs import Faults, MazeArg, Start, find_input
+from selfrepair.cli._inputs import DomainOpt, Faults, MazeArg, Start, domain_named, find_input
+from selfrepair.errors import InputError
 
 __all__ = ["PDDL_CELLS_DEFAULT", "pddl_command"]
 
@@ -52,12 +53,20 @@ def pddl_command(
     with_plan: Annotated[
         bool, typer.Option("--plan", help="Also write the lattice planner's plan as plan.pddl.")
     ] = False,
+    domain_name: DomainOpt = "four-wheel",
 ) -> int:
     """Write the planning problem from START to GOAL as PDDL files.
 
     domain.pddl and problem.pddl go to DIR; with --plan also plan.pddl. Exit 1 when there is no
-    plan to write.
+    plan to write. The encoding is the four-wheel robot's: --domain names no other.
     """
+    if domain_name != "four-wheel":
+        domain_named(domain_name)  # an unknown name is told as such
+        raise InputError(
+            f"the PDDL export encodes the four-wheel robot only (its 81 actions and wheel "
+            f"faults), not {domain_name!r}",
+            source="--domain",
+        )
     from selfrepair.baselines.pddl import export_pddl, plan_to_pddl, write_pddl
     from selfrepair.cli.planning import parse_goal
     from selfrepair.geometry import parse_pose

@@ -26,6 +26,7 @@ from selfrepair.cli._app import (
 from selfrepair.cli._inputs import (
     Backend,
     ClearanceWeight,
+    DomainOpt,
     Faults,
     Heuristic,
     Json,
@@ -33,7 +34,9 @@ from selfrepair.cli._inputs import (
     MazeArg,
     Start,
     TimeLimit,
+    domain_named,
     find_input,
+    parse_faults,
     parse_weight,
 )
 from selfrepair.cli._mission import Recursion, TableOpt
@@ -42,6 +45,7 @@ from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES
 
 if TYPE_CHECKING:
     from selfrepair.geometry import Cell, Heading
+    from selfrepair.robots.domain import Domain
     from selfrepair.search.astar import PlanResult
     from selfrepair.search.problem import GridResult, PlanningProblem
     from selfrepair.world.maze import Maze
@@ -63,10 +67,11 @@ def parse_goal(text: str) -> "tuple[Cell, Heading | None]":
     return parse_cell(text, source="--goal"), None
 
 
-def kernel_load_ns(backend: str, *kinds: str) -> int:
+def kernel_load_ns(backend: str, *kinds: str, domain: "Domain[Any, Any] | None" = None) -> int:
     """Load the compiled kernels of ``kinds`` (default: all; see
-    :data:`selfrepair.search.warmup.KERNELS`) if ``backend`` uses them; the nanoseconds it took
-    (0 when they were loaded already in this process or are not used)."""
+    :data:`selfrepair.search.warmup.KERNELS`) if ``backend`` uses them (for the robot ``domain``
+    when given: an explicit ``numba`` it does not fit is refused); the nanoseconds it took (0
+    when they were loaded already in this process or are not used)."""
     from selfrepair.search.astar import BACKENDS
     from selfrepair.search.backend import use_numba
 
@@ -74,7 +79,7 @@ def kernel_load_ns(backend: str, *kinds: str) -> int:
         raise InputError(
             f"expected one of {', '.join(BACKENDS)}, got {backend!r}", source="--backend"
         )
-    if not use_numba(backend):
+    if not use_numba(backend, domain):
         return 0
     from selfrepair.search.warmup import ensure_warm
 
@@ -85,16 +90,23 @@ def _ms(ns: int) -> float:
     return round(ns / 1e6, 3)
 
 
-def plan_json(result: "PlanResult", load_ns: int = 0) -> dict[str, Any]:
+def plan_json(
+    result: "PlanResult", load_ns: int = 0, domain: "Domain[Any, Any] | None" = None
+) -> dict[str, Any]:
     """The ``plan --json`` object: ``cost`` and ``duration`` as numbers with exact ``_exact``
-    strings; ``search_ms`` is the search alone, ``kernel_load_ms`` the one-off kernel load."""
+    strings; ``actions`` in the text form of ``domain`` (default: the four-wheel robot);
+    ``search_ms`` is the search alone, ``kernel_load_ms`` the one-off kernel load."""
+    if domain is None:
+        from selfrepair.robots.four_wheel import FOUR_WHEEL
+
+        domain = FOUR_WHEEL
     return {
         "status": result.status.value,
         "cost": number_json(result.cost),
         "cost_exact": exact_json(result.cost),
         "duration": number_json(result.duration),
         "duration_exact": exact_json(result.duration),
-        "actions": [a.code for a in result.actions],
+        "actions": [domain.format_action(a) for a in result.actions],
         "poses": [[p.x, p.y, p.heading.name] for p in result.poses],
         "expansions": result.expansions,
         "search_ms": _ms(result.wall_time_ns),
@@ -142,6 +154,7 @@ def plan_command(
     max_expansions: MaxExpansions = None,
     time_limit: TimeLimit = None,
     backend: Backend = "auto",
+    domain_name: DomainOpt = "four-wheel",
     as_json: Json = False,
     max_cells: MaxCells = MAX_CELLS,
     tolerance_k: Annotated[
@@ -161,12 +174,12 @@ def plan_command(
     Exit 1 when there is no plan (or the budget ran out).
     """
     from selfrepair.geometry import parse_pose
-    from selfrepair.robots import four_wheel
     from selfrepair.search.astar import PlanStatus
     from selfrepair.search.lattice import plan
     from selfrepair.search.problem import PlanningProblem
     from selfrepair.world.bundled import resolve_maze
 
+    domain = domain_named(domain_name)
     maze = resolve_maze(find_input(maze_spec), max_cells=max_cells)
     goal_cell, goal_heading = parse_goal(goal)
     problem = PlanningProblem(
@@ -174,11 +187,12 @@ def plan_command(
         start=parse_pose(start, source="--start"),
         goal=goal_cell,
         goal_heading=goal_heading,
-        faults=four_wheel.parse_faults(faults, source="--faults"),
+        faults=parse_faults(domain, faults),
         clearance_weight=parse_weight(clearance_weight),
         clearance_radius=clearance_radius,
+        domain=domain,
     )
-    load_ns = kernel_load_ns(backend, "lattice")
+    load_ns = kernel_load_ns(backend, "lattice", domain=domain)
     result = plan(
         problem,
         heuristic=heuristic,
@@ -192,7 +206,7 @@ def plan_command(
 
         tolerance = plan_tolerance_of(problem, result, tolerance_k, table, recursion)
     if as_json:
-        out = plan_json(result, load_ns)
+        out = plan_json(result, load_ns, domain)
         if tolerance is not None:
             from selfrepair.cli.tolerance import tolerance_json
 
@@ -208,13 +222,13 @@ def plan_command(
 
 
 def _print_plan(problem: "PlanningProblem", result: "PlanResult", load_ns: int) -> None:
-    from selfrepair.robots import four_wheel
     from selfrepair.world.render import GOAL_CHAR, path_layer, pose_layer, render_ascii
 
+    domain = problem.domain
     swept = [
         cell
         for pose, action in zip(result.poses, result.actions, strict=False)
-        for cell in four_wheel.swept_cells(pose, action)
+        for cell in domain.footprint(pose, action)
     ]
     layers = [path_layer(swept), {problem.goal: GOAL_CHAR}, pose_layer(result.poses[:1])]
     echo(render_ascii(problem.maze, layers).rstrip("\n"))
@@ -223,7 +237,7 @@ def _print_plan(problem: "PlanningProblem", result: "PlanResult", load_ns: int) 
         echo(
             f"cost: {result.cost}  duration: {result.duration} ticks  steps: {len(result.actions)}"
         )
-        echo("actions: " + " ".join(a.code for a in result.actions))
+        echo("actions: " + " ".join(domain.format_action(a) for a in result.actions))
     echo(f"expansions: {result.expansions}  {_times(result.wall_time_ns, load_ns)}")
 
 

@@ -18,8 +18,7 @@ from selfrepair.cli._app import (
     echo_json,
     table_app,
 )
-from selfrepair.cli._inputs import find_input
-from selfrepair.cli._mission import domain_named
+from selfrepair.cli._inputs import domain_named, find_input
 from selfrepair.errors import InputError
 from selfrepair.limits import MAX_CELLS, MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES
 
@@ -49,7 +48,7 @@ def table_generate(
         typer.Option(
             "--domain",
             metavar="NAME",
-            help="The robot: a registered domain name (four-wheel, three-action).",
+            help="The robot: a registered domain name ({domains}).",
         ),
     ] = "four-wheel",
     max_length: Annotated[

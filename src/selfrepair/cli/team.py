@@ -22,6 +22,7 @@ from selfrepair.cli._app import (
     echo,
     echo_json,
 )
+from selfrepair.cli._inputs import find_input
 from selfrepair.limits import (
     MAX_CELLS,
     MAX_FILE_BYTES,
@@ -62,10 +63,30 @@ def _out() -> Any:
     return console()
 
 
-def _options(strategy: str, table: str, max_ticks: int | None, backend: str) -> Any:
+RobotTable = Annotated[
+    str | None,
+    typer.Option(
+        "--robot-table",
+        metavar="TABLE",
+        help="The robots' own table for their wheel faults: a bundled name or FILE.json "
+        "(default: the scenario's 'table', else the robot's default, generated for a robot "
+        "without a bundled one).",
+    ),
+]
+
+
+def _options(
+    strategy: str, table: str, max_ticks: int | None, backend: str, robot_table: str | None = None
+) -> Any:
     from selfrepair.team.result import TeamOptions
 
-    return TeamOptions(strategy=strategy, table=table, max_ticks=max_ticks, backend=backend)
+    return TeamOptions(
+        strategy=strategy,
+        table=table,
+        max_ticks=max_ticks,
+        backend=backend,
+        robot_table="" if robot_table is None else find_input(robot_table),
+    )
 
 
 @team_app.command("run")
@@ -81,6 +102,7 @@ def team_run(
         str,
         typer.Option("--table", metavar="TABLE", help="Team table: handwritten or generated."),
     ] = "handwritten",
+    robot_table: RobotTable = None,
     trace: Annotated[
         Path | None,
         typer.Option("--trace", metavar="FILE", help="Write the team trace (JSON Lines) here."),
@@ -131,7 +153,7 @@ def team_run(
         from selfrepair.execution.faults import Detection
 
         parsed = replace(parsed, detection=choice(Detection, detect, "detection"))
-    options = _options(strategy, table, max_ticks, backend)
+    options = _options(strategy, table, max_ticks, backend, robot_table)
     result = run_team(parsed, options)
     baseline = run_team(parsed.without_faults(), options).makespan if parsed.faults else None
     if trace is not None:
@@ -197,6 +219,7 @@ def team_compare(
         str,
         typer.Option("--backend", metavar="NAME", help="Planner backend: auto, python or numba."),
     ] = "auto",
+    robot_table: RobotTable = None,
     max_robots: MaxRobots = MAX_ROBOTS,
     max_tasks: MaxTasks = MAX_TASKS,
     max_cells: MaxCells = MAX_CELLS,
@@ -211,20 +234,22 @@ def team_compare(
     from rich.table import Table
     from rich.text import Text
 
+    from selfrepair.repair.strategies import StrategyName
     from selfrepair.team.engine import run_team
-    from selfrepair.team.model import TeamStrategyName, TeamTableName
+    from selfrepair.team.model import TeamTableName
     from selfrepair.team.scenario import Limits, resolve_scenario
 
     parsed = resolve_scenario(
         scenario, limits=Limits(max_robots, max_tasks, max_cells, max_file_bytes)
     )
     variants = [
-        (TeamStrategyName.TEAM_REPLACEMENT, TeamTableName.HANDWRITTEN),
-        (TeamStrategyName.TEAM_REPLACEMENT, TeamTableName.GENERATED),
-        (TeamStrategyName.REALLOCATION, TeamTableName.HANDWRITTEN),
-        (TeamStrategyName.ALONE, TeamTableName.HANDWRITTEN),
+        (StrategyName.TEAM_REPLACEMENT, TeamTableName.HANDWRITTEN),
+        (StrategyName.TEAM_REPLACEMENT, TeamTableName.GENERATED),
+        (StrategyName.REALLOCATION, TeamTableName.HANDWRITTEN),
+        (StrategyName.ALONE, TeamTableName.HANDWRITTEN),
     ]
-    baseline = run_team(parsed.without_faults(), _options("alone", "handwritten", None, backend))
+    calm = _options(StrategyName.ALONE, "handwritten", None, backend, robot_table)
+    baseline = run_team(parsed.without_faults(), calm)
     view = Table(title=f"{parsed.name}: fault-free makespan {baseline.makespan} ticks")
     for column in (
         "strategy", "delivered", "makespan", "vs fault-free", "first repair µs (median)",
@@ -232,7 +257,7 @@ def team_compare(
     ):  # fmt: skip
         view.add_column(column, justify="left" if column == "strategy" else "right")
     for strategy, table in variants:
-        options = _options(strategy, table, None, backend)
+        options = _options(strategy, table, None, backend, robot_table)
         run_team(parsed, options)  # warm: one-off costs stay out of the latencies
         runs = [run_team(parsed, options) for _ in range(repeats)]
         result = runs[-1]

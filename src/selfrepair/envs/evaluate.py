@@ -15,7 +15,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from enum import StrEnum
 from typing import Any
 
 import numpy as np
@@ -23,6 +22,7 @@ import numpy as np
 from selfrepair.envs.env import FaultyMazeEnv
 from selfrepair.envs.policies import Policy
 from selfrepair.errors import ProblemError
+from selfrepair.status import EpisodeEnd
 
 __all__ = [
     "MAX_EPISODES",
@@ -41,14 +41,6 @@ MAX_EPISODES = 10_000
 """The most episodes :func:`evaluate` runs unless its ``max_episodes`` is raised."""
 
 CONFIDENCE = 0.95
-
-
-class EpisodeEnd(StrEnum):
-    """How an episode ended: the goal reached, the step limit, or the policy gave up."""
-
-    REACHED = "reached"
-    TRUNCATED = "truncated"
-    GAVE_UP = "gave_up"
 
 
 @dataclass(frozen=True, slots=True)

@@ -47,8 +47,8 @@ __all__ = [
 class PolicyName(StrEnum):
     """The built-in baseline policies."""
 
-    REPLACEMENT = "replacement"
-    REPLAN = "replan"
+    REPLACEMENT = StrategyName.REPLACEMENT
+    REPLAN = StrategyName.REPLAN
     RANDOM = "random"
 
 

@@ -8,6 +8,7 @@ the others.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
 from fractions import Fraction
@@ -16,14 +17,17 @@ from typing import Any, NamedTuple
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.geometry import Cell, Heading, Pose
-from selfrepair.repair.strategies import Repair, StrategyName, StrategyOptions
+from selfrepair.repair.strategies import Repair, RepairSource, StrategyName, StrategyOptions
+from selfrepair.repair.tolerance import PlanObjective
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import PlanResult
 from selfrepair.search.problem import PlannerSettings
+from selfrepair.status import MissionStatus
 from selfrepair.world.maze import Maze
 
 __all__ = [
+    "STEP_OF_REPAIR",
     "MissionResult",
     "MissionSpec",
     "MissionStatus",
@@ -34,31 +38,28 @@ __all__ = [
 ]
 
 
-class MissionStatus(StrEnum):
-    """How a mission ended: goal reached; a repair replan found no plan (``stuck``); a replan hit
-    its planner budget (``budget_exhausted``); the initial plan failed (``no_initial_plan``, see
-    ``MissionResult.reason``); ``max_steps`` steps without reaching the goal (``step_limit``); the
-    simulator refused a move into a wall (``collision``, never expected)."""
-
-    REACHED = "reached"
-    STUCK = "stuck"
-    BUDGET_EXHAUSTED = "budget_exhausted"
-    NO_INITIAL_PLAN = "no_initial_plan"
-    STEP_LIMIT = "step_limit"
-    COLLISION = "collision"
-
-
 class StepSource(StrEnum):
     """Where an executed step's action came from: the initial plan, a repair (by its source:
     ``plan-repair`` is a plan repaired by LPG-adapt), or a command that a fault the executor did
     not know yet made fail."""
 
     PLAN = "plan"
-    REPLACEMENT = "replacement"
-    LOOKAHEAD = "lookahead"
-    REPLAN = "replan"
-    PLAN_REPAIR = "plan-repair"
+    REPLACEMENT = RepairSource.REPLACEMENT.value
+    LOOKAHEAD = RepairSource.LOOKAHEAD.value
+    REPLAN = RepairSource.REPLAN.value
+    PLAN_REPAIR = RepairSource.PLAN_REPAIR.value
     FAILED_ATTEMPT = "failed-attempt"
+
+
+STEP_OF_REPAIR: Mapping[RepairSource, StepSource] = {
+        RepairSource.REPLACEMENT: StepSource.REPLACEMENT,
+        RepairSource.LOOKAHEAD: StepSource.LOOKAHEAD,
+        RepairSource.REPLAN: StepSource.REPLAN,
+        RepairSource.PLAN_REPAIR: StepSource.PLAN_REPAIR,
+}
+"""The step source of the actions a repair spliced in, by the repair's source: an explicit
+mapping, never a conversion by value (a plain dictionary, typed read-only: one look-up inside the
+timed repair)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -87,6 +88,10 @@ class MissionSpec:
     initial_faults_known: bool = False
     max_steps: int | None = None
     domain: Domain[Any, Any] = FOUR_WHEEL
+    objective: PlanObjective | None = None
+    """The tolerant planner's objective for the plan made before any fault is known (``None``:
+    the plain cost, duration plus clearance term); replans, made with faults known, always
+    minimise the plain cost. A hard objective without a tolerant plan falls back to it too."""
 
     def __post_init__(self) -> None:
         if self.seed < 0:

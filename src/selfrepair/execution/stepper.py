@@ -49,7 +49,7 @@ from typing import Any, overload
 
 from selfrepair.errors import ProblemError
 from selfrepair.execution.moves import MoveTable, available_moves
-from selfrepair.execution.result import RepairRecord, StepSource, TraceStep
+from selfrepair.execution.result import STEP_OF_REPAIR, RepairRecord, StepSource, TraceStep
 from selfrepair.execution.simulator import Outcome, StepOutcome
 from selfrepair.geometry import Pose
 from selfrepair.repair.strategies import (
@@ -72,10 +72,6 @@ Entry = tuple[Any, StepSource]
 """One queued action and where it came from."""
 
 _ACTION = itemgetter(0)
-
-_STEP_SOURCES = {str(s): StepSource(s) for s in StepSource}
-"""Step sources by value: a dictionary look-up, where calling the enum costs a microsecond inside
-the timed repair."""
 
 _new_tuple = tuple.__new__
 """Builds the :class:`TraceStep` of each step without the ``NamedTuple`` constructor's Python
@@ -234,7 +230,7 @@ class Stepper:
         fallback = action is None  # the queue ran out away from the goal: plain replan
         repair = replan(self.context, request) if fallback else self.repairer.repair(request)
         if repair.status is RepairStatus.REPAIRED:
-            source = _STEP_SOURCES.get(repair.source) or StepSource(repair.source)
+            source = STEP_OF_REPAIR[repair.source]
             splice(queue, repair.consumed, repair.actions, source)
         latency = time.perf_counter_ns() - t0
         self.repairs.append(RepairRecord(step, pose, action, repair, latency))

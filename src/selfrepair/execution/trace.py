@@ -3,9 +3,12 @@
 A trace has one JSON object per line:
 
 1. a header (``"type": "header"``): format name and version, the robot's ``domain`` (absent in
-   version-1 traces of the four-wheel robot), the maze (name and embedded rows, so the trace
-   stands alone), start, goal, fault schedule, strategy and options, planner settings, seed, and
-   the initial plan;
+   version-1 traces of the four-wheel robot) and, for a robot defined in a plug-in file, that
+   ``plugin`` (``{"path": ..., "sha256": ...}``: the resolved path and the SHA-256 of the
+   content that ran; a reader loads it when the robot is not registered yet and the file there
+   still has that content, else names the ``--plugin`` flag to pass), the maze (name and
+   embedded rows, so the trace stands alone), start, goal, fault schedule, strategy and
+   options, planner settings, seed, and the initial plan;
 2. one line per repair (``"type": "repair"``), written just before the step at which it takes
    effect: ``step``, ``pose``, the faulty ``action`` (``null`` for the defensive replan when the
    queue ran out), ``status``, ``source``, ``attempts``, the new ``actions``, how many queued
@@ -48,9 +51,9 @@ from selfrepair.execution.result import (
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.limits import MAX_TRACE_BYTES
-from selfrepair.repair.strategies import RepairSource, RepairStatus, StrategyOptions
+from selfrepair.repair.strategies import RepairSource, RepairStatus, StrategyName, StrategyOptions
 from selfrepair.robots.domain import Domain
-from selfrepair.robots.registry import get_domain
+from selfrepair.robots.registry import PluginFile, get_domain, load_recorded_plugin, plugin_file
 from selfrepair.textio import read_text
 from selfrepair.world.maze import format_maze, parse_maze
 
@@ -84,11 +87,14 @@ def header_json(spec: MissionSpec, initial_plan: Iterable[Any] = ()) -> dict[str
     """The header line's object for ``spec``."""
     options = spec.options
     domain = spec.domain
+    origin = plugin_file(domain.name)
+    plugin = {} if origin is None else {"plugin": {"path": origin.path, "sha256": origin.sha256}}
     return {
         "type": "header",
         "format": TRACE_FORMAT,
         "version": TRACE_VERSION,
         "domain": domain.name,
+        **plugin,
         "maze": {"name": spec.maze.name, "rows": format_maze(spec.maze).splitlines()},
         "start": _pose_json(spec.start),
         "goal": [spec.goal[0], spec.goal[1]],
@@ -343,11 +349,38 @@ def _header(data: Any, source: str, number: int) -> tuple[Mapping[str, Any], Dom
     name = data.get("domain", DEFAULT_DOMAIN)
     if not isinstance(name, str):
         raise TraceError(f"expected 'domain' to be a string, got {name!r}", source=source, line=1)
+    _load_robot(name, data.get("plugin"), source, number)
     try:
         domain = get_domain(name)
     except InputError as exc:
-        raise TraceError(exc.reason, source=source, line=number) from None
+        raise TraceError(
+            f"the trace's robot {name!r} is not registered here ({exc.reason}): pass "
+            "--plugin FILE with the file that defines it",
+            source=source,
+            line=number,
+        ) from None
     return data, domain
+
+
+def _load_robot(name: str, plugin: Any, source: str, number: int) -> None:
+    """Make the trace's robot known from the plug-in file its header records (see
+    :func:`selfrepair.robots.registry.load_recorded_plugin`)."""
+    if plugin is None:
+        return
+    if not (
+        isinstance(plugin, dict)
+        and isinstance(plugin.get("path"), str)
+        and isinstance(plugin.get("sha256"), str)
+    ):
+        raise TraceError(
+            f"expected 'plugin' to be {{\"path\": ..., \"sha256\": ...}}, got {plugin!r}",
+            source=source,
+            line=number,
+        )
+    try:
+        load_recorded_plugin(name, PluginFile(plugin["path"], plugin["sha256"]), "trace")
+    except InputError as exc:
+        raise TraceError(exc.reason, source=source, line=number) from None
 
 
 def parse_trace(text: str, source: str = "<trace>", *, partial: bool = False) -> Trace:
@@ -433,7 +466,9 @@ def read_trace(
 def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> MissionSpec:
     """The mission spec a trace header describes (so the mission can be run again)."""
     try:
-        domain = get_domain(str(header.get("domain", DEFAULT_DOMAIN)))
+        name = str(header.get("domain", DEFAULT_DOMAIN))
+        _load_robot(name, header.get("plugin"), source, 1)
+        domain = get_domain(name)
         maze_data = header["maze"]
         maze = parse_maze(
             "\n".join(maze_data["rows"]), source=source, name=str(maze_data.get("name", ""))
@@ -449,7 +484,7 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
             goal=(int(gx), int(gy)),
             goal_heading=None if heading is None else Heading[heading],
             schedule=FaultSchedule.from_json(header.get("schedule", {}), domain, source),
-            strategy=str(header.get("strategy", "replacement")),
+            strategy=str(header.get("strategy", StrategyName.REPLACEMENT)),
             options=StrategyOptions(
                 table=str(options.get("table", "handwritten")),
                 recursion=str(options.get("recursion", "flat")),  # type: ignore[arg-type]

@@ -23,7 +23,13 @@ from selfrepair.errors import ProblemError
 from selfrepair.execution.executor import run_mission
 from selfrepair.execution.metrics import latency_stats, motion_distance, plan_distance
 from selfrepair.execution.result import MissionResult, MissionSpec
-from selfrepair.repair.strategies import RepairSource, RepairStatus, strategy_names, uses_table
+from selfrepair.repair.strategies import (
+    RepairSource,
+    RepairStatus,
+    StrategyName,
+    strategy_names,
+    uses_table,
+)
 from selfrepair.robots.domain import Domain
 
 __all__ = [
@@ -44,7 +50,7 @@ def strategy_label(spec: MissionSpec) -> str:
         return str(spec.strategy)
     options = spec.options
     parts = [options.table_label, options.recursion.value]
-    if spec.strategy == "lookahead":
+    if spec.strategy == StrategyName.LOOKAHEAD:
         parts.append(f"k={options.window}")
     return f"{spec.strategy}[{','.join(parts)}]"
 
@@ -122,7 +128,7 @@ def strategy_refusal(name: str, domain: Domain[Any, Any]) -> str | None:
     ``None`` when it can. Only ``lpg-adapt`` has conditions: the ``pddl`` extra and the
     four-wheel robot (:func:`selfrepair.baselines.adapt.check_lpg_adapt`, which an experiment
     file's validation asks too)."""
-    if name != "lpg-adapt":
+    if name != StrategyName.LPG_ADAPT:
         return None
     from selfrepair.baselines.adapt import check_lpg_adapt
 

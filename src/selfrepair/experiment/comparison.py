@@ -6,7 +6,7 @@ clearance weight 0 is compared. *The same missions*: the table is computed over 
 (maze, route, faults, fault time, detection, replicate) that **every** variant ran, so a strategy
 limited to some mazes (LPG-adapt cannot take ``wide-long``) limits the table to those; the per-maze
 figures (:func:`per_maze`) use every row. The unit of every statistic is the mission; intervals
-are :func:`~selfrepair.experiment.stats.bootstrap_interval`'s (percentile bootstrap, fixed seed).
+are :func:`~selfrepair.stats.bootstrap_interval`'s (percentile bootstrap, fixed seed).
 
 Columns of :class:`BaselineLine`:
 
@@ -42,9 +42,10 @@ from fractions import Fraction
 from typing import ClassVar
 
 from selfrepair.experiment.findings import situation
-from selfrepair.experiment.stats import Interval, bootstrap_interval
 from selfrepair.experiment.store import Value
 from selfrepair.experiment.summary import Row, group_label, met_fault, num, strategy_order
+from selfrepair.repair.strategies import StrategyName
+from selfrepair.stats import Interval, bootstrap_interval
 
 __all__ = [
     "BASELINE_STRATEGIES",
@@ -60,10 +61,10 @@ __all__ = [
     "per_maze",
 ]
 
-BASELINE_STRATEGIES = ("dstar-lite", "lpg-adapt")
+BASELINE_STRATEGIES = (StrategyName.DSTAR_LITE, StrategyName.LPG_ADAPT)
 """The strategies from neighbouring fields; rows with one of them switch the comparison on."""
 
-REFERENCE = "replan"
+REFERENCE = StrategyName.REPLAN
 """The variant plan quality is measured against: A* replanning with the default backend."""
 
 FIRST_REPAIR = "first_repair_ns"
@@ -74,7 +75,7 @@ REPAIR_COMPUTE = "repair_compute_ns"
 
 
 _TIMEOUT = "lpg-adapt:timeout"
-_NO_EFFORT = frozenset({"lpg-adapt"})
+_NO_EFFORT = frozenset({StrategyName.LPG_ADAPT})
 """Strategies whose own search effort is not counted in expansions."""
 
 
@@ -143,7 +144,7 @@ class BaselineLine:
             _text(self.over_reference, 2),
             _text(self.plan_distance),
             f"{self.fallbacks}/{self.repairs}",
-            str(self.timeouts) if self.label.startswith("lpg-adapt") else "-",
+            str(self.timeouts) if self.label.startswith(StrategyName.LPG_ADAPT) else "-",
         )
 
 

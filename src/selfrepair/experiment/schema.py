@@ -14,11 +14,13 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
-from selfrepair.errors import InputError
+from selfrepair.errors import InputError, ProblemError
 from selfrepair.execution.faults import Clock, Detection, Persistence
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CLEARANCE_WEIGHT
 from selfrepair.repair.replacement import DEFERRING, RecursionMode
+from selfrepair.repair.strategies import MissionKind, StrategyName
+from selfrepair.repair.tolerance import OPTIMAL, parse_objective
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN
 from selfrepair.robots.registry import get_domain
@@ -43,7 +45,7 @@ __all__ = [
 ]
 
 FAULT_PROFILES = ("paper", "singles", "doubles", "all")
-"""Named fault-set profiles; see :func:`selfrepair.experiment.missions.fault_profile`."""
+"""Named fault-set profiles; see :func:`selfrepair.experiment.faultsets.fault_profile`."""
 
 PAPER_ONLY = frozenset({"paper"})
 """Profiles defined for the four-wheel robot only."""
@@ -122,6 +124,15 @@ class FaultsConfig(Frozen):
     persistence: Persistence = Persistence.PERMANENT
     duration: Annotated[Int, Field(ge=1)] | None = None
     probability: Annotated[Float, Field(ge=0.0, le=1.0)] | None = None
+    at_random: bool = False
+    """When true, each situation's faults appear at one step drawn (seeded by the situation)
+    uniformly from the steps of the route's fault-free optimal plan, instead of at each ``at``."""
+
+    @model_validator(mode="after")
+    def _random_step(self) -> FaultsConfig:
+        if self.at_random and (self.clock is not Clock.STEP or self.at != (0,)):
+            raise ValueError("at_random = true draws a step: leave 'at' and 'clock' unset")
+        return self
 
     @model_validator(mode="after")
     def _persistence_options(self) -> FaultsConfig:
@@ -181,7 +192,7 @@ class ReplanStrategy(_StrategyEntry):
     (``auto``: the compiled kernels when numba is installed; ``python``: the pure-Python search,
     to compare with pure-Python strategies such as D* Lite)."""
 
-    name: Literal["replan"]
+    name: Literal[StrategyName.REPLAN]
     backend: Literal["auto", "numba", "python"] = "auto"
 
 
@@ -189,10 +200,39 @@ class ReplacementStrategy(_StrategyEntry):
     """Replacement tables with recursion mode; one variant per table, mode and ``rewrite``
     value (``true``: whole-plan rewriting, ``[false, true]``: both; default per encounter)."""
 
-    name: Literal["replacement"]
+    name: Literal[StrategyName.REPLACEMENT]
     tables: Annotated[tuple[str, ...], NonEmpty] = ("handwritten",)
     recursion: Annotated[tuple[RecursionMode, ...], NonEmpty] = (RecursionMode.GUARDED,)
     rewrite: tuple[bool, ...] = (False,)
+    objectives: Annotated[tuple[str, ...], NonEmpty] = (OPTIMAL,)
+    """How the plan made before any fault is known is chosen: ``optimal`` (the plain cost, with
+    the clearance weight), ``tolerant k=K`` (the cheapest plan tolerant of every set of 1 to K
+    faults, else the optimum) or ``tolerant soft L k=K`` (L ticks per (step, fault set) pair
+    that needs a replan); see :mod:`selfrepair.repair.tolerance_masks`."""
+
+    @field_validator("objectives")
+    @classmethod
+    def _objectives(cls, value: tuple[str, ...]) -> tuple[str, ...]:
+        out = []
+        for text in value:
+            try:
+                objective = parse_objective(text)
+            except ProblemError as exc:
+                raise ValueError(str(exc)) from None
+            out.append(OPTIMAL if objective is None else objective.label)
+        if len(set(out)) != len(out):
+            raise ValueError("an objective is listed twice")
+        return tuple(out)
+
+    @model_validator(mode="after")
+    def _tolerant_modes(self) -> ReplacementStrategy:
+        deferring = [str(m) for m in self.recursion if m in DEFERRING]
+        if any(o != OPTIMAL for o in self.objectives) and deferring:
+            raise ValueError(
+                f"tolerant objectives need a non-deferring recursion mode, not "
+                f"{', '.join(deferring)}"
+            )
+        return self
 
     @field_validator("rewrite", mode="before")
     @classmethod
@@ -221,7 +261,7 @@ class LookaheadStrategy(ReplacementStrategy):
     """Replace a window of ``window`` actions after the faulty one and, when the fault is known
     ahead, ``before`` actions before it; one variant per (window, before) pair."""
 
-    name: Literal["lookahead"]  # type: ignore[assignment]
+    name: Literal[StrategyName.LOOKAHEAD]  # type: ignore[assignment]
     window: tuple[Annotated[Int, Field(ge=0, le=64)], ...] = (3,)
     before: tuple[Annotated[Int, Field(ge=0, le=64)], ...] = (0,)
 
@@ -236,14 +276,14 @@ class LookaheadStrategy(ReplacementStrategy):
 class DStarLiteStrategy(_StrategyEntry):
     """D* Lite, incremental replanning (pure Python), keeping its search between repairs."""
 
-    name: Literal["dstar-lite"]
+    name: Literal[StrategyName.DSTAR_LITE]
 
 
 class LpgAdaptStrategy(_StrategyEntry):
     """Plan repair with LPG-adapt (``pddl`` extra, four-wheel robot): ``time_limit`` seconds per
     call, LPG's ``seed``; LPG's failures and time-outs fall back to replanning."""
 
-    name: Literal["lpg-adapt"]
+    name: Literal[StrategyName.LPG_ADAPT]
     time_limit: Annotated[Float, Field(gt=0, le=3600)] = 5.0
     seed: Annotated[Int, Field(ge=0, lt=2**31)] = 0
 
@@ -261,7 +301,7 @@ class LpgAdaptStrategy(_StrategyEntry):
         return value
 
 
-STRATEGY_TAGS = ("replan", "replacement", "lookahead", "dstar-lite", "lpg-adapt")
+STRATEGY_TAGS: tuple[StrategyName, ...] = StrategyName.of_kind(MissionKind.ROBOT)
 """The ``name`` values that select a strategy entry's model (the discriminator of
 :data:`StrategyConfig`)."""
 

@@ -42,7 +42,7 @@ from typing import Any, TypeVar
 
 from selfrepair import __version__
 from selfrepair.errors import InputError, ProblemError
-from selfrepair.experiment.missions import Mission
+from selfrepair.experiment.keys import Mission
 
 __all__ = [
     "FIXED_COLUMNS",

@@ -45,29 +45,28 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import Field, model_validator
+from pydantic import BeforeValidator, Field, model_validator
 
 from selfrepair.errors import ConfigError
 from selfrepair.execution.faults import Persistence
 from selfrepair.experiment.config import parse_config, read_experiment_text
-from selfrepair.experiment.missions import (
+from selfrepair.experiment.keys import (
     SCHEMA,
     Mission,
     canonical_json,
     derive_seed,
-    maze_identity,
-    maze_label,
-    maze_of,
     mission_key,
     portable,
 )
+from selfrepair.experiment.mazes import maze_identity, maze_label, maze_of
 from selfrepair.experiment.schema import ExperimentConfig, GeneratedMaze, MazeConfig
 from selfrepair.experiment.store import Value
 from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES, MAX_MISSIONS, MAX_ROBOTS, check_limit
 from selfrepair.repair.replacement import RecursionMode
+from selfrepair.repair.strategies import MissionKind, StrategyName
 from selfrepair.team.experiment import FaultCase, TeamCase, case_row
 from selfrepair.team.grid import components
-from selfrepair.team.model import TeamStrategyName, TeamTableName
+from selfrepair.team.model import TeamTableName
 from selfrepair.team.randomteam import GripperMix
 from selfrepair.team.result import TeamOptions
 from selfrepair.tomlfile import Frozen, NonEmpty, find_line, read_toml, validate
@@ -123,7 +122,6 @@ class TeamFaults(Frozen):
     persistence: Annotated[tuple[Persistence, ...], NonEmpty] = (Persistence.PERMANENT,)
     duration: Annotated[int, Field(ge=1, le=100_000)] | None = None
 
-
     @model_validator(mode="after")
     def _timing(self) -> TeamFaults:
         if Persistence.INTERMITTENT in self.persistence:
@@ -136,15 +134,22 @@ class TeamFaults(Frozen):
 class RobotSettings(Frozen):
     """How each robot handles its own wheel faults (a single-robot strategy and table)."""
 
-    strategy: Literal["replacement", "replan", "lookahead"] = "replacement"
+    strategy: Literal[StrategyName.REPLACEMENT, StrategyName.REPLAN, StrategyName.LOOKAHEAD] = (
+        StrategyName.REPLACEMENT
+    )
     table: str = "handwritten"
     recursion: RecursionMode = RecursionMode.FLAT
+
+
+def _team_strategy(value: object) -> StrategyName:
+    """``value`` as a team strategy's name (a robot strategy's name is refused)."""
+    return StrategyName.of(value, MissionKind.TEAM)
 
 
 class TeamStrategyConfig(Frozen):
     """One team strategy; team replacement once per table."""
 
-    name: TeamStrategyName
+    name: Annotated[StrategyName, BeforeValidator(_team_strategy)]
     tables: tuple[TeamTableName, ...] = (TeamTableName.HANDWRITTEN,)
 
 
@@ -229,9 +234,9 @@ def expand_team(
     than ``max_missions``, or a maze file has more than ``max_cells`` cells."""
     missions: dict[str, Mission] = {}
     variants = [
-        (s.name, table if s.name is TeamStrategyName.TEAM_REPLACEMENT else None)
+        (s.name, table if s.name is StrategyName.TEAM_REPLACEMENT else None)
         for s in config.strategies
-        for table in (s.tables if s.name is TeamStrategyName.TEAM_REPLACEMENT else s.tables[:1])
+        for table in (s.tables if s.name is StrategyName.TEAM_REPLACEMENT else s.tables[:1])
     ]
     team, faults = config.team, config.faults
     situations = sum(

@@ -5,3 +5,7 @@ Domain-generic: it takes domains, tables and a free-cell test as values, and get
 executor as a function, so it imports ``tables``, ``robots.domain``/``robots.registry`` and the
 search result values, never a concrete robot and never ``world``.
 """
+
+import selfrepair.repair.dstar_lite  # noqa: F401  (registers dstar-lite)
+
+__all__: list[str] = []

@@ -38,12 +38,14 @@ from selfrepair.repair.strategies import (
     RepairRequest,
     RepairSource,
     RepairStatus,
+    StrategyName,
+    register_strategy,
 )
 from selfrepair.robots.domain import Domain, primitive_by_motion, progress_rate
 
 __all__ = ["DSTAR_LITE", "DStarLite", "start_dstar_lite"]
 
-DSTAR_LITE = "dstar-lite"
+DSTAR_LITE = StrategyName.DSTAR_LITE
 """The strategy's name in the registry."""
 
 INF = math.inf
@@ -367,3 +369,6 @@ def start_dstar_lite(context: MissionContext) -> Repairer:
         search.begin(context.start, frozenset())
         search.compute(context.replan_budget)  # if the budget runs out, repairs go on from here
     return search
+
+
+register_strategy(DSTAR_LITE, start_dstar_lite)

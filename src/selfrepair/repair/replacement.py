@@ -46,7 +46,9 @@ Recursion modes (:class:`RecursionMode`; registry :data:`RECURSION_MODES` of the
     replacement, or a faulty arc inside anything), and a faulty primitive action has only its
     all-healthy candidates, as in ``flat``.
 
-The search is greedy but complete within each mode: every sub-replacement of an action ``b`` from a
+The search is the replacement core's (:mod:`selfrepair.repair.core`, the same validity test a team's
+replacement uses) over :class:`RobotWorld`, the robot's primitive actions. It is greedy but
+complete within each mode: every sub-replacement of an action ``b`` from a
 state ends in the same state, so the first valid sub-replacement found is as good as any other for
 the rest of the candidate.
 """
@@ -54,23 +56,25 @@ the rest of the candidate.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from enum import StrEnum
-from typing import Any, NamedTuple
+from typing import Any
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError, choice
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
+from selfrepair.repair.core import CoreSearch, RecurseRule, Replacement
 from selfrepair.robots.domain import Domain
 from selfrepair.tables.model import ReplacementTable
 
 __all__ = [
     "DEFAULT_MAX_DEPTH",
-    "PREFILLED_CACHES",
     "RECURSION_MODES",
     "FreeTest",
+    "RecurseRule",
     "RecursionMode",
     "Replacement",
+    "RobotWorld",
     "complex_actions",
     "find_replacement",
     "flat_replacement",
@@ -94,30 +98,6 @@ class RecursionMode(StrEnum):
     PRIMITIVE = "primitive"
 
 
-class Replacement(NamedTuple):
-    """A valid replacement found at run time.
-
-    ``candidate`` is the table's candidate (index ``index`` in the looked-up list); ``actions`` the
-    executable sequence after nested replacements are expanded (equal to ``candidate`` when
-    ``depth`` is 0). ``depth`` counts nested replacement levels below this one; ``examined`` the
-    candidates looked at in total, nested ones included. ``end`` is the state reached.
-    ``deferred`` lists the positions in ``actions`` of faulty complex actions left unreplaced
-    (``primitive`` mode only; never position 0): they are replaced when the robot reaches them.
-    An immutable ``NamedTuple`` (cheaper to build than a frozen dataclass on the hot path).
-    """
-
-    action: Any
-    candidate: tuple[Any, ...]
-    actions: tuple[Any, ...]
-    position: int
-    depth: int
-    examined: int
-    end: Pose
-    deferred: tuple[int, ...] = ()
-
-
-RecurseRule = Callable[[Any, Any, int], bool]
-"""Whether faulty action ``b`` inside a candidate for ``a`` may be replaced at depth ``d``."""
 
 ModeRule = Callable[[Domain[Any, Any], int], RecurseRule]
 """A recursion mode: given the domain and the depth bound, its recursion rule."""
@@ -174,89 +154,31 @@ def _complex(table: ReplacementTable, known: frozenset[Any]) -> frozenset[Any]:
 
 
 _COMPLEX: BoundedCache[tuple[ReplacementTable, frozenset[Any]], frozenset[Any]] = BoundedCache(
-    "complex actions", 256
+    "complex actions", 256, kind=CacheKind.REPAIR
 )
 
 
-@dataclass(slots=True)
-class _Search:
-    """One look-up in progress (mutable: counts candidates and memoises sub-problems)."""
+@dataclass(frozen=True, slots=True)
+class RobotWorld:
+    """One robot's primitive actions as the replacement core sees them
+    (:class:`~selfrepair.repair.core.LiftedWorld`): an action is healthy when the known faults
+    leave it available, and executable from a pose when its footprint there is free; it binds to
+    itself and leads to the pose the domain says."""
 
-    table: ReplacementTable
+    domain: Domain[Any, Any]
     known: frozenset[Any]
     free: FreeTest
-    may_recurse: RecurseRule
-    deferrable: frozenset[Any] = frozenset()
-    examined: int = 0
-    memo: dict[tuple[Any, Pose, frozenset[Any], int, bool], Replacement | None] = field(
-        default_factory=dict
-    )
 
-    def replace(
-        self, action: Any, state: Pose, replacing: frozenset[Any], depth: int, first: bool = True
-    ) -> Replacement | None:
-        """The first valid replacement; nested results are memoised per (action, state, guard set,
-        depth, whether it runs first), so a sub-problem met again in another candidate is not
-        searched twice."""
-        key = (action, state, replacing, depth, first)
-        if key in self.memo:
-            return self.memo[key]
-        found = self._first(action, state, replacing, depth, first)
-        self.memo[key] = found
-        return found
+    def healthy(self, action: Any, state: Pose) -> bool:
+        """Whether the known faults leave ``action`` available."""
+        return self.domain.available(action, self.known)
 
-    def _first(
-        self, action: Any, state: Pose, replacing: frozenset[Any], depth: int, first: bool
-    ) -> Replacement | None:
-        for position, candidate in enumerate(self.table.candidates(action, self.known)):
-            self.examined += 1
-            found = self._expand(action, candidate, state, replacing, depth, first)
-            if found is not None:
-                actions, end, nested, deferred = found
-                return Replacement(
-                    action, candidate, actions, position, nested, self.examined, end, deferred
-                )
-        return None
-
-    def _expand(
-        self,
-        action: Any,
-        candidate: tuple[Any, ...],
-        state: Pose,
-        replacing: frozenset[Any],
-        depth: int,
-        first: bool,
-    ) -> tuple[tuple[Any, ...], Pose, int, tuple[int, ...]] | None:
-        dom = self.table.domain
-        out: list[Any] = []
-        deferred: list[int] = []
-        nested = 0
-        for b in candidate:
-            if b in replacing:
-                return None
-            runs_first = first and not out
-            if dom.available(b, self.known):
-                if not self.free(dom.footprint(state, b)):
-                    return None
-                out.append(b)
-                state = dom.apply(state, b)
-            elif b in self.deferrable:  # a faulty complex action: replaced when reached
-                if runs_first:
-                    return None
-                deferred.append(len(out))
-                out.append(b)
-                state = dom.apply(state, b)
-            elif self.may_recurse(b, action, depth):
-                sub = self.replace(b, state, replacing | {b}, depth + 1, runs_first)
-                if sub is None:
-                    return None
-                deferred.extend(len(out) + i for i in sub.deferred)
-                out.extend(sub.actions)
-                state = sub.end
-                nested = max(nested, sub.depth + 1)
-            else:
-                return None
-        return tuple(out), state, nested, tuple(deferred)
+    def advance(self, action: Any, state: Pose) -> tuple[tuple[Any, ...], Pose] | None:
+        """``((action,), end)`` when ``action``'s footprint at ``state`` is free, else ``None``."""
+        domain = self.domain
+        if not self.free(domain.footprint(state, action)):
+            return None
+        return (action,), domain.apply(state, action)
 
 
 def find_replacement(
@@ -285,7 +207,14 @@ def find_replacement(
         raise ProblemError(f"max_depth must be at least 0, got {max_depth}")
     known = frozenset(known_faults)
     deferrable = complex_actions(table, known) if chosen in DEFERRING else frozenset()
-    search = _Search(table, known, free, rule(table.domain, max_depth), deferrable)
+    domain = table.domain
+    search: CoreSearch[Any, Pose] = CoreSearch(
+        RobotWorld(domain, known, free),
+        lambda a: table.candidates(a, known),
+        rule(domain, max_depth),
+        deferrable,
+        domain.apply,
+    )
     return search.replace(action, state, frozenset(guard) | {action}, 0)
 
 
@@ -348,7 +277,7 @@ def _geometry(domain: Domain[Any, Any], candidate: tuple[Any, ...]) -> _Geometry
 
 
 _GEOMETRY: BoundedCache[tuple[Domain[Any, Any], tuple[Any, ...]], _Geometry] = BoundedCache(
-    "candidate geometry", 1 << 16
+    "candidate geometry", 1 << 16, kind=CacheKind.PREFILLED
 )
 
 
@@ -377,13 +306,10 @@ def _reach(table: ReplacementTable) -> int:
     )
 
 
-_REACH: BoundedCache[ReplacementTable, int] = BoundedCache("table reach", 64)
+_REACH: BoundedCache[ReplacementTable, int] = BoundedCache(
+    "table reach", 64, kind=CacheKind.PREFILLED
+)
 
-PREFILLED_CACHES: tuple[str, ...] = (_REACH.name, _GEOMETRY.name)
-"""The names of the caches :func:`table_reach` fills: a mission fills them before anything is
-timed (the margin of its free grid needs the reach), so no timed look-up computes them. A
-measurement that empties the caches to time a cold first repair can keep these (the experiment
-runner does): the cold repair does the same work either way."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -412,7 +338,7 @@ def _compile_flat(
 
 _COMPILED: BoundedCache[
     tuple[ReplacementTable, Any, frozenset[Any], int], tuple[_Compiled, ...]
-] = BoundedCache("compiled flat look-ups", 1 << 14)
+] = BoundedCache("compiled flat look-ups", 1 << 14, kind=CacheKind.REPAIR)
 
 
 def flat_replacement(

@@ -17,7 +17,9 @@ A robot defined in a plain Python file (not an installed package) is a *plug-in 
 :func:`load_plugin` runs it once per process, and the file registers its domain with
 :func:`register_domain`. The command line's ``--plugin FILE`` and an experiment file's
 ``plugins = [...]`` key do exactly that (an experiment's worker processes load the same files before
-they run a mission).
+they run a mission). The registry remembers which plug-in file (resolved path and SHA-256 of its
+content) registered each domain, :func:`plugin_file`, so that results and traces can name the
+exact robot however it was loaded.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ import hashlib
 import importlib
 import importlib.util
 import sys
+from dataclasses import dataclass
 from importlib.metadata import entry_points
 from pathlib import Path
 from typing import Any
@@ -35,9 +38,12 @@ from selfrepair.robots.domain import Domain, check_domain
 
 __all__ = [
     "ENTRY_POINT_GROUP",
+    "PluginFile",
     "domain_names",
     "get_domain",
     "load_plugin",
+    "load_recorded_plugin",
+    "plugin_file",
     "register_domain",
 ]
 
@@ -104,6 +110,25 @@ def _load(name: str, target: str) -> Domain[Any, Any]:
     return value
 
 
+@dataclass(frozen=True, slots=True)
+class PluginFile:
+    """The plug-in file that registered a domain: its resolved path and the SHA-256 of the
+    content that was run."""
+
+    path: str
+    sha256: str
+
+
+_ORIGINS: dict[str, PluginFile] = {}
+"""Domain name -> the plug-in file whose run registered it."""
+
+
+def plugin_file(name: str) -> PluginFile | None:
+    """The plug-in file that registered domain ``name`` in this process (``None`` for a built-in
+    domain, an installed entry point, or one registered from imported code)."""
+    return _ORIGINS.get(name)
+
+
 _PLUGINS: dict[str, str] = {}
 """Plug-in files run in this process: resolved path -> SHA-256 of the content that was run."""
 _RUN: set[str] = set()
@@ -142,6 +167,7 @@ def load_plugin(path: str | Path) -> str:
         raise InputError("expected a Python file (.py)", source=str(file))
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
+    before = dict(_REGISTERED)
     try:
         spec.loader.exec_module(module)
     except Exception as exc:  # the file is the user's code: any failure is bad input
@@ -151,4 +177,44 @@ def load_plugin(path: str | Path) -> str:
         ) from None
     _PLUGINS[key] = digest
     _RUN.add(digest)
+    origin = PluginFile(key, digest)
+    for registered, domain in _REGISTERED.items():
+        if before.get(registered) is not domain:
+            _ORIGINS[registered] = origin
     return digest
+
+
+def load_recorded_plugin(name: str, recorded: PluginFile, what: str) -> None:
+    """Make domain ``name`` known as a file (``what``: ``"trace"``, ...) recorded it: from the
+    plug-in file ``recorded`` when the domain is not registered yet and that file still has the
+    recorded content. Raises :class:`InputError` (one line, naming the ``--plugin`` flag to pass)
+    when the file cannot be read or changed, and when this process has ``name`` from a plug-in
+    file of other content (the file would be read against another robot). A domain registered
+    from code (an entry point, an import) is taken as it is."""
+    flag = f"pass --plugin FILE with the {name} robot the {what} was written with"
+    digest = recorded.sha256
+    loaded = plugin_file(name)
+    if loaded is not None:
+        if loaded.sha256 != digest:
+            raise InputError(
+                f"the {what}'s robot {name!r} comes from plug-in content {digest[:12]} "
+                f"({recorded.path}), but this process loaded {name!r} from {loaded.path} "
+                f"(content {loaded.sha256[:12]}): {flag}"
+            )
+        return
+    if name in domain_names():
+        return
+    path = Path(recorded.path)
+    try:
+        found = hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        raise InputError(
+            f"the {what}'s robot {name!r} comes from the plug-in file {path}, which cannot be "
+            f"read here: {flag}"
+        ) from None
+    if found != digest:
+        raise InputError(
+            f"the {what}'s robot {name!r} comes from the plug-in file {path}, which changed "
+            f"since the {what} was written (content {digest[:12]}, now {found[:12]}): {flag}"
+        )
+    load_plugin(path)

@@ -52,7 +52,7 @@ from typing import Any, NamedTuple, TypeVar
 import numpy as np
 import numpy.typing as npt
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain
 from selfrepair.search.astar import PlanStatus
@@ -372,7 +372,9 @@ def _padded_free(maze: Maze) -> npt.NDArray[np.uint8]:
     return _cached(_FREE, maze, make)  # type: ignore[no-any-return]
 
 
-_FREE: BoundedCache[Maze, npt.NDArray[np.uint8]] = BoundedCache("padded free cells", 8)
+_FREE: BoundedCache[Maze, npt.NDArray[np.uint8]] = BoundedCache(
+    "padded free cells", 8, kind=CacheKind.PLAN
+)
 
 
 def _neighbourhoods(maze: Maze) -> npt.NDArray[np.uint16]:
@@ -396,7 +398,7 @@ def _neighbourhoods(maze: Maze) -> npt.NDArray[np.uint16]:
 
 
 _NEIGHBOURS: BoundedCache[Maze, npt.NDArray[np.uint16]] = BoundedCache(
-    "lattice neighbourhood masks", 8
+    "lattice neighbourhood masks", 8, kind=CacheKind.PLAN
 )
 
 
@@ -432,10 +434,11 @@ _FIRST_QUEUE = 1 << 12
 @_search_kernel
 def _lattice(
     nbr: Any, pen: Any, hdist: Any, mt: Any, par: Any,
-    rec: Any, heap: Any, scal: Any,
+    rec: Any, heap: Any, scal: Any, extra: Any,
 ) -> int:  # fmt: skip
     rnum, rden, wmul = par[0], par[1], par[2]
     goal_cell, goal_head, limit, opened, shift = par[3], par[4], par[5], par[6], par[7]
+    with_extra = par[8]
     closed = opened + 1
     size, counter, expansions = scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS]
     nmoves = mt.shape[1]
@@ -470,6 +473,11 @@ def _lattice(
             if m == closed:
                 continue
             gn = gs + mt[head, k, _DUR]
+            if with_extra:  # the step term: -1 forbids the step (hard), else its scaled cost
+                x = extra[s * nmoves + k]
+                if x < 0:
+                    continue
+                gn += x
             if wmul:
                 penalty = 0
                 for j in range(mt[head, k, _NSW]):
@@ -565,7 +573,9 @@ def _motion(domain: Domain[Any, Any], moves: tuple[Any, ...], pw: int, scale: in
     return _Motion(table, int(table[:, :, _DUR].max(initial=0)), objects)
 
 
-_MOTIONS: BoundedCache[Hashable, _Motion] = BoundedCache("lattice motion tables", 256)
+_MOTIONS: BoundedCache[Hashable, _Motion] = BoundedCache(
+    "lattice motion tables", 256, kind=CacheKind.PLAN
+)
 
 
 def _padded_penalty(maze: Maze, radius: int) -> tuple[npt.NDArray[np.int64], int]:
@@ -585,12 +595,46 @@ def _padded_penalty(maze: Maze, radius: int) -> tuple[npt.NDArray[np.int64], int
 
 
 _PENALTY: BoundedCache[tuple[Maze, int], tuple[npt.NDArray[np.int64], int]] = BoundedCache(
-    "padded clearance penalties", 8
+    "padded clearance penalties", 8, kind=CacheKind.PLAN
 )
 
 _NO_PENALTY = np.zeros(1, dtype=np.int64)
 _NO_PENALTY.setflags(write=False)
 
+
+_NO_EXTRA = np.zeros(1, dtype=np.int64)
+_NO_EXTRA.setflags(write=False)
+
+
+def _step_extra(
+    problem: PlanningProblem, scale: int, n_states: int, n_moves: int
+) -> tuple[npt.NDArray[np.int64], int]:
+    """The step term of ``problem`` in the kernel's layout, ``extra[state * n_moves + k]``: -1
+    where a hard term forbids the step, else its scaled cost; and the largest cost. Without a
+    term a one-element array the kernel never reads (the default objective pays one branch)."""
+    term = problem.step_term
+    if term is None:
+        return _NO_EXTRA, 0
+
+    def make() -> tuple[npt.NDArray[np.int64], int]:
+        counts = term.counts.astype(np.int64)
+        if term.penalty is None:
+            values = np.where(counts > 0, -1, 0)
+        else:
+            values = counts * int(term.penalty * scale)
+        height, width = counts.shape[:2]
+        padded = np.zeros((height + 2, width + 2, 4, n_moves), dtype=np.int64)
+        padded[1:-1, 1:-1] = values
+        out = padded.reshape(n_states * n_moves)
+        out.setflags(write=False)
+        return out, int(max(0, values.max(initial=0)))
+
+    return _cached(_EXTRA, (term, scale), make)  # type: ignore[no-any-return]
+
+
+_EXTRA: BoundedCache[Hashable, tuple[npt.NDArray[np.int64], int]] = BoundedCache(
+    "step terms in kernel layout", 8, kind=CacheKind.PLAN
+)
 
 
 def plan_lattice(
@@ -634,9 +678,11 @@ def plan_lattice(
     mt = motion.table
     hmax = (int(hdist.max(initial=0)) if largest is None else largest) * rnum // rden
     shift = hmax.bit_length()  # heap key: (f << shift) | h, ordered as (f, h)
+    extra, extra_max = _step_extra(problem, scale, n_states, len(moves))
     f_max = _check_int64(
-        motion.dur_max, mt.shape[2] - _SW, pen_max, wmul, hmax, shift, n_states, len(moves)
-    )
+        motion.dur_max + extra_max, mt.shape[2] - _SW, pen_max, wmul, hmax, shift, n_states,
+        len(moves),
+    )  # fmt: skip
     start = problem.start
     start_cell = (start.y + 1) * pw + start.x + 1
     start_state = 4 * start_cell + start.heading
@@ -657,14 +703,17 @@ def plan_lattice(
     heap[_BASE] = ((h0 << shift) | h0, start_state)
     heap[_BASE + 1 : _BASE + 4, 0] = _NO_KEY  # slots from the size on never win a comparison
     scal = np.array([1, 0, 0, -1], dtype=np.int64)
-    par = np.array([rnum, rden, wmul, goal_cell, goal_head, 0, opened, shift], dtype=np.int64)
+    with_extra = int(extra is not _NO_EXTRA)
+    par = np.array(
+        [rnum, rden, wmul, goal_cell, goal_head, 0, opened, shift, with_extra], dtype=np.int64
+    )
     nbr = _neighbourhoods(maze)
 
     def run(limit: int) -> int:
         nonlocal heap
         while True:
             par[5] = limit
-            code = int(_lattice(nbr, pen, hdist, mt, par, rec, heap, scal))
+            code = int(_lattice(nbr, pen, hdist, mt, par, rec, heap, scal, extra))
             if code != _GROW:
                 return code
             heap = _heap("lattice", np.int64, 2 * heap.shape[0], 2)

@@ -23,11 +23,11 @@ import heapq
 import time
 from collections.abc import Callable, Hashable, Iterable
 from dataclasses import dataclass
-from enum import Enum
 from fractions import Fraction
 from typing import Any, Generic, TypeVar
 
 from selfrepair.geometry import Pose
+from selfrepair.status import PlanStatus
 
 __all__ = [
     "BACKENDS",
@@ -50,14 +50,6 @@ MAX_TIME_LIMIT = 1e9
 
 _TIME_CHECK_EVERY = 256
 """Expansions between two looks at the clock (the clock costs more than an expansion)."""
-
-
-class PlanStatus(Enum):
-    """How a search ended. "No path" and "budget hit" are different outcomes."""
-
-    SOLVED = "solved"
-    UNSOLVABLE = "unsolvable"
-    BUDGET_EXHAUSTED = "budget_exhausted"
 
 
 @dataclass(frozen=True, slots=True)

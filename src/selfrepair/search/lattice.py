@@ -15,7 +15,11 @@ Cost (exact formula)
 
     where ``clearance(c)`` is :func:`selfrepair.world.maze.clearance_map` (Chebyshev distance to the
     nearest wall, outside counts as wall). The penalty only bites in cells closer than
-    ``clearance_radius`` to a wall, and grows by one per cell of missing clearance. With
+    ``clearance_radius`` to a wall, and grows by one per cell of missing clearance. A problem
+    with a :class:`~selfrepair.search.problem.StepTerm` (the tolerant planner,
+    :mod:`selfrepair.repair.tolerance_masks`) adds ``penalty * count`` per step (soft mode) or
+    never takes a step whose count is above 0 (hard mode); counts are non-negative, so every
+    heuristic below stays admissible and consistent. With
     ``clearance_weight == 0`` the cost of a plan is its total duration, so the plan found has the
     minimum total duration.
 
@@ -32,7 +36,7 @@ Heuristics (:data:`HEURISTICS`), all admissible and consistent
     straight move is one step; an arc sweeps ``a``, the cell ahead, and ``b`` beside it). For a
     domain without it ``"grid-distance"`` is refused. The clearance term is non-negative, so the
     bound holds for any weight, and ``d(goal) = 0``. Internally costs are scaled to integers
-    (``S = lcm of the duration denominators * weight denominator``) and ``h`` is rounded down,
+    (``S = domain.time_unit * weight denominator``) and ``h`` is rounded down,
     which keeps it consistent because edge costs are integers.
 
 Determinism
@@ -45,7 +49,6 @@ Determinism
 
 from __future__ import annotations
 
-import math
 import sys
 import time
 from collections import deque
@@ -57,7 +60,7 @@ from typing import Any, Protocol
 import numpy as np
 import numpy.typing as npt
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.limits import MAX_CLEARANCE_WEIGHT
@@ -69,6 +72,7 @@ from selfrepair.search.backend import BACKENDS, numba_available, use_numba
 from selfrepair.search.problem import (
     CellBound,
     PlanningProblem,
+    StepTerm,
     check_search_inputs,
     with_border,
 )
@@ -135,7 +139,7 @@ def _make_setup(domain: Domain[Any, Any], faults: frozenset[Any]) -> _Setup:
 
 
 _SETUPS: BoundedCache[tuple[Domain[Any, Any], frozenset[Any]], _Setup] = BoundedCache(
-    "planner actions per fault set", 1024
+    "planner actions per fault set", 1024, kind=CacheKind.PLAN
 )
 
 
@@ -150,7 +154,7 @@ def progress_rate(domain: Domain[Any, Any], actions: Sequence[Any]) -> Fraction:
 
 
 _RATES: BoundedCache[tuple[Domain[Any, Any], tuple[Any, ...]], Fraction] = BoundedCache(
-    "planner progress rates", 1024
+    "planner progress rates", 1024, kind=CacheKind.PLAN
 )
 
 
@@ -159,19 +163,12 @@ def _progress_rate(domain: Domain[Any, Any], actions: Sequence[Any]) -> Fraction
 
 
 def cost_scale(domain: Domain[Any, Any], weight: Fraction) -> int:
-    """The factor that makes every edge cost an integer: the lcm of the duration denominators
-    times the clearance weight's denominator."""
-    return _duration_scale(domain) * weight.denominator
+    """The factor that makes every edge cost an integer: the domain's time unit
+    (:attr:`~selfrepair.robots.domain.Domain.time_unit`) times the clearance weight's
+    denominator."""
+    return domain.time_unit * weight.denominator
 
 
-def _duration_scale(domain: Domain[Any, Any]) -> int:
-    return _SCALES.get(
-        domain,
-        lambda: math.lcm(*(Fraction(domain.duration(a)).denominator for a in domain.actions)),
-    )
-
-
-_SCALES: BoundedCache[Domain[Any, Any], int] = BoundedCache("domain duration scales", 64)
 
 
 def _zero_distances(maze: Maze, goal: Cell, backend: str) -> npt.NDArray[np.int32]:
@@ -243,10 +240,10 @@ _SMALL_MAZE = 1 << 18
 
 _Distances = tuple[npt.NDArray[np.int32], int]
 _DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], _Distances] = BoundedCache(
-    "goal distances (mazes up to 512x512)", 32
+    "goal distances (mazes up to 512x512)", 32, kind=CacheKind.PLAN
 )
 _LARGE_DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], _Distances] = BoundedCache(
-    "goal distances (larger mazes)", 4
+    "goal distances (larger mazes)", 4, kind=CacheKind.PLAN
 )
 
 
@@ -368,10 +365,26 @@ def plan_cost(problem: PlanningProblem, actions: Sequence[Any]) -> Fraction:
             clearance_radius=problem.clearance_radius,
             domain=domain,
         )
+        total += _term_cost(problem.step_term, pose, action, index, name)
         pose = end
     if not problem.at_goal(pose):
         raise ProblemError(f"the plan ends at {pose}, not at the goal")
     return total
+
+
+def _term_cost(term: StepTerm | None, pose: Pose, action: Any, index: int, name: str) -> Fraction:
+    """The step term's cost of ``action`` at ``pose`` (0 without a term); a step a hard term
+    forbids, or an action it has no count for, raises :class:`ProblemError`."""
+    if term is None:
+        return Fraction(0)
+    if action not in term.actions:
+        raise ProblemError(f"action {index} ({name}) is not one the step term was made for")
+    count = int(term.counts[pose.y, pose.x, pose.heading, term.actions.index(action)])
+    if term.penalty is None:
+        if count:
+            raise ProblemError(f"action {index} ({name}) at {pose} is forbidden by the hard term")
+        return Fraction(0)
+    return term.penalty * count
 
 
 def plan(
@@ -396,7 +409,7 @@ def plan(
     """
     t0 = time.perf_counter_ns()
     _validate(problem, heuristic, max_expansions, time_limit, backend)
-    fast, load_ns = _load(backend)
+    fast, load_ns = _load(backend, problem.domain)
     if not isinstance(problem.clearance_weight, Fraction):
         problem = replace(problem, clearance_weight=Fraction(problem.clearance_weight))
     if problem.at_goal(problem.start):
@@ -408,7 +421,12 @@ def plan(
     setup = _setup(domain, problem.faults)
     actions = setup.actions
     bound, largest = _bound(problem, heuristic, setup, "numba" if fast else "python")
-    scale = _duration_scale(domain) * problem.clearance_weight.denominator
+    scale = domain.time_unit * problem.clearance_weight.denominator
+    term = problem.step_term
+    if term is not None:
+        _check_term(problem, term, actions)
+        if term.penalty is not None:
+            scale *= term.penalty.denominator
     deadline = deadline_from(time_limit, t0 + load_ns)
     found: _Found | None = None
     if fast:
@@ -440,12 +458,14 @@ def plan(
     )
 
 
-def _load(backend: str) -> tuple[bool, int]:
-    """Whether ``backend`` means the compiled kernels, and the nanoseconds spent now importing
-    numba and loading them (0 when this process already had)."""
+def _load(backend: str, domain: Domain[Any, Any] | None = None) -> tuple[bool, int]:
+    """Whether ``backend`` means the compiled kernels for ``domain`` (see
+    :func:`~selfrepair.search.backend.use_numba`: an explicit ``numba`` for a robot the kernels
+    cannot take is refused), and the nanoseconds spent now importing numba and loading them (0
+    when this process already had)."""
     t0 = time.perf_counter_ns()
     cold = "selfrepair.search._kernels" not in sys.modules
-    fast = use_numba(backend)
+    fast = use_numba(backend, domain)
     global _KERNELS_LOADED
     if fast and not _KERNELS_LOADED:
         _KERNELS_LOADED = cold = True
@@ -479,6 +499,10 @@ def _plan_python(
     penalty = clearance_penalties(maze, problem.clearance_radius).tolist()
     distance = bound.distance.tolist()
     rate = bound.rate * scale
+    term = problem.step_term
+    counts = term.counts.tolist() if term is not None else None
+    hard = term is not None and term.hard
+    per_count = 0 if term is None or term.penalty is None else int(term.penalty * scale)
 
     def heuristic(pose: Pose) -> int | None:
         d = distance[pose.y][pose.x]
@@ -486,12 +510,17 @@ def _plan_python(
 
     def successors(pose: Pose) -> list[tuple[Pose, int, Any]]:
         out = []
-        for action in actions:
+        here = counts[pose.y][pose.x][pose.heading] if counts is not None else None
+        for k, action in enumerate(actions):
             end, swept, dur = domain.step(pose, action)
             if maze.all_free(swept):
                 cost = dur + weight * sum(penalty[y][x] for x, y in swept)
-                scaled = cost * scale
-                out.append((end, scaled.numerator, action))
+                scaled = (cost * scale).numerator
+                if here is not None:
+                    if hard and here[k]:
+                        continue
+                    scaled += per_count * here[k]
+                out.append((end, scaled, action))
         return out
 
     outcome = astar(
@@ -512,6 +541,21 @@ MAX_CLEARANCE_RADIUS = 1_000_000
 """Far beyond any maze's clearance; keeps the penalties inside ``int64``."""
 
 # MAX_CLEARANCE_WEIGHT lives in selfrepair.limits (the experiment schema and the CLI use it too).
+
+
+def _check_term(problem: PlanningProblem, term: StepTerm, actions: tuple[Any, ...]) -> None:
+    """Refuse a step term made for other planning actions or another maze size."""
+    if term.actions != actions:
+        raise ProblemError(
+            f"the step term {term.label!r} was made for other planning actions than those under "
+            f"the faults known ({problem.domain.format_faults(problem.faults) or 'none'})"
+        )
+    height, width = problem.maze.walls.shape
+    if term.counts.shape[:2] != (height, width):
+        raise ProblemError(
+            f"the step term {term.label!r} is for a {term.counts.shape[1]}x"
+            f"{term.counts.shape[0]} maze, not {width}x{height}"
+        )
 
 
 def _validate(

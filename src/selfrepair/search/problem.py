@@ -19,12 +19,13 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import BACKENDS, MAX_TIME_LIMIT, PlanStatus
+from selfrepair.search.term import StepTerm
 from selfrepair.world.maze import Maze
 
 __all__ = [
@@ -36,6 +37,7 @@ __all__ = [
     "OctileCost",
     "PlannerSettings",
     "PlanningProblem",
+    "StepTerm",
     "check_search_inputs",
     "grid_heuristic",
     "make_pose",
@@ -50,6 +52,8 @@ class PlanningProblem:
     for the robot ``domain`` (the four-wheel robot unless given).
 
     ``faults`` are the faults the planner knows about; actions they forbid are never used.
+    ``step_term`` adds a cost term per (pose, action) (:class:`StepTerm`: the tolerant planner's
+    masks); ``None``, the default, costs nothing.
     """
 
     maze: Maze
@@ -60,6 +64,7 @@ class PlanningProblem:
     clearance_weight: Fraction | int = Fraction(0)
     clearance_radius: int = 2
     domain: Domain[Any, Any] = FOUR_WHEEL
+    step_term: StepTerm | None = None
 
     def at_goal(self, pose: Pose) -> bool:
         """Whether ``pose`` satisfies the goal."""
@@ -138,7 +143,9 @@ def pose_table(maze: Maze) -> list[Pose | None] | None:
 POSE_TABLE_CELLS = 1 << 16
 """The largest maze (cells) with a :func:`pose_table`: 256 x 256, 2 MB per table."""
 
-_POSES: BoundedCache[Maze, list[Pose | None]] = BoundedCache("canonical poses per maze", 16)
+_POSES: BoundedCache[Maze, list[Pose | None]] = BoundedCache(
+    "canonical poses per maze", 16, kind=CacheKind.PLAN
+)
 
 
 def with_border(inner: npt.NDArray[np.integer]) -> npt.NDArray[np.int32]:

@@ -37,6 +37,7 @@ from selfrepair.search.lattice import bfs_distances, planning_actions
 from selfrepair.team.model import drive as drive_action
 from selfrepair.team.reservations import FOREVER, TimedStep
 from selfrepair.team.result import OwnRepairRecord, TeamSource
+from selfrepair.team.robottable import robot_table
 from selfrepair.team.scenario import grid_distances
 from selfrepair.team.spacetime import cost_to_go, lattice_of, plan_spacetime, schedule_path
 from selfrepair.team.state import Drive, Entry, RobotState, TeamWorld
@@ -104,7 +105,9 @@ def begin_drive(world: TeamWorld, robot: RobotState, entry: Entry, at: int) -> D
         robot.pose,
         target,
         strategy=options.robot_strategy,
-        options=StrategyOptions(table=options.robot_table, recursion=options.recursion),
+        options=StrategyOptions(
+            table=robot_table(world.scenario, options), recursion=options.recursion
+        ),
         backend=options.backend,
         domain=domain,
     )

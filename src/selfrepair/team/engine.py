@@ -49,6 +49,7 @@ from selfrepair.execution.faults import Detection, FaultSchedule
 from selfrepair.execution.result import StepSource
 from selfrepair.execution.simulator import Outcome, Simulator
 from selfrepair.geometry import Cell
+from selfrepair.repair.strategies import StrategyName
 from selfrepair.search.backend import use_numba
 from selfrepair.team.allocation import Job, Worker, allocate, distance_maps, job_plan
 from selfrepair.team.binding import Incident
@@ -70,9 +71,7 @@ from selfrepair.team.model import (
     Load,
     TeamFaultKind,
     TeamScenario,
-    TeamStrategyName,
     Trigger,
-    time_scale,
 )
 from selfrepair.team.reservations import FOREVER, TimedStep
 from selfrepair.team.result import (
@@ -84,6 +83,7 @@ from selfrepair.team.result import (
     TeamResult,
     TeamStatus,
 )
+from selfrepair.team.robottable import robot_table
 from selfrepair.team.scenario import check_scenario
 from selfrepair.team.spacetime import clear_cost_to_go
 from selfrepair.team.state import (
@@ -123,8 +123,9 @@ def run_team(scenario: TeamScenario, options: TeamOptions | None = None) -> Team
     options = options or TeamOptions()
     check_scenario(scenario)
     get_team_strategy(options.strategy)  # fails fast on a bad name
-    if options.strategy is TeamStrategyName.TEAM_REPLACEMENT:
+    if options.strategy is StrategyName.TEAM_REPLACEMENT:
         get_team_table(options.table)  # a generated table is made before anything is timed
+    robot_table(scenario, options)  # so is the robots' own (and a table for another robot fails)
     if use_numba(options.backend):
         from selfrepair.search.warmup import ensure_warm
 
@@ -165,7 +166,7 @@ def run_team(scenario: TeamScenario, options: TeamOptions | None = None) -> Team
 
 
 def _world(scenario: TeamScenario, options: TeamOptions) -> TeamWorld:
-    scale = time_scale(scenario.domain)
+    scale = scenario.domain.time_unit
     states = [
         FaultState(i, f, f.at * scale if f.trigger is Trigger.TICK else None)
         for i, f in enumerate(scenario.faults)
@@ -486,13 +487,13 @@ def _incident(
         world.broadcast(robot.name)
     if robot.drive is not None:
         cancel_drive(world, robot, t)
-    strategy = get_team_strategy(world.options.strategy)
+    repairer = get_team_strategy(world.options.strategy)(world)  # stateless: started per incident
     collecting = gc.isenabled()
     gc.disable()  # a collection's pause belongs to no repair: it runs after the timed part
     try:
         t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
         plans0, expansions0 = world.plans, world.expansions
-        decision = strategy(world, Incident(robot.name, entry, kind, load, item, t))
+        decision = repairer.repair(Incident(robot.name, entry, kind, load, item, t))
         for name in world.robots:  # scenario order: a frozenset's order depends on the hash seed
             if name in decision.changed:
                 _prepare(world, world.robots[name], t)

@@ -22,16 +22,17 @@ from typing import Any
 
 import numpy as np
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.execution.faults import Persistence
 from selfrepair.geometry import Cell
+from selfrepair.repair.strategies import StrategyName
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.team.allocation import Job, Worker, allocate, distance_maps
 from selfrepair.team.engine import run_team
 from selfrepair.team.grid import components
 from selfrepair.team.metrics import team_row
-from selfrepair.team.model import TeamFault, TeamFaultKind, TeamScenario, TeamStrategyName, Trigger
+from selfrepair.team.model import TeamFault, TeamFaultKind, TeamScenario, Trigger
 from selfrepair.team.randomteam import GripperMix, random_scenario
 from selfrepair.team.result import TeamOptions, TeamResult
 from selfrepair.world.maze import Maze
@@ -199,7 +200,7 @@ def _grid_path(maze: Maze, start: Cell, goal: Cell) -> list[Cell]:
 # --- running --------------------------------------------------------------------------------------
 
 _BASELINES: BoundedCache[tuple[Maze, int, int, str, int, str], Fraction] = BoundedCache(
-    "team fault-free makespans", 512
+    "team fault-free makespans", 512, kind=CacheKind.REFERENCE
 )
 
 
@@ -207,7 +208,7 @@ def run_case(maze: Maze, case: TeamCase, options: TeamOptions) -> tuple[TeamResu
     """Run ``case`` with ``options``; returns the result and the fault-free makespan."""
     scenario = build_scenario(maze, case)
     key = (maze, case.team_size, case.tasks, str(case.grippers), case.seed, options.backend)
-    calm = replace(options, strategy=TeamStrategyName.ALONE)
+    calm = replace(options, strategy=StrategyName.ALONE)
     baseline = _BASELINES.get(key, lambda: run_team(scenario.without_faults(), calm).makespan)
     return run_team(scenario, options), baseline
 

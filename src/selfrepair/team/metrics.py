@@ -15,7 +15,8 @@ from fractions import Fraction
 import numpy as np
 
 from selfrepair.execution.result import StepSource
-from selfrepair.repair.strategies import RepairSource
+from selfrepair.repair.strategies import RepairSource, StrategyName
+from selfrepair.stats import percentile
 from selfrepair.team.result import RepairOutcome, TeamResult, TeamSource
 
 __all__ = ["TEAM_COLUMNS", "executed_own_replacements", "team_row"]
@@ -77,7 +78,10 @@ TEAM_COLUMNS = (
 
 
 def _percentile(values: Sequence[int], q: float) -> int | None:
-    return int(np.percentile(values, q, method="lower")) if values else None
+    """The nearest-rank ``q`` quantile of :mod:`selfrepair.stats` (``None`` for no values): the
+    same definition as the single-robot rows, so the 99th percentile of fewer than 100 repairs
+    is the slowest one."""
+    return percentile(values, q) if values else None
 
 
 def team_row(
@@ -102,7 +106,9 @@ def team_row(
         "grippers": sum(r.gripper for r in scenario.robots),
         "tasks": len(scenario.tasks),
         "strategy": str(options.strategy),
-        "team_table": str(options.table) if options.strategy == "team-replacement" else None,
+        "team_table": (
+            str(options.table) if options.strategy == StrategyName.TEAM_REPLACEMENT else None
+        ),
         "variant": options.label,
         "fault_kinds": ",".join(sorted({str(f.kind) for f in scenario.faults})),
         "status": str(result.status),
@@ -120,12 +126,12 @@ def team_row(
         "deferrals": sum(r.outcome is RepairOutcome.DEFERRED for r in repairs),
         "candidates": json.dumps([r.candidate for r in repairs if r.candidate]),
         "repair_sources": json.dumps([str(r.source) for r in repairs]),
-        "repair_latency_median_ns": _percentile(latencies, 50),
-        "repair_latency_p99_ns": _percentile(latencies, 99),
+        "repair_latency_median_ns": _percentile(latencies, 0.5),
+        "repair_latency_p99_ns": _percentile(latencies, 0.99),
         "repair_latency_max_ns": max(latencies, default=None),
         "repair_latencies_ns": json.dumps(latencies),
-        "repair_cpu_median_ns": _percentile(cpus, 50),
-        "repair_cpu_p99_ns": _percentile(cpus, 99),
+        "repair_cpu_median_ns": _percentile(cpus, 0.5),
+        "repair_cpu_p99_ns": _percentile(cpus, 0.99),
         "repair_cpus_ns": json.dumps(cpus),
         "repair_plans": sum(r.plans for r in repairs),
         "repair_expansions": sum(r.expansions for r in repairs),

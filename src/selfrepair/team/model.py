@@ -21,18 +21,16 @@ A team plan is one queue of :class:`TeamAction` per robot:
 
 A robot carries at most one item. Pick, drop and handover take :data:`PICK_TICKS`,
 :data:`DROP_TICKS` and :data:`HANDOVER_TICKS`. Time inside the team engine is counted in integer
-*units* of ``1 / time_scale(domain)`` ticks (thirds of a tick for the four-wheel robot), so every
+*units* of ``1 / domain.time_unit`` ticks (thirds of a tick for the four-wheel robot), so every
 action's duration is a whole number of units.
 """
 
 from __future__ import annotations
 
-import math
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 from enum import StrEnum
-from fractions import Fraction
 from typing import Any
 
 from selfrepair.errors import InputError, ProblemError
@@ -56,7 +54,6 @@ __all__ = [
     "TeamFault",
     "TeamFaultKind",
     "TeamScenario",
-    "TeamStrategyName",
     "TeamTableName",
     "Trigger",
     "drive",
@@ -65,7 +62,6 @@ __all__ = [
     "handover",
     "parse_team_action",
     "pick",
-    "time_scale",
 ]
 
 PICK_TICKS = 2
@@ -126,24 +122,11 @@ class Load(StrEnum):
     CARRYING = "carrying"
 
 
-class TeamStrategyName(StrEnum):
-    """The team strategies compared (see :mod:`selfrepair.team.strategies`)."""
-
-    TEAM_REPLACEMENT = "team-replacement"
-    REALLOCATION = "reallocation"
-    ALONE = "alone"
-
-
 class TeamTableName(StrEnum):
     """The team replacement tables (see :mod:`selfrepair.team.table`)."""
 
     HANDWRITTEN = "handwritten"
     GENERATED = "generated"
-
-
-def time_scale(domain: Domain[Any, Any]) -> int:
-    """Units per tick: the least common multiple of the denominators of the domain's durations."""
-    return math.lcm(*(Fraction(domain.duration(a)).denominator for a in domain.actions))
 
 
 # --- robots, tasks, faults ---------------------------------------------------------------------
@@ -273,8 +256,9 @@ class TeamScenario:
         raise ProblemError(f"no task delivers item {item!r}")
 
     def without_faults(self) -> TeamScenario:
-        """The same scenario with no team fault (the fault-free baseline)."""
-        return replace(self, faults=())
+        """The same scenario with no team fault (the fault-free baseline; no longer the file's
+        content, so without its digest)."""
+        return replace(self, faults=(), digest="")
 
 
 # --- higher-level actions ----------------------------------------------------------------------

@@ -1,7 +1,8 @@
 """The values of a team mission run: its options (:class:`TeamOptions`), what happened
 (:class:`TeamResult` and its records) and the vocabularies they use.
 
-Times are integer units (``scale`` units per tick, see :func:`selfrepair.team.model.time_scale`).
+Times are integer units (``scale`` units per tick, see
+:attr:`selfrepair.robots.domain.Domain.time_unit`).
 Records come in the order they happened; traces (:mod:`selfrepair.team.trace`) and metrics
 (:mod:`selfrepair.team.metrics`) read them.
 """
@@ -17,13 +18,13 @@ from selfrepair.errors import ProblemError, choice
 from selfrepair.execution.result import StepSource
 from selfrepair.geometry import Cell, Pose
 from selfrepair.repair.replacement import RecursionMode
-from selfrepair.repair.strategies import RepairSource, RepairStatus, StrategyName
+from selfrepair.repair.strategies import MissionKind, RepairSource, RepairStatus, StrategyName
+from selfrepair.status import RepairOutcome, TeamStatus
 from selfrepair.team.model import (
     IncidentKind,
     Load,
     TeamAction,
     TeamScenario,
-    TeamStrategyName,
     TeamTableName,
 )
 
@@ -47,49 +48,33 @@ class TeamSource(StrEnum):
     """Where a queued higher-level action came from."""
 
     PLAN = "plan"
-    TEAM_REPLACEMENT = "team-replacement"
-    REALLOCATION = "reallocation"
-    ALONE = "alone"
+    TEAM_REPLACEMENT = StrategyName.TEAM_REPLACEMENT.value
+    REALLOCATION = StrategyName.REALLOCATION.value
+    ALONE = StrategyName.ALONE.value
     YIELD = "yield"
-
-
-class TeamStatus(StrEnum):
-    """How a team mission ended: every task delivered; nothing more could happen (``stalled``:
-    the robots left with work cannot act and no fault will clear); or ``max_ticks`` passed."""
-
-    DELIVERED = "delivered"
-    STALLED = "stalled"
-    TIME_LIMIT = "time_limit"
-
-
-class RepairOutcome(StrEnum):
-    """What a team strategy did about an incident: changed the plan (``repaired``), let the robot
-    wait and try again (``deferred``), or gave the incident's task up (``lost``)."""
-
-    REPAIRED = "repaired"
-    DEFERRED = "deferred"
-    LOST = "lost"
 
 
 @dataclass(frozen=True, slots=True)
 class TeamOptions:
     """How a team mission is run.
 
-    ``strategy`` is a team strategy (:class:`TeamStrategyName`) and ``table`` its team
+    ``strategy`` is a team strategy (a team member of
+    :class:`~selfrepair.repair.strategies.StrategyName`) and ``table`` its team
     replacement table. Each robot handles its own wheel faults first with the single-robot
     strategy ``robot_strategy`` (a name in :mod:`selfrepair.repair.strategies`), table
-    ``robot_table`` and ``recursion``. ``max_depth`` bounds nested team replacements (the
-    recursion guard's depth). ``max_ticks`` ends the mission (default: see
-    :func:`selfrepair.team.engine.default_max_ticks`). ``max_wait_ticks`` is the longest wait
-    :func:`~selfrepair.team.spacetime.schedule_path` accepts before cooperative A* is tried, with
-    ``spacetime_expansions`` nodes at most. ``seed`` is recorded with the results (the engine
-    draws nothing at random; scenarios are drawn from it).
+    ``robot_table`` (a bundled name or a file; ``""``: the scenario's ``table``, else the
+    robot's default, see :mod:`selfrepair.team.robottable`) and ``recursion``. ``max_depth``
+    bounds nested team replacements (the recursion guard's depth). ``max_ticks`` ends the
+    mission (default: see :func:`selfrepair.team.engine.default_max_ticks`). ``max_wait_ticks``
+    is the longest wait :func:`~selfrepair.team.spacetime.schedule_path` accepts before
+    cooperative A* is tried, with ``spacetime_expansions`` nodes at most. ``seed`` is recorded
+    with the results (the engine draws nothing at random; scenarios are drawn from it).
     """
 
-    strategy: str = TeamStrategyName.TEAM_REPLACEMENT
+    strategy: str = StrategyName.TEAM_REPLACEMENT
     table: str = TeamTableName.HANDWRITTEN
     robot_strategy: str = StrategyName.REPLACEMENT
-    robot_table: str = "handwritten"
+    robot_table: str = ""
     recursion: RecursionMode = RecursionMode.FLAT
     max_depth: int = 2
     backend: str = "auto"
@@ -99,9 +84,7 @@ class TeamOptions:
     seed: int = 0
 
     def __post_init__(self) -> None:
-        object.__setattr__(
-            self, "strategy", choice(TeamStrategyName, self.strategy, "team strategy")
-        )
+        object.__setattr__(self, "strategy", StrategyName.of(self.strategy, MissionKind.TEAM))
         object.__setattr__(self, "table", choice(TeamTableName, self.table, "team table"))
         object.__setattr__(
             self, "recursion", choice(RecursionMode, self.recursion, "recursion mode")
@@ -118,7 +101,7 @@ class TeamOptions:
     @property
     def label(self) -> str:
         """A short readable variant such as ``team-replacement[handwritten]``."""
-        if self.strategy is TeamStrategyName.TEAM_REPLACEMENT:
+        if self.strategy is StrategyName.TEAM_REPLACEMENT:
             return f"{self.strategy}[{self.table}]"
         return str(self.strategy)
 

@@ -72,6 +72,8 @@ from selfrepair.team.randomteam import (
     draw_tasks,
     random_scenario,
 )
+from selfrepair.team.result import TeamOptions
+from selfrepair.team.robottable import robot_table
 from selfrepair.textio import read_text, strip_bom
 from selfrepair.tomlfile import Frozen, Int, find_line, read_toml, validate
 from selfrepair.world.maze import Maze
@@ -302,6 +304,14 @@ def parse_scenario(
         table=table, digest=scenario_digest(text), detection=entry.detection,
     )  # fmt: skip
     check_scenario(scenario, text=text, limits=limits)
+    if table:
+        try:
+            robot_table(scenario, TeamOptions())
+        except (InputError, ProblemError) as exc:
+            reason = exc.reason if isinstance(exc, InputError) else str(exc)
+            raise ConfigError(
+                f"key 'table': {reason}", source=source, line=find_line(text, ("table",))
+            ) from None
     return scenario
 
 

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.execution.faults import FaultEvent, Persistence
 from selfrepair.execution.simulator import Simulator
 from selfrepair.execution.stepper import Stepper
@@ -308,7 +308,9 @@ class TeamWorld:
         self.messages += len(self.robots) - 1
 
 
-_KNOWN: BoundedCache[tuple[Maze, frozenset[Cell]], Maze] = BoundedCache("team known maps", 64)
+_KNOWN: BoundedCache[tuple[Maze, frozenset[Cell]], Maze] = BoundedCache(
+    "team known maps", 64, kind=CacheKind.PLAN
+)
 
 
 def known_maze(maze: Maze, extra: frozenset[Cell]) -> Maze:

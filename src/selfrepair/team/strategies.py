@@ -1,9 +1,13 @@
 """Team strategies: what the team does when a robot's next higher-level action cannot go on.
 
-Each strategy is a plain function ``(world, incident) -> Decision`` in the registry
-:data:`TEAM_STRATEGIES` (:class:`~selfrepair.team.model.TeamStrategyName`). It changes robots'
-queues in the world and says what it did; the engine (:mod:`selfrepair.team.engine`) times it,
-places the changed robots' next drives in time and records the repair.
+The team strategies live in the one strategy registry
+(:mod:`selfrepair.repair.strategies.registry`), next to the robot strategies, as entries of the
+team kind (:data:`TEAM`): a factory started with the running :class:`TeamWorld` gives a
+:class:`~selfrepair.repair.strategies.Repairer` asked about each :class:`Incident`. The built-in
+ones keep no state (each is a plain function ``(world, incident) -> Decision`` wrapped by
+:func:`~selfrepair.repair.strategies.stateless`): the repairer changes robots' queues in the world
+and says what it did; the engine (:mod:`selfrepair.team.engine`) times it, places the changed
+robots' next drives in time and records the repair.
 
 ``team-replacement``
     Look the incident up in the team replacement table and splice in the first valid candidate,
@@ -26,8 +30,17 @@ from collections import deque
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
-from selfrepair.errors import choice
 from selfrepair.geometry import Cell
+from selfrepair.repair.strategies import (
+    Kind,
+    MissionKind,
+    Repairer,
+    StrategyEntry,
+    StrategyName,
+    register,
+    stateless,
+    strategy_for,
+)
 from selfrepair.search.lattice import bfs_distances
 from selfrepair.team.allocation import (
     DistanceMap,
@@ -37,22 +50,22 @@ from selfrepair.team.allocation import (
     distance_maps,
     job_plan,
 )
-from selfrepair.team.binding import Incident, Maps, apply_binding, choose, mobile
+from selfrepair.team.binding import apply_binding, choose
 from selfrepair.team.driving import RETRY_TICKS
 from selfrepair.team.model import (
     DROP_TICKS,
     IncidentKind,
     TeamAction,
-    TeamStrategyName,
     drive,
     drop,
     handover,
 )
 from selfrepair.team.result import RepairOutcome, TeamSource
 from selfrepair.team.state import Entry, RobotState, TeamWorld, resource
+from selfrepair.team.steps import Incident, Maps, mobile
 from selfrepair.team.table import get_team_table
 
-__all__ = ["TEAM_STRATEGIES", "Decision", "TeamStrategy", "get_team_strategy"]
+__all__ = ["TEAM", "Decision", "TeamStrategy", "get_team_strategy"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -72,9 +85,6 @@ class Decision:
     lost: tuple[str, ...] = ()
     messages: int = 0
 
-
-TeamStrategy = Callable[[TeamWorld, Incident], Decision]
-"""A team strategy: changes the queues of ``world`` for ``incident`` and says what it did."""
 
 
 def team_replacement(world: TeamWorld, incident: Incident) -> Decision:
@@ -203,14 +213,22 @@ def alone(world: TeamWorld, incident: Incident) -> Decision:
     return Decision(RepairOutcome.DEFERRED, TeamSource.ALONE)
 
 
-TEAM_STRATEGIES: dict[TeamStrategyName, TeamStrategy] = {
-    TeamStrategyName.TEAM_REPLACEMENT: team_replacement,
-    TeamStrategyName.REALLOCATION: reallocation,
-    TeamStrategyName.ALONE: alone,
-}
-"""The team strategies by name."""
+TEAM: Kind[TeamWorld, Incident, Decision] = Kind(MissionKind.TEAM)
+"""A team's mission: its strategies start with the running :class:`TeamWorld`, are asked about
+an :class:`Incident` and answer a :class:`Decision`."""
+
+TeamStrategy = Callable[[TeamWorld], Repairer[Incident, Decision]]
+"""A team strategy's factory: started with the team's world, it answers incidents (changing the
+world's queues) with decisions."""
+
+for _name, _fn in (
+    (StrategyName.TEAM_REPLACEMENT, team_replacement),
+    (StrategyName.REALLOCATION, reallocation),
+    (StrategyName.ALONE, alone),
+):
+    register(StrategyEntry(_name, TEAM, stateless(_fn), _name is StrategyName.TEAM_REPLACEMENT))
 
 
 def get_team_strategy(name: str) -> TeamStrategy:
-    """The team strategy called ``name`` (unknown names raise ``ProblemError``)."""
-    return TEAM_STRATEGIES[choice(TeamStrategyName, name, "team strategy")]
+    """The factory of team strategy ``name`` (unknown names raise ``ProblemError``)."""
+    return strategy_for(name, TEAM)

@@ -12,7 +12,8 @@ from collections import defaultdict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-import numpy as np
+from selfrepair.repair.strategies import MissionKind, StrategyName
+from selfrepair.stats import lower_median, percentile
 
 __all__ = ["TeamSummary", "by_fault_case", "summarize_team"]
 
@@ -95,7 +96,9 @@ def summarize_team(rows: Sequence[Row]) -> list[TeamSummary]:
     groups: dict[str, list[Row]] = defaultdict(list)
     for row in rows:
         groups[str(row.get("variant"))].append(row)
-    order = {"team-replacement": 0, "reallocation": 1, "alone": 2}
+    order: dict[str, int] = {
+        name: i for i, name in enumerate(StrategyName.of_kind(MissionKind.TEAM))
+    }
     out = []
     for variant in sorted(groups, key=lambda v: (order.get(v.split("[")[0], 9), v)):
         group = groups[variant]
@@ -113,10 +116,10 @@ def summarize_team(rows: Sequence[Row]) -> list[TeamSummary]:
                 sum(int(_number(row, "tasks") or 0) for row in group),
                 sum(int(_number(row, "delivered") or 0) for row in group),
                 sum(int(_number(row, "all_delivered") or 0) for row in group),
-                float(np.median(ratios)) if ratios else None,
-                float(np.median(latencies)) / 1000 if latencies else None,
-                float(np.percentile(latencies, 99)) / 1000 if latencies else None,
-                float(np.median(cpus)) / 1000
+                float(lower_median(ratios)) if ratios else None,
+                lower_median(latencies) / 1000 if latencies else None,
+                percentile(latencies, 0.99) / 1000 if latencies else None,
+                lower_median(cpus) / 1000
                 if (cpus := _latencies(group, "repair_cpus_ns"))
                 else None,
                 repaired,

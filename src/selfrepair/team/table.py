@@ -2,7 +2,9 @@
 
 A single-robot table maps a faulty action to sub-plans of the same robot. A team table maps a
 *situation* - the kind of the failing higher-level action, why it failed and whether the robot
-carries an item, a :data:`Key` - to :class:`Template` candidates: short sequences of steps by
+carries an item, a :data:`Key` - to :class:`Template` candidates (as a robot's table maps an
+action and its known faults: both are looked up through the replacement core's
+:class:`~selfrepair.repair.core.CandidateTable`): short sequences of steps by
 two roles, the robot with the incident (``r1``) and a teammate (``r2``), at symbolic places:
 
 =====  =======================================================================================
@@ -43,7 +45,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from enum import StrEnum
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import choice
 from selfrepair.team.model import ActionKind, IncidentKind, Load, TeamTableName
 
@@ -52,6 +54,7 @@ __all__ = [
     "KEYS",
     "MAX_STEPS",
     "Key",
+    "Known",
     "Place",
     "Role",
     "Scope",
@@ -97,8 +100,13 @@ class Scope(StrEnum):
     TASK = "task"
 
 
+Known = tuple[IncidentKind, Load]
+"""What is known to be wrong when a team action fails: why it failed, and whether ``r1`` carries
+the item (a team table's counterpart of a robot's known faults)."""
+
 Key = tuple[ActionKind, IncidentKind, Load]
-"""What a team table is indexed by: failing action kind, incident kind, load of ``r1``."""
+"""What a team table is indexed by: failing action kind, incident kind, load of ``r1`` (the
+action and what is :data:`Known`)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -143,14 +151,17 @@ class TeamTable:
     name: TeamTableName
     entries: dict[Key, tuple[Template, ...]]
 
-    def candidates(self, key: Key) -> tuple[Template, ...]:
-        """The candidates for ``key`` (none when the table has no entry)."""
-        return self.entries.get(key, ())
+    def candidates(self, action: ActionKind, known: Known) -> tuple[Template, ...]:
+        """The candidates for the failing action's kind ``action`` under what is known to be
+        wrong, ``known`` (none when the table has no entry): the replacement core's
+        :class:`~selfrepair.repair.core.CandidateTable`, as a robot's table answers for an
+        action and its known faults."""
+        return self.entries.get((action, *known), ())
 
     def rows(self) -> Iterator[tuple[Key, Template]]:
         """Every (key, candidate) in key order, then preference order."""
         for key in KEYS:
-            for template in self.candidates(key):
+            for template in self.entries.get(key, ()):
                 yield key, template
 
 
@@ -237,7 +248,9 @@ def get_team_table(name: str) -> TeamTable:
     return _GENERATED.get(MAX_STEPS, lambda: generate_table(MAX_STEPS))
 
 
-_GENERATED: BoundedCache[int, TeamTable] = BoundedCache("generated team tables", 2)
+_GENERATED: BoundedCache[int, TeamTable] = BoundedCache(
+    "generated team tables", 2, kind=CacheKind.REPAIR
+)
 
 
 # --- generation -----------------------------------------------------------------------------------

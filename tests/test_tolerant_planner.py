@@ -1,0 +1,156 @@
+"""The tolerant planner: masks per (pose, action), hard and soft modes, both backends."""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from extras import NUMBA
+from selfrepair.errors import ProblemError
+from selfrepair.execution.executor import mission_context
+from selfrepair.execution.result import MissionSpec
+from selfrepair.geometry import Heading, Pose
+from selfrepair.repair.replacement import table_reach
+from selfrepair.repair.strategies import StrategyOptions
+from selfrepair.repair.tolerance import fault_model, needs_replan, plan_tolerance
+from selfrepair.repair.tolerance_masks import tolerance_masks, tolerance_term
+from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.search.astar import PlanStatus
+from selfrepair.search.lattice import plan, plan_cost, planning_actions
+from selfrepair.search.problem import PlanningProblem, StepTerm
+from selfrepair.tables.fileformat import resolve_table
+from selfrepair.world.bundled import bundled_routes, load_bundled
+from selfrepair.world.maze import Maze
+from selfrepair.world.mazegen import generate_maze
+from selfrepair.world.routes import random_routes
+
+ACTIONS = planning_actions(FOUR_WHEEL, frozenset())
+SINGLE = fault_model(FOUR_WHEEL, 1)
+DOUBLE = fault_model(FOUR_WHEEL, 2)
+BACKENDS = ["python", pytest.param("numba", marks=NUMBA)]
+
+
+def _term(maze: Maze, table: str, recursion: str, k: int, penalty: Fraction | None) -> StepTerm:
+    t = resolve_table(table)
+    grid = maze.free_grid(max(2, table_reach(t)))
+    return tolerance_term(t, grid, ACTIONS, fault_model(FOUR_WHEEL, k), penalty=penalty,
+                          mode=recursion)  # fmt: skip
+
+
+def test_masks_are_the_strategys_local_test_at_every_pose() -> None:
+    """Every bit of every mask on a small maze equals the replacement strategy's own answer."""
+    maze = generate_maze(9, 9, corridor=1, braid=0.3, seed=3)
+    for table, recursion in (("handwritten", "flat"), ("generated-indexed", "guarded")):
+        spec = MissionSpec(maze, Pose(1, 1, Heading.E), (7, 7),
+                           options=StrategyOptions(table=table, recursion=recursion))  # fmt: skip
+        t = spec.options.resolved_table()
+        context = mission_context(spec, t)
+        masks = tolerance_masks(t, context.grid, ACTIONS, SINGLE, mode=recursion)
+        set_bits = 0
+        for x, y in maze.free_cells():
+            for heading in Heading:
+                pose = Pose(x, y, heading)
+                for k, action in enumerate(ACTIONS):
+                    expected = tuple(
+                        f for f in SINGLE.fault_sets if needs_replan(context, pose, action, f)
+                    )
+                    assert masks.fault_sets_at(pose, k) == expected, (pose, action)
+                    assert masks.counts[y, x, heading, k] == len(expected)
+                    set_bits += len(expected)
+        assert set_bits > 0
+
+
+def test_hard_plan_is_tolerant_and_costs_at_least_the_optimum() -> None:
+    maze = load_bundled("narrow-short")
+    for route in bundled_routes("narrow-short"):
+        for table in ("handwritten", "generated-indexed"):
+            term = _term(maze, table, "flat", 1, None)
+            optimum = plan(PlanningProblem(maze, route.start, route.goal))
+            hard = plan(PlanningProblem(maze, route.start, route.goal, step_term=term))
+            assert hard.status is PlanStatus.SOLVED and optimum.cost is not None
+            assert hard.cost == hard.duration >= optimum.cost
+            spec = MissionSpec(maze, route.start, route.goal,
+                               options=StrategyOptions(table=table))  # fmt: skip
+            context = mission_context(spec, spec.options.resolved_table())
+            tolerance = plan_tolerance(context, hard.poses, hard.actions, SINGLE)
+            assert tolerance.tolerant and tolerance.replan_steps == 0
+
+
+def test_hard_mode_proves_that_no_tolerant_plan_exists() -> None:
+    """A one-cell corridor: with FL:F and FL:S the front-left wheel only goes backward, and
+    the hand-written table has no replacement for a forward step there."""
+    walls = np.ones((3, 9), dtype=bool)
+    walls[1, :] = False
+    maze = Maze(walls)
+    term = _term(maze, "handwritten", "flat", 2, None)
+    found = plan(PlanningProblem(maze, Pose(0, 1, Heading.E), (8, 1), step_term=term))
+    assert found.status is PlanStatus.UNSOLVABLE
+    single = _term(maze, "handwritten", "flat", 1, None)
+    assert plan(PlanningProblem(maze, Pose(0, 1, Heading.E), (8, 1), step_term=single)).actions
+
+
+def test_soft_cost_is_duration_plus_penalty_per_step_that_needs_a_replan() -> None:
+    maze = load_bundled("narrow-short")
+    route = bundled_routes("narrow-short")[0]
+    spec = MissionSpec(maze, route.start, route.goal)
+    context = mission_context(spec, spec.options.resolved_table())
+    optimum = plan(PlanningProblem(maze, route.start, route.goal))
+    base = plan_tolerance(context, optimum.poses, optimum.actions, DOUBLE)
+    for penalty in (Fraction(1, 3), Fraction(1), Fraction(5)):
+        term = _term(maze, "handwritten", "flat", 2, penalty)
+        problem = PlanningProblem(maze, route.start, route.goal, step_term=term)
+        soft = plan(problem)
+        assert soft.cost is not None and optimum.cost is not None
+        steps = plan_tolerance(context, soft.poses, soft.actions, DOUBLE).replan_steps
+        assert soft.cost == soft.duration + penalty * steps == plan_cost(problem, soft.actions)
+        assert soft.cost <= optimum.cost + penalty * base.replan_steps  # the soft optimum
+
+
+def test_a_term_for_other_actions_or_another_maze_is_refused() -> None:
+    maze = load_bundled("narrow-short")
+    route = bundled_routes("narrow-short")[0]
+    term = _term(maze, "handwritten", "flat", 1, None)
+    faults = FOUR_WHEEL.parse_faults("FL:F")
+    with pytest.raises(ProblemError, match="other planning actions"):
+        plan(PlanningProblem(maze, route.start, route.goal, faults=faults, step_term=term))
+    other = load_bundled("wide-short")
+    with pytest.raises(ProblemError, match="maze"):
+        plan(PlanningProblem(other, Pose(1, 1, Heading.E), (2, 2), step_term=term))
+    with pytest.raises(ProblemError, match="non-deferring"):
+        _term(maze, "handwritten", "primitive", 1, None)
+    with pytest.raises(ProblemError, match="shape"):
+        StepTerm(ACTIONS, np.zeros((2, 2, 4, 3), dtype=np.int32))
+
+
+@st.composite
+def _problems(draw: st.DrawFn) -> tuple[PlanningProblem, int]:
+    seed = draw(st.integers(0, 10_000))
+    maze = generate_maze(11, 11, corridor=draw(st.sampled_from([1, 2])), braid=0.4, seed=seed)
+    route = random_routes(maze, 1, seed)[0]
+    table = draw(st.sampled_from(["handwritten", "generated-indexed"]))
+    recursion = draw(st.sampled_from(["flat", "guarded", "layered"]))
+    k = draw(st.sampled_from([1, 2]))
+    penalty = draw(st.sampled_from([None, Fraction(0), Fraction(1, 2), Fraction(3)]))
+    weight = draw(st.sampled_from([Fraction(0), Fraction(1)]))
+    term = _term(maze, table, recursion, k, penalty)
+    problem = PlanningProblem(maze, route.start, route.goal, clearance_weight=weight,
+                              step_term=term)  # fmt: skip
+    return problem, k
+
+
+@NUMBA
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(_problems())
+def test_backends_agree_on_tolerant_plans(case: tuple[PlanningProblem, int]) -> None:
+    problem, _ = case
+    fast = plan(problem, backend="numba")
+    slow = plan(problem, backend="python")
+    assert (fast.status, fast.actions, fast.poses, fast.cost) == (
+        slow.status, slow.actions, slow.poses, slow.cost,
+    )  # fmt: skip
+    if fast.status is PlanStatus.SOLVED:
+        assert plan_cost(problem, fast.actions) == fast.cost
