@@ -29,8 +29,8 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from selfrepair.caching import clear_caches
-from selfrepair.repair.replacement import PREFILLED_CACHES, table_reach
+from selfrepair.caching import CacheKind, clear_caches
+from selfrepair.repair.replacement import table_reach
 from selfrepair.repair.tolerance import fault_model
 from selfrepair.repair.tolerance_masks import tolerance_term
 from selfrepair.robots.four_wheel import FOUR_WHEEL
@@ -73,7 +73,7 @@ def main() -> None:
 
                 cold = float("inf")
                 for _ in range(max(1, args.repeats // 2)):
-                    clear_caches(keep=PREFILLED_CACHES)
+                    clear_caches(set(CacheKind) - {CacheKind.PREFILLED})
                     t0 = time.thread_time()
                     make()
                     cold = min(cold, time.thread_time() - t0)

@@ -240,7 +240,9 @@ def test_report_and_animate(tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
         for n in ("1", "1b", "2", "3", "4")
         for o in ("HELD", "NOT HELD", "INCONCLUSIVE")
     ]
-    assert sum(report.count(o) for o in outcomes) == 5
+    assert sum(report.count(o) for o in outcomes) == 3
+    # one table, one recursion mode: findings 3 and 4 do not apply, one line each
+    assert report.count("*Finding 3 left out: ") == 1 and report.count("*Finding 4 left out: ") == 1
     # the drawn mission's trace replays, and animate works on it from the CLI
     assert main(["replay", str(out_dir / "mission.jsonl")]) == 0
     gif = tmp_path / "again.gif"
@@ -287,7 +289,7 @@ def test_terminal_summary_never_truncates_a_number(
 
     monkeypatch.setenv("COLUMNS", str(width))
     monkeypatch.setattr(sys.stdout, "isatty", lambda: True)
-    from selfrepair.experiment.stats import Interval
+    from selfrepair.stats import Interval
 
     summary = StrategySummary(
         label="replacement[generated-agnostic,guarded] w=1/3",
@@ -315,7 +317,7 @@ def test_terminal_summary_never_truncates_a_number(
 
 def _long_summary(label: str) -> object:
     from selfrepair.experiment.findings import StrategySummary
-    from selfrepair.experiment.stats import Interval
+    from selfrepair.stats import Interval
 
     return StrategySummary(
         label=label,

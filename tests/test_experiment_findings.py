@@ -11,11 +11,11 @@ from selfrepair.experiment.findings import (
     MIN_PAIRS,
     Outcome,
     check_findings,
-    percentile,
     reference_note,
     summarize,
 )
 from selfrepair.experiment.summary import fault_set_bite
+from selfrepair.stats import percentile
 
 
 def row(
@@ -71,7 +71,6 @@ def row(
 
 
 def test_percentile_nearest_rank() -> None:
-    assert percentile([], 0.5) is None
     assert percentile([3.0, 1.0, 2.0], 0.5) == 2.0
     assert percentile(list(range(1, 101)), 0.99) == 99.0
 
@@ -239,7 +238,7 @@ def test_finding_2_clearance_by_paired_missions() -> None:
     full = [_flat(r) for r in routes]
     # a baseline at 100% leaves no room: neither held nor refuted
     assert _outcome(full + [_flat(r, "1") for r in routes], "2") is Outcome.INCONCLUSIVE
-    assert _outcome(base, "2") is Outcome.INCONCLUSIVE  # nothing to compare
+    assert _outcome(base, "2") is Outcome.NOT_APPLICABLE  # no weight above 0: left out
 
 
 def test_finding_3_tables_by_paired_missions() -> None:
@@ -249,7 +248,7 @@ def test_finding_3_tables_by_paired_missions() -> None:
     worse = [_flat(r, ok=False, table="generated-indexed") for r in routes]
     assert _outcome(hand + better, "3") is Outcome.HELD
     assert _outcome(hand + worse, "3") is Outcome.NOT_HELD
-    assert _outcome(hand, "3") is Outcome.INCONCLUSIVE
+    assert _outcome(hand, "3") is Outcome.NOT_APPLICABLE  # no other table: left out
 
 
 def test_finding_4_primitive_against_guarded() -> None:

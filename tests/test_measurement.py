@@ -19,9 +19,9 @@ from selfrepair.execution.metrics import mission_row, motion_distance, optimum_t
 from selfrepair.execution.result import MissionSpec
 from selfrepair.experiment.faultsets import PAPER_FAULT_SETS, biting_fault_sets
 from selfrepair.experiment.keys import Mission, canonical_json
-from selfrepair.experiment.runner import execute_mission
 from selfrepair.experiment.scale import crossover
-from selfrepair.experiment.stats import bootstrap_interval, sign_test
+from selfrepair.experiment.stats import sign_test
+from selfrepair.experiment.timing import execute_mission
 from selfrepair.geometry import Heading, Pose
 from selfrepair.repair.replacement import (
     RecursionMode,
@@ -33,6 +33,7 @@ from selfrepair.repair.strategies import StrategyOptions
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.lattice import plan
 from selfrepair.search.problem import PlanningProblem
+from selfrepair.stats import bootstrap_interval
 from selfrepair.tables.fileformat import bundled_table
 from selfrepair.tables.model import ReplacementTable, TableEntry
 from selfrepair.world.bundled import bundled_routes, load_bundled

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import pytest
 
+from extras import need
 from selfrepair.cli import main
 from selfrepair.robots.registry import load_plugin
 
@@ -134,7 +135,7 @@ def test_verdict_names_the_most_as_such_and_uses_the_motion_distance(
 def test_explicit_numba_on_a_robot_the_kernels_cannot_take_is_refused(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    pytest.importorskip("numba")
+    need("numba", "fast")
     for command in (["run"], ["plan"]):
         args = [*P, *command, *HOP_ROUTE, "--faults", "HOP", "--backend", "numba"]
         assert main(args) == 2
@@ -145,7 +146,7 @@ def test_explicit_numba_on_a_robot_the_kernels_cannot_take_is_refused(
 def test_auto_falls_back_and_the_row_says_which_backend_ran(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    pytest.importorskip("numba")
+    need("numba", "fast")
     assert main([*P, "run", *HOP_ROUTE, "--faults", "HOP", "--no-warm-up", "--json"]) == 0
     row = json.loads(capsys.readouterr().out)
     assert (row["backend"], row["backend_ran"]) == ("auto", "python")
@@ -260,3 +261,46 @@ def test_a_trace_of_another_version_of_a_loaded_robot_is_refused(
     capsys.readouterr()
     assert main(["replay", str(trace)]) == 2
     assert "but this process loaded 'hopper'" in capsys.readouterr().err
+
+
+# --- 2. editing a robot given with --plugin never reuses its old results -----------------
+
+EXPERIMENT = """\
+name = "hopper"
+domain = "hopper"
+seed = 3
+[[mazes]]
+bundled = "narrow-short"
+[faults]
+sets = "singles"
+[[strategies]]
+name = "replan"
+"""
+
+
+def test_the_robot_file_given_with_plugin_enters_the_mission_keys(tmp_path: Path) -> None:
+    robot = tmp_path / "robot.py"
+    shutil.copy(HOPPER, robot)
+    config = tmp_path / "hopper.toml"
+    config.write_text(EXPERIMENT)
+    db = tmp_path / "r.sqlite"
+    args = ["--plugin", str(robot), "experiment", str(config), "--db", str(db), "--jobs", "1"]
+    first = _cli(*args, cwd=tmp_path)
+    assert first.returncode == 0, first.stderr
+    assert "20 missions, 0 already stored, 20 run" in first.stdout
+    # 10. the findings that do not apply to this experiment are left out, one line each
+    out = " ".join(first.stdout.split())
+    assert "Nothing to compare" not in out and "INCONCLUSIVE" not in out
+    assert "Finding 2 left out: it compares a replacement variant at clearance weight 0" in out
+    for number in ("3", "4"):
+        assert (
+            f"Finding {number} left out: it is about the paper's hand-written table, which is "
+            "the four-wheel robot's; this experiment's robot is hopper." in out
+        )
+    again = _cli(*args, cwd=tmp_path)
+    assert "20 missions, 20 already stored, 0 run" in again.stdout, again.stdout
+    back = '"back": (-1, 0, Fraction({}))'
+    robot.write_text(robot.read_text().replace(back.format(2), back.format(3)))
+    edited = _cli(*args, cwd=tmp_path)
+    assert edited.returncode == 0, edited.stderr
+    assert "20 missions, 0 already stored, 20 run" in edited.stdout, edited.stdout

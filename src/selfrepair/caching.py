@@ -2,10 +2,12 @@
 
 Some values are expensive to derive and cheap to keep: a loaded table, the compiled look-ups of a
 table under a fault set, a maze's occupancy grid, the exact optimum of a fault set. Each such cache
-is a :class:`BoundedCache` made here with a name and a maximum number of entries, evicting the least
-recently used one. Nothing hides scratch space inside frozen values; :func:`cache_stats` lists
-every cache with its size, so a user can see what the process keeps, and :func:`clear_caches`
-empties them all (the tests use it to measure cold behaviour).
+is a :class:`BoundedCache` made with a name, a :class:`CacheKind` and a maximum number of entries,
+evicting the least recently used one. Nothing hides scratch space inside frozen values, and no
+module keeps a cache any other way (no ``functools.cache``, no module-level dict filled on demand;
+a test scans the sources). :func:`cache_stats` lists every cache with its kind and size, so a user
+can see what the process keeps, and :func:`clear_caches` empties them all or those of some kinds
+(the experiment runner's cold runs clear by kind: :mod:`selfrepair.experiment.timing`).
 
 Keys must be hashable with a cheap hash: values such as mazes and tables cache their own hash.
 """
@@ -15,19 +17,47 @@ from __future__ import annotations
 from collections import OrderedDict
 from collections.abc import Callable, Hashable, Iterable
 from dataclasses import dataclass
+from enum import StrEnum
 from typing import Any, Generic, TypeVar
 
-__all__ = ["BoundedCache", "CacheStats", "cache_stats", "clear_caches"]
+__all__ = ["BoundedCache", "CacheKind", "CacheStats", "cache_stats", "clear_caches"]
 
 K = TypeVar("K", bound=Hashable)
 V = TypeVar("V")
 
 
+class CacheKind(StrEnum):
+    """What a cache holds, which decides whether a cold run empties it.
+
+    A cold run (the first run of a mission, timed as a fresh process would pay it) empties the
+    kinds whose work belongs to what is timed and keeps the rest; the policy is
+    :data:`selfrepair.experiment.timing.COLD_CLEARS`.
+    """
+
+    INPUT = "input"
+    """Parsed inputs: bundled and file tables, mazes, route files, package data listings."""
+    REFERENCE = "reference"
+    """Reference figures computed outside every clock (the fault-free optimum of a route)."""
+    SIMULATION = "simulation"
+    """The simulator's own tables (time units, move tables); no plan or repair reads them."""
+    PREFILLED = "prefilled"
+    """Derived data every mission computes before its clocks start (a table's reach and its
+    candidates' geometry)."""
+    PLAN = "plan"
+    """Planner data: lattices, distances, occupancy and clearance grids, kernel inputs."""
+    REPAIR = "repair"
+    """Replacement data: compiled look-ups, merged candidates, complex actions, optima."""
+    RECORD = "record"
+    """Texts and figures made for rows and traces after a run."""
+
+
 @dataclass(frozen=True, slots=True)
 class CacheStats:
-    """One cache's name, bound, current size and hit/miss counts since it was made or cleared."""
+    """One cache's name, kind, bound, current size and hit/miss counts since it was made or
+    cleared."""
 
     name: str
+    kind: CacheKind
     maxsize: int
     size: int
     hits: int
@@ -35,14 +65,16 @@ class CacheStats:
 
 
 class BoundedCache(Generic[K, V]):
-    """A named least-recently-used cache of at most ``maxsize`` entries (mutable by nature)."""
+    """A named least-recently-used cache of at most ``maxsize`` entries of one ``kind`` (mutable
+    by nature)."""
 
-    __slots__ = ("_data", "hits", "maxsize", "misses", "name")
+    __slots__ = ("_data", "hits", "kind", "maxsize", "misses", "name")
 
-    def __init__(self, name: str, maxsize: int) -> None:
+    def __init__(self, name: str, maxsize: int, *, kind: CacheKind) -> None:
         if maxsize < 1:
             raise ValueError(f"cache {name!r}: maxsize must be at least 1, got {maxsize}")
         self.name = name
+        self.kind = kind
         self.maxsize = maxsize
         self._data: OrderedDict[K, V] = OrderedDict()
         self.hits = 0
@@ -82,7 +114,9 @@ class BoundedCache(Generic[K, V]):
 
     def stats(self) -> CacheStats:
         """This cache's :class:`CacheStats`."""
-        return CacheStats(self.name, self.maxsize, len(self._data), self.hits, self.misses)
+        return CacheStats(
+            self.name, self.kind, self.maxsize, len(self._data), self.hits, self.misses
+        )
 
 
 _ALL: list[BoundedCache[Any, Any]] = []
@@ -93,10 +127,10 @@ def cache_stats() -> tuple[CacheStats, ...]:
     return tuple(sorted((c.stats() for c in _ALL), key=lambda s: s.name))
 
 
-def clear_caches(keep: Iterable[str] = ()) -> None:
-    """Empty every cache (e.g. to measure the first, cold call of something), except those named
-    in ``keep``."""
-    spared = frozenset(keep)
+def clear_caches(kinds: Iterable[CacheKind] | None = None) -> None:
+    """Empty every cache of the given ``kinds`` (every cache when ``None``), e.g. to measure the
+    first, cold call of something."""
+    chosen = frozenset(CacheKind) if kinds is None else frozenset(kinds)
     for cache in _ALL:
-        if cache.name not in spared:
+        if cache.kind in chosen:
             cache.clear()

@@ -55,7 +55,7 @@ def resolve_experiment(spec: str) -> Path:
 
 def _check_options(backend: str, jobs: int, scheduler: str | None) -> None:
     """The runner's checks, worded with the flags (the library names none)."""
-    from selfrepair.experiment.runner import BACKENDS
+    from selfrepair.experiment.backends import BACKENDS
 
     if backend not in BACKENDS:
         raise InputError(
@@ -142,12 +142,15 @@ def experiment(
     """
     import joblib
 
+    from selfrepair.experiment.backends import check_backend
     from selfrepair.experiment.findings import check_findings, reference_note, summarize
     from selfrepair.experiment.missions import expand
-    from selfrepair.experiment.runner import check_backend, execute_mission, run_missions
+    from selfrepair.experiment.runner import run_missions
     from selfrepair.experiment.store import ResultStore
     from selfrepair.experiment.summary import fault_set_bite
     from selfrepair.experiment.teams import TeamExperimentConfig, load_experiment
+    from selfrepair.experiment.timing import execute_mission
+    from selfrepair.experiment.tolerance_findings import tolerance_findings
 
     missions: tuple[Mission, ...] = ()
     db_path: Path | None = None
@@ -203,7 +206,9 @@ def experiment(
             rows = [r for r in store.rows() if r["key"] in keys]
             print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
             print_fault_sets(fault_set_bite(rows))
-            print_findings(check_findings(rows), reference_note(rows))
+            print_findings(
+                [*check_findings(rows), *tolerance_findings(rows)], reference_note(rows)
+            )
             print_baselines(rows)
             if cfg.crossover:
                 _print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))

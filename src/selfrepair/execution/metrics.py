@@ -27,7 +27,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, NamedTuple
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
 from selfrepair.repair.strategies import RepairSource, RepairStatus
@@ -36,6 +36,7 @@ from selfrepair.search.astar import PlanStatus
 from selfrepair.search.backend import backend_ran
 from selfrepair.search.lattice import action_cost, plan
 from selfrepair.search.problem import PlanningProblem
+from selfrepair.stats import lower_median, percentile
 
 __all__ = [
     "ROW_COLUMNS",
@@ -84,7 +85,7 @@ def motion_distance(
 
 
 _OPTIMUM: BoundedCache[tuple[Hashable, ...], Fraction | None] = BoundedCache(
-    "fault-free optimum ticks", 1024
+    "fault-free optimum ticks", 1024, kind=CacheKind.REFERENCE
 )
 
 
@@ -122,22 +123,16 @@ class LatencyStats:
     total_ns: int
 
 
-def _nearest_rank(ordered: Sequence[int], fraction: float) -> int:
-    """The nearest-rank percentile: the smallest value with at least ``fraction`` of the data at
-    or below it."""
-    rank = max(1, -(-round(fraction * 10_000) * len(ordered) // 10_000))
-    return ordered[min(rank, len(ordered)) - 1]
-
-
 def latency_stats(latencies_ns: Iterable[int]) -> LatencyStats:
-    """Count, median (lower median), nearest-rank 99th percentile, maximum and total."""
+    """Count, lower median, 99th percentile, maximum and total (the percentile and median of
+    :mod:`selfrepair.stats`)."""
     ordered = sorted(latencies_ns)
     if not ordered:
         return LatencyStats(0, None, None, None, 0)
     return LatencyStats(
         len(ordered),
-        ordered[(len(ordered) - 1) // 2],
-        _nearest_rank(ordered, 0.99),
+        lower_median(ordered),
+        percentile(ordered, 0.99),
         ordered[-1],
         sum(ordered),
     )
@@ -243,7 +238,7 @@ def _schedule_texts(schedule: FaultSchedule, domain: Domain[Any, Any]) -> tuple[
 
 
 _SCHEDULE_TEXTS: BoundedCache[tuple[FaultSchedule, Domain[Any, Any]], tuple[str, str]] = (
-    BoundedCache("fault schedule texts", 256)
+    BoundedCache("fault schedule texts", 256, kind=CacheKind.RECORD)
 )
 
 

@@ -18,22 +18,19 @@ subset under a fault set is kept per fault set.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, NamedTuple
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain
 
 __all__ = [
-    "SIMULATION_CACHES",
     "Move",
     "MoveTable",
     "available_moves",
     "move_table",
-    "time_unit",
 ]
 
 
@@ -70,25 +67,13 @@ class MoveTable:
     shapes: dict[Any, tuple[tuple[Cell, ...], ...]]
 
 
-def time_unit(domain: Domain[Any, Any]) -> int:
-    """The domain's time unit: lcm of its duration denominators (and of 1, a failed attempt)."""
-    return _UNITS.get(domain, lambda: _time_unit(domain))
-
-
-def _time_unit(domain: Domain[Any, Any]) -> int:
-    return math.lcm(1, *(Fraction(domain.duration(a)).denominator for a in domain.actions))
-
-
-_UNITS: BoundedCache[Domain[Any, Any], int] = BoundedCache("domain time units", 64)
-
-
 def move_table(domain: Domain[Any, Any], stride: int) -> MoveTable:
     """The :class:`MoveTable` of ``domain`` for buffers of ``stride`` bytes per row."""
     return _TABLES.get((domain, stride), lambda: _move_table(domain, stride))
 
 
 def _move_table(domain: Domain[Any, Any], stride: int) -> MoveTable:
-    unit = time_unit(domain)
+    unit = domain.time_unit
     moves: dict[Any, tuple[Move, ...]] = {}
     shapes: dict[Any, tuple[tuple[Cell, ...], ...]] = {}
     reach = 0
@@ -116,7 +101,7 @@ def _move_table(domain: Domain[Any, Any], stride: int) -> MoveTable:
 
 
 _TABLES: BoundedCache[tuple[Domain[Any, Any], int], MoveTable] = BoundedCache(
-    "domain move tables", 64
+    "domain move tables", 64, kind=CacheKind.SIMULATION
 )
 
 
@@ -132,12 +117,6 @@ def _available(table: MoveTable, faults: frozenset[Any]) -> dict[Any, tuple[Move
 
 
 _AVAILABLE: BoundedCache[tuple[MoveTable, frozenset[Any]], dict[Any, tuple[Move, ...]]] = (
-    BoundedCache("available moves per fault set", 4096)
+    BoundedCache("available moves per fault set", 4096, kind=CacheKind.SIMULATION)
 )
 
-
-SIMULATION_CACHES: tuple[str, ...] = (_UNITS.name, _TABLES.name, _AVAILABLE.name)
-"""The names of this module's caches: the simulator's and the executor's own bookkeeping, derived
-from the robot model alone (per domain, maze stride and fault set) and never read by a plan or a
-repair, so no timed call depends on them. A measurement that empties the caches to time a cold
-first repair can keep these (the experiment runner does)."""

@@ -6,7 +6,7 @@ clearance weight 0 is compared. *The same missions*: the table is computed over 
 (maze, route, faults, fault time, detection, replicate) that **every** variant ran, so a strategy
 limited to some mazes (LPG-adapt cannot take ``wide-long``) limits the table to those; the per-maze
 figures (:func:`per_maze`) use every row. The unit of every statistic is the mission; intervals
-are :func:`~selfrepair.experiment.stats.bootstrap_interval`'s (percentile bootstrap, fixed seed).
+are :func:`~selfrepair.stats.bootstrap_interval`'s (percentile bootstrap, fixed seed).
 
 Columns of :class:`BaselineLine`:
 
@@ -42,10 +42,10 @@ from fractions import Fraction
 from typing import ClassVar
 
 from selfrepair.experiment.findings import situation
-from selfrepair.experiment.stats import Interval, bootstrap_interval
 from selfrepair.experiment.store import Value
 from selfrepair.experiment.summary import Row, group_label, met_fault, num, strategy_order
 from selfrepair.repair.strategies import StrategyName
+from selfrepair.stats import Interval, bootstrap_interval
 
 __all__ = [
     "BASELINE_STRATEGIES",

@@ -43,6 +43,7 @@ when all are HELD, INCONCLUSIVE otherwise.
 
 from __future__ import annotations
 
+import json
 import textwrap
 from collections import defaultdict
 from collections.abc import Callable, Sequence
@@ -50,7 +51,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 from fractions import Fraction
 
-from selfrepair.experiment.stats import Interval, bootstrap_interval, sign_test, wilcoxon_greater
+from selfrepair.experiment.stats import sign_test, wilcoxon_greater
 from selfrepair.experiment.store import Value
 from selfrepair.experiment.summary import (
     Row,
@@ -58,15 +59,13 @@ from selfrepair.experiment.summary import (
     group_label,
     is_reference_replan,
     local_share,
-    median,
     met_fault,
     num,
-    percentile,
     repairs_of,
     summarize,
 )
-from selfrepair.experiment.variants import REWRITE_LABEL
 from selfrepair.repair.strategies import RepairSource, StrategyName
+from selfrepair.stats import Interval, bootstrap_interval, lower_median
 
 __all__ = [
     "ALPHA",
@@ -82,8 +81,6 @@ __all__ = [
     "group_label",
     "is_rewrite",
     "local_share",
-    "median",
-    "percentile",
     "reference_note",
     "repairs_of",
     "summarize",
@@ -114,6 +111,10 @@ class Outcome(StrEnum):
     HELD = "held"
     NOT_HELD = "not held"
     INCONCLUSIVE = "inconclusive"
+    NOT_APPLICABLE = "not applicable"
+    """The experiment runs none of the variants the claim compares (a plug-in robot has no
+    hand-written table, a sweep without clearance weights): the finding is left out, with one
+    line saying why, rather than judged INCONCLUSIVE on nothing."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -132,19 +133,30 @@ class Finding:
         return self.outcome.value
 
     @property
+    def applies(self) -> bool:
+        """Whether the experiment holds what the claim compares (else :attr:`lines` is the one
+        line saying why it is left out)."""
+        return self.outcome is not Outcome.NOT_APPLICABLE
+
+    @property
     def evidence(self) -> str:
         """The evidence as one paragraph."""
         return " ".join(self.lines)
 
     @property
     def headline(self) -> str:
-        """``Finding N: OUTCOME. Claim.``"""
+        """``Finding N: OUTCOME. Claim.``, or ``Finding N left out: why.`` when it does not
+        apply."""
+        if not self.applies:
+            return f"Finding {self.number} left out: {self.lines[0]}"
         return f"Finding {self.number}: {self.outcome.value.upper()}. {_cap(self.claim)}."
 
     def paragraph(self, width: int = 96) -> str:
         """The headline, the introducing sentence and one item per comparison, wrapped to
-        ``width`` for a terminal."""
+        ``width`` for a terminal (the headline alone for a finding left out)."""
         out = [textwrap.fill(self.headline, width, subsequent_indent="  ")]
+        if not self.applies:
+            return out[0]
         intro, *items = self.lines
         out.append(textwrap.fill(intro, width, initial_indent="  ", subsequent_indent="  "))
         out += [
@@ -154,7 +166,10 @@ class Finding:
         return "\n".join(out)
 
     def markdown(self) -> str:
-        """The same as Markdown: the headline in bold, the items as a list."""
+        """The same as Markdown: the headline in bold, the items as a list (one line in italics
+        for a finding left out)."""
+        if not self.applies:
+            return f"*{self.headline}*"
         intro, *items = self.lines
         head = f"**Finding {self.number}: {self.outcome.value.upper()}.** {_cap(self.claim)}."
         return "\n".join([head, "", intro, "", *(f"- {item}" for item in items)])
@@ -172,6 +187,8 @@ CLAIMS = {
     "1b": "replanning time falls when most faulty actions found a substitute",
     "2": "keeping plans away from walls (clearance weight > 0) raises the share of missions "
     "completed without a replan",
+    "2t": "planning for tolerance (the tolerant planner) completes more missions without a "
+    "replan than planning for clearance (the highest clearance weight run)",
     "3": "generated tables complete more missions without a replan than the hand-written one",
     "4": "the primitive/complex recursion scheme works badly with the hand-written table "
     "(fewer missions without a replan than guarded recursion)",
@@ -206,6 +223,7 @@ def reference_note(rows: Sequence[Row]) -> str | None:
 
 def check_findings(rows: Sequence[Row]) -> list[Finding]:
     """Every finding, each HELD / NOT HELD / INCONCLUSIVE, with the numbers behind it."""
+    rows = [r for r in rows if not is_tolerant(r)]  # judged apart (tolerance_findings)
     rewriting = [r for r in rows if is_rewrite(r)]
     rows = [r for r in rows if not is_rewrite(r)]
     return [
@@ -250,10 +268,23 @@ def _is_replacement(row: Row) -> bool:
     return row.get("strategy") == StrategyName.REPLACEMENT
 
 
+def is_tolerant(row: Row) -> bool:
+    """Whether a row's plan was made by the tolerant planner (objective ``tolerant ...``)."""
+    return str(row.get("objective") or "").startswith("tolerant")
+
+
 def is_rewrite(row: Row) -> bool:
-    """Whether a row's variant rewrites the whole plan (``replacement[...,rewrite]``)."""
-    inside = str(row.get("variant") or "").partition("[")[2].rstrip("]")
-    return REWRITE_LABEL in inside.split(",")
+    """Whether a row's variant rewrites the whole plan: its ``rewrite`` column (rows stored
+    before that column existed: the ``rewrite`` option of the mission's stored configuration),
+    never the variant label's text."""
+    column = row.get("rewrite")
+    if column is not None:
+        return column == 1
+    config = row.get("config")
+    if not isinstance(config, str):
+        return False
+    options = json.loads(config).get("options")
+    return isinstance(options, dict) and bool(options.get("rewrite"))
 
 
 # --- finding 1: compute ------------------------------------------------------------------------
@@ -286,7 +317,10 @@ def _finding_1(rows: Sequence[Row], number: str = "1") -> Finding:
             and num(r, "replans") == 0
         ):
             variants[group_label(r)].append(r)
-    if not replan or not variants:
+    lacking = _lacking(rows, replan)
+    if lacking is not None:
+        return Finding(number, CLAIMS[number], Outcome.NOT_APPLICABLE, (lacking,))
+    if not variants:
         return Finding(number, CLAIMS[number], Outcome.INCONCLUSIVE, (_NEEDS_BOTH,))
     outcomes = []
     lines = []
@@ -305,6 +339,15 @@ def _finding_1(rows: Sequence[Row], number: str = "1") -> Finding:
 
 
 _NEEDS_BOTH = "Needs replan (variant replan) and replacing missions in the same situations."
+
+
+def _lacking(rows: Sequence[Row], replan: dict[tuple[Value, ...], Row]) -> str | None:
+    """Why a finding that sets replacement against variant replan does not apply: the
+    experiment runs one of them not at all (``None`` when it runs both)."""
+    if replan and any(_is_replacement(r) for r in rows):
+        return None
+    what = "no variant replan" if not replan else "no replacement strategy"
+    return f"it sets replacement against variant replan, and this experiment runs {what}."
 _ONE_INTRO = (
     "Paired missions that met a fault, the replacing robot without any replan; "
     "median of (its repair compute / that of variant replan), 95% interval:"
@@ -316,8 +359,8 @@ def _ratio_line(
 ) -> str:
     if interval is None:
         return f"{label}: no pair: {outcome.value}."
-    ours = median([num(r, "repair_count") for r, _ in pairs]) or 0
-    theirs = median([num(p, "repair_count") for _, p in pairs]) or 0
+    ours = lower_median([num(r, "repair_count") for r, _ in pairs]) if pairs else 0
+    theirs = lower_median([num(p, "repair_count") for _, p in pairs]) if pairs else 0
     return (
         f"{label}: {interval.text(3)} over {interval.n} pairs ({ours:g} repairs per mission "
         f"against {theirs:g}): {outcome.value}."
@@ -326,8 +369,9 @@ def _ratio_line(
 
 def _finding_1b(rows: Sequence[Row]) -> Finding:
     replan = _by_situation(rows, is_reference_replan)
-    if not replan:
-        return Finding("1b", CLAIMS["1b"], Outcome.INCONCLUSIVE, (_NEEDS_BOTH,))
+    lacking = _lacking(rows, replan)
+    if lacking is not None:
+        return Finding("1b", CLAIMS["1b"], Outcome.NOT_APPLICABLE, (lacking,))
     variants: dict[str, list[float]] = defaultdict(list)
     for r in rows:
         if (
@@ -445,12 +489,17 @@ def _pairs(base: Sequence[Row], other: Sequence[Row]) -> list[tuple[Row, Row]]:
 
 
 def _judge(
-    number: str, comparisons: Sequence[Comparison], intro: str, extra: Sequence[str] = ()
+    number: str,
+    comparisons: Sequence[Comparison],
+    intro: str,
+    extra: Sequence[str] = (),
+    *,
+    missing: str,
 ) -> Finding:
+    """The finding from its comparisons; without any, the finding does not apply and
+    ``missing`` says why (one sentence: what the claim compares that the experiment lacks)."""
     if not comparisons:
-        return Finding(
-            number, CLAIMS[number], Outcome.INCONCLUSIVE, (intro, "Nothing to compare.", *extra)
-        )
+        return Finding(number, CLAIMS[number], Outcome.NOT_APPLICABLE, (missing,))
     full = [c for c in comparisons if c.ceiling and c.outcome is not Outcome.NOT_HELD]
     counted = [c.outcome for c in comparisons if c not in full]
     lines = [intro, *(c.line() for c in comparisons if c not in full)]
@@ -481,7 +530,12 @@ def _finding_2(rows: Sequence[Row]) -> Finding:
             costs.append(_tick_cost(f"{variant} w={weight}", pairs))
     intro = _PAIRED
     shares = _encounter_shares(by_variant)
-    return _judge("2", comparisons, intro, [c for c in (*costs, shares) if c])
+    missing = (
+        "it compares a replacement variant at clearance weight 0 with the same variant at a "
+        "weight above 0, and this experiment runs "
+        + ("no replacement strategy." if not by_variant else "each at one weight only.")
+    )
+    return _judge("2", comparisons, intro, [c for c in (*costs, shares) if c], missing=missing)
 
 
 _PAIRED = (
@@ -540,7 +594,26 @@ def _finding_3(rows: Sequence[Row]) -> Finding:
             if table != HANDWRITTEN:
                 pairs = _pairs(tables[HANDWRITTEN], group)
                 comparisons.append(compare(f"{table} vs {HANDWRITTEN}, {mode}", pairs))
-    return _judge("3", comparisons, _PAIRED)
+    used = {table for tables in groups.values() for table in tables}
+    return _judge("3", comparisons, _PAIRED, missing=_no_handwritten(rows, used, "another table"))
+
+
+def _robots(rows: Sequence[Row]) -> str:
+    names = sorted({str(r.get("domain") or "four-wheel") for r in rows})
+    return ", ".join(names) or "no"
+
+
+def _no_handwritten(rows: Sequence[Row], tables: set[str], other: str) -> str:
+    """Why a finding about the hand-written table does not apply (``tables``: those the
+    replacing missions use; ``other``: what the claim sets the hand-written table against)."""
+    if HANDWRITTEN in tables:
+        return f"it sets the hand-written table against {other}, which this experiment lacks."
+    if all(str(r.get("domain") or "four-wheel") != "four-wheel" for r in rows):
+        return (
+            "it is about the paper's hand-written table, which is the four-wheel robot's; this "
+            f"experiment's robot is {_robots(rows)}."
+        )
+    return "it is about the hand-written table, which this experiment's replacement never uses."
 
 
 # --- finding 4: primitive/complex recursion ---------------------------------------------------
@@ -561,4 +634,5 @@ def _finding_4(rows: Sequence[Row]) -> Finding:
             found = compare(f"{table}: guarded against primitive", pairs, room=False)
             (judged if table == HANDWRITTEN else others).append(found)
     extra = [f"For comparison, {c.line()}" for c in others]
-    return _judge("4", judged, _PAIRED, extra)
+    missing = _no_handwritten(rows, set(groups), "itself under guarded and primitive recursion")
+    return _judge("4", judged, _PAIRED, extra, missing=missing)

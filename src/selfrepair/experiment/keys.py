@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from selfrepair.experiment.schema import ExperimentConfig
-from selfrepair.robots.registry import load_plugin
+from selfrepair.robots.registry import load_plugin, plugin_file
 
 __all__ = [
     "SCHEMA",
@@ -78,11 +78,17 @@ def derive_seed(base_seed: int, situation: dict[str, Any]) -> int:
 
 def plugin_identities(config: ExperimentConfig) -> list[dict[str, str]]:
     """Each plug-in file of ``config`` by absolute path (to load it in workers) and content hash
-    (so editing the robot gives its missions new keys)."""
+    (so editing the robot gives its missions new keys), then the file that registered the
+    config's robot when the config does not name it (a robot given with ``--plugin``): the
+    robot file's content enters the keys however the robot was loaded. A built-in or installed
+    robot adds nothing, so its keys do not change."""
     out = []
     for plugin in config.plugins:
         path = (config.base_dir / plugin).resolve()
         out.append({"file": str(path), "sha256": load_plugin(path)})
+    origin = plugin_file(config.domain)
+    if origin is not None and all(p["sha256"] != origin.sha256 for p in out):
+        out.append({"file": origin.path, "sha256": origin.sha256})
     return out
 
 

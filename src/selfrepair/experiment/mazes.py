@@ -13,7 +13,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ConfigError
 from selfrepair.experiment.keys import canonical_json, derive_seed, portable
 from selfrepair.experiment.schema import MazeConfig
@@ -84,7 +84,9 @@ def entry_label(entry: MazeConfig) -> str:
     return maze_label({"generate": entry.generate.model_dump()})
 
 
-_MAZES: BoundedCache[tuple[str, int | None], Maze] = BoundedCache("experiment mazes", 64)
+_MAZES: BoundedCache[tuple[str, int | None], Maze] = BoundedCache(
+    "experiment mazes", 64, kind=CacheKind.INPUT
+)
 
 
 def maze_of(identity_json: str, *, max_cells: int | None = None) -> Maze:

@@ -23,14 +23,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from selfrepair.experiment.findings import NEGLIGIBLE, situation
-from selfrepair.experiment.stats import (
+from selfrepair.experiment.summary import Row, is_reference_replan, met_fault, num
+from selfrepair.stats import (
     BOOTSTRAP_RESAMPLES,
     BOOTSTRAP_SEED,
     LEVEL,
     Interval,
     bootstrap_interval,
 )
-from selfrepair.experiment.summary import Row, is_reference_replan, met_fault, num
 
 __all__ = ["Crossover", "MazeRatio", "crossover", "maze_side"]
 

@@ -1,12 +1,9 @@
-"""Statistics for the findings and the summary: intervals and paired tests over missions.
+"""Paired tests for the findings: the pairs of missions in the same situation under two strategies.
 
-The unit of every statistic here is the **mission** (or the pair of missions in the same situation
-under two strategies): repairs inside one mission are not independent, missions are. Everything
-is deterministic: bootstrap resampling uses a fixed seed (:data:`BOOTSTRAP_SEED`), so a report
-recomputed from the same database prints the same intervals.
+The unit of every test here is the pair of missions (repairs inside one mission are not
+independent, missions are). Intervals, the bootstrap, percentiles and medians are the ground
+module's (:mod:`selfrepair.stats`).
 
-* :func:`bootstrap_interval` - a percentile bootstrap 95% interval of a statistic (median or mean)
-  of one sample;
 * :func:`sign_test` - the exact one-sided sign test on paired outcomes (the binomial tail over the
   pairs that differ), used for yes/no outcomes such as "completed without replan";
 * :func:`wilcoxon_greater` - the one-sided Wilcoxon signed-rank test on paired differences
@@ -16,107 +13,10 @@ recomputed from the same database prints the same intervals.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Sequence
 from fractions import Fraction
 
-import numpy as np
-import numpy.typing as npt
-
-__all__ = [
-    "BOOTSTRAP_RESAMPLES",
-    "BOOTSTRAP_SEED",
-    "LEVEL",
-    "Interval",
-    "bootstrap_interval",
-    "lower_median",
-    "sign_test",
-    "wilcoxon_greater",
-]
-
-LEVEL = 0.95
-"""Confidence level of every interval."""
-
-BOOTSTRAP_RESAMPLES = 2000
-"""Bootstrap resamples per interval (the percentile method's error at 2000 is about 1% of the
-interval's width)."""
-
-BOOTSTRAP_SEED = 20_061_201
-"""Seed of every bootstrap: intervals are reproducible from the stored rows."""
-
-
-@dataclass(frozen=True, slots=True)
-class Interval:
-    """An estimate with its 95% interval (``low`` and ``high``; equal to the estimate for a
-    sample of one) and the sample size it came from."""
-
-    estimate: float
-    low: float
-    high: float
-    n: int
-
-    def scaled(self, factor: float) -> Interval:
-        """The same interval in other units (e.g. ns to µs)."""
-        return Interval(self.estimate * factor, self.low * factor, self.high * factor, self.n)
-
-    def text(self, digits: int = 0, unit: str = "") -> str:
-        """``12 [10, 15]``: estimate and interval, rounded to ``digits`` decimals."""
-        return (
-            f"{_num(self.estimate, digits)}{unit} "
-            f"[{_num(self.low, digits)}, {_num(self.high, digits)}]"
-        )
-
-
-def _num(value: float, digits: int) -> str:
-    if digits == 0 and abs(value) >= 10:
-        return f"{value:,.0f}"
-    if digits == 0:
-        return f"{value:.1f}"
-    return f"{value:.{digits}f}"
-
-
-def lower_median(values: Sequence[float]) -> float:
-    """The lower median (a value of the data; the middle one for an odd count)."""
-    ordered = sorted(values)
-    return float(ordered[(len(ordered) - 1) // 2])
-
-
-def _median(sample: npt.NDArray[np.float64], axis: int = -1) -> npt.NDArray[np.float64]:
-    return np.asarray(np.median(sample, axis=axis), dtype=np.float64)
-
-
-def _mean(sample: npt.NDArray[np.float64], axis: int = -1) -> npt.NDArray[np.float64]:
-    return np.asarray(np.mean(sample, axis=axis), dtype=np.float64)
-
-
-STATISTICS: dict[str, Callable[..., npt.NDArray[np.float64]]] = {
-    "median": _median,
-    "mean": _mean,
-}
-"""The statistics :func:`bootstrap_interval` knows (vectorised along the last axis)."""
-
-
-def bootstrap_interval(values: Sequence[float], statistic: str = "median") -> Interval | None:
-    """The ``statistic`` of ``values`` with its percentile-bootstrap 95% interval; ``None`` for
-    no values. With one value, or all values equal, the interval is the value itself.
-
-    The percentile bootstrap: :data:`BOOTSTRAP_RESAMPLES` samples of the same size drawn with
-    replacement, the statistic of each, and their 2.5% and 97.5% quantiles (as
-    ``scipy.stats.bootstrap(method="percentile")`` computes it, vectorised here in numpy,
-    which is an order of magnitude faster for the many small samples of a summary)."""
-    if not values:
-        return None
-    sample = np.asarray(values, dtype=np.float64)
-    fn = STATISTICS[statistic]
-    estimate = float(fn(sample))
-    if len(sample) == 1 or np.all(sample == sample[0]):
-        return Interval(estimate, estimate, estimate, len(sample))
-    rng = np.random.default_rng(BOOTSTRAP_SEED)
-    draws = rng.integers(0, len(sample), size=(BOOTSTRAP_RESAMPLES, len(sample)))
-    stats = fn(sample[draws], axis=-1)
-    tail = (1 - LEVEL) / 2
-    low, high = np.quantile(stats, [tail, 1 - tail])
-    return Interval(estimate, min(float(low), estimate), max(float(high), estimate), len(sample))
+__all__ = ["sign_test", "wilcoxon_greater"]
 
 
 def sign_test(better: int, worse: int) -> float:

@@ -19,7 +19,7 @@ mission that never meets a faulty action says nothing about repair.
   over missions with its interval. The initial plan is left out: every strategy of a situation
   makes the same one;
 * *first repair cold / warm*: the first repair of the mission when every derived-data cache of the
-  process was emptied, and the same repair in a warm run (see ``runner.execute_mission``); medians
+  process was emptied, and the same repair in a warm run (see ``timing.execute_mission``); medians
   over missions with intervals;
 * *repair latency median, p99*: over every repair of every mission (pooled; descriptive only,
   repairs of one mission are not independent);
@@ -34,15 +34,14 @@ mission that never meets a faulty action says nothing about repair.
 from __future__ import annotations
 
 import json
-import math
 from collections import Counter, defaultdict
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import ClassVar
 
-from selfrepair.experiment.stats import Interval, bootstrap_interval
 from selfrepair.experiment.store import Value
 from selfrepair.repair.strategies import RepairSource, StrategyName
+from selfrepair.stats import Interval, bootstrap_interval, lower_median, percentile
 
 __all__ = [
     "STRATEGY_ORDER",
@@ -53,33 +52,14 @@ __all__ = [
     "group_label",
     "is_reference_replan",
     "local_share",
-    "median",
     "met_fault",
     "num",
-    "percentile",
     "repairs_of",
     "strategy_order",
     "summarize",
 ]
 
 Row = dict[str, Value]
-
-
-def percentile(values: Sequence[float], fraction: float) -> float | None:
-    """Nearest-rank percentile (``fraction`` in [0, 1]); None for no values."""
-    if not values:
-        return None
-    ordered = sorted(values)
-    rank = max(1, math.ceil(fraction * len(ordered)))
-    return float(ordered[min(rank, len(ordered)) - 1])
-
-
-def median(values: Sequence[float]) -> float | None:
-    """The lower median (a value that occurs in the data); None for no values."""
-    if not values:
-        return None
-    ordered = sorted(values)
-    return float(ordered[(len(ordered) - 1) // 2])
 
 
 def group_label(row: Row) -> str:
@@ -261,10 +241,10 @@ def _summary(label: str, rows: list[Row]) -> StrategySummary:
         repair_compute_us=bootstrap_interval(_values(met, "repair_compute_ns", 1e-3)),
         cold_first_repair_us=bootstrap_interval(_values(met, "cold_first_repair_ns", 1e-3)),
         warm_first_repair_us=bootstrap_interval(_values(met, "first_repair_ns", 1e-3)),
-        latency_median_us=median(latencies),
-        latency_p99_us=percentile(latencies, 0.99),
+        latency_median_us=lower_median(latencies) if latencies else None,
+        latency_p99_us=percentile(latencies, 0.99) if latencies else None,
         repairs_per_mission=sum(num(r, "repair_count") for r in met) / len(met) if met else None,
-        hit_latency_median_us=median(hits),
+        hit_latency_median_us=lower_median(hits) if hits else None,
     )
 
 

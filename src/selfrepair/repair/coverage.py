@@ -23,7 +23,7 @@ from typing import Any, Protocol
 import numpy as np
 import numpy.typing as npt
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import TableError
 from selfrepair.geometry import Cell, Heading, Pose, relative_cell
 from selfrepair.repair.optimum import (
@@ -52,6 +52,7 @@ class WallGrid(Protocol):
 
     @property
     def name(self) -> str: ...
+
 
 __all__ = [
     "CoverageReport",
@@ -316,7 +317,7 @@ _HEADINGS = tuple(Heading)
 
 
 _OPTIMA: BoundedCache[tuple[Domain[Any, Any], frozenset[Any]], dict[Any, Fraction | None]] = (
-    BoundedCache("exact optimal replacements", 256)
+    BoundedCache("exact optimal replacements", 256, kind=CacheKind.REPAIR)
 )
 
 

@@ -60,7 +60,7 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import Any, Final, Generic, Literal, TypeVar
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError, choice
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.limits import MAX_LOOKUP_PATTERNS
@@ -355,7 +355,7 @@ def _key(mode: RecursionMode, max_depth: int) -> int:
 _LOOKUPS: BoundedCache[
     tuple[ReplacementTable, frozenset[Any], RecursionMode, int, Hashable, frozenset[Any], int],
     FaultLookups[Any],
-] = BoundedCache("compiled replacement look-ups", MAX_FAULT_LOOKUPS)
+] = BoundedCache("compiled replacement look-ups", MAX_FAULT_LOOKUPS, kind=CacheKind.REPAIR)
 
 
 def fault_lookups(
@@ -466,7 +466,7 @@ class GridLookups(Generic[T]):
 
 
 _ON_GRIDS: BoundedCache[tuple[FaultLookups[Any], FreeGrid], GridLookups[Any]] = BoundedCache(
-    "compiled look-ups on grids", MAX_FAULT_LOOKUPS
+    "compiled look-ups on grids", MAX_FAULT_LOOKUPS, kind=CacheKind.REPAIR
 )
 
 

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError, choice
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.repair.replacement import (
@@ -95,7 +95,9 @@ def _action_index(domain: Domain[Any, Any]) -> ActionIndex:
     )
 
 
-_INDEX: BoundedCache[Domain[Any, Any], ActionIndex] = BoundedCache("action index", 16)
+_INDEX: BoundedCache[Domain[Any, Any], ActionIndex] = BoundedCache(
+    "action index", 16, kind=CacheKind.REPAIR
+)
 
 
 def action_index(domain: Domain[Any, Any]) -> ActionIndex:
@@ -254,7 +256,7 @@ def _join(parts: tuple[int, ...]) -> int:
 
 
 _ROWS: BoundedCache[tuple[FreeGrid, int], list[list[int]]] = BoundedCache(
-    "occupancy codes", MAX_CODE_GRIDS
+    "occupancy codes", MAX_CODE_GRIDS, kind=CacheKind.REPAIR
 )
 
 

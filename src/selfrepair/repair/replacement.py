@@ -60,7 +60,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError, choice
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.repair.core import CoreSearch, RecurseRule, Replacement
@@ -69,7 +69,6 @@ from selfrepair.tables.model import ReplacementTable
 
 __all__ = [
     "DEFAULT_MAX_DEPTH",
-    "PREFILLED_CACHES",
     "RECURSION_MODES",
     "FreeTest",
     "RecurseRule",
@@ -155,7 +154,7 @@ def _complex(table: ReplacementTable, known: frozenset[Any]) -> frozenset[Any]:
 
 
 _COMPLEX: BoundedCache[tuple[ReplacementTable, frozenset[Any]], frozenset[Any]] = BoundedCache(
-    "complex actions", 256
+    "complex actions", 256, kind=CacheKind.REPAIR
 )
 
 
@@ -278,7 +277,7 @@ def _geometry(domain: Domain[Any, Any], candidate: tuple[Any, ...]) -> _Geometry
 
 
 _GEOMETRY: BoundedCache[tuple[Domain[Any, Any], tuple[Any, ...]], _Geometry] = BoundedCache(
-    "candidate geometry", 1 << 16
+    "candidate geometry", 1 << 16, kind=CacheKind.PREFILLED
 )
 
 
@@ -307,13 +306,10 @@ def _reach(table: ReplacementTable) -> int:
     )
 
 
-_REACH: BoundedCache[ReplacementTable, int] = BoundedCache("table reach", 64)
+_REACH: BoundedCache[ReplacementTable, int] = BoundedCache(
+    "table reach", 64, kind=CacheKind.PREFILLED
+)
 
-PREFILLED_CACHES: tuple[str, ...] = (_REACH.name, _GEOMETRY.name)
-"""The names of the caches :func:`table_reach` fills: a mission fills them before anything is
-timed (the margin of its free grid needs the reach), so no timed look-up computes them. A
-measurement that empties the caches to time a cold first repair can keep these (the experiment
-runner does): the cold repair does the same work either way."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -342,7 +338,7 @@ def _compile_flat(
 
 _COMPILED: BoundedCache[
     tuple[ReplacementTable, Any, frozenset[Any], int], tuple[_Compiled, ...]
-] = BoundedCache("compiled flat look-ups", 1 << 14)
+] = BoundedCache("compiled flat look-ups", 1 << 14, kind=CacheKind.REPAIR)
 
 
 def flat_replacement(

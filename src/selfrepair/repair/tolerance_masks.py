@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.limits import MAX_LOOKUP_PATTERNS
@@ -122,7 +122,9 @@ def tolerance_masks(
     )
 
 
-_MASKS: BoundedCache[tuple[Any, ...], ToleranceMasks] = BoundedCache("tolerance masks", 16)
+_MASKS: BoundedCache[tuple[Any, ...], ToleranceMasks] = BoundedCache(
+    "tolerance masks", 16, kind=CacheKind.REPAIR
+)
 
 
 def _masks(
@@ -221,5 +223,5 @@ def tolerance_term(
 
 
 _TERMS: BoundedCache[tuple[ToleranceMasks, Fraction | None], StepTerm] = BoundedCache(
-    "tolerance terms", 16
+    "tolerance terms", 16, kind=CacheKind.REPAIR
 )

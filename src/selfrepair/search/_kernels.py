@@ -52,7 +52,7 @@ from typing import Any, NamedTuple, TypeVar
 import numpy as np
 import numpy.typing as npt
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain
 from selfrepair.search.astar import PlanStatus
@@ -372,7 +372,9 @@ def _padded_free(maze: Maze) -> npt.NDArray[np.uint8]:
     return _cached(_FREE, maze, make)  # type: ignore[no-any-return]
 
 
-_FREE: BoundedCache[Maze, npt.NDArray[np.uint8]] = BoundedCache("padded free cells", 8)
+_FREE: BoundedCache[Maze, npt.NDArray[np.uint8]] = BoundedCache(
+    "padded free cells", 8, kind=CacheKind.PLAN
+)
 
 
 def _neighbourhoods(maze: Maze) -> npt.NDArray[np.uint16]:
@@ -396,7 +398,7 @@ def _neighbourhoods(maze: Maze) -> npt.NDArray[np.uint16]:
 
 
 _NEIGHBOURS: BoundedCache[Maze, npt.NDArray[np.uint16]] = BoundedCache(
-    "lattice neighbourhood masks", 8
+    "lattice neighbourhood masks", 8, kind=CacheKind.PLAN
 )
 
 
@@ -571,7 +573,9 @@ def _motion(domain: Domain[Any, Any], moves: tuple[Any, ...], pw: int, scale: in
     return _Motion(table, int(table[:, :, _DUR].max(initial=0)), objects)
 
 
-_MOTIONS: BoundedCache[Hashable, _Motion] = BoundedCache("lattice motion tables", 256)
+_MOTIONS: BoundedCache[Hashable, _Motion] = BoundedCache(
+    "lattice motion tables", 256, kind=CacheKind.PLAN
+)
 
 
 def _padded_penalty(maze: Maze, radius: int) -> tuple[npt.NDArray[np.int64], int]:
@@ -591,12 +595,11 @@ def _padded_penalty(maze: Maze, radius: int) -> tuple[npt.NDArray[np.int64], int
 
 
 _PENALTY: BoundedCache[tuple[Maze, int], tuple[npt.NDArray[np.int64], int]] = BoundedCache(
-    "padded clearance penalties", 8
+    "padded clearance penalties", 8, kind=CacheKind.PLAN
 )
 
 _NO_PENALTY = np.zeros(1, dtype=np.int64)
 _NO_PENALTY.setflags(write=False)
-
 
 
 _NO_EXTRA = np.zeros(1, dtype=np.int64)
@@ -630,7 +633,7 @@ def _step_extra(
 
 
 _EXTRA: BoundedCache[Hashable, tuple[npt.NDArray[np.int64], int]] = BoundedCache(
-    "step terms in kernel layout", 8
+    "step terms in kernel layout", 8, kind=CacheKind.PLAN
 )
 
 

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Heading, Pose
 from selfrepair.robots.domain import Domain
@@ -35,7 +36,9 @@ def numba_available() -> bool:
     return _kernels.NUMBA
 
 
-_REFUSALS: dict[Domain[Any, Any], str | None] = {}
+_REFUSALS: BoundedCache[Domain[Any, Any], str | None] = BoundedCache(
+    "kernel refusals", 16, kind=CacheKind.PLAN
+)
 """:func:`kernel_refusal` by domain (a process knows a few domains)."""
 
 
@@ -43,27 +46,24 @@ def kernel_refusal(domain: Domain[Any, Any]) -> str | None:
     """Why the compiled lattice kernels cannot plan for ``domain`` (one line), or ``None`` when
     they can: an action that ends or sweeps outside the 3x3 cells around the robot from some
     heading, or more than :data:`MAX_KERNEL_CLASSES` motion classes. Checked once per domain."""
-    if domain in _REFUSALS:
-        return _REFUSALS[domain]
-    reason: str | None = None
+    return _REFUSALS.get(domain, lambda: _refusal(domain))
+
+
+def _refusal(domain: Domain[Any, Any]) -> str | None:
     classes = len({domain.motion_class(a) for a in domain.actions})
     if classes > MAX_KERNEL_CLASSES:
-        reason = f"it has {classes} motion classes, more than the kernels' {MAX_KERNEL_CLASSES}"
+        return f"it has {classes} motion classes, more than the kernels' {MAX_KERNEL_CLASSES}"
     for action in domain.actions:
-        if reason is not None:
-            break
         for heading in Heading:
             start = Pose(0, 0, heading)
             end = domain.apply(start, action)
             cells = (end.cell, *domain.footprint(start, action))
             if any(max(abs(x), abs(y)) > 1 for x, y in cells):
-                reason = (
+                return (
                     f"action {domain.format_action(action)} facing {heading.name} leaves the 3x3 "
                     "cells around the robot"
                 )
-                break
-    _REFUSALS[domain] = reason
-    return reason
+    return None
 
 
 def use_numba(backend: str, domain: Domain[Any, Any] | None = None) -> bool:

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain
@@ -143,7 +143,9 @@ def pose_table(maze: Maze) -> list[Pose | None] | None:
 POSE_TABLE_CELLS = 1 << 16
 """The largest maze (cells) with a :func:`pose_table`: 256 x 256, 2 MB per table."""
 
-_POSES: BoundedCache[Maze, list[Pose | None]] = BoundedCache("canonical poses per maze", 16)
+_POSES: BoundedCache[Maze, list[Pose | None]] = BoundedCache(
+    "canonical poses per maze", 16, kind=CacheKind.PLAN
+)
 
 
 def with_border(inner: npt.NDArray[np.integer]) -> npt.NDArray[np.int32]:

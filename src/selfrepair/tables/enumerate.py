@@ -8,14 +8,13 @@ generator and the report that judges it agree on what an action costs.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 from fractions import Fraction
 from typing import Any
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import TableError, choice
 from selfrepair.geometry import Cell
 from selfrepair.robots.domain import Domain, run_open
@@ -83,7 +82,9 @@ class DomainClasses:
     scale: int
 
 
-_CLASSES: BoundedCache[Domain[Any, Any], DomainClasses] = BoundedCache("domain motion classes", 16)
+_CLASSES: BoundedCache[Domain[Any, Any], DomainClasses] = BoundedCache(
+    "domain motion classes", 16, kind=CacheKind.REPAIR
+)
 
 
 def motion_classes(domain: Domain[Any, Any]) -> tuple[MotionClass, ...]:
@@ -122,8 +123,7 @@ def _classes(domain: Domain[Any, Any]) -> DomainClasses:
     identity = frozenset(
         c.index for c in classes if c.end == start and c.footprint == frozenset({start.cell})
     )
-    scale = math.lcm(*(Fraction(domain.duration(a)).denominator for a in domain.actions))
-    return DomainClasses(domain, classes, of_action, identity, scale)
+    return DomainClasses(domain, classes, of_action, identity, domain.time_unit)
 
 
 # --- fault scopes and class costs -------------------------------------------------------------

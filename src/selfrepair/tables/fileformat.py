@@ -25,14 +25,13 @@ from __future__ import annotations
 import json
 import math
 import re
-from functools import cache
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import InputError, TableError
 from selfrepair.limits import MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES, check_limit
 from selfrepair.robots.domain import Domain
@@ -356,13 +355,20 @@ def dump_table(table: ReplacementTable) -> str:
     return "\n".join(line for line in lines if line) + "\n"
 
 
-@cache
+_NAMES: BoundedCache[str, tuple[str, ...]] = BoundedCache(
+    "bundled table names", 1, kind=CacheKind.INPUT
+)
+
+
 def bundled_table_names() -> tuple[str, ...]:
-    """Names of the tables shipped as package data."""
-    folder = resources.files("selfrepair").joinpath("data", "tables")
-    return tuple(
-        sorted(p.name[: -len(".json")] for p in folder.iterdir() if p.name.endswith(".json"))
-    )
+    """Names of the tables shipped as package data (listed once per process)."""
+
+    def listing() -> tuple[str, ...]:
+        folder = resources.files("selfrepair").joinpath("data", "tables")
+        names = (p.name[: -len(".json")] for p in folder.iterdir() if p.name.endswith(".json"))
+        return tuple(sorted(names))
+
+    return _NAMES.get("tables", listing)
 
 
 def bundled_table(name: str = "handwritten") -> ReplacementTable:
@@ -380,9 +386,11 @@ def _read_bundled(name: str) -> ReplacementTable:
     return parse_table(resource.read_text(encoding="utf-8"), source=f"<bundled:{name}>")
 
 
-_BUNDLED: BoundedCache[str, ReplacementTable] = BoundedCache("bundled tables", 8)
-_FILES: BoundedCache[tuple[str, int, int, int | None, int | None], ReplacementTable] = (
-    BoundedCache("table files", 8)
+_BUNDLED: BoundedCache[str, ReplacementTable] = BoundedCache(
+    "bundled tables", 8, kind=CacheKind.INPUT
+)
+_FILES: BoundedCache[tuple[str, int, int, int | None, int | None], ReplacementTable] = BoundedCache(
+    "table files", 8, kind=CacheKind.INPUT
 )
 
 
@@ -445,5 +453,5 @@ def default_table(domain: Domain[Any, Any]) -> ReplacementTable:
 
 
 _GENERATED: BoundedCache[Domain[Any, Any], ReplacementTable] = BoundedCache(
-    "generated default tables", 4
+    "generated default tables", 4, kind=CacheKind.INPUT
 )

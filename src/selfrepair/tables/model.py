@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 from enum import StrEnum
 from typing import Any
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError, TableError, choice
 from selfrepair.geometry import Heading, Pose
 from selfrepair.robots.domain import Domain, run_open
@@ -198,7 +198,7 @@ class ReplacementTable:
 
 
 _MERGED: BoundedCache[tuple[ReplacementTable, Any, frozenset[Any]], tuple[Candidate, ...]] = (
-    BoundedCache("fault-indexed merged look-ups", 4096)
+    BoundedCache("fault-indexed merged look-ups", 4096, kind=CacheKind.REPAIR)
 )
 """Candidates for fault sets a fault-indexed table has no entry of its own for."""
 

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.execution.faults import Persistence
 from selfrepair.geometry import Cell
 from selfrepair.repair.strategies import StrategyName
@@ -200,7 +200,7 @@ def _grid_path(maze: Maze, start: Cell, goal: Cell) -> list[Cell]:
 # --- running --------------------------------------------------------------------------------------
 
 _BASELINES: BoundedCache[tuple[Maze, int, int, str, int, str], Fraction] = BoundedCache(
-    "team fault-free makespans", 512
+    "team fault-free makespans", 512, kind=CacheKind.REFERENCE
 )
 
 

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain
 from selfrepair.team.reservations import FOREVER, Reservations, TimedStep
@@ -235,10 +235,10 @@ def lattice_of(
 
 
 _LATTICES: BoundedCache[tuple[Maze, Domain[Any, Any], tuple[Any, ...], int], Lattice] = (
-    BoundedCache("team lattices", 32)
+    BoundedCache("team lattices", 32, kind=CacheKind.PLAN)
 )
 _COST_TO_GO: BoundedCache[tuple[Lattice, frozenset[Cell], Cell], list[int]] = BoundedCache(
-    "team cost-to-go maps", 512
+    "team cost-to-go maps", 512, kind=CacheKind.PLAN
 )
 
 

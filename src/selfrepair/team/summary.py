@@ -12,9 +12,8 @@ from collections import defaultdict
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
-import numpy as np
-
 from selfrepair.repair.strategies import MissionKind, StrategyName
+from selfrepair.stats import lower_median, percentile
 
 __all__ = ["TeamSummary", "by_fault_case", "summarize_team"]
 
@@ -117,10 +116,10 @@ def summarize_team(rows: Sequence[Row]) -> list[TeamSummary]:
                 sum(int(_number(row, "tasks") or 0) for row in group),
                 sum(int(_number(row, "delivered") or 0) for row in group),
                 sum(int(_number(row, "all_delivered") or 0) for row in group),
-                float(np.median(ratios)) if ratios else None,
-                float(np.median(latencies)) / 1000 if latencies else None,
-                float(np.percentile(latencies, 99)) / 1000 if latencies else None,
-                float(np.median(cpus)) / 1000
+                float(lower_median(ratios)) if ratios else None,
+                lower_median(latencies) / 1000 if latencies else None,
+                percentile(latencies, 0.99) / 1000 if latencies else None,
+                lower_median(cpus) / 1000
                 if (cpus := _latencies(group, "repair_cpus_ns"))
                 else None,
                 repaired,

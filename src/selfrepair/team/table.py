@@ -45,7 +45,7 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from enum import StrEnum
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import choice
 from selfrepair.team.model import ActionKind, IncidentKind, Load, TeamTableName
 
@@ -248,7 +248,9 @@ def get_team_table(name: str) -> TeamTable:
     return _GENERATED.get(MAX_STEPS, lambda: generate_table(MAX_STEPS))
 
 
-_GENERATED: BoundedCache[int, TeamTable] = BoundedCache("generated team tables", 2)
+_GENERATED: BoundedCache[int, TeamTable] = BoundedCache(
+    "generated team tables", 2, kind=CacheKind.REPAIR
+)
 
 
 # --- generation -----------------------------------------------------------------------------------

@@ -11,10 +11,10 @@ place has no substitute; in wide corridors arcs can stand in. See ``docs/mazes.m
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cache
 from importlib import resources
 from pathlib import Path
 
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import InputError
 from selfrepair.limits import MAX_CELLS
 from selfrepair.world.loading import load_maze
@@ -87,18 +87,30 @@ def _data_text(filename: str) -> str:
     return resources.files("selfrepair").joinpath("data", "mazes", filename).read_text("utf-8")
 
 
-@cache
+_MAZES: BoundedCache[str, Maze] = BoundedCache("bundled mazes", 32, kind=CacheKind.INPUT)
+_ROUTES: BoundedCache[str, tuple[Route, ...]] = BoundedCache(
+    "bundled routes", 32, kind=CacheKind.INPUT
+)
+
+
 def load_bundled(name: str) -> Maze:
-    """The bundled maze ``name`` (see :func:`maze_names`)."""
+    """The bundled maze ``name`` (see :func:`maze_names`), parsed once per process."""
     _check_name(name)
-    return parse_maze(_data_text(f"{name}.maze"), source=f"<bundled {name}.maze>", name=name)
+    return _MAZES.get(
+        name,
+        lambda: parse_maze(_data_text(f"{name}.maze"), source=f"<bundled {name}.maze>", name=name),
+    )
 
 
-@cache
 def bundled_routes(name: str) -> tuple[Route, ...]:
     """The four routes of bundled maze ``name``, checked against the maze."""
-    maze = load_bundled(name)
-    return parse_routes(_data_text(f"{name}.routes"), source=f"<bundled {name}.routes>", maze=maze)
+
+    def parse() -> tuple[Route, ...]:
+        maze = load_bundled(name)
+        text = _data_text(f"{name}.routes")
+        return parse_routes(text, source=f"<bundled {name}.routes>", maze=maze)
+
+    return _ROUTES.get(name, parse)
 
 
 def resolve_maze(spec: str, *, max_cells: int | None = MAX_CELLS) -> Maze:

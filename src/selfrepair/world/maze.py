@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
-from selfrepair.caching import BoundedCache
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import InputError
 from selfrepair.geometry import Cell, FreeGrid
 from selfrepair.limits import MAX_CELLS, check_limit
@@ -97,7 +97,9 @@ class Maze:
         return format_maze(self)
 
 
-_FREE_GRIDS: BoundedCache[tuple[Maze, int], FreeGrid] = BoundedCache("maze free grids", 8)
+_FREE_GRIDS: BoundedCache[tuple[Maze, int], FreeGrid] = BoundedCache(
+    "maze free grids", 8, kind=CacheKind.PLAN
+)
 
 
 def _free_grid(maze: Maze, margin: int) -> FreeGrid:
@@ -178,7 +180,9 @@ def clearance_map(maze: Maze) -> npt.NDArray[np.int32]:
     return _CLEARANCE.get(maze, lambda: _clearance(maze))
 
 
-_CLEARANCE: BoundedCache[Maze, npt.NDArray[np.int32]] = BoundedCache("maze clearance maps", 8)
+_CLEARANCE: BoundedCache[Maze, npt.NDArray[np.int32]] = BoundedCache(
+    "maze clearance maps", 8, kind=CacheKind.PLAN
+)
 
 
 def _clearance(maze: Maze) -> npt.NDArray[np.int32]:
