@@ -15,6 +15,7 @@ from pathlib import Path
 
 import pytest
 
+from extras import need
 from selfrepair.cli import main
 from selfrepair.robots.registry import load_plugin
 
@@ -134,7 +135,7 @@ def test_verdict_names_the_most_as_such_and_uses_the_motion_distance(
 def test_explicit_numba_on_a_robot_the_kernels_cannot_take_is_refused(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    pytest.importorskip("numba")
+    need("numba", "fast")
     for command in (["run"], ["plan"]):
         args = [*P, *command, *HOP_ROUTE, "--faults", "HOP", "--backend", "numba"]
         assert main(args) == 2
@@ -145,7 +146,7 @@ def test_explicit_numba_on_a_robot_the_kernels_cannot_take_is_refused(
 def test_auto_falls_back_and_the_row_says_which_backend_ran(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    pytest.importorskip("numba")
+    need("numba", "fast")
     assert main([*P, "run", *HOP_ROUTE, "--faults", "HOP", "--no-warm-up", "--json"]) == 0
     row = json.loads(capsys.readouterr().out)
     assert (row["backend"], row["backend_ran"]) == ("auto", "python")

@@ -150,6 +150,7 @@ def experiment(
     from selfrepair.experiment.summary import fault_set_bite
     from selfrepair.experiment.teams import TeamExperimentConfig, load_experiment
     from selfrepair.experiment.timing import execute_mission
+    from selfrepair.experiment.tolerance_findings import tolerance_findings
 
     missions: tuple[Mission, ...] = ()
     db_path: Path | None = None
@@ -205,7 +206,9 @@ def experiment(
             rows = [r for r in store.rows() if r["key"] in keys]
             print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
             print_fault_sets(fault_set_bite(rows))
-            print_findings(check_findings(rows), reference_note(rows))
+            print_findings(
+                [*check_findings(rows), *tolerance_findings(rows)], reference_note(rows)
+            )
             print_baselines(rows)
             if cfg.crossover:
                 _print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))

@@ -39,7 +39,7 @@ import time
 from array import array
 from collections import Counter
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from typing import Any
 
@@ -60,10 +60,13 @@ from selfrepair.repair.strategies import (
     get_strategy,
     uses_table,
 )
+from selfrepair.repair.tolerance import PlanObjective, fault_model
+from selfrepair.repair.tolerance_masks import tolerance_term
 from selfrepair.search.astar import PlanResult, PlanStatus
 from selfrepair.search.backend import use_numba
-from selfrepair.search.lattice import action_cost, cost_scale, plan
+from selfrepair.search.lattice import action_cost, cost_scale, plan, planning_actions
 from selfrepair.search.problem import PlanningProblem
+from selfrepair.search.term import StepTerm
 from selfrepair.status import mission_status
 from selfrepair.tables.model import ReplacementTable
 from selfrepair.world.maze import Maze, clearance_penalties
@@ -79,10 +82,20 @@ def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> Missio
     maze, domain, radius = spec.maze, spec.domain, settings.clearance_radius
     heuristic, backend = settings.heuristic, settings.backend
 
+    objective = spec.objective
+
     def plan_to(
         start: Pose, goal: Cell, heading: Heading | None, known: frozenset[Any], budget: int | None
     ) -> PlanResult:
         problem = PlanningProblem(maze, start, goal, heading, known, weight, radius, domain)
+        if objective is not None and not known:  # the tolerant objective: before any fault
+            term = _objective_term(spec, objective, table)
+            found = plan(
+                replace(problem, step_term=term), heuristic=heuristic, max_expansions=budget,
+                backend=backend,
+            )  # fmt: skip
+            if found.status is not PlanStatus.UNSOLVABLE or objective.penalty is not None:
+                return found  # a hard objective without a tolerant plan: the plain optimum
         return plan(problem, heuristic=heuristic, max_expansions=budget, backend=backend)
 
     def cost(pose: Pose, action: Any) -> Fraction:
@@ -106,6 +119,25 @@ def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> Missio
         world=spec.maze,
         cost_scale=cost_scale(spec.domain, weight),
         start=spec.start,
+    )
+
+
+def _objective_term(
+    spec: MissionSpec, objective: PlanObjective, table: ReplacementTable | None
+) -> StepTerm:
+    """The tolerance term of ``objective`` for the mission's first plan: masks of the
+    replacement strategy with the mission's table (or the one its options name) and recursion."""
+    chosen = table if table is not None else spec.options.resolved_table()
+    options = spec.options
+    return tolerance_term(
+        chosen,
+        spec.maze.free_grid(max(2, table_reach(chosen))),
+        planning_actions(spec.domain, frozenset()),
+        fault_model(spec.domain, objective.k),
+        penalty=objective.penalty,
+        mode=options.recursion,
+        max_depth=options.max_depth,
+        max_patterns=options.max_lookup_patterns,
     )
 
 

@@ -18,6 +18,7 @@ from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.repair.strategies import Repair, RepairSource, StrategyName, StrategyOptions
+from selfrepair.repair.tolerance import PlanObjective
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import PlanResult
@@ -87,6 +88,10 @@ class MissionSpec:
     initial_faults_known: bool = False
     max_steps: int | None = None
     domain: Domain[Any, Any] = FOUR_WHEEL
+    objective: PlanObjective | None = None
+    """The tolerant planner's objective for the plan made before any fault is known (``None``:
+    the plain cost, duration plus clearance term); replans, made with faults known, always
+    minimise the plain cost. A hard objective without a tolerant plan falls back to it too."""
 
     def __post_init__(self) -> None:
         if self.seed < 0:

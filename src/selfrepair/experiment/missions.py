@@ -23,6 +23,7 @@ from selfrepair.execution.faults import FaultEvent, FaultSchedule, canonical_ord
 from selfrepair.execution.result import MissionSpec
 from selfrepair.experiment.axes import Axis, cross
 from selfrepair.experiment.faultsets import fault_profile
+from selfrepair.experiment.faultsteps import random_fault_step
 from selfrepair.experiment.keys import (
     SCHEMA,
     Mission,
@@ -43,6 +44,7 @@ from selfrepair.experiment.mazes import (
 from selfrepair.experiment.schema import ExperimentConfig
 from selfrepair.experiment.variants import (
     maze_filter,
+    objective_label,
     short_table,
     variant_count,
     variant_label,
@@ -52,8 +54,11 @@ from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, check_limit
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import StrategyOptions
+from selfrepair.repair.tolerance import OPTIMAL, parse_objective
+from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.robots.registry import get_domain, load_plugin
+from selfrepair.world.routes import Route
 
 __all__ = ["count_missions", "expand", "to_spec"]
 
@@ -90,7 +95,7 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
         if filtered
         else (all_routes, "routes"),
         (len(fault_profile(faults.sets, get_domain(config.domain))), "fault sets"),
-        (len(faults.at), "fault times"),
+        (1 if faults.at_random else len(faults.at), "fault times"),
         (len(faults.detection), "detections"),
         (config.repeats, "repeats"),
     ]
@@ -147,7 +152,7 @@ def expand(
     axes = (
         Axis("route", routes, "routes"),
         Axis("faults", fault_profile(config.faults.sets, domain), "fault sets"),
-        Axis("fault_at", tuple(config.faults.at), "fault times"),
+        Axis("fault_at", (RANDOM,) if config.faults.at_random else config.faults.at, "fault times"),
         Axis("detection", tuple(config.faults.detection), "detections"),
         Axis("replicate", tuple(range(config.repeats)), "repeats"),
         Axis("variant", variants, "strategy variants and weights"),
@@ -165,7 +170,8 @@ def expand(
             "start": str(route.start),
             "goal": f"{route.goal[0]},{route.goal[1]}",
             "faults": point["faults"],
-            "fault_at": point["fault_at"],
+            "fault_at": _fault_step(config, identity, route, point, domain),
+            **({"fault_at_random": True} if config.faults.at_random else {}),
             "fault_clock": config.faults.clock,
             "persistence": config.faults.persistence,
             "fault_duration": config.faults.duration,
@@ -219,9 +225,36 @@ def _mission(
         ("table", short_table(options.get("table"))),
         ("recursion", options.get("recursion")),
         ("window", options.get("window")),
+        ("before", options.get("before", 0) if "window" in options else None),
+        ("rewrite", int(bool(options.get("rewrite"))) if "table" in options else None),
         ("clearance_weight", weight),
+        ("objective", objective_label(options, weight)),
     )
     return Mission(key, config.name, seed, text, labels)
+
+
+RANDOM = "random"
+"""The ``fault_at`` axis value of ``at_random``: one step drawn per situation."""
+
+
+def _fault_step(
+    config: ExperimentConfig,
+    identity: dict[str, Any],
+    route: Route,
+    point: dict[str, Any],
+    domain: Domain[Any, Any],
+) -> int:
+    """When the faults of one situation (``point``) appear: its ``fault_at``, or for
+    :data:`RANDOM` one step drawn
+    (seeded by the maze, route and fault set) from the route's optimal plan
+    (:func:`~selfrepair.experiment.faultsteps.random_fault_step`), the same for every strategy
+    and objective."""
+    at, faults = point["fault_at"], point["faults"]
+    if at != RANDOM:
+        return int(at)
+    where = portable({"maze": identity, "route": route.name, "faults": faults, "at": RANDOM})
+    maze = maze_of(canonical_json(identity))
+    return random_fault_step(maze, route, domain, derive_seed(config.seed, where))
 
 
 def to_spec(mission: Mission) -> MissionSpec:
@@ -260,6 +293,7 @@ def to_spec(mission: Mission) -> MissionSpec:
             lpg_seed=options.get("lpg_seed", 0),
             rewrite=options.get("rewrite", False),
         ),
+        objective=parse_objective(options.get("objective", OPTIMAL)),
         clearance_weight=Fraction(s["clearance_weight"]),
         clearance_radius=s["clearance_radius"],
         seed=mission.seed,

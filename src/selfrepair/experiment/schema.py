@@ -14,12 +14,13 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
-from selfrepair.errors import InputError
+from selfrepair.errors import InputError, ProblemError
 from selfrepair.execution.faults import Clock, Detection, Persistence
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CLEARANCE_WEIGHT
 from selfrepair.repair.replacement import DEFERRING, RecursionMode
 from selfrepair.repair.strategies import MissionKind, StrategyName
+from selfrepair.repair.tolerance import OPTIMAL, parse_objective
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN
 from selfrepair.robots.registry import get_domain
@@ -123,6 +124,15 @@ class FaultsConfig(Frozen):
     persistence: Persistence = Persistence.PERMANENT
     duration: Annotated[Int, Field(ge=1)] | None = None
     probability: Annotated[Float, Field(ge=0.0, le=1.0)] | None = None
+    at_random: bool = False
+    """When true, each situation's faults appear at one step drawn (seeded by the situation)
+    uniformly from the steps of the route's fault-free optimal plan, instead of at each ``at``."""
+
+    @model_validator(mode="after")
+    def _random_step(self) -> FaultsConfig:
+        if self.at_random and (self.clock is not Clock.STEP or self.at != (0,)):
+            raise ValueError("at_random = true draws a step: leave 'at' and 'clock' unset")
+        return self
 
     @model_validator(mode="after")
     def _persistence_options(self) -> FaultsConfig:
@@ -194,6 +204,35 @@ class ReplacementStrategy(_StrategyEntry):
     tables: Annotated[tuple[str, ...], NonEmpty] = ("handwritten",)
     recursion: Annotated[tuple[RecursionMode, ...], NonEmpty] = (RecursionMode.GUARDED,)
     rewrite: tuple[bool, ...] = (False,)
+    objectives: Annotated[tuple[str, ...], NonEmpty] = (OPTIMAL,)
+    """How the plan made before any fault is known is chosen: ``optimal`` (the plain cost, with
+    the clearance weight), ``tolerant k=K`` (the cheapest plan tolerant of every set of 1 to K
+    faults, else the optimum) or ``tolerant soft L k=K`` (L ticks per (step, fault set) pair
+    that needs a replan); see :mod:`selfrepair.repair.tolerance_masks`."""
+
+    @field_validator("objectives")
+    @classmethod
+    def _objectives(cls, value: tuple[str, ...]) -> tuple[str, ...]:
+        out = []
+        for text in value:
+            try:
+                objective = parse_objective(text)
+            except ProblemError as exc:
+                raise ValueError(str(exc)) from None
+            out.append(OPTIMAL if objective is None else objective.label)
+        if len(set(out)) != len(out):
+            raise ValueError("an objective is listed twice")
+        return tuple(out)
+
+    @model_validator(mode="after")
+    def _tolerant_modes(self) -> ReplacementStrategy:
+        deferring = [str(m) for m in self.recursion if m in DEFERRING]
+        if any(o != OPTIMAL for o in self.objectives) and deferring:
+            raise ValueError(
+                f"tolerant objectives need a non-deferring recursion mode, not "
+                f"{', '.join(deferring)}"
+            )
+        return self
 
     @field_validator("rewrite", mode="before")
     @classmethod

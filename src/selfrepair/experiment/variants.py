@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Iterator, Sequence
+from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
@@ -24,11 +25,13 @@ from selfrepair.experiment.schema import (
     ReplanStrategy,
     StrategyConfig,
 )
+from selfrepair.repair.tolerance import OPTIMAL
 
 __all__ = [
     "BUNDLED_TABLES",
     "REWRITE_LABEL",
     "maze_filter",
+    "objective_label",
     "short_table",
     "strategy_variants",
     "variant_count",
@@ -65,17 +68,20 @@ def variants_of(
             for recursion in strategy.recursion:
                 for window, before in windows:
                     for rewrite in strategy.rewrite:
-                        options: dict[str, Any] = {
-                            **_table_identity(table, config),
-                            "recursion": recursion,
-                        }
-                        if window is not None:
-                            options["window"] = window
-                        if before:  # absent when 0, so older mission keys stay valid
-                            options["before"] = before
-                        if rewrite:  # absent when false, so older mission keys stay valid
-                            options["rewrite"] = True
-                        yield {"strategy": strategy.name, "options": options}, weights
+                        for objective in strategy.objectives:
+                            options: dict[str, Any] = {
+                                **_table_identity(table, config),
+                                "recursion": recursion,
+                            }
+                            if window is not None:
+                                options["window"] = window
+                            if before:  # absent when 0, so older mission keys stay valid
+                                options["before"] = before
+                            if rewrite:  # absent when false, so older mission keys stay valid
+                                options["rewrite"] = True
+                            if objective != OPTIMAL:  # absent when optimal, likewise
+                                options["objective"] = objective
+                            yield {"strategy": strategy.name, "options": options}, weights
     else:
         yield {"strategy": strategy.name, "options": _plain_options(strategy)}, weights
 
@@ -92,7 +98,12 @@ def variant_count(strategy: StrategyConfig, config: ExperimentConfig) -> int:
         else 1
     )
     return (
-        len(strategy.tables) * len(strategy.recursion) * windows * len(strategy.rewrite) * weights
+        len(strategy.tables)
+        * len(strategy.recursion)
+        * windows
+        * len(strategy.rewrite)
+        * len(strategy.objectives)
+        * weights
     )
 
 
@@ -191,4 +202,16 @@ def variant_label(strategy: str, options: dict[str, Any]) -> str:
         parts.append(f"seed={options['lpg_seed']}")
     if options.get("rewrite"):
         parts.append(REWRITE_LABEL)
+    if options.get("objective"):
+        parts.append(str(options["objective"]))
     return f"{strategy}[{','.join(parts)}]"
+
+
+def objective_label(options: dict[str, Any], weight: str) -> str:
+    """The ``objective`` column: ``optimal``, ``clearance W``, ``tolerant k=K``, ``tolerant soft
+    L k=K`` (with ``, clearance W`` when a tolerant objective also has a weight)."""
+    clearance = "" if Fraction(weight) == 0 else f"clearance {weight}"
+    tolerant = str(options.get("objective") or "")
+    if not tolerant:
+        return clearance or OPTIMAL
+    return f"{tolerant}, {clearance}" if clearance else tolerant

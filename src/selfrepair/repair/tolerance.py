@@ -36,6 +36,7 @@ schedule makes ``F`` appear at step ``i``).
 
 from __future__ import annotations
 
+import re
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
@@ -58,11 +59,14 @@ from selfrepair.robots.domain import Domain
 from selfrepair.search.astar import PlanResult, PlanStatus
 
 __all__ = [
+    "OPTIMAL",
     "FaultModel",
+    "PlanObjective",
     "PlanTolerance",
     "StepTolerance",
     "fault_model",
     "needs_replan",
+    "parse_objective",
     "plan_tolerance",
     "runs_without_replan",
     "without_replans",
@@ -103,6 +107,56 @@ def fault_model(domain: Domain[Any, Any], k: int) -> FaultModel:
             frozenset(c) for size in range(1, k + 1) for c in combinations(domain.faults, size)
         )
     return FaultModel(sets, f"k={k}")
+
+
+OPTIMAL = "optimal"
+"""The objective name of a plan made without the tolerance term (the plain optimum, or the
+clearance objective when the mission has a clearance weight)."""
+
+
+@dataclass(frozen=True, slots=True)
+class PlanObjective:
+    """The tolerant planner's objective for a mission's plan made before any fault is known: the
+    fault model of every set of 1 to ``k`` faults, hard (``penalty`` ``None``: only steps that
+    need no replan under any of them, see :mod:`selfrepair.repair.tolerance_masks`) or soft
+    (``penalty`` ticks per (step, fault set) pair that needs a replan)."""
+
+    k: int = 1
+    penalty: Fraction | None = None
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.k, int) or self.k < 1:
+            raise ProblemError(f"a tolerant objective needs k >= 1, got {self.k!r}")
+        if self.penalty is not None:
+            object.__setattr__(self, "penalty", Fraction(self.penalty))
+            if self.penalty < 0:
+                raise ProblemError(f"a soft penalty must be >= 0, got {self.penalty}")
+
+    @property
+    def label(self) -> str:
+        """``tolerant k=1`` or ``tolerant soft 1/2 k=2`` (what :func:`parse_objective` reads)."""
+        soft = "" if self.penalty is None else f" soft {self.penalty}"
+        return f"tolerant{soft} k={self.k}"
+
+
+_OBJECTIVE = re.compile(
+    r"tolerant(?: soft (?P<penalty>[0-9]+(?:/[0-9]+|\.[0-9]+)?))? k=(?P<k>[0-9]+)"
+)
+
+
+def parse_objective(text: str) -> PlanObjective | None:
+    """``optimal`` (``None``), ``tolerant k=K`` or ``tolerant soft L k=K`` (``L`` an exact
+    number such as ``1``, ``1/2`` or ``0.5``); anything else raises :class:`ProblemError`."""
+    if text == OPTIMAL:
+        return None
+    found = _OBJECTIVE.fullmatch(text)
+    if found is None:
+        raise ProblemError(
+            f"expected an objective 'optimal', 'tolerant k=K' or 'tolerant soft L k=K', "
+            f"got {text!r}"
+        )
+    penalty = found.group("penalty")
+    return PlanObjective(int(found.group("k")), None if penalty is None else Fraction(penalty))
 
 
 @dataclass(frozen=True, slots=True)

@@ -1,0 +1,80 @@
+"""Finding 2 restated on the exact basis: planning for tolerance against planning for clearance.
+
+Finding 2 asks whether keeping plans off walls (a clearance weight) raises the missions completed
+without a replan. The exact question is whether the plan is tolerant of the faults that may
+appear (:mod:`selfrepair.repair.tolerance`). Finding **2t** compares, per replacement variant
+(table, recursion mode) and tolerant objective, the robot whose first plan the tolerant planner
+made (clearance weight 0) with the same variant planned for clearance at the highest weight
+the rows hold. The comparison is paired over situations (maze, route, faults, fault step),
+by missions completed without a replan, with the rule of :mod:`selfrepair.experiment.findings`
+(sign test, 95% interval of the paired difference; HELD / NOT HELD / INCONCLUSIVE). The price of
+each, in ticks to the goal over the w=0 optimum, is stated next to it, and so are the comparisons
+with the lower weights (as evidence, not counted).
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from collections.abc import Sequence
+from fractions import Fraction
+
+from selfrepair.experiment.findings import (
+    _PAIRED,
+    Comparison,
+    Finding,
+    _is_replacement,
+    _judge,
+    _pairs,
+    _tick_cost,
+    _weight,
+    compare,
+    is_rewrite,
+    is_tolerant,
+)
+from selfrepair.experiment.summary import Row
+
+__all__ = ["base_variant", "tolerance_findings"]
+
+
+def base_variant(row: Row) -> str:
+    """The row's variant without its tolerant objective: ``replacement[handwritten,flat,tolerant
+    k=1]`` becomes ``replacement[handwritten,flat]``."""
+    variant = str(row.get("variant") or "")
+    objective = str(row.get("objective") or "").split(", clearance")[0]
+    if is_tolerant(row) and variant.endswith(f",{objective}]"):
+        return variant[: -len(objective) - 2] + "]"
+    return variant
+
+
+def tolerance_findings(rows: Sequence[Row]) -> list[Finding]:
+    """Finding 2t when ``rows`` hold missions planned by the tolerant planner (else none)."""
+    replacing = [r for r in rows if _is_replacement(r) and not is_rewrite(r)]
+    tolerant: dict[tuple[str, str], list[Row]] = defaultdict(list)
+    clearance: dict[str, dict[Fraction, list[Row]]] = defaultdict(lambda: defaultdict(list))
+    for r in replacing:
+        if is_tolerant(r):
+            if _weight(r) == 0:
+                tolerant[base_variant(r), str(r.get("objective"))].append(r)
+        else:
+            clearance[str(r.get("variant"))][_weight(r)].append(r)
+    if not tolerant:
+        return []
+    judged: list[Comparison] = []
+    extra: list[str] = []
+    for (base, objective), group in sorted(tolerant.items()):
+        weights = clearance.get(base, {})
+        top = max(weights, default=Fraction(0))
+        if top == 0:
+            continue
+        judged.append(compare(f"{base} {objective} vs w={top}", _pairs(weights[top], group)))
+        for weight in sorted(w for w in weights if 0 < w < top):
+            found = compare(f"{base} {objective} vs w={weight}", _pairs(weights[weight], group))
+            extra.append(f"For comparison, {found.line()}")
+        if 0 in weights:
+            extra.append(_tick_cost(f"{base} {objective}", _pairs(weights[Fraction(0)], group)))
+            extra.append(_tick_cost(f"{base} w={top}", _pairs(weights[Fraction(0)], weights[top])))
+    missing = (
+        "No variant run with a tolerant objective is also run at a clearance weight above 0, "
+        "so tolerance cannot be compared with clearance."
+    )
+    return [_judge("2t", judged, _PAIRED, [line for line in extra if line], missing=missing)]
