@@ -44,3 +44,59 @@ def test_every_step_source_has_one_colour_used_by_figures_and_viewer() -> None:
     assert colour_of("failed", "#123456") == "#123456"
     for module in (plots, missionplot, viewer):
         assert "SOURCE_COLOURS" not in vars(module) or module.SOURCE_COLOURS is SOURCE_COLOURS
+
+
+VARIANTS = """\
+name = "columns"
+
+[[mazes]]
+bundled = "narrow-short"
+
+[faults]
+sets = ["FL:F"]
+
+[[strategies]]
+name = "replan"
+
+[[strategies]]
+name = "replacement"
+tables = ["handwritten"]
+recursion = ["flat"]
+rewrite = [false, true]
+
+[[strategies]]
+name = "lookahead"
+tables = ["handwritten"]
+recursion = ["flat"]
+window = [3]
+before = [0, 2]
+"""
+
+
+def test_variant_settings_are_columns_of_every_mission() -> None:
+    from selfrepair.experiment.config import parse_config
+    from selfrepair.experiment.missions import expand
+
+    seen = set()
+    for mission in expand(parse_config(VARIANTS)):
+        labels = dict(mission.labels)
+        options = mission.settings["options"]
+        columns = tuple(labels[c] for c in ("strategy", "table", "recursion", "window", "before"))
+        seen.add((*columns, labels["rewrite"]))
+        rewrite = int(options.get("rewrite", False)) if "table" in options else None
+        assert labels["rewrite"] == rewrite
+    assert seen == {
+        ("replan", None, None, None, None, None),
+        ("replacement", "handwritten", "flat", None, None, 0),
+        ("replacement", "handwritten", "flat", None, None, 1),
+        ("lookahead", "handwritten", "flat", 3, 0, 0),
+        ("lookahead", "handwritten", "flat", 3, 2, 0),
+    }
+
+
+def test_fault_sets_are_spread_over_the_parts_the_domain_names() -> None:
+    """biting_fault_sets asks the domain (parts_of), never splits fault text; the paper's 12
+    sets still follow from the rule (tests/test_measurement.py)."""
+    assert FOUR_WHEEL.parts_of(FOUR_WHEEL.faults[0]) == ("FL", "F")
+    assert THREE_ACTION.parts_of(THREE_ACTION.faults[0]) == (THREE_ACTION.format_faults(
+        (THREE_ACTION.faults[0],)),)  # fmt: skip

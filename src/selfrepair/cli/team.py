@@ -120,6 +120,14 @@ def team_run(
         str,
         typer.Option("--backend", metavar="NAME", help="Planner backend: auto, python or numba."),
     ] = "auto",
+    detect: Annotated[
+        str | None,
+        typer.Option(
+            "--detect",
+            metavar="MODE",
+            help="How robots learn their wheel faults: now or on-use (default: the scenario's).",
+        ),
+    ] = None,
     max_robots: MaxRobots = MAX_ROBOTS,
     max_tasks: MaxTasks = MAX_TASKS,
     max_cells: MaxCells = MAX_CELLS,
@@ -138,6 +146,13 @@ def team_run(
     parsed = resolve_scenario(
         scenario, limits=Limits(max_robots, max_tasks, max_cells, max_file_bytes)
     )
+    if detect is not None:
+        from dataclasses import replace
+
+        from selfrepair.errors import choice
+        from selfrepair.execution.faults import Detection
+
+        parsed = replace(parsed, detection=choice(Detection, detect, "detection"))
     options = _options(strategy, table, max_ticks, backend, robot_table)
     result = run_team(parsed, options)
     baseline = run_team(parsed.without_faults(), options).makespan if parsed.faults else None
@@ -158,6 +173,12 @@ def _print_result(result: "TeamResult", baseline: Any) -> None:
     )
     for fault in scenario.faults:
         echo(f"  fault: {fault.describe()} ({fault.persistence})")
+    for d in result.discoveries:
+        echo(
+            f"  tick {d.at / result.scale:g}: {d.robot} learns of fault {d.index} "
+            f"({scenario.faults[d.index].describe()}), {d.delay / result.scale:g} ticks after "
+            f"it started (detection {scenario.detection})"
+        )
     ratio = (
         f" ({float(result.makespan / baseline):.2f} x fault-free {baseline})" if baseline else ""
     )

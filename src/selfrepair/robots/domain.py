@@ -90,6 +90,10 @@ class Domain(Generic[A, F]):
     footprint_connected: bool = False
     description: str = ""
     canonical: Pose = field(default=CANONICAL)
+    fault_parts: Callable[[F], tuple[str, ...]] | None = None
+    """What one fault is made of, for spreading chosen fault sets over them (the four-wheel
+    robot: its wheel and its mode); ``None``: each fault is its own single part (see
+    :meth:`parts_of`)."""
     action_set: frozenset[A] = field(init=False, repr=False)
     time_unit: int = field(init=False, repr=False)
     """Units per tick in which every duration is a whole number: the least common multiple of
@@ -110,6 +114,12 @@ class Domain(Generic[A, F]):
     def step(self, pose: Pose, action: A) -> tuple[Pose, tuple[Cell, ...], Fraction]:
         """End pose, footprint and duration of ``action`` at ``pose`` on an open plane."""
         return self.apply(pose, action), self.footprint(pose, action), self.duration(action)
+
+    def parts_of(self, fault: F) -> tuple[str, ...]:
+        """The parts of ``fault`` (:attr:`fault_parts`; by default its own text)."""
+        if self.fault_parts is None:
+            return (self.format_faults((fault,)),)
+        return self.fault_parts(fault)
 
     def blocking(self, action: A, faults: Iterable[F]) -> frozenset[F]:
         """The faults of ``faults`` that each forbid ``action`` on their own."""

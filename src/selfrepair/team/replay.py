@@ -27,6 +27,8 @@ from pathlib import Path
 from typing import Any
 
 from selfrepair.errors import InputError
+from selfrepair.execution.faults import FaultEvent, Persistence
+from selfrepair.execution.result import StepSource
 from selfrepair.geometry import Cell, Pose
 from selfrepair.team.model import (
     DROP_TICKS,
@@ -210,7 +212,7 @@ def _check_moves(trace: TeamTrace, spans: list[tuple[int, int | None, TeamFault]
     maze = scenario.maze
     names = {r.name for r in scenario.robots}
     last: dict[str, tuple[Pose, int]] = {r.name: (r.start, 0) for r in scenario.robots}
-    every = frozenset(domain.faults)
+    steps = dict.fromkeys(names, 0)  # each robot's commands so far (its intermittent draws)
     for m in sorted(trace.moves, key=lambda m: (m.start, m.line)):
         if m.robot not in names:
             raise _Problem(f"move of unknown robot {m.robot!r}", m.line)
@@ -223,37 +225,63 @@ def _check_moves(trace: TeamTrace, spans: list[tuple[int, int | None, TeamFault]
             raise _Problem(
                 f"{m.robot} starts a move at {m.start} before its last one ends ({free_at})", m.line
             )
+        faults, blocked = _truth(trace, spans, m.robot, m.start, steps[m.robot])
+        steps[m.robot] += 1
+        name = domain.format_action(m.action)
+        if m.source is StepSource.FAILED_ATTEMPT:
+            if m.after != m.before or m.end - m.start != scale:
+                raise _Problem(f"{m.robot}'s failed attempt moves or lasts not one tick", m.line)
+            if domain.available(m.action, faults):
+                raise _Problem(
+                    f"{m.robot}'s {name} is logged as failed, but its true faults allow it", m.line
+                )
+            continue
         if domain.apply(m.before, m.action) != m.after:
-            raise _Problem(
-                f"{domain.format_action(m.action)} from {m.before} does not end at {m.after}",
-                m.line,
-            )
+            raise _Problem(f"{name} from {m.before} does not end at {m.after}", m.line)
         if m.end - m.start != units(domain, m.action, scale):
             raise _Problem(
-                f"{domain.format_action(m.action)} takes {units(domain, m.action, scale)} "
-                f"units, not {m.end - m.start}",
+                f"{name} takes {units(domain, m.action, scale)} units, not {m.end - m.start}",
                 m.line,
             )
         cells = domain.footprint(m.before, m.action)
         if not maze.all_free(cells):
             raise _Problem(f"{m.robot}'s move sweeps a wall", m.line)
-        faults: set[Any] = set()
-        blocked: set[Cell] = set()
-        for f in _faults_at(spans, m.start):
-            if f.kind is TeamFaultKind.BLOCKED:
-                blocked.update(f.cells)
-            elif f.robot == m.robot and f.kind is TeamFaultKind.IMMOBILISED:
-                faults |= every
-            elif f.robot == m.robot and f.kind is TeamFaultKind.WHEELS:
-                faults |= domain.parse_faults(f.wheel_faults)
         if any(c in blocked for c in cells[1:]):
             raise _Problem(f"{m.robot}'s move sweeps a blocked cell", m.line)
-        if not domain.available(m.action, frozenset(faults)):
-            raise _Problem(
-                f"{m.robot} moves with {domain.format_action(m.action)}, which its faults forbid",
-                m.line,
-            )
+        if not domain.available(m.action, faults):
+            raise _Problem(f"{m.robot} moves with {name}, which its faults forbid", m.line)
         last[m.robot] = (m.after, m.end)
+
+
+def _truth(
+    trace: TeamTrace,
+    spans: list[tuple[int, int | None, TeamFault]],
+    robot: str,
+    t: int,
+    step: int,
+) -> tuple[frozenset[Any], set[Cell]]:
+    """The true domain faults of ``robot`` at ``t`` (its command number ``step``: an
+    intermittent fault is drawn as :class:`~selfrepair.team.state.RobotFaultClock` draws it,
+    from the options' seed) and the blocked cells."""
+    domain = trace.scenario.domain
+    faults: set[Any] = set()
+    blocked: set[Cell] = set()
+    for f in _faults_at(spans, t):
+        if f.kind is TeamFaultKind.BLOCKED:
+            blocked.update(f.cells)
+            continue
+        if f.robot != robot or f.kind not in (TeamFaultKind.IMMOBILISED, TeamFaultKind.WHEELS):
+            continue
+        if f.persistence is Persistence.INTERMITTENT:
+            index = next(i for i, g in enumerate(trace.scenario.faults) if g is f)
+            draw = FaultEvent(None, persistence=Persistence.INTERMITTENT, probability=f.probability)
+            if not draw.active(index, step, Fraction(0), trace.options.seed):
+                continue
+        if f.kind is TeamFaultKind.IMMOBILISED:
+            faults.update(domain.faults)
+        else:
+            faults |= domain.parse_faults(f.wheel_faults)
+    return frozenset(faults), blocked
 
 
 def _check_acts(trace: TeamTrace, spans: list[tuple[int, int | None, TeamFault]]) -> dict[str, int]:
@@ -336,7 +364,12 @@ def _check_conflicts(trace: TeamTrace) -> None:
         pose, since, line = robot.start, 0, 1
         for m in moves:
             by_cell.setdefault(pose.cell, []).append((since, m.start, robot.name, line))
-            for cell in domain.footprint(m.before, m.action):
+            held = (
+                (m.before.cell,)
+                if m.source is StepSource.FAILED_ATTEMPT
+                else domain.footprint(m.before, m.action)
+            )  # a failed attempt holds the robot's cell
+            for cell in held:
                 by_cell.setdefault(cell, []).append((m.start, m.end, robot.name, m.line))
             pose, since, line = m.after, m.end, m.line
         by_cell.setdefault(pose.cell, []).append((since, horizon, robot.name, line))

@@ -30,6 +30,7 @@ from selfrepair.team.model import (
 
 __all__ = [
     "ActRecord",
+    "DiscoveryRecord",
     "FaultRecord",
     "IncidentRecord",
     "MoveRecord",
@@ -138,6 +139,18 @@ class FaultRecord:
 
 
 @dataclass(frozen=True, slots=True)
+class DiscoveryRecord:
+    """``robot`` learned of its team fault number ``index`` at ``at``, ``delay`` units after the
+    fault started (0 when it senses its faults at once; with detection ``on-use`` it learns a
+    fault when a command it forbids fails; an intermittent fault may also first show later)."""
+
+    at: int
+    robot: str
+    index: int
+    delay: int
+
+
+@dataclass(frozen=True, slots=True)
 class IncidentRecord:
     """``robot``'s next action could not go on, for reason ``kind``, with ``load``."""
 
@@ -206,7 +219,7 @@ class TeamResult:
     with the unit at which their drop finished; ``end`` the last unit simulated. Counters:
     ``messages`` and ``plans`` over the whole mission (``plans``: every drive planning, lattice
     and space-time, with ``expansions`` their search nodes), ``yields`` (idle robots asked to clear
-    a path).
+    a path). ``discoveries``: when each robot learned of each of its wheel faults.
     """
 
     scenario: TeamScenario
@@ -228,6 +241,7 @@ class TeamResult:
     plans: int = 0
     yields: int = 0
     expansions: int = 0
+    discoveries: tuple[DiscoveryRecord, ...] = ()
 
     @property
     def makespan(self) -> Fraction:

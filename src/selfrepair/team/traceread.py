@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from selfrepair.errors import InputError, TraceError
-from selfrepair.execution.faults import Persistence
+from selfrepair.execution.faults import Detection, Persistence
 from selfrepair.execution.result import StepSource
 from selfrepair.execution.trace import TraceFields
 from selfrepair.limits import MAX_TRACE_BYTES
@@ -179,9 +179,15 @@ def _header(f: TraceFields) -> tuple[TeamScenario, TeamOptions, int]:
         )
     faults = [_fault(TraceFields(d, f.source, f.line)) for d in _list(f, "faults")]
     options = _options(f)
+    try:
+        detection = Detection(f.data.get("detection", "now"))
+    except ValueError:
+        raise f.fail(
+            f"expected 'detection' now or on-use, got {f.data.get('detection')!r}"
+        ) from None
     scenario = TeamScenario(
         maze, tuple(robots), tuple(tasks), tuple(faults), domain,
-        str(f.data.get("scenario", "")), f.source,
+        str(f.data.get("scenario", "")), f.source, detection=detection,
     )  # fmt: skip
     scale = f.integer("scale", minimum=1)
     if scale != domain.time_unit:
@@ -201,6 +207,7 @@ def _fault(f: TraceFields) -> TeamFault:
             Trigger(d.get("trigger", "tick")),
             Persistence(d.get("persistence", "permanent")),
             d.get("duration"),
+            None if d.get("probability") is None else float(d["probability"]),
         )
     except (KeyError, TypeError, ValueError) as exc:
         if isinstance(exc, TraceError):

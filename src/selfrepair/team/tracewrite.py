@@ -59,9 +59,11 @@ def header_json(result: TeamResult) -> dict[str, Any]:
                 "trigger": f.trigger.value,
                 "persistence": f.persistence.value,
                 "duration": f.duration,
+                "probability": f.probability,
             }
             for f in scenario.faults
         ],
+        "detection": scenario.detection.value,
         "options": {
             "strategy": str(options.strategy),
             "table": str(options.table),
