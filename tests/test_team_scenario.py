@@ -239,3 +239,24 @@ def test_a_robot_without_a_bundled_table_gets_a_generated_one() -> None:
     assert robot_table_label(scenario, TeamOptions()) == "generated"
     table = robot_table(scenario, TeamOptions())
     assert table.domain is scenario.domain and table.domain.name == "hopper"
+
+
+TOKENS = ["=", '"', "[", "]", "[[robots]]", "[[tasks]]", "[[faults]]", "\n", "5", "-1",
+          "true", "1.5", '"1,1,E"', '"r1"', "robots", "tasks", "name", "kind", "{", "}", ",",
+          "#"]  # fmt: skip
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.tuples(st.integers(0, len(SCENARIO)), st.sampled_from(TOKENS),
+                          st.integers(0, 3)), max_size=4))  # fmt: skip
+def test_a_mutated_scenario_parses_or_is_one_input_error(
+    edits: list[tuple[int, str, int]],
+) -> None:
+    text = SCENARIO
+    for at, token, cut in edits:
+        at = min(at, len(text))
+        text = text[:at] + token + text[at + cut :]
+    try:
+        parse_scenario(text, source="s.toml")
+    except InputError as exc:
+        assert str(exc).startswith("s.toml") or "maze" in str(exc), str(exc)
