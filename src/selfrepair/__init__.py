@@ -21,9 +21,10 @@ command's start-up).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
-
+TYPE_CHECKING = False  # not typing's: importing typing would double the cost of this import
 if TYPE_CHECKING:  # what the names are, for type checkers and editors; nothing loads at run time
+    from typing import Any
+
     from selfrepair.errors import (
         ConfigError,
         InputError,
