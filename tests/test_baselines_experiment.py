@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from extras import LPG
 from selfrepair.baselines import adapt
 from selfrepair.baselines.lpg import lpg_available
 from selfrepair.cli import main
@@ -29,9 +30,7 @@ from selfrepair.experiment.summary import is_reference_replan
 
 DOCS = Path(__file__).parent.parent / "docs"
 
-needs_lpg = pytest.mark.skipif(
-    not lpg_available(), reason="needs the pddl extra: pip install 'selfrepair[pddl]'"
-)
+needs_lpg = LPG
 
 BASE = """\
 name = "mini"

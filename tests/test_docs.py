@@ -230,7 +230,9 @@ def _stale_in_span(span: str, page: Path, *, linked: bool) -> list[str]:
         stale.append(span)
     short = SHORT_DOTTED.match(span)
     dotted = short.group(1) if short else ""
-    first, _, _ = dotted.partition(".")
+    first, _, rest = dotted.partition(".")
+    if first == "sr":  # import selfrepair as sr
+        return [*stale, *([dotted] if not _resolves(f"selfrepair.{rest}") else [])]
     if dotted and first != "selfrepair" and dotted.rsplit(".", 1)[-1] not in FILE_SUFFIXES:
         known = _short_resolves(dotted)
         if known is False or (known is None and not _outside_module(first)):
@@ -250,7 +252,8 @@ def test_the_checker_finds_names_that_are_gone(tmp_path: Path) -> None:
         "`robot.MOTIONS`, `lattice.plan`, `selfrepair.search.lattice.plan` and\n"
         "`selfrepair.robots.four_wheel.NO_SUCH_NAME`; see [the planner](../nowhere.md),\n"
         "`tests/test_docs.py::test_no_such_test`, `test_no_such_test_either`,\n"
-        '`plugins = ["mine.py"]`, `search/lattice.py` and `Heading.rotated`.\n',
+        '`plugins = ["mine.py"]`, `search/lattice.py`, `Heading.rotated`, `sr.run_mission`\n'
+        "and `sr.run_missions`.\n",
         encoding="utf-8",
     )
     assert stale_names(page) == [
@@ -261,6 +264,7 @@ def test_the_checker_finds_names_that_are_gone(tmp_path: Path) -> None:
         "old.md:3: link ../nowhere.md",
         "old.md:4: tests/test_docs.py::test_no_such_test",
         "old.md:4: test_no_such_test_either",
+        "old.md:6: sr.run_missions",
     ]
 
 

@@ -14,20 +14,14 @@ import pytest
 
 from selfrepair.cli import main
 from selfrepair.envs import FaultyMazeEnv
-from selfrepair.envs.evaluate import (
-    EpisodeEnd,
-    bootstrap_interval,
-    episode_seeds,
-    evaluate,
-    run_episode,
-    wilson_interval,
-)
+from selfrepair.envs.evaluate import EpisodeEnd, Evaluation, episode_seeds, evaluate, run_episode
 from selfrepair.envs.policies import PlannerPolicy, make_policy, policy_names
 from selfrepair.errors import ProblemError
 from selfrepair.execution.executor import run_mission
 from selfrepair.execution.result import MissionSpec
 from selfrepair.experiment.config import load_config
 from selfrepair.experiment.missions import expand, to_spec
+from selfrepair.stats import bootstrap_interval, wilson_interval
 
 
 def _paper_specs(variant: str) -> list[MissionSpec]:
@@ -114,18 +108,26 @@ def test_evaluation_is_paired_and_seeded() -> None:
 
 def test_intervals() -> None:
     interval = wilson_interval(8, 10)
+    assert interval is not None and interval.estimate == 0.8 and interval.n == 10
     z = 1.959963984540054
     centre = (0.8 + z * z / 20) / (1 + z * z / 10)
     half = z / (1 + z * z / 10) * math.sqrt(0.8 * 0.2 / 10 + z * z / 400)
     assert interval.low == pytest.approx(centre - half) and interval.high == pytest.approx(
         centre + half
     )
-    assert wilson_interval(10, 10).high == pytest.approx(1.0)
+    top = wilson_interval(10, 10)
+    assert top is not None and top.high == pytest.approx(1.0)
+    assert wilson_interval(0, 0) is None
     values = [-10.0, -12.0, -8.0, -30.0, -9.0, -11.0]
-    boot = bootstrap_interval(values, seed=1)
-    assert boot.low < sum(values) / len(values) < boot.high and boot.low >= -30.0
-    assert bootstrap_interval([3.0, 3.0]) == bootstrap_interval([3.0, 3.0, 3.0])
-    assert math.isnan(bootstrap_interval([1.0]).low)
+    boot = bootstrap_interval(values, "mean", seed=1)
+    assert boot is not None and boot.low < sum(values) / len(values) < boot.high
+    assert boot.low >= -30.0
+
+
+def test_evaluation_intervals_are_undefined_for_too_few_episodes() -> None:
+    empty = Evaluation("replan", 3, ())
+    assert math.isnan(empty.success_interval().low) and math.isnan(empty.return_interval().low)
+    assert empty.success_interval().level == 0.95
 
 
 def test_policy_names_and_misuse() -> None:

@@ -15,12 +15,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from extras import NUMBA
 from selfrepair.cli import main
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.geometry import Heading, Pose
 from selfrepair.robots.domain import Domain, check_domain
 from selfrepair.robots.registry import domain_names, get_domain, load_plugin
-from selfrepair.search.backend import numba_available
 from selfrepair.search.lattice import plan, plan_cost
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.tables.fileformat import dump_table
@@ -81,7 +81,7 @@ def problems(draw: st.DrawFn) -> PlanningProblem:
     )
 
 
-@pytest.mark.skipif(not numba_available(), reason="numba is not installed")
+@NUMBA
 @settings(max_examples=40, deadline=None)
 @given(problems())
 def test_the_compiled_planner_runs_the_new_robot_exactly_like_the_reference(

@@ -17,7 +17,12 @@ from selfrepair.cli import main
 
 GOLDEN = Path(__file__).parent / "data" / "golden"
 
-CHANGED: dict[str, str] = {}
+CHANGED: dict[str, str] = {
+    "own_replacements": "issue 29 item 17: counts the own replacements whose actions ran, not "
+    "those a later cooperative A* placement threw away before they ran (16 of the 480 team "
+    "missions; team.json was rewritten from the rows of 8eea7b0, the code before the "
+    "refactoring, without this column: a digest covers every column it names)",
+}
 """Columns left out of the comparison, each with why its values changed on purpose."""
 
 

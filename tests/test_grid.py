@@ -11,15 +11,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from extras import NUMBA
 from selfrepair.errors import ProblemError
 from selfrepair.search.astar import PlanStatus
-from selfrepair.search.backend import numba_available
 from selfrepair.search.grid import grid_astar
 from selfrepair.search.problem import SQRT2, OctileCost
 from selfrepair.world.maze import Maze, parse_maze
 
-BACKENDS = ["python", pytest.param("numba", marks=pytest.mark.skipif(
-    not numba_available(), reason="numba not installed"))]  # fmt: skip
+BACKENDS = ["python", pytest.param("numba", marks=NUMBA)]
 
 OPEN_3X3 = parse_maze("...\n...\n...\n")
 CORNER = parse_maze(".#\n..\n")
@@ -172,7 +171,7 @@ def test_grid_astar_equals_dijkstra(case: tuple) -> None:
         assert result.cost.diagonal == 0
 
 
-@pytest.mark.skipif(not numba_available(), reason="numba not installed")
+@NUMBA
 @settings(max_examples=200, deadline=None)
 @given(grid_cases())
 def test_numba_grid_agrees_with_the_reference(case: tuple) -> None:

@@ -12,6 +12,7 @@ from dataclasses import replace
 
 import pytest
 
+from extras import LPG
 from selfrepair.baselines import lpg
 from selfrepair.baselines.lpg import LpgStatus, lpg_adapt_repair, lpg_available, lpg_plan
 from selfrepair.errors import ProblemError
@@ -22,9 +23,7 @@ from selfrepair.search.problem import PlanningProblem
 from selfrepair.world import bundled
 from selfrepair.world.maze import parse_maze
 
-needs_lpg = pytest.mark.skipif(
-    not lpg_available(), reason="needs the pddl extra: pip install 'selfrepair[pddl]'"
-)
+needs_lpg = LPG
 
 U_TURN = parse_maze(".....\n.###.\n.....\n", name="u-turn")
 

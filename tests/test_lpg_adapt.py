@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
+from extras import LPG
 from selfrepair.baselines import adapt
-from selfrepair.baselines.lpg import lpg_available
 from selfrepair.cli import main
 from selfrepair.errors import ProblemError
 from selfrepair.execution.executor import mission_context, run_mission
@@ -37,9 +37,7 @@ from selfrepair.search.lattice import plan_cost
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.world.bundled import bundled_routes, load_bundled
 
-needs_lpg = pytest.mark.skipif(
-    not lpg_available(), reason="needs the pddl extra: pip install 'selfrepair[pddl]'"
-)
+needs_lpg = LPG
 
 NO_MOTION = "FL:F,FL:B,FR:F,FR:B,RL:F,RL:B,RR:F,RR:B"
 """Every wheel can only stop: the robot cannot move, so no goal elsewhere can be reached."""

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import pytest
 
+from extras import need
 from selfrepair.cli import main
 from selfrepair.robots.registry import load_plugin
 
@@ -134,7 +135,7 @@ def test_verdict_names_the_most_as_such_and_uses_the_motion_distance(
 def test_explicit_numba_on_a_robot_the_kernels_cannot_take_is_refused(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    pytest.importorskip("numba")
+    need("numba", "fast")
     for command in (["run"], ["plan"]):
         args = [*P, *command, *HOP_ROUTE, "--faults", "HOP", "--backend", "numba"]
         assert main(args) == 2
@@ -145,7 +146,7 @@ def test_explicit_numba_on_a_robot_the_kernels_cannot_take_is_refused(
 def test_auto_falls_back_and_the_row_says_which_backend_ran(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    pytest.importorskip("numba")
+    need("numba", "fast")
     assert main([*P, "run", *HOP_ROUTE, "--faults", "HOP", "--no-warm-up", "--json"]) == 0
     row = json.loads(capsys.readouterr().out)
     assert (row["backend"], row["backend_ran"]) == ("auto", "python")
@@ -303,3 +304,40 @@ def test_the_robot_file_given_with_plugin_enters_the_mission_keys(tmp_path: Path
     edited = _cli(*args, cwd=tmp_path)
     assert edited.returncode == 0, edited.stderr
     assert "20 missions, 0 already stored, 20 run" in edited.stdout, edited.stdout
+
+
+# --- 9. table check and coverage on the generator's own tables ------------------------------
+
+
+def test_table_check_does_not_warn_about_the_generators_empty_entries(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    table = tmp_path / "indexed.json"
+    args = ["table", "generate", "--domain", "hopper", "--shape", "fault-indexed", "-o"]
+    assert main([*P, *args, str(table)]) == 0
+    capsys.readouterr()
+    assert main([*P, "table", "check", str(table)]) == 0
+    out = capsys.readouterr().out
+    assert "warning:" not in out and "0 errors, 0 warnings" in out
+    assert "(5 empty fault-indexed entries mark an action without a replacement" in out
+
+
+def test_table_coverage_says_when_uncovered_pairs_need_longer_sub_plans(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    table = tmp_path / "short.json"
+    args = ["table", "generate", "--domain", "hopper", "--shape", "fault-indexed"]
+    assert main([*P, *args, "--max-length", "3", "-o", str(table)]) == 0
+    capsys.readouterr()
+    assert main([*P, "table", "coverage", str(table), "--no-walls"]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    assert (
+        "6 of the 21 replaceable pairs (6 uncovered) need longer sub-plans: 5 to 6 actions, "
+        "more than the table's 3; regenerate with --max-length 6." in out
+    )
+    longer = tmp_path / "long.json"
+    assert main([*P, *args, "--max-length", "6", "-o", str(longer)]) == 0
+    capsys.readouterr()
+    assert main([*P, "table", "coverage", str(longer), "--no-walls", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert "longer_needed" not in data and data["totals"]["coverage"] == 1

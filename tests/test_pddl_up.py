@@ -5,6 +5,7 @@ Needs the ``pddl`` extra; without it every test here is skipped with that reason
 it), never silently passed.
 """
 
+# ruff: noqa: E402  (the extra is checked before the imports that need it)
 from __future__ import annotations
 
 from collections.abc import Callable
@@ -14,10 +15,10 @@ from typing import Any
 
 import pytest
 
-pytest.importorskip(
-    "unified_planning", reason="needs the pddl extra: pip install 'selfrepair[pddl]'"
-)
-pytest.importorskip("up_lpg", reason="needs the pddl extra: pip install 'selfrepair[pddl]'")
+from extras import need
+
+need("unified_planning", "pddl")  # skips the module, or fails under SELFREPAIR_REQUIRE_EXTRAS=1
+need("up_lpg", "pddl")
 
 from unified_planning.engines import FailedValidationReason, ValidationResultStatus
 from unified_planning.io import PDDLReader

@@ -6,18 +6,17 @@ from fractions import Fraction
 
 import pytest
 
+from extras import NUMBA
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Heading, Pose, parse_pose
 from selfrepair.robots import four_wheel
 from selfrepair.robots.four_wheel import FOUR_WHEEL, parse_action, parse_faults
 from selfrepair.search.astar import PlanResult, PlanStatus
-from selfrepair.search.backend import numba_available
 from selfrepair.search.lattice import HEURISTICS, action_cost, plan, plan_cost, planning_actions
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.world.maze import Maze, clearance_map, parse_maze
 
-BACKENDS = ["python", pytest.param("numba", marks=pytest.mark.skipif(
-    not numba_available(), reason="numba not installed"))]  # fmt: skip
+BACKENDS = ["python", pytest.param("numba", marks=NUMBA)]
 
 CORRIDOR = parse_maze(".....\n")
 OPEN_2X2 = parse_maze("..\n..\n")

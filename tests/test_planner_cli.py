@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from extras import need
 from selfrepair.cli import main
 
 U_TURN = ".....\n.###.\n.....\n"
@@ -71,10 +72,8 @@ def test_kernels_are_loaded_before_the_search_is_timed(
 ) -> None:
     """The command loads the kernels first, then calls the planner: the order is the point."""
     from selfrepair.search import lattice, warmup
-    from selfrepair.search.backend import numba_available
 
-    if not numba_available():
-        pytest.skip("numba is not installed (the kernels are what is loaded)")
+    need("numba", "fast")  # the kernels are what is loaded
     calls: list[str] = []
     monkeypatch.setattr(warmup, "_WARM", set())
 

@@ -12,15 +12,14 @@ import itertools
 from fractions import Fraction
 
 import numpy as np
-import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from extras import NUMBA
 from selfrepair.geometry import Heading, Pose
 from selfrepair.robots import four_wheel
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import PlanStatus
-from selfrepair.search.backend import numba_available
 from selfrepair.search.lattice import HEURISTICS, plan, planning_actions
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.world.maze import Maze, clearance_map
@@ -114,7 +113,7 @@ def test_lattice_astar_equals_brute_force_dijkstra(
         assert result.cost == result.duration
 
 
-@pytest.mark.skipif(not numba_available(), reason="numba not installed")
+@NUMBA
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(problems(), st.sampled_from(sorted(HEURISTICS)))
 def test_numba_backend_agrees_with_the_reference(problem: PlanningProblem, heuristic: str) -> None:
@@ -161,7 +160,7 @@ def test_heuristics_are_consistent(problem: PlanningProblem) -> None:
                         assert h_start <= cost + h_end, name
 
 
-@pytest.mark.skipif(not numba_available(), reason="numba not installed")
+@NUMBA
 @settings(max_examples=40, deadline=None)
 @given(problems())
 def test_bfs_kernel_equals_python_bfs(problem: PlanningProblem) -> None:

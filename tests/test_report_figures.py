@@ -17,7 +17,7 @@ from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.result import MissionSpec
 from selfrepair.execution.trace import read_trace, write_trace
-from selfrepair.experiment import plots
+from selfrepair.experiment import missionplot, plots
 from selfrepair.experiment.report import counted, render_markdown
 from selfrepair.geometry import parse_pose
 from selfrepair.repair.strategies import StrategyOptions
@@ -53,18 +53,18 @@ def trace_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture(scope="module")
-def picture(trace_file: Path) -> plots.MissionPicture:
-    return plots.picture_from_trace(read_trace(trace_file))
+def picture(trace_file: Path) -> missionplot.MissionPicture:
+    return missionplot.picture_from_trace(read_trace(trace_file))
 
 
-def _drawn(picture: plots.MissionPicture) -> Any:
+def _drawn(picture: missionplot.MissionPicture) -> Any:
     fig = new_figure()
     ax = fig.subplots()
-    plots.draw_mission(ax, picture)
+    missionplot.draw_mission(ax, picture)
     return ax
 
 
-def test_mission_picture_marks_every_repair(picture: plots.MissionPicture) -> None:
+def test_mission_picture_marks_every_repair(picture: missionplot.MissionPicture) -> None:
     assert len(picture.repairs) > 10  # the replacing robot meets its faulty actions again
     marks = [line for line in _drawn(picture).lines if line.get_gid() == "repair"]
     assert len(marks) == len(picture.repairs)
@@ -73,7 +73,7 @@ def test_mission_picture_marks_every_repair(picture: plots.MissionPicture) -> No
     ]
 
 
-def test_initial_plan_is_drawn_over_the_executed_path(picture: plots.MissionPicture) -> None:
+def test_initial_plan_is_drawn_over_the_executed_path(picture: missionplot.MissionPicture) -> None:
     ax = _drawn(picture)
     (plan,) = [line for line in ax.lines if line.get_gid() == "initial-plan"]
     executed = [line for line in ax.lines if line.get_gid() == "step"]
@@ -81,14 +81,14 @@ def test_initial_plan_is_drawn_over_the_executed_path(picture: plots.MissionPict
     assert len(plan.get_xdata()) >= len(picture.planned)
 
 
-def test_animation_marks_each_repair_once(picture: plots.MissionPicture) -> None:
+def test_animation_marks_each_repair_once(picture: missionplot.MissionPicture) -> None:
     fig = new_figure()
     ax = fig.subplots()
-    plots.draw_background(ax, picture)
+    missionplot.draw_background(ax, picture)
     total = len(picture.steps)
     drawn = 0
     for upto in [*range(0, total + 1, 7), total, total, total]:  # held last frames
-        plots.draw_steps(ax, picture, drawn, upto)
+        missionplot.draw_steps(ax, picture, drawn, upto)
         drawn = max(drawn, upto)
     marks = [line for line in ax.lines if line.get_gid() == "repair"]
     assert len(marks) == len(picture.repairs)
@@ -196,7 +196,7 @@ def test_animate_reports_the_frames_in_the_gif_and_its_progress(
 
 
 @pytest.fixture(scope="module")
-def arc_picture(tmp_path_factory: pytest.TempPathFactory) -> plots.MissionPicture:
+def arc_picture(tmp_path_factory: pytest.TempPathFactory) -> missionplot.MissionPicture:
     """The report's mission of `experiment paper`: in wide corridors the robot turns by arcs."""
     spec = MissionSpec(
         load_bundled("wide-short"),
@@ -207,10 +207,10 @@ def arc_picture(tmp_path_factory: pytest.TempPathFactory) -> plots.MissionPictur
     )
     trace = tmp_path_factory.mktemp("arcs") / "t.jsonl"
     write_trace(run_mission(spec), trace)
-    return plots.picture_from_trace(read_trace(trace))
+    return missionplot.picture_from_trace(read_trace(trace))
 
 
-def test_arcs_are_drawn_as_quarter_circles(arc_picture: plots.MissionPicture) -> None:
+def test_arcs_are_drawn_as_quarter_circles(arc_picture: missionplot.MissionPicture) -> None:
     arcs = [
         (start, end)
         for start, end, _ in arc_picture.steps
@@ -234,7 +234,7 @@ def test_arcs_are_drawn_as_quarter_circles(arc_picture: plots.MissionPicture) ->
         assert radii == pytest.approx([1.0] * len(radii))
 
 
-def test_initial_plan_follows_the_arcs_too(arc_picture: plots.MissionPicture) -> None:
+def test_initial_plan_follows_the_arcs_too(arc_picture: missionplot.MissionPicture) -> None:
     (plan,) = [line for line in _drawn(arc_picture).lines if line.get_gid() == "initial-plan"]
     points = set(zip(plan.get_xdata(), plan.get_ydata(), strict=True))
     assert {(p.x, p.y) for p in arc_picture.planned} <= points  # every pose of the plan on it
@@ -242,7 +242,7 @@ def test_initial_plan_follows_the_arcs_too(arc_picture: plots.MissionPicture) ->
 
 
 @pytest.fixture(scope="module")
-def deep_table_picture(tmp_path_factory: pytest.TempPathFactory) -> plots.MissionPicture:
+def deep_table_picture(tmp_path_factory: pytest.TempPathFactory) -> missionplot.MissionPicture:
     """A mission whose table is a file deep in a directory tree (as an experiment file's
     ``table = "..."`` becomes an absolute path in the trace)."""
     folder = tmp_path_factory.mktemp("tables")
@@ -261,11 +261,11 @@ def deep_table_picture(tmp_path_factory: pytest.TempPathFactory) -> plots.Missio
     )
     trace = folder / "t.jsonl"
     write_trace(run_mission(spec), trace)
-    return plots.picture_from_trace(read_trace(trace))
+    return missionplot.picture_from_trace(read_trace(trace))
 
 
 def test_mission_title_names_the_table_file_not_its_path(
-    deep_table_picture: plots.MissionPicture,
+    deep_table_picture: missionplot.MissionPicture,
 ) -> None:
     assert "my-table.json" in deep_table_picture.title
     assert (
@@ -274,13 +274,13 @@ def test_mission_title_names_the_table_file_not_its_path(
 
 
 def test_mission_title_fits_the_figure(
-    deep_table_picture: plots.MissionPicture, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    deep_table_picture: missionplot.MissionPicture, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     figures: list[Any] = []
-    monkeypatch.setattr(plots, "_save", lambda fig, path: figures.append(fig) or path)
+    monkeypatch.setattr(missionplot, "save", lambda fig, path: figures.append(fig) or path)
     long = replace(deep_table_picture, title=deep_table_picture.title + ", and more" * 12)
     for picture in (deep_table_picture, long):
-        plots.figure_mission(picture, tmp_path / "mission.png")
+        missionplot.figure_mission(picture, tmp_path / "mission.png")
         fig = figures[-1]
         fig.draw_without_rendering()
         title = fig.axes[0].title

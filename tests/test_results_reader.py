@@ -18,6 +18,7 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
+from extras import need
 from selfrepair.cli import main
 from selfrepair.errors import InputError
 from selfrepair.experiment.findings import check_findings, summarize
@@ -309,7 +310,7 @@ def test_any_damaged_file_is_read_or_refused(
 def test_report_on_any_altered_database_is_written_or_one_line(
     valid_db: Path, mutation: object
 ) -> None:
-    pytest.importorskip("matplotlib")
+    need("matplotlib", "viz")
     with tempfile.TemporaryDirectory() as folder:
         db = _copy(valid_db, Path(folder))
         with sqlite3.connect(db) as con:

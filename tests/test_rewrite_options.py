@@ -129,6 +129,7 @@ def _row(
         "variant": variant,
         "table": variant.split("[")[1].split(",")[0] if "[" in variant else None,
         "recursion": "guarded" if "[" in variant else None,
+        "rewrite": (1 if variant.endswith(",rewrite]") else 0) if "[" in variant else None,
         "clearance_weight": "0",
         "maze": "m",
         "route": route,
@@ -179,6 +180,11 @@ def _finding(findings: list[Finding], number: str) -> Finding | None:
 def test_finding_1r_judges_the_rewriting_robot_apart() -> None:
     assert is_rewrite(REWRITING[0]) and not is_rewrite(PER_ENCOUNTER[0])
     assert not is_rewrite(REPLAN[0])
+    # the column decides, not the label's text; a row stored before the column reads its config
+    assert not is_rewrite({**REWRITING[0], "rewrite": 0})
+    old = {k: v for k, v in PER_ENCOUNTER[0].items() if k != "rewrite"}
+    assert is_rewrite({**old, "config": '{"options": {"rewrite": true}}'})
+    assert not is_rewrite({**old, "config": '{"options": {"table": "handwritten"}}'})
     findings = check_findings([*REPLAN, *PER_ENCOUNTER, *REWRITING])
     one, rewritten = _finding(findings, "1"), _finding(findings, "1r")
     assert one is not None and rewritten is not None

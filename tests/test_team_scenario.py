@@ -67,7 +67,7 @@ def test_a_hand_made_scenario_reads_as_written() -> None:
         Trigger.TICK,
     )
     assert scenario.table == "" and scenario.digest == scenario_digest(SCENARIO)
-    assert scenario.without_faults().faults == () and scenario.without_faults().digest
+    assert scenario.without_faults().faults == () and not scenario.without_faults().digest
 
 
 @pytest.mark.parametrize(
@@ -131,12 +131,19 @@ def test_counts_draw_the_same_team_from_the_same_seed() -> None:
 
 
 def test_the_table_key_and_a_relative_table_file(tmp_path: Path) -> None:
+    from selfrepair.tables.fileformat import bundled_table, dump_table
+
     with pytest.raises(ConfigError, match=r"faults\[0\]\.table"):
-        parse_scenario(SCENARIO + 'table = "generated"\n', source="s.toml")
-    top = parse_scenario('table = "generated"\n' + SCENARIO, source="s.toml")
-    assert top.table == "generated"
+        parse_scenario(SCENARIO + 'table = "handwritten"\n', source="s.toml")
+    top = parse_scenario('table = "handwritten"\n' + SCENARIO, source="s.toml")
+    assert top.table == "handwritten"
+    (tmp_path / "t").mkdir()
+    (tmp_path / "t" / "x.json").write_text(dump_table(bundled_table("handwritten")), "utf-8")
     filed = parse_scenario('table = "t/x.json"\n' + SCENARIO, base_dir=tmp_path)
     assert filed.table == str(tmp_path / "t" / "x.json")
+    with pytest.raises(ConfigError, match="key 'table': cannot read table file") as info:
+        parse_scenario('\ntable = "t/missing.json"\n' + SCENARIO, base_dir=tmp_path)
+    assert info.value.line == 2
 
 
 def test_bundled_scenario_is_found_and_hashed() -> None:
@@ -176,3 +183,59 @@ def test_random_scenarios_always_pass_the_checks(
     assert len(cells) == len(set(cells)) == robots + 2 * tasks
     area = set(largest_area(maze))
     assert all(c in area for c in cells)
+
+
+# --- the robots' own table ---------------------------------------------------------------------
+
+THREE_ACTION = SCENARIO.replace(
+    'maze = "wide-short"', 'maze = "wide-short"\ndomain = "three-action"'
+)
+THREE_ACTION = THREE_ACTION.replace(
+    'kind = "gripper"\nrobot = "r2"', 'kind = "wheels"\nrobot = "r1"\nwheel_faults = "L"'
+)
+THREE_ACTION = THREE_ACTION.replace("gripper = false\n", "")
+
+
+def test_a_three_action_team_runs_to_delivery(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "three.toml"
+    path.write_text(THREE_ACTION, encoding="utf-8")
+    trace = tmp_path / "t.jsonl"
+    assert main(["team", "run", str(path), "--trace", str(trace)]) == 0
+    assert "1/1 delivered" in capsys.readouterr().out
+    assert main(["team", "replay", str(trace)]) == 0
+    scenario = parse_scenario(THREE_ACTION)
+    from selfrepair.team.result import TeamOptions
+    from selfrepair.team.robottable import robot_table, robot_table_label
+
+    assert robot_table(scenario, TeamOptions()).domain is scenario.domain
+    assert robot_table_label(scenario, TeamOptions()) == "three-action"
+
+
+def test_a_table_for_another_robot_is_refused_with_its_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = 'table = "handwritten"\n' + THREE_ACTION
+    with pytest.raises(ConfigError, match="key 'table': the robots' table 'handwritten' is for "
+                       "the four-wheel robot") as info:  # fmt: skip
+        parse_scenario(text, source="s.toml")
+    assert info.value.line == 1
+    path = tmp_path / "three.toml"
+    path.write_text(THREE_ACTION, encoding="utf-8")
+    assert main(["team", "run", str(path), "--robot-table", "handwritten"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "is for the four-wheel robot" in err
+
+
+def test_a_robot_without_a_bundled_table_gets_a_generated_one() -> None:
+    from selfrepair.robots.registry import load_plugin
+    from selfrepair.team.result import TeamOptions
+    from selfrepair.team.robottable import robot_table, robot_table_label
+
+    load_plugin(Path(__file__).parent / "data" / "robots" / "hopper.py")
+    text = THREE_ACTION.replace('"three-action"', '"hopper"').replace('"L"', '"HOP"')
+    scenario = parse_scenario(text)
+    assert robot_table_label(scenario, TeamOptions()) == "generated"
+    table = robot_table(scenario, TeamOptions())
+    assert table.domain is scenario.domain and table.domain.name == "hopper"

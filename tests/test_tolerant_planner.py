@@ -9,6 +9,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from extras import NUMBA
 from selfrepair.errors import ProblemError
 from selfrepair.execution.executor import mission_context
 from selfrepair.execution.result import MissionSpec
@@ -19,7 +20,6 @@ from selfrepair.repair.tolerance import fault_model, needs_replan, plan_toleranc
 from selfrepair.repair.tolerance_masks import tolerance_masks, tolerance_term
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import PlanStatus
-from selfrepair.search.backend import numba_available
 from selfrepair.search.lattice import plan, plan_cost, planning_actions
 from selfrepair.search.problem import PlanningProblem, StepTerm
 from selfrepair.tables.fileformat import resolve_table
@@ -31,7 +31,7 @@ from selfrepair.world.routes import random_routes
 ACTIONS = planning_actions(FOUR_WHEEL, frozenset())
 SINGLE = fault_model(FOUR_WHEEL, 1)
 DOUBLE = fault_model(FOUR_WHEEL, 2)
-BACKENDS = ["python", "numba"] if numba_available() else ["python"]
+BACKENDS = ["python", pytest.param("numba", marks=NUMBA)]
 
 
 def _term(maze: Maze, table: str, recursion: str, k: int, penalty: Fraction | None) -> StepTerm:
@@ -142,7 +142,7 @@ def _problems(draw: st.DrawFn) -> tuple[PlanningProblem, int]:
     return problem, k
 
 
-@pytest.mark.skipif(not numba_available(), reason="needs numba")
+@NUMBA
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(_problems())
 def test_backends_agree_on_tolerant_plans(case: tuple[PlanningProblem, int]) -> None:

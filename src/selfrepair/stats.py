@@ -12,8 +12,10 @@ Definitions (one each, used by single-robot rows, team rows, summaries, findings
   integer nanoseconds stays an integer.
 * :class:`Interval` and :func:`bootstrap_interval` - an estimate with its 95% percentile-bootstrap
   interval over a sample whose unit is the **mission** (repairs inside one mission are not
-  independent, missions are). The bootstrap is seeded (:data:`BOOTSTRAP_SEED`), so a report
-  recomputed from the same rows prints the same intervals.
+  independent, missions are) or the episode. The bootstrap is seeded (:data:`BOOTSTRAP_SEED` by
+  default), so a report recomputed from the same rows prints the same intervals.
+* :func:`wilson_interval` - the Wilson score interval of a success rate (good at rates near 0
+  and 1, where the normal approximation fails; scipy, imported inside).
 
 Misuse (an empty sample, a fraction outside [0, 1]) raises
 :class:`~selfrepair.errors.ProblemError`; no data is an outcome the caller handles first.
@@ -41,6 +43,7 @@ __all__ = [
     "bootstrap_interval",
     "lower_median",
     "percentile",
+    "wilson_interval",
 ]
 
 N = TypeVar("N", int, float)
@@ -77,17 +80,20 @@ def lower_median(values: Sequence[N]) -> N:
 
 @dataclass(frozen=True, slots=True)
 class Interval:
-    """An estimate with its 95% interval (``low`` and ``high``; equal to the estimate for a
-    sample of one) and the sample size it came from."""
+    """An estimate with its interval at confidence ``level`` (``low`` and ``high``; equal to the
+    estimate for a sample of one) and the sample size it came from."""
 
     estimate: float
     low: float
     high: float
     n: int
+    level: float = LEVEL
 
     def scaled(self, factor: float) -> Interval:
         """The same interval in other units (e.g. ns to µs)."""
-        return Interval(self.estimate * factor, self.low * factor, self.high * factor, self.n)
+        return Interval(
+            self.estimate * factor, self.low * factor, self.high * factor, self.n, self.level
+        )
 
     def text(self, digits: int = 0, unit: str = "") -> str:
         """``12 [10, 15]``: estimate and interval, rounded to ``digits`` decimals."""
@@ -122,24 +128,45 @@ STATISTICS: dict[str, Callable[..., npt.NDArray[np.float64]]] = {
 bootstrap distribution of a lower median is needlessly lumpy."""
 
 
-def bootstrap_interval(values: Sequence[float], statistic: str = "median") -> Interval | None:
-    """The ``statistic`` of ``values`` with its percentile-bootstrap 95% interval; ``None`` for
-    no values. With one value, or all values equal, the interval is the value itself.
+def bootstrap_interval(
+    values: Sequence[float],
+    statistic: str = "median",
+    *,
+    level: float = LEVEL,
+    seed: int = BOOTSTRAP_SEED,
+    resamples: int = BOOTSTRAP_RESAMPLES,
+) -> Interval | None:
+    """The ``statistic`` of ``values`` with its percentile-bootstrap interval at ``level``;
+    ``None`` for no values. With one value, or all values equal, the interval is the value itself.
 
-    The percentile bootstrap: :data:`BOOTSTRAP_RESAMPLES` samples of the same size drawn with
-    replacement, the statistic of each, and their 2.5% and 97.5% quantiles (as
-    ``scipy.stats.bootstrap(method="percentile")`` computes it, vectorised here in numpy,
-    which is an order of magnitude faster for the many small samples of a summary)."""
+    The percentile bootstrap: ``resamples`` samples of the same size drawn with replacement
+    (``numpy.random.default_rng(seed)``), the statistic of each, and their ``(1 - level) / 2``
+    and ``(1 + level) / 2`` quantiles (as ``scipy.stats.bootstrap(method="percentile")``
+    computes it, vectorised here in numpy, which is an order of magnitude faster for the many
+    small samples of a summary)."""
     if not values:
         return None
     sample = np.asarray(values, dtype=np.float64)
     fn = STATISTICS[statistic]
     estimate = float(fn(sample))
     if len(sample) == 1 or np.all(sample == sample[0]):
-        return Interval(estimate, estimate, estimate, len(sample))
-    rng = np.random.default_rng(BOOTSTRAP_SEED)
-    draws = rng.integers(0, len(sample), size=(BOOTSTRAP_RESAMPLES, len(sample)))
+        return Interval(estimate, estimate, estimate, len(sample), level)
+    rng = np.random.default_rng(seed)
+    draws = rng.integers(0, len(sample), size=(resamples, len(sample)))
     stats = fn(sample[draws], axis=-1)
-    tail = (1 - LEVEL) / 2
+    tail = (1 - level) / 2
     low, high = np.quantile(stats, [tail, 1 - tail])
-    return Interval(estimate, min(float(low), estimate), max(float(high), estimate), len(sample))
+    return Interval(
+        estimate, min(float(low), estimate), max(float(high), estimate), len(sample), level
+    )
+
+
+def wilson_interval(successes: int, trials: int, level: float = LEVEL) -> Interval | None:
+    """The success rate ``successes / trials`` with its Wilson score interval at ``level``
+    (``scipy.stats.binomtest(...).proportion_ci(method="wilson")``); ``None`` for no trials."""
+    if trials < 1:
+        return None
+    from scipy.stats import binomtest
+
+    ci = binomtest(successes, trials).proportion_ci(confidence_level=level, method="wilson")
+    return Interval(successes / trials, float(ci.low), float(ci.high), trials, level)

@@ -411,10 +411,12 @@ def table_check(
 ) -> int:
     """Check a table: gaps and dead candidates.
 
-    Loads the table (re-simulating every candidate). Exit 1 when there are errors.
+    Loads the table (re-simulating every candidate). Exit 1 when there are errors. An empty
+    entry of a fault-indexed table marks an action without a replacement under those faults
+    (the generator writes them): counted, not warned about.
     """
     from selfrepair.tables.fileformat import resolve_table
-    from selfrepair.tables.model import check_table
+    from selfrepair.tables.model import check_table, no_replacement_marks
 
     table = resolve_table(
         find_input(spec), max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
@@ -424,8 +426,15 @@ def table_check(
         echo(f"{spec}: {problem}")
     errors = sum(1 for p in problems if p.severity == "error")
     candidates = sum(len(e.candidates) for e in table.entries)
+    marks = no_replacement_marks(table)
+    marked = (
+        f" ({marks} empty fault-indexed entries mark an action without a replacement under "
+        "those faults: intended, not warned about)"
+        if marks
+        else ""
+    )
     echo(
         f"{spec}: {len(table.entries)} entries, {candidates} candidates re-simulated; "
-        f"{errors} errors, {len(problems) - errors} warnings"
+        f"{errors} errors, {len(problems) - errors} warnings{marked}"
     )
     return 1 if errors else 0

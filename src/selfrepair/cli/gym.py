@@ -15,8 +15,9 @@ from selfrepair.cli._app import app, echo, echo_json
 from selfrepair.errors import InputError
 
 if TYPE_CHECKING:
-    from selfrepair.envs.evaluate import Evaluation, Interval
+    from selfrepair.envs.evaluate import Evaluation
     from selfrepair.envs.scenarios import FaultSpec, MazeSpec
+    from selfrepair.stats import Interval
 
 __all__ = ["gym_eval"]
 
@@ -175,7 +176,7 @@ def _interval(interval: "Interval", digits: int) -> str:
 
 def _print(result: "Evaluation", domain: str, spec: "FaultSpec") -> None:
     n = len(result.episodes)
-    level = round(100 * result.success_interval().confidence)
+    level = round(100 * result.success_interval().level)
     mean_steps = sum(e.steps for e in result.episodes) / n
     echo(f"policy {result.policy}, {n} episodes (seed {result.seed}), robot {domain}")
     echo(
@@ -204,7 +205,7 @@ def _as_json(result: "Evaluation", domain: str) -> dict[str, Any]:
         "success_interval": [success.low, success.high],
         "mean_return": result.mean_return,
         "return_interval": [ret.low, ret.high],
-        "confidence": success.confidence,
+        "confidence": success.level,
         "runs": [
             {
                 "seed": e.seed,

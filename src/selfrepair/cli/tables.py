@@ -26,6 +26,7 @@ if TYPE_CHECKING:
     from rich.table import Table
 
     from selfrepair.repair.coverage import CoverageReport
+    from selfrepair.tables.model import ReplacementTable
     from selfrepair.world.maze import Maze
 
 __all__ = ["table_coverage", "table_generate"]
@@ -196,6 +197,9 @@ def table_coverage(
         label=spec,
     )
     data = report.to_json()
+    longer = _longer_needed(report, table)
+    if longer is not None:
+        data["longer_needed"] = longer
     if json_out is not None:
         json_out.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n", encoding="utf-8")
     if as_json:
@@ -206,7 +210,61 @@ def table_coverage(
     console().print(_summary_table(report))
     if report.walls:
         console().print(_wall_table(report))
+    if longer is not None:
+        echo(_longer_text(longer))
     return 0
+
+
+def _longer_needed(report: "CoverageReport", table: "ReplacementTable") -> dict[str, Any] | None:
+    """The uncovered replaceable pairs whose every replacement is longer than the table's
+    longest candidate (``max_length`` of a generated table; the longest candidate listed
+    otherwise), with the fewest actions each needs (exact search, the ``length`` objective);
+    ``None`` when there are none."""
+    from selfrepair.repair.optimum import optimal_replacements
+
+    dom = table.domain
+    limit = table.parameters.get("max_length")
+    if not isinstance(limit, int):
+        limit = max((len(c) for e in table.entries for c in e.candidates), default=0)
+    uncovered = [p for p in report.pairs if p.optimum is not None and p.cost is None]
+    shortest: dict[str, dict[Any, Any]] = {}
+    lengths = []
+    for pair in uncovered:
+        if pair.faults not in shortest:
+            shortest[pair.faults] = optimal_replacements(
+                dom, dom.parse_faults(pair.faults), "length"
+            )
+        fewest = shortest[pair.faults][dom.parse_action(pair.action)]
+        if fewest is not None and fewest > limit:
+            lengths.append(int(fewest))
+    if not lengths:
+        return None
+    return {
+        "pairs": len(lengths),
+        "replaceable": sum(r.replaceable for r in report.rows),
+        "uncovered": len(uncovered),
+        "table_max_length": limit,
+        "fewest_actions_min": min(lengths),
+        "fewest_actions_max": max(lengths),
+    }
+
+
+def _longer_text(longer: dict[str, Any]) -> str:
+    from selfrepair.tables.model import MAX_LENGTH_LIMIT
+
+    low, high = longer["fewest_actions_min"], longer["fewest_actions_max"]
+    span = str(low) if low == high else f"{low} to {high}"
+    advice = (
+        f"regenerate with --max-length {high}"
+        if high <= MAX_LENGTH_LIMIT
+        else f"the generator searches up to --max-length {MAX_LENGTH_LIMIT}"
+    )
+    return (
+        f"{longer['pairs']} of the {longer['replaceable']} replaceable pairs "
+        f"({longer['uncovered']} uncovered) {'needs' if longer['pairs'] == 1 else 'need'} "
+        f"longer sub-plans: {span} actions, more than "
+        f"the table's {longer['table_max_length']}; {advice}."
+    )
 
 
 def _percent(value: float | None) -> str:

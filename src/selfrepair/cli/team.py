@@ -22,6 +22,7 @@ from selfrepair.cli._app import (
     echo,
     echo_json,
 )
+from selfrepair.cli._inputs import find_input
 from selfrepair.limits import (
     MAX_CELLS,
     MAX_FILE_BYTES,
@@ -62,10 +63,30 @@ def _out() -> Any:
     return console()
 
 
-def _options(strategy: str, table: str, max_ticks: int | None, backend: str) -> Any:
+RobotTable = Annotated[
+    str | None,
+    typer.Option(
+        "--robot-table",
+        metavar="TABLE",
+        help="The robots' own table for their wheel faults: a bundled name or FILE.json "
+        "(default: the scenario's 'table', else the robot's default, generated for a robot "
+        "without a bundled one).",
+    ),
+]
+
+
+def _options(
+    strategy: str, table: str, max_ticks: int | None, backend: str, robot_table: str | None = None
+) -> Any:
     from selfrepair.team.result import TeamOptions
 
-    return TeamOptions(strategy=strategy, table=table, max_ticks=max_ticks, backend=backend)
+    return TeamOptions(
+        strategy=strategy,
+        table=table,
+        max_ticks=max_ticks,
+        backend=backend,
+        robot_table="" if robot_table is None else find_input(robot_table),
+    )
 
 
 @team_app.command("run")
@@ -81,6 +102,7 @@ def team_run(
         str,
         typer.Option("--table", metavar="TABLE", help="Team table: handwritten or generated."),
     ] = "handwritten",
+    robot_table: RobotTable = None,
     trace: Annotated[
         Path | None,
         typer.Option("--trace", metavar="FILE", help="Write the team trace (JSON Lines) here."),
@@ -98,6 +120,14 @@ def team_run(
         str,
         typer.Option("--backend", metavar="NAME", help="Planner backend: auto, python or numba."),
     ] = "auto",
+    detect: Annotated[
+        str | None,
+        typer.Option(
+            "--detect",
+            metavar="MODE",
+            help="How robots learn their wheel faults: now or on-use (default: the scenario's).",
+        ),
+    ] = None,
     max_robots: MaxRobots = MAX_ROBOTS,
     max_tasks: MaxTasks = MAX_TASKS,
     max_cells: MaxCells = MAX_CELLS,
@@ -116,7 +146,14 @@ def team_run(
     parsed = resolve_scenario(
         scenario, limits=Limits(max_robots, max_tasks, max_cells, max_file_bytes)
     )
-    options = _options(strategy, table, max_ticks, backend)
+    if detect is not None:
+        from dataclasses import replace
+
+        from selfrepair.errors import choice
+        from selfrepair.execution.faults import Detection
+
+        parsed = replace(parsed, detection=choice(Detection, detect, "detection"))
+    options = _options(strategy, table, max_ticks, backend, robot_table)
     result = run_team(parsed, options)
     baseline = run_team(parsed.without_faults(), options).makespan if parsed.faults else None
     if trace is not None:
@@ -136,6 +173,12 @@ def _print_result(result: "TeamResult", baseline: Any) -> None:
     )
     for fault in scenario.faults:
         echo(f"  fault: {fault.describe()} ({fault.persistence})")
+    for d in result.discoveries:
+        echo(
+            f"  tick {d.at / result.scale:g}: {d.robot} learns of fault {d.index} "
+            f"({scenario.faults[d.index].describe()}), {d.delay / result.scale:g} ticks after "
+            f"it started (detection {scenario.detection})"
+        )
     ratio = (
         f" ({float(result.makespan / baseline):.2f} x fault-free {baseline})" if baseline else ""
     )
@@ -176,6 +219,7 @@ def team_compare(
         str,
         typer.Option("--backend", metavar="NAME", help="Planner backend: auto, python or numba."),
     ] = "auto",
+    robot_table: RobotTable = None,
     max_robots: MaxRobots = MAX_ROBOTS,
     max_tasks: MaxTasks = MAX_TASKS,
     max_cells: MaxCells = MAX_CELLS,
@@ -204,7 +248,7 @@ def team_compare(
         (StrategyName.REALLOCATION, TeamTableName.HANDWRITTEN),
         (StrategyName.ALONE, TeamTableName.HANDWRITTEN),
     ]
-    calm = _options(StrategyName.ALONE, "handwritten", None, backend)
+    calm = _options(StrategyName.ALONE, "handwritten", None, backend, robot_table)
     baseline = run_team(parsed.without_faults(), calm)
     view = Table(title=f"{parsed.name}: fault-free makespan {baseline.makespan} ticks")
     for column in (
@@ -213,7 +257,7 @@ def team_compare(
     ):  # fmt: skip
         view.add_column(column, justify="left" if column == "strategy" else "right")
     for strategy, table in variants:
-        options = _options(strategy, table, None, backend)
+        options = _options(strategy, table, None, backend, robot_table)
         run_team(parsed, options)  # warm: one-off costs stay out of the latencies
         runs = [run_team(parsed, options) for _ in range(repeats)]
         result = runs[-1]

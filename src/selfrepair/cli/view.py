@@ -1,6 +1,8 @@
 """``selfrepair view``: write a mission as one self-contained HTML page (no server, no network).
 
-``selfrepair view TRACE -o mission.html`` views a trace written by ``run --trace``;
+``selfrepair view TRACE -o mission.html`` views a trace written by ``run --trace`` (a team trace of
+``team run --trace`` gets the team page: every robot, item, held cell, incident and repair on one
+timeline);
 ``selfrepair view RESULTS.sqlite --key K -o mission.html`` re-runs the stored mission whose key
 starts with ``K`` and views it. Bad input (a missing file, a file that is neither, an unknown or
 ambiguous key) is one line on stderr and exit code 2 (see :func:`selfrepair.cli.main`).
@@ -35,7 +37,7 @@ def view(
         Path,
         typer.Argument(
             metavar="SOURCE",
-            help="A trace (run --trace) or a results database (with --key).",
+            help="A trace (run --trace, team run --trace) or a results database (with --key).",
         ),
     ],
     out: Annotated[Path, typer.Option("--out", "-o", metavar="FILE", help="HTML file to write.")],
@@ -53,7 +55,8 @@ def view(
 ) -> int:
     """Write a mission as a self-contained HTML page.
 
-    The page replays the mission: maze, plan, path, faults and repairs.
+    The page replays the mission: maze, plan, path, faults and repairs; for a team trace every
+    robot, item, held cell, incident and repair on one timeline.
     """
     from selfrepair.experiment.viewer import view_results, view_trace
 

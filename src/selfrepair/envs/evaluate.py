@@ -6,9 +6,10 @@ return, with 95% intervals.
 the same mazes, routes and faults (paired comparisons). :func:`run_episode` runs one episode and
 accepts ``reset`` options (to replay a given mission).
 
-Intervals: the success rate gets the Wilson score interval (good at rates near 0 and 1, where
-the normal approximation fails) and the mean return a percentile bootstrap interval, both from
-SciPy (``scipy.stats.binomtest(...).proportion_ci`` and ``scipy.stats.bootstrap``, seeded).
+Intervals (:mod:`selfrepair.stats`, the one statistics module): the success rate gets the Wilson
+score interval (good at rates near 0 and 1, where the normal approximation fails) and the mean
+return a percentile bootstrap interval seeded by the evaluation's seed; both are undefined
+(``nan`` ends) for too few episodes.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import numpy as np
 from selfrepair.envs.env import FaultyMazeEnv
 from selfrepair.envs.policies import Policy
 from selfrepair.errors import ProblemError
+from selfrepair.stats import LEVEL, Interval, bootstrap_interval, wilson_interval
 from selfrepair.status import EpisodeEnd
 
 __all__ = [
@@ -29,18 +31,19 @@ __all__ = [
     "Episode",
     "EpisodeEnd",
     "Evaluation",
-    "Interval",
-    "bootstrap_interval",
     "episode_seeds",
     "evaluate",
     "run_episode",
-    "wilson_interval",
 ]
+
+BOOTSTRAP_RESAMPLES_EVAL = 9999
+"""Bootstrap resamples of an evaluation's return interval (episodes are few and cheap)."""
 
 MAX_EPISODES = 10_000
 """The most episodes :func:`evaluate` runs unless its ``max_episodes`` is raised."""
 
-CONFIDENCE = 0.95
+CONFIDENCE = LEVEL
+"""The default confidence of the intervals (:data:`selfrepair.stats.LEVEL`)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -62,48 +65,10 @@ class Episode:
         return self.end is EpisodeEnd.REACHED
 
 
-@dataclass(frozen=True, slots=True)
-class Interval:
-    """A two-sided confidence interval (``nan`` ends when it is undefined)."""
-
-    low: float
-    high: float
-    confidence: float = CONFIDENCE
-
-
-def wilson_interval(successes: int, trials: int, confidence: float = CONFIDENCE) -> Interval:
-    """The Wilson score interval of a success rate (SciPy's ``binomtest``)."""
-    if trials < 1:
-        return Interval(float("nan"), float("nan"), confidence)
-    from scipy.stats import binomtest
-
-    ci = binomtest(successes, trials).proportion_ci(confidence_level=confidence, method="wilson")
-    return Interval(float(ci.low), float(ci.high), confidence)
-
-
-def bootstrap_interval(
-    values: np.ndarray | list[float], confidence: float = CONFIDENCE, seed: int = 0
-) -> Interval:
-    """A percentile bootstrap interval of the mean of ``values`` (SciPy's ``bootstrap``, 9999
-    resamples, seeded). Undefined (``nan``) for fewer than two values; a single point when all
-    values are equal."""
-    data = np.asarray(values, dtype=float)
-    if data.size < 2:
-        return Interval(float("nan"), float("nan"), confidence)
-    if np.all(data == data[0]):
-        return Interval(float(data[0]), float(data[0]), confidence)
-    from scipy.stats import bootstrap
-
-    result = bootstrap(
-        (data,),
-        np.mean,
-        confidence_level=confidence,
-        method="percentile",
-        n_resamples=9999,
-        rng=np.random.default_rng(seed),
-    )
-    ci = result.confidence_interval
-    return Interval(float(ci.low), float(ci.high), confidence)
+def _undefined(n: int, level: float) -> Interval:
+    """An interval that does not exist (too few episodes), with ``nan`` ends."""
+    nan = float("nan")
+    return Interval(nan, nan, nan, n, level)
 
 
 @dataclass(frozen=True, slots=True)
@@ -132,13 +97,19 @@ class Evaluation:
         return float(np.mean([e.episode_return for e in self.episodes]))
 
     def success_interval(self, confidence: float = CONFIDENCE) -> Interval:
-        """The Wilson interval of the success rate."""
-        return wilson_interval(self.successes, len(self.episodes), confidence)
+        """The Wilson interval of the success rate (``nan`` ends without episodes)."""
+        n = len(self.episodes)
+        found = wilson_interval(self.successes, n, confidence)
+        return _undefined(n, confidence) if found is None else found
 
     def return_interval(self, confidence: float = CONFIDENCE) -> Interval:
-        """The bootstrap interval of the mean return (seeded by the evaluation's seed)."""
+        """The percentile-bootstrap interval of the mean return, seeded by the evaluation's
+        seed (``nan`` ends for fewer than two episodes)."""
         returns = [e.episode_return for e in self.episodes]
-        return bootstrap_interval(returns, confidence, self.seed)
+        found = bootstrap_interval(
+            returns, "mean", level=confidence, seed=self.seed, resamples=BOOTSTRAP_RESAMPLES_EVAL
+        )
+        return _undefined(len(returns), confidence) if found is None or len(returns) < 2 else found
 
 
 def episode_seeds(seed: int, episodes: int) -> tuple[int, ...]:

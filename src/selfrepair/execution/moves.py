@@ -18,7 +18,6 @@ subset under a fault set is kept per fault set.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, NamedTuple
@@ -32,7 +31,6 @@ __all__ = [
     "MoveTable",
     "available_moves",
     "move_table",
-    "time_unit",
 ]
 
 
@@ -69,27 +67,13 @@ class MoveTable:
     shapes: dict[Any, tuple[tuple[Cell, ...], ...]]
 
 
-def time_unit(domain: Domain[Any, Any]) -> int:
-    """The domain's time unit: lcm of its duration denominators (and of 1, a failed attempt)."""
-    return _UNITS.get(domain, lambda: _time_unit(domain))
-
-
-def _time_unit(domain: Domain[Any, Any]) -> int:
-    return math.lcm(1, *(Fraction(domain.duration(a)).denominator for a in domain.actions))
-
-
-_UNITS: BoundedCache[Domain[Any, Any], int] = BoundedCache(
-    "domain time units", 64, kind=CacheKind.SIMULATION
-)
-
-
 def move_table(domain: Domain[Any, Any], stride: int) -> MoveTable:
     """The :class:`MoveTable` of ``domain`` for buffers of ``stride`` bytes per row."""
     return _TABLES.get((domain, stride), lambda: _move_table(domain, stride))
 
 
 def _move_table(domain: Domain[Any, Any], stride: int) -> MoveTable:
-    unit = time_unit(domain)
+    unit = domain.time_unit
     moves: dict[Any, tuple[Move, ...]] = {}
     shapes: dict[Any, tuple[tuple[Cell, ...], ...]] = {}
     reach = 0

@@ -15,8 +15,9 @@ from __future__ import annotations
 
 from enum import StrEnum
 from fractions import Fraction
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, Protocol
 
+from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import Detection, FaultClock, FaultSchedule
 from selfrepair.execution.moves import Move, MoveTable, available_moves, move_table
 from selfrepair.geometry import Cell, Heading, Pose
@@ -24,7 +25,7 @@ from selfrepair.robots.domain import Domain
 from selfrepair.search.problem import make_pose, pose_table
 from selfrepair.world.maze import Maze
 
-__all__ = ["FAILED_ATTEMPT_TICKS", "Outcome", "Simulator", "StepOutcome"]
+__all__ = ["FAILED_ATTEMPT_TICKS", "FaultSource", "Outcome", "Simulator", "StepOutcome"]
 
 FAILED_ATTEMPT_TICKS = Fraction(1)
 """What a failed attempt costs."""
@@ -55,6 +56,17 @@ class StepOutcome(NamedTuple):
     blocking: frozenset[Any]
 
 
+class FaultSource(Protocol):
+    """The true faults over time: what :class:`~selfrepair.execution.faults.FaultClock` is for a
+    schedule (a team robot's clock, whose faults start at events no schedule knows in advance,
+    is another)."""
+
+    def at(self, step: int, units: int) -> frozenset[Any]:
+        """The faults active at the start of step ``step``, ``units`` time units in (the same
+        object while they do not change)."""
+        ...
+
+
 class Simulator:
     """The true world for one mission (mutable: the pose, step count and clock advance).
 
@@ -62,6 +74,10 @@ class Simulator:
     ``Domain.apply``/``footprint``/``duration`` once per domain), footprints are tested against the
     maze's :class:`~selfrepair.geometry.FreeGrid` with a margin of the table's reach, and the clock
     counts integer time units (``ticks`` is the exact :class:`~fractions.Fraction`).
+    ``clock`` replaces the schedule's fault clock when the true faults are not a function of a
+    schedule alone (a team robot's); the schedule then gives only the detection. A robot that
+    waits between commands (a team robot waiting for its turn) says so with
+    :meth:`wait_until`.
     """
 
     def __init__(
@@ -71,6 +87,7 @@ class Simulator:
         start: Pose,
         schedule: FaultSchedule,
         seed: int = 0,
+        clock: FaultSource | None = None,
     ) -> None:
         self.domain = domain
         self.maze = maze
@@ -88,7 +105,7 @@ class Simulator:
         """The move of the last command if it moved the robot, else ``None``."""
         self.last_duration = Fraction(0)
         self.last_blocking: frozenset[Any] = frozenset()
-        self._clock = FaultClock(schedule, seed, self.unit)
+        self._clock: FaultSource = clock or FaultClock(schedule, seed, self.unit)
         self._sense_now = schedule.detection is Detection.NOW
         self._faults: frozenset[Any] | None = None
         self._moves: dict[Any, tuple[Move, ...]] = {}
@@ -115,6 +132,12 @@ class Simulator:
         if self._sense_now:
             return self._clock.at(self.steps, self.units)
         return frozenset()
+
+    def wait_until(self, units: int) -> None:
+        """Let time pass without a command until ``units`` (no step; never backwards)."""
+        if units < self.units:
+            raise ProblemError(f"time runs forwards: {units} < {self.units} units")
+        self.units = units
 
     def execute(self, action: Any) -> StepOutcome:
         """Command ``action`` from the current pose and advance the world."""

@@ -43,7 +43,7 @@ def animate_trace(
     """Write a GIF of the mission in ``trace`` to ``out``; returns the number of frames in the
     file written. A trace file over ``max_trace_bytes`` is refused unread."""
     from selfrepair.execution.trace import read_trace, replay
-    from selfrepair.experiment import plots
+    from selfrepair.experiment import figstyle, missionplot
     from selfrepair.optional import matplotlib
     from selfrepair.team.trace import is_team_trace
 
@@ -64,7 +64,7 @@ def animate_trace(
     check = replay(parsed)  # draw only what the robot model says happened
     if not check.ok:
         raise TraceError(f"the trace does not replay: {check}", source=str(trace))
-    picture = plots.picture_from_trace(parsed)
+    picture = missionplot.picture_from_trace(parsed)
     total = len(picture.steps)
     stride = max(1, -(-total // max(1, max_frames)))
     frames = [*range(0, total + 1, stride)]
@@ -74,7 +74,7 @@ def animate_trace(
     known = [",".join(sorted(str(f) for f in s.known)) or "none" for s in parsed.steps]
     maze = picture.maze
     headline = picture.title.splitlines()[0]
-    with mpl.rc_context(plots.STYLE):
+    with mpl.rc_context(figstyle.STYLE):
         size = 6.0 * min(1.0, max(0.6, maze.width / 40))
         fig = Figure(
             figsize=(size + 2.4, size * maze.height / maze.width + 0.9),
@@ -82,13 +82,13 @@ def animate_trace(
             layout="constrained",
         )
         ax = fig.subplots()
-        plots.draw_background(ax, picture)
-        plots.mission_legend(fig, picture, with_robot=True)
+        missionplot.draw_background(ax, picture)
+        missionplot.mission_legend(fig, picture, with_robot=True)
         (robot,) = ax.plot(
             [picture.start.x],
             [picture.start.y],
             linestyle="",
-            marker=plots.robot_marker(picture.start),
+            marker=missionplot.robot_marker(picture.start),
             color="#D55E00",
             markeredgecolor="#111111",
             markersize=10,
@@ -100,12 +100,12 @@ def animate_trace(
         drawn = [0]
 
         def draw(upto: int) -> list[Any]:
-            plots.draw_steps(ax, picture, drawn[0], upto)
+            missionplot.draw_steps(ax, picture, drawn[0], upto)
             drawn[0] = max(drawn[0], upto)
             if upto > 0:
                 pose = picture.steps[upto - 1][1]
                 robot.set_data([pose.x], [pose.y])
-                robot.set_marker(plots.robot_marker(pose))  # type: ignore[arg-type]
+                robot.set_marker(missionplot.robot_marker(pose))  # type: ignore[arg-type]
                 source = picture.steps[upto - 1][2]
                 title.set_text(
                     f"{headline}\nstep {upto}/{total}: {source}; known faults {known[upto - 1]}"

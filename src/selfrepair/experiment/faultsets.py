@@ -42,8 +42,9 @@ def biting_fault_sets(
     """The rule behind :data:`PAPER_FAULT_SETS`: among ``domain.fault_sets``, those that disable
     at least one action of **every** plan of ``plans`` (so every mission meets a faulty action
     unless a repair steers round it), at most ``count`` of them, smallest sets first, then greedily
-    the set whose wheels and modes (the two halves of ``W:M``) were used least by the sets chosen
-    so far, ties to the earlier in ``domain.fault_sets``."""
+    the set whose fault parts (:meth:`~selfrepair.robots.domain.Domain.parts_of`: for the
+    four-wheel robot, wheels and modes) were used least by the sets chosen so far, ties to the
+    earlier in ``domain.fault_sets``."""
     plans = [tuple(p) for p in plans]
     biting = [
         faults
@@ -52,14 +53,14 @@ def biting_fault_sets(
     ]
     used: Counter[str] = Counter()
 
-    def halves(faults: frozenset[Any]) -> list[str]:
-        return [part for f in faults for part in domain.format_faults((f,)).split(":")]
+    def parts(faults: frozenset[Any]) -> list[str]:
+        return [part for f in domain.faults if f in faults for part in domain.parts_of(f)]
 
     chosen: list[str] = []
     while biting and len(chosen) < count:
-        best = min(biting, key=lambda fs: (len(fs), sum(used[h] for h in halves(fs))))
+        best = min(biting, key=lambda fs: (len(fs), sum(used[p] for p in parts(fs))))
         biting.remove(best)
-        used.update(halves(best))
+        used.update(parts(best))
         chosen.append(domain.format_faults(best))
     return tuple(chosen)
 

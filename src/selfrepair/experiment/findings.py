@@ -43,6 +43,7 @@ when all are HELD, INCONCLUSIVE otherwise.
 
 from __future__ import annotations
 
+import json
 import textwrap
 from collections import defaultdict
 from collections.abc import Callable, Sequence
@@ -63,7 +64,6 @@ from selfrepair.experiment.summary import (
     repairs_of,
     summarize,
 )
-from selfrepair.experiment.variants import REWRITE_LABEL
 from selfrepair.repair.strategies import RepairSource, StrategyName
 from selfrepair.stats import Interval, bootstrap_interval, lower_median
 
@@ -274,9 +274,17 @@ def is_tolerant(row: Row) -> bool:
 
 
 def is_rewrite(row: Row) -> bool:
-    """Whether a row's variant rewrites the whole plan (``replacement[...,rewrite]``)."""
-    inside = str(row.get("variant") or "").partition("[")[2].rstrip("]")
-    return REWRITE_LABEL in inside.split(",")
+    """Whether a row's variant rewrites the whole plan: its ``rewrite`` column (rows stored
+    before that column existed: the ``rewrite`` option of the mission's stored configuration),
+    never the variant label's text."""
+    column = row.get("rewrite")
+    if column is not None:
+        return column == 1
+    config = row.get("config")
+    if not isinstance(config, str):
+        return False
+    options = json.loads(config).get("options")
+    return isinstance(options, dict) and bool(options.get("rewrite"))
 
 
 # --- finding 1: compute ------------------------------------------------------------------------

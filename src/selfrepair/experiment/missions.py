@@ -225,6 +225,8 @@ def _mission(
         ("table", short_table(options.get("table"))),
         ("recursion", options.get("recursion")),
         ("window", options.get("window")),
+        ("before", options.get("before", 0) if "window" in options else None),
+        ("rewrite", int(bool(options.get("rewrite"))) if "table" in options else None),
         ("clearance_weight", weight),
         ("objective", objective_label(options, weight)),
     )

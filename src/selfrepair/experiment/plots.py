@@ -1,26 +1,22 @@
-"""Figures of the experiment report (matplotlib, PNG; needs the ``viz`` extra).
+"""Figures of the experiment report over result rows (matplotlib, PNG; needs the ``viz`` extra).
 
-Every figure is drawn with matplotlib's object API (no pyplot state, no GUI backend) on an
-explicitly white background with dark text, so it reads the same in light and dark viewers.
-Colours come from the Okabe-Ito palette, which stays distinguishable for colour-blind readers.
-Functions take result rows (dicts from the store) and a path, and return the path written.
+Functions take result rows (dicts from the store) and a path, and return the path written. Their
+look (palette, step colours, style) is :mod:`selfrepair.experiment.figstyle`; the drawing of one
+mission is :mod:`selfrepair.experiment.missionplot`.
 """
 
 from __future__ import annotations
 
-import itertools
 import math
-import textwrap
 from collections import defaultdict
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
-from dataclasses import dataclass
+from collections.abc import Sequence
 from fractions import Fraction
-from pathlib import Path, PurePath
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from selfrepair.experiment.figstyle import OKABE_ITO, colour_of, figure, save
 from selfrepair.experiment.findings import (
     NEGLIGIBLE,
     Row,
@@ -29,72 +25,19 @@ from selfrepair.experiment.findings import (
 )
 from selfrepair.experiment.scale import Crossover
 from selfrepair.experiment.summary import is_reference_replan
-from selfrepair.geometry import Cell, Pose, turn_corner
 from selfrepair.optional import matplotlib
 from selfrepair.repair.strategies import RepairSource, StrategyName
 from selfrepair.stats import lower_median, percentile
-from selfrepair.world.maze import Maze
 
 __all__ = [
-    "SOURCE_COLOURS",
-    "MissionPicture",
-    "draw_mission",
     "figure_baselines",
     "figure_clearance",
+    "figure_crossover",
     "figure_heatmap",
     "figure_latency",
     "figure_latency_vs_size",
-    "figure_mission",
-    "fit_title",
-    "move_points",
-    "picture_from_trace",
+    "heatmap_variant",
 ]
-
-OKABE_ITO = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#D55E00", "#56B4E9", "#F0E442", "#000000")
-SOURCE_COLOURS = {
-    "plan": "#0072B2",
-    "replacement": "#009E73",
-    "lookahead": "#CC79A7",
-    "replan": "#E69F00",
-    "plan-repair": "#56B4E9",
-    "failed-attempt": "#D55E00",
-}
-WALL = "#3b3b3b"
-STYLE = {
-    "figure.facecolor": "white",
-    "axes.facecolor": "white",
-    "savefig.facecolor": "white",
-    "savefig.edgecolor": "white",
-    "text.color": "#111111",
-    "axes.labelcolor": "#111111",
-    "axes.edgecolor": "#333333",
-    "xtick.color": "#111111",
-    "ytick.color": "#111111",
-    "axes.grid": True,
-    "grid.color": "#d9d9d9",
-    "grid.linewidth": 0.6,
-    "font.size": 10,
-    "axes.titlesize": 11,
-    "legend.framealpha": 1.0,
-    "legend.facecolor": "white",
-}
-
-
-@contextmanager
-def _figure(width: float, height: float, ncols: int = 1) -> Iterator[tuple[Any, Any]]:
-    """A white figure with ``ncols`` axes in the report's style."""
-    mpl = matplotlib()
-    from matplotlib.figure import Figure
-
-    with mpl.rc_context(STYLE):
-        fig = Figure(figsize=(width, height), dpi=110, layout="constrained")
-        axes = fig.subplots(1, ncols, squeeze=False)[0]
-        yield fig, axes
-
-
-def _save(fig: Any, path: Path) -> Path:
-    fig.savefig(path, format="png", facecolor="white", transparent=False)
-    return path
 
 
 def _weight(row: Row) -> Fraction:
@@ -117,7 +60,7 @@ def figure_latency(rows: Sequence[Row], path: Path) -> Path:
             key = label if row.get("strategy") == StrategyName.REPLAN else f"{label}: {source}"
             groups[key].append(latency / 1000)
     labels = sorted(groups, key=lambda k: lower_median(groups[k]) if groups[k] else 0)
-    with _figure(9.5, 1.2 + 0.42 * max(1, len(labels))) as (fig, (ax,)):
+    with figure(9.5, 1.2 + 0.42 * max(1, len(labels))) as (fig, (ax,)):
         if not labels:
             ax.text(0.5, 0.5, "no repairs in these results", ha="center", transform=ax.transAxes)
         else:
@@ -132,7 +75,7 @@ def figure_latency(rows: Sequence[Row], path: Path) -> Path:
             )
             for patch, label in zip(box["boxes"], labels, strict=True):
                 source = label.rsplit(": ", 1)[-1] if ": " in label else RepairSource.REPLAN
-                patch.set_facecolor(SOURCE_COLOURS.get(source, "#999999"))
+                patch.set_facecolor(colour_of(source, "#999999"))
                 patch.set_alpha(0.8)
             ax.set_yticks(range(1, len(labels) + 1), [f"{k} (n={len(groups[k])})" for k in labels])
             ax.set_xscale("log")
@@ -142,7 +85,7 @@ def figure_latency(rows: Sequence[Row], path: Path) -> Path:
             "box: quartiles and median; whiskers: 1st to 99th percentile",
             fontsize=11,
         )
-        return _save(fig, path)
+        return save(fig, path)
 
 
 def figure_latency_vs_size(rows: Sequence[Row], path: Path) -> Path:
@@ -170,7 +113,7 @@ def figure_latency_vs_size(rows: Sequence[Row], path: Path) -> Path:
             else:
                 continue
             names[cells].add(str(row.get("maze")))
-    with _figure(7.0, 4.8) as (fig, (ax,)):
+    with figure(7.0, 4.8) as (fig, (ax,)):
         for (label, by_size), colour in zip(series.items(), ("#E69F00", "#009E73"), strict=True):
             sizes = sorted(by_size)
             if not sizes:
@@ -198,7 +141,7 @@ def figure_latency_vs_size(rows: Sequence[Row], path: Path) -> Path:
         ax.set_title("How repair latency grows with maze size")
         if ax.get_legend_handles_labels()[0]:
             fig.legend(loc="outside lower center", fontsize=8, ncols=2)
-        return _save(fig, path)
+        return save(fig, path)
 
 
 # --- clearance -----------------------------------------------------------------------------------
@@ -215,7 +158,7 @@ def figure_clearance(rows: Sequence[Row], path: Path) -> Path | None:
     groups = {k: v for k, v in groups.items() if len(v) > 1}
     if not groups:
         return None
-    with _figure(10.0, 4.0, ncols=2) as (fig, (left, right)):
+    with figure(10.0, 4.0, ncols=2) as (fig, (left, right)):
         weights = sorted({w for g in groups.values() for w in g})
         positions = {w: i for i, w in enumerate(weights)}
         for (label, by_weight), colour in zip(sorted(groups.items()), OKABE_ITO, strict=False):
@@ -243,7 +186,7 @@ def figure_clearance(rows: Sequence[Row], path: Path) -> Path | None:
         right.set_title("Price paid in execution time")
         # Below the axes, never on top of a data point.
         fig.legend(*left.get_legend_handles_labels(), loc="outside lower center", ncols=2)
-        return _save(fig, path)
+        return save(fig, path)
 
 
 # --- heat map ----------------------------------------------------------------------------------
@@ -283,7 +226,7 @@ def figure_heatmap(rows: Sequence[Row], path: Path, variant: str | None = None) 
                 extra[i, j] = sum(ticks) / len(ticks)
     numbers = len(faults) <= HEATMAP_NUMBERED_ROWS
     row_height = 0.32 if numbers else 0.13
-    with _figure(
+    with figure(
         3.0 + 1.35 * max(2, len(mazes)) * 2, 1.6 + row_height * max(4, len(faults)), ncols=2
     ) as (fig, (left, right)):
         _heat(
@@ -310,7 +253,7 @@ def figure_heatmap(rows: Sequence[Row], path: Path, variant: str | None = None) 
         )
         right.set_yticks(range(len(faults)), [""] * len(faults))
         fig.suptitle(f"{variant}, clearance weight 0 (grey: no faulty encounter)")
-        return _save(fig, path)
+        return save(fig, path)
 
 
 HEATMAP_NUMBERED_ROWS = 30
@@ -371,312 +314,12 @@ def _heat(
             ax.text(j, i, "-", ha="center", va="center", fontsize=7, color="#555555")
 
 
-# --- one mission ---------------------------------------------------------------------------------
-
-
-@dataclass(frozen=True, slots=True)
-class MissionPicture:
-    """What a mission drawing needs: the maze, the route, the initial plan's poses, every
-    executed step as ``(from, to, source)`` and every repair as ``(step index, pose, source)``
-    (the repair happened before step ``index`` of :attr:`steps`; its source is what resolved it,
-    or ``"failed"``)."""
-
-    maze: Maze
-    start: Pose
-    goal: Cell
-    planned: tuple[Pose, ...]
-    steps: tuple[tuple[Pose, Pose, str], ...]
-    faults: str
-    title: str
-    repairs: tuple[tuple[int, Pose, str], ...] = ()
-
-
-def picture_from_trace(trace: Any) -> MissionPicture:
-    """A :class:`MissionPicture` from a parsed :class:`selfrepair.execution.trace.Trace`."""
-    from selfrepair.execution.trace import spec_from_header
-
-    spec = spec_from_header(trace.header, trace.source)
-    domain = spec.domain
-    poses = [spec.start]
-    for code in trace.header.get("initial_plan", []):
-        poses.append(domain.apply(poses[-1], domain.parse_action(code)))
-    faults = domain.format_faults(spec.schedule.all_faults()) or "none"
-    strategy = str(spec.strategy)
-    if strategy != StrategyName.REPLAN:
-        table = short_name(spec.options.table_label)
-        strategy += f" [{table}, {spec.options.recursion.value}]"
-    summary = trace.summary or {}
-    status = summary.get("status", "?")
-    title = (
-        f"{short_name(spec.maze.name or 'maze')}: {spec.start} -> {spec.goal[0]},{spec.goal[1]}, "
-        f"faults {faults}\n{strategy}, clearance weight {spec.clearance_weight}: {status}"
-    )
-    steps = tuple((s.start, s.end, s.source) for s in trace.steps)
-    index = {s.step: i for i, s in enumerate(trace.steps)}
-    repairs = tuple(
-        (
-            index.get(r.step, len(steps)),
-            r.pose,
-            str(r.source) if r.status == "repaired" else "failed",
-        )
-        for r in trace.repairs
-    )
-    return MissionPicture(
-        spec.maze, spec.start, spec.goal, tuple(poses), steps, faults, title, repairs
-    )
-
-
-def short_name(label: str) -> str:
-    """A file's name without its folders (a table or maze given by path), else ``label``."""
-    return PurePath(label).name if "/" in label or "\\" in label else label
-
-
-ARC_SAMPLES = 9
-"""Points drawn along one arc (a quarter ellipse), ends included."""
-
-
-def move_points(start: Pose, end: Pose) -> list[tuple[float, float]]:
-    """The drawn path of one move from ``start`` to ``end``, both as the domain's ``apply``
-    gives them: a quarter ellipse tangent to both headings when the move turns as it goes
-    (:func:`~selfrepair.geometry.turn_corner`; a quarter circle for the four-wheel robot's
-    arcs), else the straight segment."""
-    corner = turn_corner(start, end)
-    if corner is None:
-        return [(start.x, start.y), (end.x, end.y)]
-    cx, cy = start.x + end.x - corner[0], start.y + end.y - corner[1]
-    angles = np.linspace(0.0, math.pi / 2, ARC_SAMPLES)
-    return [
-        (
-            float(cx + (start.x - cx) * math.cos(t) + (end.x - cx) * math.sin(t)),
-            float(cy + (start.y - cy) * math.cos(t) + (end.y - cy) * math.sin(t)),
-        )
-        for t in angles
-    ]
-
-
-def path_points(poses: Sequence[Pose]) -> list[tuple[float, float]]:
-    """The drawn path through consecutive ``poses`` (one move between each two)."""
-    points = [(float(poses[0].x), float(poses[0].y))] if poses else []
-    for start, end in itertools.pairwise(poses):
-        points += move_points(start, end)[1:]
-    return points
-
-
-def draw_background(ax: Any, picture: MissionPicture) -> None:
-    """The parts of a mission drawing that never change: maze, initial plan, start and goal."""
-    maze = picture.maze
-    mpl = matplotlib()
-    cmap = mpl.colors.ListedColormap(["white", WALL])
-    ax.imshow(
-        maze.walls.astype(int),
-        cmap=cmap,
-        vmin=0,
-        vmax=1,
-        interpolation="nearest",
-        extent=(-0.5, maze.width - 0.5, maze.height - 0.5, -0.5),
-    )
-    ax.grid(False)
-    ax.set_xticks([])
-    ax.set_yticks([])
-    # The initial plan is drawn thin and dashed ABOVE the executed path (which is wider), so
-    # both stay visible where they coincide.
-    plan = path_points(picture.planned)
-    ax.plot(
-        [x for x, _ in plan],
-        [y for _, y in plan],
-        color=PLAN_COLOUR,
-        linestyle=(0, (3, 2)),
-        linewidth=1.3,
-        zorder=PLAN_ZORDER,
-        gid="initial-plan",
-    )
-    ax.plot(picture.start.x, picture.start.y, marker="o", color="#111111", markersize=9, zorder=7)
-    ax.plot(
-        *picture.goal,
-        marker="*",
-        color="#F0E442",
-        markeredgecolor="#111111",
-        markersize=15,
-        zorder=7,
-    )
-
-
-PLAN_COLOUR = "#222222"
-PLAN_ZORDER = 5
-"""The initial plan is drawn above the executed steps (z-order 3 and 4)."""
-REPAIR_ZORDER = 6
-
-
-def draw_steps(ax: Any, picture: MissionPicture, first: int, stop: int) -> None:
-    """Executed steps ``first .. stop - 1``, coloured by source, and one X per repair made
-    before them (coloured by what resolved it; red when it failed)."""
-    if first >= stop and first > 0:
-        return  # nothing new since the previous call (an animation's held last frame)
-    maze = picture.maze
-    width = max(1.8, 90 / max(maze.width, maze.height))
-    for start, end, source in picture.steps[first:stop]:
-        colour = SOURCE_COLOURS.get(source, "#000000")
-        if source == "failed-attempt":
-            ax.plot(start.x, start.y, marker="x", color=colour, markersize=7, zorder=4, gid="step")
-        elif start.cell == end.cell:
-            ax.plot(
-                start.x,
-                start.y,
-                marker="o",
-                color=colour,
-                markersize=width * 1.6,
-                zorder=3,
-                alpha=0.9,
-                gid="step",
-            )
-        else:
-            points = move_points(start, end)
-            ax.plot(
-                [x for x, _ in points],
-                [y for _, y in points],
-                color=colour,
-                linewidth=width,
-                solid_capstyle="round",
-                zorder=3 if source == "plan" else 4,
-                gid="step",
-            )
-    last = stop >= len(picture.steps)
-    for index, pose, source in picture.repairs:
-        if first <= index < stop or (last and index >= len(picture.steps)):
-            ax.plot(
-                pose.x,
-                pose.y,
-                marker="X",
-                color=SOURCE_COLOURS.get(source, "#D55E00"),
-                markersize=8,
-                markeredgecolor="#111111",
-                markeredgewidth=0.8,
-                linestyle="",
-                zorder=REPAIR_ZORDER,
-                gid="repair",
-            )
-
-
-def robot_marker(pose: Pose) -> tuple[int, int, int]:
-    """A triangle marker pointing along ``pose``'s heading (screen up is north)."""
-    return (3, 0, -90 * pose.heading.value)
-
-
-def draw_mission(ax: Any, picture: MissionPicture) -> None:
-    """The whole mission: maze, initial plan, every executed step, start and goal."""
-    draw_background(ax, picture)
-    draw_steps(ax, picture, 0, len(picture.steps))
-
-
-def mission_legend(fig: Any, picture: MissionPicture, *, with_robot: bool = False) -> None:
-    """A legend for :func:`draw_mission` listing only the sources that occur."""
-    from matplotlib.lines import Line2D
-
-    used = {s for _, _, s in picture.steps}
-    handles = [Line2D([], [], color=PLAN_COLOUR, linestyle=(0, (3, 2)), label="initial plan")]
-    names = {
-        "plan": "executed: plan",
-        "replacement": "executed: table replacement",
-        "lookahead": "executed: lookahead window",
-        "replan": "executed: replanned",
-        "failed-attempt": "failed attempt",
-    }
-    for source, label in names.items():
-        if source == "failed-attempt" and source in used:
-            handles.append(
-                Line2D([], [], color=SOURCE_COLOURS[source], marker="x", linestyle="", label=label)
-            )
-        elif source in used:
-            handles.append(Line2D([], [], color=SOURCE_COLOURS[source], linewidth=3, label=label))
-    if picture.repairs:
-        handles.append(
-            Line2D(
-                [],
-                [],
-                marker="X",
-                color="#bbbbbb",
-                linestyle="",
-                markeredgecolor="#111111",
-                markersize=8,
-                label=f"repair ({len(picture.repairs)}; colour: what resolved it)",
-            )
-        )
-    handles += [
-        Line2D([], [], marker="o", color="#111111", linestyle="", label="start"),
-        Line2D(
-            [],
-            [],
-            marker="*",
-            color="#F0E442",
-            markeredgecolor="#111111",
-            linestyle="",
-            markersize=13,
-            label="goal",
-        ),
-    ]
-    if with_robot:
-        handles.append(
-            Line2D(
-                [],
-                [],
-                marker=(3, 0, -90),
-                color="#D55E00",
-                linestyle="",
-                markeredgecolor="#111111",
-                markersize=10,
-                label="robot",
-            )
-        )
-    fig.legend(handles=handles, loc="outside right upper", fontsize=8)
-
-
-def fit_title(fig: Any, ax: Any, text: str, *, fontsize: float = 9, smallest: float = 6.5) -> Any:
-    """Set ``text`` as the title of ``ax`` so that it fits: centred on the axes, between the
-    figure's left edge and its legend (or right edge). The font shrinks from ``fontsize`` to
-    ``smallest`` as needed; a title still too wide is wrapped at spaces. Measured with
-    matplotlib's renderer after the layout is done; returns the title artist."""
-    title = ax.set_title(text, fontsize=fontsize)
-    lines = text.splitlines()
-    width = max(map(len, lines), default=0)
-    for _ in range(8):
-        fig.draw_without_rendering()  # the constrained layout moves the axes as the title changes
-        box = title.get_window_extent()
-        frame = ax.get_window_extent()
-        centre = (frame.x0 + frame.x1) / 2
-        right = min((legend.get_window_extent().x0 for legend in fig.legends), default=fig.bbox.x1)
-        room = 2 * min(centre - fig.bbox.x0, right - centre) - 8  # a few pixels clear
-        if box.width <= room and box.y1 <= fig.bbox.y1:
-            break
-        ratio = room / box.width
-        size = title.get_fontsize()
-        if size > smallest:
-            title.set_fontsize(max(smallest, size * min(ratio, 0.95)))
-        else:
-            width = max(12, int(width * min(ratio, 0.9)))
-            wrapped = [part for line in lines for part in textwrap.wrap(line, width) or [""]]
-            title.set_text("\n".join(wrapped))
-    return title
-
-
-def figure_mission(picture: MissionPicture, path: Path) -> Path:
-    """One mission: maze, planned and executed paths, repairs and replaced segments."""
-    size = 7.0 * min(1.0, max(0.6, picture.maze.width / 40))
-    with _figure(size + 2.6, size * picture.maze.height / picture.maze.width + 0.8) as (fig, (ax,)):
-        draw_mission(ax, picture)
-        mission_legend(fig, picture)
-        fit_title(fig, ax, picture.title)
-        return _save(fig, path)
-
-
-# --- scale -------------------------------------------------------------------------------------
-
-
 def figure_crossover(results: Sequence[Crossover], path: Path) -> Path:
     """Per maze, the median paired ratio of repair compute (replacing / replanning robot) with its
     95% interval against the maze side, log-log; the fitted line, the 1/10 threshold and the
     crossover side with its interval, one colour per replacement variant."""
     colours = ("#009E73", "#0072B2", "#D55E00", "#CC79A7", "#E69F00")
-    with _figure(7.0, 4.8) as (fig, (ax,)):
+    with figure(7.0, 4.8) as (fig, (ax,)):
         sides: list[float] = []
         for result, colour in zip(results, colours, strict=False):
             points = [m for m in result.mazes if m.ratio is not None]
@@ -715,7 +358,7 @@ def figure_crossover(results: Sequence[Crossover], path: Path) -> Path:
         ax.set_title("Where replacement's repair compute falls below 1/10 of replanning")
         if ax.get_legend_handles_labels()[0]:
             fig.legend(loc="outside lower center", fontsize=8, ncols=1)
-        return _save(fig, path)
+        return save(fig, path)
 
 
 # --- baselines -----------------------------------------------------------------------------------
@@ -734,7 +377,7 @@ def figure_baselines(rows: Sequence[Row], path: Path) -> Path:
     labels = list(dict.fromkeys(m.label for cells, _ in panels for m in cells))
     markers = "osD^v<>Ph"
     colours = [c for c in OKABE_ITO if c != "#F0E442"] + ["#999999"]  # yellow is too pale
-    with _figure(12.0, 5.0, ncols=2) as (fig, axes):
+    with figure(12.0, 5.0, ncols=2) as (fig, axes):
         for ax, (cells, ylabel) in zip(axes, panels, strict=True):
             mazes = list(dict.fromkeys((m.maze, m.free_cells) for m in cells))
             position = {maze: i for i, (maze, _) in enumerate(mazes)}
@@ -767,4 +410,4 @@ def figure_baselines(rows: Sequence[Row], path: Path) -> Path:
             fig.legend(loc="outside lower center", fontsize=8, ncols=3)
         else:
             axes[0].text(0.5, 0.5, "no repairs", ha="center", transform=axes[0].transAxes)
-        return _save(fig, path)
+        return save(fig, path)

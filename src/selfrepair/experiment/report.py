@@ -308,14 +308,14 @@ def rerun_mission(row: Row, source: str = "<results database>") -> MissionResult
 def _mission_files(row: Row, out_dir: Path, source: str) -> list[Path]:
     """Run the chosen mission again, write its trace, picture and GIF."""
     from selfrepair.execution.trace import read_trace, write_trace
-    from selfrepair.experiment import plots
+    from selfrepair.experiment import missionplot
     from selfrepair.experiment.animate import animate_trace
 
     result = rerun_mission(row, source)
     trace_path = out_dir / "mission.jsonl"
     write_trace(result, trace_path)
-    picture = plots.picture_from_trace(read_trace(trace_path))
-    png = plots.figure_mission(picture, out_dir / "mission.png")
+    picture = missionplot.picture_from_trace(read_trace(trace_path))
+    png = missionplot.figure_mission(picture, out_dir / "mission.png")
     gif = out_dir / "mission.gif"
     animate_trace(trace_path, gif, max_frames=60)
     return [trace_path, png, gif]

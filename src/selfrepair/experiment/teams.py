@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping, Sequence
+from fractions import Fraction
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -49,6 +50,7 @@ from pydantic import BeforeValidator, Field, model_validator
 
 from selfrepair.errors import ConfigError
 from selfrepair.execution.faults import Persistence
+from selfrepair.experiment.axes import Axis, cross, describe, total
 from selfrepair.experiment.config import parse_config, read_experiment_text
 from selfrepair.experiment.keys import (
     SCHEMA,
@@ -68,7 +70,7 @@ from selfrepair.team.experiment import FaultCase, TeamCase, case_row
 from selfrepair.team.grid import components
 from selfrepair.team.model import TeamTableName
 from selfrepair.team.randomteam import GripperMix
-from selfrepair.team.result import TeamOptions
+from selfrepair.team.result import TeamOptions, TeamResult
 from selfrepair.tomlfile import Frozen, NonEmpty, find_line, read_toml, validate
 
 __all__ = [
@@ -77,6 +79,7 @@ __all__ = [
     "expand_team",
     "is_team_rows",
     "load_experiment",
+    "rerun_team_mission",
     "write_team_report",
 ]
 
@@ -229,86 +232,72 @@ def expand_team(
     max_missions: int | None = MAX_MISSIONS,
     max_cells: int | None = MAX_CELLS,
 ) -> tuple[Mission, ...]:
-    """Every mission of ``config``, in a deterministic order, with keys and seeds. Raises
+    """Every mission of ``config``, in a deterministic order, with keys and seeds: one cross
+    product (:func:`selfrepair.experiment.axes.cross`) over mazes, team sizes, loads, equipment
+    mixes, repeats, fault settings and strategy variants, as single-robot missions are. Raises
     :class:`~selfrepair.errors.LimitError` before building any mission when there would be more
     than ``max_missions``, or a maze file has more than ``max_cells`` cells."""
-    missions: dict[str, Mission] = {}
-    variants = [
+    variants = tuple(
         (s.name, table if s.name is StrategyName.TEAM_REPLACEMENT else None)
         for s in config.strategies
         for table in (s.tables if s.name is StrategyName.TEAM_REPLACEMENT else s.tables[:1])
-    ]
+    )
     team, faults = config.team, config.faults
-    situations = sum(
-        1 if case is FaultCase.NONE else len(faults.persistence) for case in faults.cases
-    )
-    factors = (
-        (len(config.mazes), "mazes"),
-        (len(team.sizes), "team sizes"),
-        (len(team.tasks_per_robot), "loads"),
-        (len(team.grippers), "equipment mixes"),
-        (config.repeats, "repeats"),
-        (situations, "fault settings"),
-        (len(variants), "strategy variants"),
-    )
-    total = 1
-    for count, _ in factors:
-        total *= count
-    detail = " x ".join(f"{n} {what}" for n, what in factors)
-    check_limit(
-        total, max_missions, name="max_missions", what="missions", detail=detail,
-        source=config.source,
-    )  # fmt: skip
-    robot = config.robot.model_dump(mode="json")
-    for index, entry in enumerate(config.mazes):
-        identity = maze_identity(
-            entry.as_maze_config(), config.base_dir, config.source, index, max_cells
+    settings_axis = tuple(
+        (case, persistence)
+        for case in faults.cases
+        for persistence in (
+            (Persistence.PERMANENT,) if case is FaultCase.NONE else faults.persistence
         )
-        label = maze_label(identity)
-        for size in config.team.sizes:
-            for load in config.team.tasks_per_robot:
-                for mix in config.team.grippers:
-                    for replicate in range(config.repeats):
-                        base: dict[str, Any] = {
-                            "schema": SCHEMA,
-                            "kind": TEAM_KIND,
-                            "maze": identity,
-                            "team_size": size,
-                            "tasks": size * load,
-                            "grippers": mix.value,
-                            "replicate": replicate,
-                        }
-                        seed = derive_seed(config.seed, portable(base))
-                        for situation in _situations(config, base):
-                            for name, table in variants:
-                                settings = {
-                                    **situation,
-                                    "strategy": name.value,
-                                    "team_table": None if table is None else table.value,
-                                    "robot": robot,
-                                    "max_ticks": config.max_ticks,
-                                    "seed": seed,
-                                }
-                                mission = _mission(config, settings, seed, label, load)
-                                missions.setdefault(mission.key, mission)
+    )
+    mazes = Axis("maze", tuple(config.mazes), "mazes")
+    rest = (
+        Axis("size", tuple(team.sizes), "team sizes"),
+        Axis("load", tuple(team.tasks_per_robot), "loads"),
+        Axis("mix", tuple(team.grippers), "equipment mixes"),
+        Axis("replicate", tuple(range(config.repeats)), "repeats"),
+        Axis("fault", settings_axis, "fault settings"),
+        Axis("variant", variants, "strategy variants"),
+    )
+    check_limit(
+        total((mazes, *rest)), max_missions, name="max_missions", what="missions",
+        detail=describe((mazes, *rest)), source=config.source,
+    )  # fmt: skip
+    identities = tuple(
+        maze_identity(entry.as_maze_config(), config.base_dir, config.source, index, max_cells)
+        for index, entry in enumerate(config.mazes)
+    )
+    axes = (Axis("maze", identities, "mazes"), *rest)
+    robot = config.robot.model_dump(mode="json")
+    missions: dict[str, Mission] = {}
+    for point in cross(axes):
+        identity, size, load, mix = point["maze"], point["size"], point["load"], point["mix"]
+        (case, persistence), (name, table) = point["fault"], point["variant"]
+        base: dict[str, Any] = {
+            "schema": SCHEMA,
+            "kind": TEAM_KIND,
+            "maze": identity,
+            "team_size": size,
+            "tasks": size * load,
+            "grippers": mix.value,
+            "replicate": point["replicate"],
+        }
+        seed = derive_seed(config.seed, portable(base))  # the same for every case and strategy
+        transient = persistence is Persistence.TRANSIENT
+        settings = {
+            **base,
+            "fault": case.value,
+            "persistence": persistence.value,
+            "duration": faults.duration if transient else None,
+            "strategy": name.value,
+            "team_table": None if table is None else table.value,
+            "robot": robot,
+            "max_ticks": config.max_ticks,
+            "seed": seed,
+        }
+        mission = _mission(config, settings, seed, maze_label(identity), load)
+        missions.setdefault(mission.key, mission)
     return tuple(missions.values())
-
-
-def _situations(config: TeamExperimentConfig, base: dict[str, Any]) -> list[dict[str, Any]]:
-    out = []
-    for case in config.faults.cases:
-        kinds = (Persistence.PERMANENT,) if case is FaultCase.NONE else config.faults.persistence
-        for persistence in kinds:
-            transient = persistence is Persistence.TRANSIENT
-            out.append(
-                {
-                    **base,
-                    "fault": case.value,
-                    "persistence": persistence.value,
-                    "duration": config.faults.duration if transient else None,
-                }
-            )
-    return out
 
 
 def _mission(
@@ -417,6 +406,17 @@ def _choose(
     return max(rows, key=score)
 
 
+def rerun_team_mission(row: Mapping[str, Value]) -> tuple[TeamResult, Fraction]:
+    """Run the stored team mission ``row`` again from its stored configuration (deterministic:
+    the same team, tasks, faults and strategy) and its fault-free baseline."""
+    from selfrepair.team.experiment import run_case
+
+    settings = json.loads(str(row["config"]))
+    seed = int(str(row["seed"]))
+    maze = maze_of(canonical_json(settings["maze"]))
+    return run_case(maze, _case_of(settings, seed), _options_of(settings, seed))
+
+
 def write_team_report(
     rows: Sequence[Mapping[str, Value]],
     out_dir: Path,
@@ -427,16 +427,13 @@ def write_team_report(
     """Write the team report for ``rows`` into ``out_dir`` (see :mod:`selfrepair.team.report`);
     the chosen mission is run again from its stored configuration (deterministic)."""
     from selfrepair.team.draw import animate_team_trace, draw_team_frame
-    from selfrepair.team.experiment import run_case
     from selfrepair.team.report import render_team_markdown, write_team_figures
     from selfrepair.team.trace import write_team_trace
 
     written = write_team_figures(rows, out_dir)
     chosen = _choose(rows, mission_key, source)
     settings = json.loads(str(chosen["config"]))
-    seed = int(str(chosen["seed"]))
-    maze = maze_of(canonical_json(settings["maze"]))
-    result, baseline = run_case(maze, _case_of(settings, seed), _options_of(settings, seed))
+    result, baseline = rerun_team_mission(chosen)
     trace = out_dir / "mission.jsonl"
     write_team_trace(result, trace, baseline)
     picture = draw_team_frame(trace, out_dir / "mission.png")

@@ -19,25 +19,22 @@ trace file; the second re-runs a mission stored in a results database (as the re
 
 from __future__ import annotations
 
-import html
-import json
 import math
-import re
 from collections.abc import Iterable, Mapping, Sequence
 from fractions import Fraction
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from selfrepair.errors import InputError, ProblemError, TraceError
+from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.faults import Detection, canonical_order
 from selfrepair.execution.result import MissionSpec, StepSource, TraceStep
 from selfrepair.execution.trace import Trace, TraceRepair, parse_trace, replay, spec_from_header
+from selfrepair.experiment.figstyle import SOURCE_COLOURS
+from selfrepair.experiment.viewpage import pose_json, render_html, wall_runs, write_page
 from selfrepair.geometry import Cell, Pose
 from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.strategies import RepairSource, uses_table
 from selfrepair.robots.domain import Domain
-from selfrepair.world.maze import Maze
 
 __all__ = [
     "MAX_VIEW_STEPS",
@@ -48,6 +45,7 @@ __all__ = [
     "trace_from_results",
     "view_results",
     "view_trace",
+    "wall_runs",
 ]
 
 VIEWER_FORMAT = "selfrepair-viewer"
@@ -56,16 +54,6 @@ VIEWER_VERSION = 1
 MAX_VIEW_STEPS = 50_000
 """Default bound on the steps of a viewed mission (about 400 bytes of page each); raise it with
 ``selfrepair view --max-steps``."""
-
-SOURCE_COLOURS = {
-    "plan": "#0072B2",
-    "replacement": "#009E73",
-    "lookahead": "#CC79A7",
-    "replan": "#E69F00",
-    "plan-repair": "#56B4E9",
-    "failed-attempt": "#D55E00",
-}
-"""Step colours by source: those of the report's figures (Okabe-Ito, colour-blind safe)."""
 
 REPAIR_SOURCE_NAMES = {
     "replacement": "table replacement",
@@ -76,20 +64,6 @@ REPAIR_SOURCE_NAMES = {
 
 
 # --- payload ------------------------------------------------------------------------------------
-
-
-def pose_json(pose: Pose) -> dict[str, Any]:
-    """A pose for drawing: cell, heading name, unit heading vector and angle (degrees clockwise
-    from north, screen up being north)."""
-    dx, dy = pose.heading.vector
-    return {
-        "x": pose.x,
-        "y": pose.y,
-        "heading": pose.heading.name,
-        "dx": dx,
-        "dy": dy,
-        "angle": 90 * pose.heading.value,
-    }
 
 
 def segment_json(domain: Domain[Any, Any], start: Pose, action: Any) -> dict[str, Any]:
@@ -123,23 +97,6 @@ def _shape(start: Pose, end: Pose, swept: Sequence[Cell]) -> tuple[str, Cell | N
         if corner in swept and touches_end:
             return "arc", corner
     return "arc", None
-
-
-def wall_runs(maze: Maze) -> list[list[int]]:
-    """The walls as horizontal runs ``[x, y, length]`` (compact, and one SVG path to draw)."""
-    runs: list[list[int]] = []
-    for y in range(maze.height):
-        row = maze.walls[y]
-        x = 0
-        while x < maze.width:
-            if row[x]:
-                start = x
-                while x < maze.width and row[x]:
-                    x += 1
-                runs.append([start, y, x - start])
-            else:
-                x += 1
-    return runs
 
 
 def _faults(domain: Domain[Any, Any], faults: Iterable[Any]) -> list[str]:
@@ -382,7 +339,7 @@ def mission_payload(
         },
         "schedule": spec.schedule.describe(),
         "detection": spec.schedule.detection.value,
-        "colours": SOURCE_COLOURS,
+        "colours": {str(source): colour for source, colour in SOURCE_COLOURS.items()},
         "plan": plan,
         "steps": [_step_json(domain, s, t) for s, t in zip(steps, ticks, strict=False)],
         "frames": [
@@ -406,44 +363,6 @@ def mission_payload(
     }
 
 
-# --- the page -----------------------------------------------------------------------------------
-
-_PLACEHOLDER = re.compile(r"\{\{(TITLE|STYLE|SCRIPT|DATA)\}\}")
-
-
-def _asset(name: str) -> str:
-    return resources.files("selfrepair").joinpath("data", "viewer", name).read_text("utf-8")
-
-
-def _script_safe_json(payload: Mapping[str, Any]) -> str:
-    """JSON that cannot end the ``<script>`` element it sits in (``<``, ``>``, ``&`` escaped)."""
-    text = json.dumps(payload, separators=(",", ":"), ensure_ascii=True, allow_nan=False)
-    return text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026")
-
-
-def render_html(payload: Mapping[str, Any]) -> str:
-    """The self-contained page for ``payload``: template, CSS, script and data, all inline."""
-    parts = {
-        "TITLE": html.escape(str(payload.get("title", "mission"))),
-        "STYLE": _asset("viewer.css"),
-        "SCRIPT": _asset("viewer.js"),
-        "DATA": _script_safe_json(payload),
-    }
-    for name in ("STYLE", "SCRIPT"):
-        if re.search(r"</(style|script)", parts[name], re.IGNORECASE):
-            raise ProblemError(f"viewer {name.lower()} asset must not close its element")
-    # one pass: text put in is never scanned for placeholders again
-    return _PLACEHOLDER.sub(lambda m: parts[m.group(1)], _asset("viewer.html"))
-
-
-def _write(payload: Mapping[str, Any], out: str | Path) -> Path:
-    out = Path(out)
-    if out.suffix.lower() not in (".html", ".htm"):
-        raise InputError("expected an output file ending in .html", source=str(out))
-    out.write_text(render_html(payload), encoding="utf-8")
-    return out
-
-
 # --- entry points -------------------------------------------------------------------------------
 
 
@@ -454,12 +373,17 @@ def view_trace(
     max_steps: int = MAX_VIEW_STEPS,
     max_trace_bytes: int | None = MAX_TRACE_BYTES,
 ) -> Path:
-    """Write the viewer page of the trace file ``trace`` to ``out``; returns ``out``. A trace
-    file over ``max_trace_bytes`` is refused unread."""
+    """Write the viewer page of the trace file ``trace`` to ``out``; returns ``out``: the mission
+    page, or the team page (:mod:`selfrepair.experiment.teamview`) for a team trace. A trace file
+    over ``max_trace_bytes`` is refused unread."""
     from selfrepair.execution.trace import read_trace
+    from selfrepair.experiment.teamview import view_team_trace
+    from selfrepair.team.traceread import is_team_trace
 
+    if is_team_trace(trace):
+        return view_team_trace(trace, out, max_steps=max_steps, max_trace_bytes=max_trace_bytes)
     parsed = read_trace(trace, max_trace_bytes=max_trace_bytes)
-    return _write(mission_payload(parsed, max_steps=max_steps), out)
+    return write_page(mission_payload(parsed, max_steps=max_steps), out)
 
 
 def trace_from_results(db: str | Path, key_prefix: str) -> tuple[Trace, dict[str, Any]]:
@@ -494,6 +418,19 @@ def trace_from_results(db: str | Path, key_prefix: str) -> tuple[Trace, dict[str
 def view_results(
     db: str | Path, key_prefix: str, out: str | Path, *, max_steps: int = MAX_VIEW_STEPS
 ) -> Path:
-    """Write the viewer page of the stored mission ``key_prefix`` of ``db`` to ``out``."""
+    """Write the viewer page of the stored mission ``key_prefix`` of ``db`` to ``out``: the
+    team page for a mission of a team experiment (run again from its stored configuration)."""
+    from selfrepair.experiment.report import pick_mission
+    from selfrepair.experiment.store import ResultStore
+    from selfrepair.experiment.teams import is_team_rows
+
+    if not key_prefix:
+        raise InputError("expected a non-empty mission key or key prefix", source=str(db))
+    with ResultStore(db, read_only=True) as store:
+        rows = store.rows("WHERE substr(key, 1, ?) = ?", (len(key_prefix), key_prefix))
+    if is_team_rows(rows):
+        from selfrepair.experiment.teamview import view_team_results
+
+        return view_team_results(pick_mission(rows, key_prefix, str(db)), db, out, max_steps)
     trace, origin = trace_from_results(db, key_prefix)
-    return _write(mission_payload(trace, origin=origin, max_steps=max_steps), out)
+    return write_page(mission_payload(trace, origin=origin, max_steps=max_steps), out)

@@ -7,3 +7,5 @@ its faults; every layer above calls it and nobody re-derives it. This package ma
 :mod:`selfrepair.errors` and :mod:`selfrepair.geometry`. The generic layers (``tables``, ``repair``)
 import ``robots.domain`` and ``robots.registry``, never a concrete robot.
 """
+
+__all__: list[str] = []  # the names live in the modules; the curated ones are `selfrepair.*`

@@ -36,6 +36,7 @@ may be any hashable values.
 from __future__ import annotations
 
 import itertools
+import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -89,12 +90,23 @@ class Domain(Generic[A, F]):
     footprint_connected: bool = False
     description: str = ""
     canonical: Pose = field(default=CANONICAL)
+    fault_parts: Callable[[F], tuple[str, ...]] | None = None
+    """What one fault is made of, for spreading chosen fault sets over them (the four-wheel
+    robot: its wheel and its mode); ``None``: each fault is its own single part (see
+    :meth:`parts_of`)."""
     action_set: frozenset[A] = field(init=False, repr=False)
+    time_unit: int = field(init=False, repr=False)
+    """Units per tick in which every duration is a whole number: the least common multiple of
+    the denominators of the actions' durations (3 for the four-wheel robot, whose durations are
+    multiples of 1/3 tick; 1 for a robot of whole-tick actions). The simulator, the planner's
+    integer costs, table enumeration and the team engine all count time in these units."""
 
     def __post_init__(self) -> None:
         if not self.fault_sets:
             object.__setattr__(self, "fault_sets", singles_and_doubles(self.faults))
         object.__setattr__(self, "action_set", frozenset(self.actions))
+        unit = math.lcm(1, *(Fraction(self.duration(a)).denominator for a in self.actions))
+        object.__setattr__(self, "time_unit", unit)
 
     def __repr__(self) -> str:
         return f"Domain({self.name!r}, {len(self.actions)} actions, {len(self.faults)} faults)"
@@ -102,6 +114,12 @@ class Domain(Generic[A, F]):
     def step(self, pose: Pose, action: A) -> tuple[Pose, tuple[Cell, ...], Fraction]:
         """End pose, footprint and duration of ``action`` at ``pose`` on an open plane."""
         return self.apply(pose, action), self.footprint(pose, action), self.duration(action)
+
+    def parts_of(self, fault: F) -> tuple[str, ...]:
+        """The parts of ``fault`` (:attr:`fault_parts`; by default its own text)."""
+        if self.fault_parts is None:
+            return (self.format_faults((fault,)),)
+        return self.fault_parts(fault)
 
     def blocking(self, action: A, faults: Iterable[F]) -> frozenset[F]:
         """The faults of ``faults`` that each forbid ``action`` on their own."""

@@ -374,6 +374,7 @@ FOUR_WHEEL: Domain[Action, Fault] = Domain(
     level=_level,
     fault_sets=tuple(frozenset({f}) for f in SINGLE_FAULTS) + DOUBLE_FAULTS,
     footprint_connected=True,
+    fault_parts=lambda fault: (fault.wheel.name, fault.mode.letter),
     description="four-wheeled skid-steer robot: 81 actions, 12 wheel faults (e.g. FL:F)",
 )
 """The four-wheel skid-steer robot as a :class:`~selfrepair.robots.domain.Domain`. Levels: waits,

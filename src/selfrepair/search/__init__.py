@@ -5,3 +5,5 @@ Planning problems and results are plain values (:mod:`selfrepair.search.problem`
 import only those, and the planners choose the backend (:mod:`selfrepair.search.backend`). This
 package may import ``world``, ``robots``, :mod:`selfrepair.geometry` and :mod:`selfrepair.errors`.
 """
+
+__all__: list[str] = []  # the names live in the modules; the curated ones are `selfrepair.*`

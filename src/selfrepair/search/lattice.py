@@ -36,7 +36,7 @@ Heuristics (:data:`HEURISTICS`), all admissible and consistent
     straight move is one step; an arc sweeps ``a``, the cell ahead, and ``b`` beside it). For a
     domain without it ``"grid-distance"`` is refused. The clearance term is non-negative, so the
     bound holds for any weight, and ``d(goal) = 0``. Internally costs are scaled to integers
-    (``S = lcm of the duration denominators * weight denominator``) and ``h`` is rounded down,
+    (``S = domain.time_unit * weight denominator``) and ``h`` is rounded down,
     which keeps it consistent because edge costs are integers.
 
 Determinism
@@ -49,7 +49,6 @@ Determinism
 
 from __future__ import annotations
 
-import math
 import sys
 import time
 from collections import deque
@@ -164,21 +163,12 @@ def _progress_rate(domain: Domain[Any, Any], actions: Sequence[Any]) -> Fraction
 
 
 def cost_scale(domain: Domain[Any, Any], weight: Fraction) -> int:
-    """The factor that makes every edge cost an integer: the lcm of the duration denominators
-    times the clearance weight's denominator."""
-    return _duration_scale(domain) * weight.denominator
+    """The factor that makes every edge cost an integer: the domain's time unit
+    (:attr:`~selfrepair.robots.domain.Domain.time_unit`) times the clearance weight's
+    denominator."""
+    return domain.time_unit * weight.denominator
 
 
-def _duration_scale(domain: Domain[Any, Any]) -> int:
-    return _SCALES.get(
-        domain,
-        lambda: math.lcm(*(Fraction(domain.duration(a)).denominator for a in domain.actions)),
-    )
-
-
-_SCALES: BoundedCache[Domain[Any, Any], int] = BoundedCache(
-    "domain duration scales", 64, kind=CacheKind.PLAN
-)
 
 
 def _zero_distances(maze: Maze, goal: Cell, backend: str) -> npt.NDArray[np.int32]:
@@ -431,7 +421,7 @@ def plan(
     setup = _setup(domain, problem.faults)
     actions = setup.actions
     bound, largest = _bound(problem, heuristic, setup, "numba" if fast else "python")
-    scale = _duration_scale(domain) * problem.clearance_weight.denominator
+    scale = domain.time_unit * problem.clearance_weight.denominator
     term = problem.step_term
     if term is not None:
         _check_term(problem, term, actions)

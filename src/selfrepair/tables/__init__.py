@@ -5,3 +5,5 @@ Everything here works on any :class:`~selfrepair.robots.domain.Domain` passed in
 package imports ``robots.domain`` and ``robots.registry`` (to read a domain name in a file), never
 a concrete robot, and never ``world``: a table is a property of a robot, not of a maze.
 """
+
+__all__: list[str] = []  # the names live in the modules; the curated ones are `selfrepair.*`

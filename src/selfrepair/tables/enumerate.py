@@ -8,7 +8,6 @@ generator and the report that judges it agree on what an action costs.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
@@ -124,8 +123,7 @@ def _classes(domain: Domain[Any, Any]) -> DomainClasses:
     identity = frozenset(
         c.index for c in classes if c.end == start and c.footprint == frozenset({start.cell})
     )
-    scale = math.lcm(*(Fraction(domain.duration(a)).denominator for a in domain.actions))
-    return DomainClasses(domain, classes, of_action, identity, scale)
+    return DomainClasses(domain, classes, of_action, identity, domain.time_unit)
 
 
 # --- fault scopes and class costs -------------------------------------------------------------

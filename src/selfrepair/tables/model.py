@@ -256,8 +256,13 @@ def check_table(table: ReplacementTable) -> list[TableProblem]:
     """Problems that loading does not reject: gaps and dead candidates.
 
     Errors: a fault-indexed candidate that uses an action its own fault set forbids (it can never
-    be valid under exactly those faults). Warnings: an action of the domain with no entry or with
-    an empty candidate list, and a candidate listed twice in one entry.
+    be valid under exactly those faults). Warnings: an action of the domain with no entry, a
+    fault-agnostic entry with an empty candidate list, and a candidate listed twice in one entry.
+
+    An empty *fault-indexed* entry is no gap: it marks that the action has no replacement under
+    exactly that fault set (the generator writes one for every disabled action it found none for
+    within its ``max_length``, so a look-up stops there instead of merging the entries of
+    subsets); :func:`no_replacement_marks` counts them.
     """
     dom = table.domain
     problems: list[TableProblem] = []
@@ -265,7 +270,7 @@ def check_table(table: ReplacementTable) -> list[TableProblem]:
     for number, entry in enumerate(table.entries):
         name = dom.format_action(entry.action)
         covered.add(entry.action)
-        if not entry.candidates:
+        if not entry.candidates and entry.faults is None:
             problems.append(TableProblem("warning", "no candidates", number, name))
         seen: set[Candidate] = set()
         for k, candidate in enumerate(entry.candidates):
@@ -292,6 +297,12 @@ def check_table(table: ReplacementTable) -> list[TableProblem]:
                 TableProblem("warning", f"action {dom.format_action(action)} has no candidates")
             )
     return problems
+
+
+def no_replacement_marks(table: ReplacementTable) -> int:
+    """The fault-indexed entries with an empty candidate list: each marks "no replacement under
+    exactly these faults" (see :func:`check_table`)."""
+    return sum(1 for e in table.entries if e.faults is not None and not e.candidates)
 
 
 # --- bundled tables ---------------------------------------------------------------------------

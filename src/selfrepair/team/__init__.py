@@ -10,3 +10,5 @@ The package sits between ``experiment`` and ``execution``: it may import ``execu
 out, and rows (:mod:`selfrepair.team.metrics`) and JSON Lines traces
 (:mod:`selfrepair.team.trace`) are made from it. See docs/team.md.
 """
+
+__all__: list[str] = []  # the names live in the modules; the curated ones are `selfrepair.*`

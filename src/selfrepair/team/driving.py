@@ -4,38 +4,43 @@ A drive starts (:func:`begin_drive`) the way a single-robot mission does: the ro
 :class:`~selfrepair.repair.strategies.MissionContext` is built by
 :func:`selfrepair.execution.executor.mission_context` on the *known* map, the lattice planner
 (``context.plan``) plans with the robot's known wheel faults, and the robot's single-robot
-strategy is started from its factory (the strategy lifecycle). The plan is then placed in time
-around the other robots (:func:`place`: :func:`~selfrepair.team.spacetime.schedule_path`, else
-cooperative A*), and its cells are reserved.
+strategy is started from its factory (the strategy lifecycle); plan, strategy and known faults
+go into a :class:`~selfrepair.execution.stepper.Stepper`, the single-robot executor's own loop.
+The plan is then placed in time around the other robots (:func:`place`:
+:func:`~selfrepair.team.spacetime.schedule_path`, else cooperative A*, whose plan replaces the
+stepper's queue), and its cells are reserved.
 
-When the next primitive action turns out to be faulty, :func:`own_repair` asks the robot's own
-repairer first (its replacement table, then its replan), exactly as the single-robot executor
-does, and places the repaired plan again. Only when that fails does the team hear of it (a
-``stuck`` incident). A robot that cannot be placed waits on its cell and tries again later; idle
-robots standing on its path are asked to make room (:func:`make_room`).
+When the next primitive action is faulty under the faults the robot knows, :func:`own_repair` asks
+the stepper, which asks the robot's own repairer (its replacement table, then its replan) and
+splices the repair in, exactly as in a single-robot mission; the repaired plan is placed again. Only
+when that fails does the team hear of it (a ``stuck`` incident). A robot that cannot be placed waits
+on its cell and tries again later; idle robots standing on its path are asked to make room
+(:func:`make_room`).
 """
 
 from __future__ import annotations
 
-import time
 from collections import deque
+from collections.abc import Mapping
 from enum import StrEnum
+from types import MappingProxyType
 
 from selfrepair.execution.executor import mission_context
-from selfrepair.execution.result import STEP_OF_REPAIR, MissionSpec, StepSource
+from selfrepair.execution.result import MissionSpec, StepSource
+from selfrepair.execution.stepper import Stepper, splice
 from selfrepair.geometry import Cell
 from selfrepair.repair.strategies import (
-    RepairRequest,
-    RepairStatus,
     StrategyOptions,
     get_strategy,
     uses_table,
 )
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.lattice import bfs_distances, planning_actions
+from selfrepair.team.model import IncidentKind
 from selfrepair.team.model import drive as drive_action
 from selfrepair.team.reservations import FOREVER, TimedStep
 from selfrepair.team.result import OwnRepairRecord, TeamSource
+from selfrepair.team.robottable import robot_table
 from selfrepair.team.scenario import grid_distances
 from selfrepair.team.spacetime import cost_to_go, lattice_of, plan_spacetime, schedule_path
 from selfrepair.team.state import Drive, Entry, RobotState, TeamWorld
@@ -64,6 +69,12 @@ class DriveStart(StrEnum):
     WAITING = "waiting"
     STUCK = "stuck"
     BLOCKED = "blocked"
+
+
+INCIDENT_OF_START: Mapping[DriveStart, IncidentKind] = MappingProxyType(
+    {DriveStart.STUCK: IncidentKind.STUCK, DriveStart.BLOCKED: IncidentKind.BLOCKED}
+)
+"""The incident a drive that could not start raises (an explicit mapping, never by value)."""
 
 
 def cancel_drive(world: TeamWorld, robot: RobotState, at: int) -> None:
@@ -103,7 +114,9 @@ def begin_drive(world: TeamWorld, robot: RobotState, entry: Entry, at: int) -> D
         robot.pose,
         target,
         strategy=options.robot_strategy,
-        options=StrategyOptions(table=options.robot_table, recursion=options.recursion),
+        options=StrategyOptions(
+            table=robot_table(world.scenario, options), recursion=options.recursion
+        ),
         backend=options.backend,
         domain=domain,
     )
@@ -115,8 +128,8 @@ def begin_drive(world: TeamWorld, robot: RobotState, entry: Entry, at: int) -> D
     if result.status is not PlanStatus.SOLVED:
         return DriveStart.STUCK
     repairer = get_strategy(options.robot_strategy)(context)
-    primitives = [(a, StepSource.PLAN) for a in result.actions]
-    robot.drive = Drive(entry, target, primitives, [], repairer)
+    stepper = Stepper(context, repairer, result.actions, robot.faults, robot.sim.table)
+    robot.drive = Drive(entry, target, stepper, [])
     return DriveStart.PLACED if place(world, robot, at) else DriveStart.WAITING
 
 
@@ -129,7 +142,7 @@ def place(world: TeamWorld, robot: RobotState, at: int) -> bool:
     res, domain, scale = world.reservations, world.scenario.domain, world.scale
     res.release_from(robot.name, at)
     known = world.known_map(robot.name)
-    actions = [a for a, _ in drive.primitives]
+    actions = drive.actions()
     steps = schedule_path(
         res, robot.name, domain, scale, known, robot.pose, at, actions,
         max_wait=world.options.max_wait_ticks * scale,
@@ -138,7 +151,8 @@ def place(world: TeamWorld, robot: RobotState, at: int) -> bool:
         found, _ = _cooperative(world, robot, drive.target, at)
         if found is not None:
             steps = found
-            drive.primitives = [(a.action, StepSource.REPLAN) for a in found]
+            queue = drive.stepper.queue
+            splice(queue, len(queue), [a.action for a in found], StepSource.REPLAN)
     if steps is None:
         res.park(robot.name, robot.pose.cell, at)
         mark_stale(world, robot)
@@ -182,28 +196,28 @@ def _cooperative(
 
 
 def own_repair(world: TeamWorld, robot: RobotState, at: int) -> bool:
-    """The robot's own repair of its faulty next primitive (its single-robot strategy); places
-    the repaired plan. ``False`` when the robot's strategy found nothing."""
+    """The robot's own repair of its faulty next primitive: its stepper repairs and splices (the
+    single-robot loop); the repaired plan is placed. ``False`` when the robot's strategy found
+    nothing (or no motion is left under its known faults)."""
     drive = robot.drive
-    assert drive is not None and drive.repairer is not None
+    assert drive is not None
     if not planning_actions(world.scenario.domain, robot.faults):
         return False
-    queue = [a for a, _ in drive.primitives]
-    t0 = time.perf_counter_ns()
-    repair = drive.repairer.repair(RepairRequest(robot.pose, queue, robot.faults, len(world.moves)))
-    latency = time.perf_counter_ns() - t0
-    world.plans += repair.replans
-    world.expansions += repair.expansions
-    world.own_repairs.append(
-        OwnRepairRecord(
-            at, robot.name, robot.pose, queue[0], repair.status, repair.source, repair.actions,
-            latency,
-        )
-    )  # fmt: skip
-    if repair.status is not RepairStatus.REPAIRED:
+    stepper = drive.stepper
+    before = len(stepper.repairs)
+    entry = stepper.next_action(robot.pose, robot.sim.steps)
+    for record in stepper.repairs[before:]:
+        repair = record.repair
+        world.plans += repair.replans
+        world.expansions += repair.expansions
+        world.own_repairs.append(
+            OwnRepairRecord(
+                at, robot.name, record.pose, record.action, repair.status, repair.source,
+                repair.actions, record.latency_ns,
+            )
+        )  # fmt: skip
+    if entry is None:
         return False
-    source = STEP_OF_REPAIR[repair.source]
-    drive.primitives = [(a, source) for a in repair.actions] + drive.primitives[repair.consumed :]
     place(world, robot, at)
     return True
 
@@ -217,7 +231,7 @@ def make_room(world: TeamWorld, robot: RobotState, at: int) -> None:
     domain = world.scenario.domain
     path: set[Cell] = {robot.pose.cell, drive.target}
     pose = robot.pose
-    for action, _ in drive.primitives:
+    for action in drive.actions():
         path.update(domain.footprint(pose, action))
         pose = domain.apply(pose, action)
     known = world.known_map()

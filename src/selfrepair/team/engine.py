@@ -18,14 +18,21 @@ options give the same result (the timings aside).
    delayed by a fault, a robot that could not plan) are placed again. So robots never share a
    cell or a swept cell at the same time, whatever the plans say;
    :func:`~selfrepair.team.trace.replay_team` checks it on every trace.
-4. **Faults.** Team faults start at a tick, or some ticks after their robot's first pick; a
-   robot senses its own faults at once. A faulty next primitive goes to the robot's own repairer
-   first; when that fails, or a drive meets a blocked cell, or a gripper has failed, the robot
-   has an *incident* and the team strategy decides (:mod:`selfrepair.team.strategies`). The
-   repair latency runs from the incident until every robot whose plan changed and is not in the
-   middle of an action has its next drive placed in time (garbage collection is held off
-   during it; each mission starts without kept cost-to-go maps, so a repair's cost does not
-   depend on the missions run before it in the process).
+4. **Faults.** Team faults start at a tick, or some ticks after their robot's first pick. Each
+   robot has its own :class:`~selfrepair.execution.simulator.Simulator` (its true faults, their
+   clock, its steps; an intermittent fault is drawn per robot step) and executes its primitive
+   actions in it. It learns its wheel faults as a single robot does (the scenario's
+   ``detection``): ``now``, sensed at once and before every command, or ``on-use``, when a
+   command fails (a failed attempt: the robot stays, one tick passes, the trace records it);
+   each discovery is recorded with its delay. A next primitive that is faulty under the known
+   faults goes to the robot's own :class:`~selfrepair.execution.stepper.Stepper` first (its
+   repairer and splice, :mod:`selfrepair.team.driving`); when that fails, or a drive meets a
+   blocked cell, or a gripper has failed, the robot has an *incident* and the team strategy
+   decides (:mod:`selfrepair.team.strategies`). The repair latency runs from the incident until
+   every robot whose plan changed and is not in the middle of an action has its next drive
+   placed in time (garbage collection is held off during it; each mission starts without kept
+   cost-to-go maps, so a repair's cost does not depend on the missions run before it in the
+   process).
 5. **End.** When every item is delivered; when nothing more can happen (``stalled``: no robot
    with work can act, no fault will clear, nothing moved for :data:`STALL_TICKS`); or at
    ``max_ticks``.
@@ -36,18 +43,18 @@ from __future__ import annotations
 import gc
 import time
 from collections import deque
-from dataclasses import dataclass
-from typing import Any
 
 from selfrepair.errors import ProblemError
-from selfrepair.execution.faults import Persistence
+from selfrepair.execution.faults import Detection, FaultSchedule
+from selfrepair.execution.result import StepSource
+from selfrepair.execution.simulator import Outcome, Simulator
 from selfrepair.geometry import Cell
 from selfrepair.repair.strategies import StrategyName
 from selfrepair.search.backend import use_numba
-from selfrepair.search.lattice import planning_actions
 from selfrepair.team.allocation import Job, Worker, allocate, distance_maps, job_plan
 from selfrepair.team.binding import Incident
 from selfrepair.team.driving import (
+    INCIDENT_OF_START,
     DriveStart,
     begin_drive,
     cancel_drive,
@@ -55,6 +62,7 @@ from selfrepair.team.driving import (
     own_repair,
     place,
 )
+from selfrepair.team.faults import fault_times, faults_due, know
 from selfrepair.team.model import (
     DROP_TICKS,
     HANDOVER_TICKS,
@@ -62,16 +70,13 @@ from selfrepair.team.model import (
     ActionKind,
     IncidentKind,
     Load,
-    TeamFault,
     TeamFaultKind,
     TeamScenario,
     Trigger,
-    time_scale,
 )
-from selfrepair.team.reservations import FOREVER
+from selfrepair.team.reservations import FOREVER, TimedStep
 from selfrepair.team.result import (
     ActRecord,
-    FaultRecord,
     IncidentRecord,
     MoveRecord,
     TeamOptions,
@@ -79,9 +84,18 @@ from selfrepair.team.result import (
     TeamResult,
     TeamStatus,
 )
+from selfrepair.team.robottable import robot_table
 from selfrepair.team.scenario import check_scenario
 from selfrepair.team.spacetime import clear_cost_to_go
-from selfrepair.team.state import Entry, ItemState, RobotState, TeamWorld, item_task_of
+from selfrepair.team.state import (
+    Entry,
+    FaultState,
+    ItemState,
+    RobotFaultClock,
+    RobotState,
+    TeamWorld,
+    item_task_of,
+)
 from selfrepair.team.strategies import get_team_strategy
 from selfrepair.team.table import get_team_table
 
@@ -105,18 +119,6 @@ def default_max_ticks(scenario: TeamScenario) -> int:
     return 300 + 6 * (maze.width + maze.height) * (len(scenario.tasks) + 1)
 
 
-@dataclass(slots=True)
-class _Clock:
-    """When team fault number ``index`` starts and ends (``None``: not known yet)."""
-
-    index: int
-    fault: TeamFault
-    on: int | None
-    off: int | None = None
-    active: bool = False
-    done: bool = False
-
-
 def run_team(scenario: TeamScenario, options: TeamOptions | None = None) -> TeamResult:
     """Run one team mission (see the module docstring)."""
     options = options or TeamOptions()
@@ -124,6 +126,7 @@ def run_team(scenario: TeamScenario, options: TeamOptions | None = None) -> Team
     get_team_strategy(options.strategy)  # fails fast on a bad name
     if options.strategy is StrategyName.TEAM_REPLACEMENT:
         get_team_table(options.table)  # a generated table is made before anything is timed
+    robot_table(scenario, options)  # so is the robots' own (and a table for another robot fails)
     if use_numba(options.backend):
         from selfrepair.search.warmup import ensure_warm
 
@@ -159,13 +162,24 @@ def run_team(scenario: TeamScenario, options: TeamOptions | None = None) -> Team
         world.plans,
         world.yields,
         world.expansions,
+        tuple(world.discoveries),
     )
 
 
 def _world(scenario: TeamScenario, options: TeamOptions) -> TeamWorld:
-    robots = {r.name: RobotState(r, r.start, deque()) for r in scenario.robots}
+    scale = scenario.domain.time_unit
+    states = [
+        FaultState(i, f, f.at * scale if f.trigger is Trigger.TICK else None)
+        for i, f in enumerate(scenario.faults)
+    ]
+    detection = FaultSchedule(detection=scenario.detection)
+    robots = {}
+    for r in scenario.robots:
+        clock = RobotFaultClock(scenario.domain, states, r.name, options.seed)
+        sim = Simulator(scenario.domain, scenario.maze, r.start, detection, options.seed, clock)
+        robots[r.name] = RobotState(r, r.start, deque(), sim, clock)
     items = {t.item: ItemState(t.pickup) for t in scenario.tasks}
-    world = TeamWorld(scenario, options, time_scale(scenario.domain), robots, items)
+    world = TeamWorld(scenario, options, scale, robots, items, faults=states)
     for robot in robots.values():
         world.reservations.park(robot.name, robot.pose.cell, 0)
     return world
@@ -196,15 +210,12 @@ def _no_meet(job: Job, here: Cell) -> Cell:
 def _loop(world: TeamWorld) -> tuple[TeamStatus, str]:
     scenario, scale = world.scenario, world.scale
     limit = (world.options.max_ticks or default_max_ticks(scenario)) * scale
-    clocks = [
-        _Clock(i, f, f.at * scale if f.trigger is Trigger.TICK else None)
-        for i, f in enumerate(scenario.faults)
-    ]
+    clocks = world.faults
     wake = {name: 0 for name in world.robots}
     t = forgotten = 0
     while True:
         world.now = t
-        _faults(world, clocks, t)
+        faults_due(world, clocks, t)
         pending = list(world.robots)
         for _ in range(_ROUNDS):
             world.dirty.clear()
@@ -220,7 +231,7 @@ def _loop(world: TeamWorld) -> tuple[TeamStatus, str]:
             return TeamStatus.DELIVERED, "every item delivered"
         if t >= limit:
             return TeamStatus.TIME_LIMIT, f"{limit // scale} ticks passed (max_ticks)"
-        upcoming = [c for c in _fault_times(clocks) if c > t]
+        upcoming = [c for c in fault_times(clocks) if c > t]
         if t - world.last_progress > STALL_TICKS * scale and not upcoming:
             return TeamStatus.STALLED, _stall_reason(world)
         candidates = [w for w in wake.values() if w > t] + upcoming
@@ -237,67 +248,6 @@ def _stall_reason(world: TeamWorld) -> str:
         f"{len(left)} items undelivered ({', '.join(left) or 'none'}); robots with work left: "
         f"{', '.join(waiting) or 'none'}"
     )
-
-
-def _fault_times(clocks: list[_Clock]) -> list[int]:
-    times = []
-    for c in clocks:
-        if not c.active and not c.done and c.on is not None:
-            times.append(c.on)
-        if c.active and c.off is not None:
-            times.append(c.off)
-    return times
-
-
-def _faults(world: TeamWorld, clocks: list[_Clock], t: int) -> None:
-    """Start and clear the team faults due at ``t`` and apply their effects."""
-    changed = False
-    for clock in clocks:
-        fault = clock.fault
-        if clock.on is None and fault.trigger is Trigger.PICK:
-            first = world.robots[fault.robot].first_pick
-            if first is not None:
-                clock.on = first + fault.at * world.scale
-        if not clock.active and not clock.done and clock.on is not None and clock.on <= t:
-            clock.active, changed = True, True
-            if fault.persistence is Persistence.TRANSIENT:
-                assert fault.duration is not None
-                clock.off = clock.on + fault.duration * world.scale
-            world.fault_log.append(FaultRecord(t, clock.index, True))
-        elif clock.active and clock.off is not None and clock.off <= t:
-            clock.active, clock.done, changed = False, True, True
-            world.fault_log.append(FaultRecord(t, clock.index, False))
-    if changed:
-        _apply_faults(world, [c.fault for c in clocks if c.active])
-
-
-def _apply_faults(world: TeamWorld, active: list[TeamFault]) -> None:
-    domain = world.scenario.domain
-    every = frozenset(domain.faults)
-    blocked: set[Cell] = set()
-    for robot in world.robots.values():
-        faults: set[Any] = set()
-        gripper = True
-        for fault in active:
-            if fault.robot != robot.name:
-                continue
-            if fault.kind is TeamFaultKind.IMMOBILISED:
-                faults |= every
-            elif fault.kind is TeamFaultKind.WHEELS:
-                faults |= domain.parse_faults(fault.wheel_faults)
-            elif fault.kind is TeamFaultKind.GRIPPER:
-                gripper = False
-        if frozenset(faults) != robot.faults or gripper != robot.gripper_ok:
-            robot.faults, robot.gripper_ok = frozenset(faults), gripper
-            robot.deferred = None
-            if robot.stuck and planning_actions(domain, robot.faults):
-                robot.stuck = False  # it can move again: the team hears of it
-                world.broadcast(robot.name)
-    for fault in active:
-        if fault.kind is TeamFaultKind.BLOCKED:
-            blocked.update(fault.cells)
-    world.blocked = blocked
-    world.known_blocked &= blocked  # a blocked cell that opened again is reported
 
 
 def _advance(world: TeamWorld, robot: RobotState, t: int) -> int:
@@ -338,7 +288,7 @@ def _drive(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> int | No
             robot.queue.popleft()
             return None
         if start in (DriveStart.STUCK, DriveStart.BLOCKED):
-            _incident(world, robot, head, IncidentKind(start.value), t)
+            _incident(world, robot, head, INCIDENT_OF_START[start], t)
             return None
         if start is DriveStart.WAITING:
             return robot.retry_at
@@ -348,7 +298,7 @@ def _drive(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> int | No
     if robot.stale and not place(world, robot, t):
         return robot.retry_at
     if not drive.steps:
-        if drive.primitives:
+        if drive.stepper.queue:
             return robot.retry_at if not place(world, robot, t) else None
         robot.drive = None
         robot.queue.popleft()
@@ -358,8 +308,12 @@ def _drive(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> int | No
         return step.start
     if step.start < t:
         return robot.retry_at if not place(world, robot, t) else None
-    domain = world.scenario.domain
-    if not domain.available(step.action, robot.faults):
+    sim, stepper = robot.sim, drive.stepper
+    if world.scenario.detection is Detection.NOW:
+        sensed = sim.sense()  # the robot senses its faults before every command
+        if sensed is not robot.faults and sensed != robot.faults:
+            know(world, robot, sensed, t)
+    if not stepper.available(step.action):
         if not own_repair(world, robot, t):
             _incident(world, robot, head, IncidentKind.STUCK, t)
         return None
@@ -368,22 +322,54 @@ def _drive(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> int | No
         _incident(world, robot, head, IncidentKind.BLOCKED, t)
         return None
     if not _safe(world, robot, step.cells, t):
-        world.reservations.release_from(robot.name, t)
-        world.reservations.park(robot.name, robot.pose.cell, t)
-        mark_stale(world, robot)
-        drive.steps = []
+        _hold(world, robot, t)
         robot.retry_at = t + 1
         return t + 1
+    return _command(world, robot, step, t)
+
+
+def _command(world: TeamWorld, robot: RobotState, step: TimedStep, t: int) -> int:
+    """Send the placed primitive ``step`` to the robot's simulator at ``t``; returns when the
+    robot is free again. A failed attempt (a fault the robot did not know) teaches it the
+    faults that blocked the command; its drive is placed again after the attempt."""
+    drive, sim = robot.drive, robot.sim
+    assert drive is not None
+    stepper, pose = drive.stepper, robot.pose
+    source = stepper.queue[0][1]
+    number = sim.steps
+    sim.wait_until(t)
+    outcome = sim.advance(step.action)
+    stepper.record(
+        number, step.action, source, outcome, pose, sim.pose, sim.last_duration,
+        sim.last_blocking,
+    )  # fmt: skip
+    if outcome is Outcome.FAILED_ATTEMPT:
+        end = sim.units
+        robot.busy_until, robot.footprint = end, (pose.cell,)
+        world.moves.append(
+            MoveRecord(robot.name, t, end, step.action, pose, pose, StepSource.FAILED_ATTEMPT)
+        )
+        know(world, robot, stepper.known, t)
+        _hold(world, robot, t)
+        return end
+    if outcome is not Outcome.MOVED or sim.pose != step.after or sim.units != step.end:
+        raise ProblemError(f"{robot.name}: the placed step {step} is not what the robot does")
     robot.pose, robot.busy_until, robot.footprint = step.after, step.end, step.cells
     world.moves.append(
-        MoveRecord(
-            robot.name, t, step.end, step.action, step.before, step.after, drive.primitives[0][1]
-        )
+        MoveRecord(robot.name, t, step.end, step.action, step.before, step.after, source)
     )
     drive.steps.pop(0)
-    drive.primitives.pop(0)
     world.last_progress = t
     return step.end
+
+
+def _hold(world: TeamWorld, robot: RobotState, t: int) -> None:
+    """``robot`` keeps its cell from ``t`` and places its drive again when it next acts."""
+    assert robot.drive is not None
+    world.reservations.release_from(robot.name, t)
+    world.reservations.park(robot.name, robot.pose.cell, t)
+    mark_stale(world, robot)
+    robot.drive.steps = []
 
 
 def _safe(world: TeamWorld, robot: RobotState, cells: tuple[Cell, ...], t: int) -> bool:

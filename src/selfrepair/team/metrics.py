@@ -14,11 +14,12 @@ from fractions import Fraction
 
 import numpy as np
 
+from selfrepair.execution.result import StepSource
 from selfrepair.repair.strategies import RepairSource, StrategyName
 from selfrepair.stats import percentile
 from selfrepair.team.result import RepairOutcome, TeamResult, TeamSource
 
-__all__ = ["TEAM_COLUMNS", "team_row"]
+__all__ = ["TEAM_COLUMNS", "executed_own_replacements", "team_row"]
 
 TEAM_COLUMNS = (
     "scenario",
@@ -63,6 +64,11 @@ TEAM_COLUMNS = (
     "yields",
     "own_repairs",
     "own_replacements",
+    "detection",
+    "failed_attempts",
+    "discoveries",
+    "discovery_delay_max_ticks",
+    "discovery_delays_ticks",
     "moves",
     "acts",
     "allocation_ns",
@@ -88,6 +94,7 @@ def team_row(
     cpus = [r.cpu_ns for r in repairs if r.outcome is RepairOutcome.REPAIRED]
     disturbed = [len(r.disturbed) for r in repairs if r.outcome is RepairOutcome.REPAIRED]
     makespan = result.makespan
+    delays = [float(Fraction(d.delay, result.scale)) for d in result.discoveries]
     ratio = (
         float(makespan / baseline)
         if baseline is not None and baseline > 0 and result.all_delivered
@@ -137,9 +144,39 @@ def team_row(
         "expansions": result.expansions,
         "yields": result.yields,
         "own_repairs": len(result.own_repairs),
-        "own_replacements": sum(r.source == RepairSource.REPLACEMENT for r in result.own_repairs),
+        "own_replacements": executed_own_replacements(result),
+        "detection": str(scenario.detection),
+        "failed_attempts": sum(m.source is StepSource.FAILED_ATTEMPT for m in result.moves),
+        "discoveries": len(result.discoveries),
+        "discovery_delay_max_ticks": max(delays, default=None),
+        "discovery_delays_ticks": json.dumps(delays),
         "moves": len(result.moves),
         "acts": len(result.acts),
         "allocation_ns": result.allocation_ns,
         "ticks_simulated": float(Fraction(result.end, result.scale)),
     }
+
+
+def executed_own_replacements(result: TeamResult) -> int:
+    """Own repairs by table replacement whose replacement ran: the robot executed at least one
+    move marked ``replacement`` after the repair and before its next own repair. A repair whose
+    drive was placed again by cooperative A* before any of its actions ran (the queue then holds
+    that planner's actions) is not counted."""
+    moves: dict[str, list[tuple[int, StepSource]]] = {}
+    for m in result.moves:
+        moves.setdefault(m.robot, []).append((m.start, m.source))
+    following: list[int | None] = [None] * len(result.own_repairs)  # the robot's next repair
+    last: dict[str, int] = {}
+    for i, r in enumerate(result.own_repairs):
+        if r.robot in last:
+            following[last[r.robot]] = r.at
+        last[r.robot] = i
+    count = 0
+    for r, until in zip(result.own_repairs, following, strict=True):
+        if r.source is not RepairSource.REPLACEMENT:
+            continue
+        count += any(
+            source is StepSource.REPLACEMENT and start >= r.at and (until is None or start < until)
+            for start, source in moves.get(r.robot, ())
+        )
+    return count

@@ -21,22 +21,20 @@ A team plan is one queue of :class:`TeamAction` per robot:
 
 A robot carries at most one item. Pick, drop and handover take :data:`PICK_TICKS`,
 :data:`DROP_TICKS` and :data:`HANDOVER_TICKS`. Time inside the team engine is counted in integer
-*units* of ``1 / time_scale(domain)`` ticks (thirds of a tick for the four-wheel robot), so every
+*units* of ``1 / domain.time_unit`` ticks (thirds of a tick for the four-wheel robot), so every
 action's duration is a whole number of units.
 """
 
 from __future__ import annotations
 
-import math
 import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 from enum import StrEnum
-from fractions import Fraction
 from typing import Any
 
 from selfrepair.errors import InputError, ProblemError
-from selfrepair.execution.faults import Persistence
+from selfrepair.execution.faults import Detection, Persistence
 from selfrepair.geometry import Cell, Pose
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
@@ -64,7 +62,6 @@ __all__ = [
     "handover",
     "parse_team_action",
     "pick",
-    "time_scale",
 ]
 
 PICK_TICKS = 2
@@ -132,11 +129,6 @@ class TeamTableName(StrEnum):
     GENERATED = "generated"
 
 
-def time_scale(domain: Domain[Any, Any]) -> int:
-    """Units per tick: the least common multiple of the denominators of the domain's durations."""
-    return math.lcm(*(Fraction(domain.duration(a)).denominator for a in domain.actions))
-
-
 # --- robots, tasks, faults ---------------------------------------------------------------------
 
 
@@ -164,8 +156,10 @@ class TeamFault:
 
     ``robot`` names the faulty robot (not for ``blocked``), ``cells`` the blocked cells,
     ``wheel_faults`` the domain faults of a ``wheels`` fault (in the domain's text, e.g.
-    ``"FL:F,RR:B"``). ``persistence`` is ``permanent`` or ``transient`` (then active for
-    ``duration`` ticks).
+    ``"FL:F,RR:B"``). ``persistence`` is ``permanent``, ``transient`` (then active for
+    ``duration`` ticks) or, for the faults of a robot's wheels (``immobilised``, ``wheels``),
+    ``intermittent``: from its start on, present at each of the robot's steps with
+    ``probability`` (see :class:`~selfrepair.team.state.RobotFaultClock`).
     """
 
     kind: TeamFaultKind
@@ -176,12 +170,22 @@ class TeamFault:
     trigger: Trigger = Trigger.TICK
     persistence: Persistence = Persistence.PERMANENT
     duration: int | None = None
+    probability: float | None = None
 
     def __post_init__(self) -> None:
         if self.at < 0:
             raise ProblemError(f"a team fault's 'at' must be >= 0, got {self.at}")
-        if self.persistence is Persistence.INTERMITTENT:
-            raise ProblemError("team faults are permanent or transient, not intermittent")
+        intermittent = self.persistence is Persistence.INTERMITTENT
+        if intermittent and self.kind not in (TeamFaultKind.IMMOBILISED, TeamFaultKind.WHEELS):
+            raise ProblemError(
+                "only a robot's wheel faults (immobilised, wheels) can be intermittent"
+            )
+        if intermittent != (self.probability is not None) or not (
+            self.probability is None or 0.0 <= self.probability <= 1.0
+        ):
+            raise ProblemError(
+                "an intermittent team fault needs a probability in [0, 1], and only it has one"
+            )
         if self.persistence is Persistence.TRANSIENT and (
             self.duration is None or self.duration < 1
         ):
@@ -203,6 +207,8 @@ class TeamFault:
         }[self.kind]
         when = f"tick {self.at}" if self.trigger is Trigger.TICK else f"{self.at} ticks after pick"
         last = f" for {self.duration} ticks" if self.persistence is Persistence.TRANSIENT else ""
+        if self.persistence is Persistence.INTERMITTENT:
+            last = f", intermittent p={self.probability}"
         return f"{what} from {when}{last}"
 
 
@@ -214,6 +220,9 @@ class TeamScenario:
     table file; ``""``: the domain's default, see
     :func:`selfrepair.tables.fileformat.default_table`). ``source`` names the file it came from
     and ``digest`` is the SHA-256 of that file's text (``""`` for a scenario built in code).
+    ``detection`` is how every robot learns of its wheel faults (as in a single robot's
+    :class:`~selfrepair.execution.faults.FaultSchedule`: ``now``, sensed before every command,
+    or ``on-use``, learned when a command fails).
     Checked by :func:`selfrepair.team.check.check_scenario`."""
 
     maze: Maze
@@ -225,6 +234,7 @@ class TeamScenario:
     source: str = "<scenario>"
     table: str = ""
     digest: str = ""
+    detection: Detection = Detection.NOW
     _index: dict[str, int] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -246,8 +256,9 @@ class TeamScenario:
         raise ProblemError(f"no task delivers item {item!r}")
 
     def without_faults(self) -> TeamScenario:
-        """The same scenario with no team fault (the fault-free baseline)."""
-        return replace(self, faults=())
+        """The same scenario with no team fault (the fault-free baseline; no longer the file's
+        content, so without its digest)."""
+        return replace(self, faults=(), digest="")
 
 
 # --- higher-level actions ----------------------------------------------------------------------

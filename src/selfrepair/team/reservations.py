@@ -1,6 +1,6 @@
 """The reservation table: which robot holds which cell over which stretch of time.
 
-Time is in integer units (see :func:`selfrepair.team.model.time_scale`). A reservation is a
+Time is in integer units (see :attr:`selfrepair.robots.domain.Domain.time_unit`). A reservation is a
 half-open interval ``[start, end)`` of one cell for one robot; ``end`` may be :data:`FOREVER`
 (a robot parked at the end of its planned path holds its cell until it plans again). A moving
 robot holds every cell of its action's footprint (``Domain.footprint``) for the whole duration of

@@ -1,7 +1,8 @@
 """The values of a team mission run: its options (:class:`TeamOptions`), what happened
 (:class:`TeamResult` and its records) and the vocabularies they use.
 
-Times are integer units (``scale`` units per tick, see :func:`selfrepair.team.model.time_scale`).
+Times are integer units (``scale`` units per tick, see
+:attr:`selfrepair.robots.domain.Domain.time_unit`).
 Records come in the order they happened; traces (:mod:`selfrepair.team.trace`) and metrics
 (:mod:`selfrepair.team.metrics`) read them.
 """
@@ -29,6 +30,7 @@ from selfrepair.team.model import (
 
 __all__ = [
     "ActRecord",
+    "DiscoveryRecord",
     "FaultRecord",
     "IncidentRecord",
     "MoveRecord",
@@ -60,18 +62,19 @@ class TeamOptions:
     :class:`~selfrepair.repair.strategies.StrategyName`) and ``table`` its team
     replacement table. Each robot handles its own wheel faults first with the single-robot
     strategy ``robot_strategy`` (a name in :mod:`selfrepair.repair.strategies`), table
-    ``robot_table`` and ``recursion``. ``max_depth`` bounds nested team replacements (the
-    recursion guard's depth). ``max_ticks`` ends the mission (default: see
-    :func:`selfrepair.team.engine.default_max_ticks`). ``max_wait_ticks`` is the longest wait
-    :func:`~selfrepair.team.spacetime.schedule_path` accepts before cooperative A* is tried, with
-    ``spacetime_expansions`` nodes at most. ``seed`` is recorded with the results (the engine
-    draws nothing at random; scenarios are drawn from it).
+    ``robot_table`` (a bundled name or a file; ``""``: the scenario's ``table``, else the
+    robot's default, see :mod:`selfrepair.team.robottable`) and ``recursion``. ``max_depth``
+    bounds nested team replacements (the recursion guard's depth). ``max_ticks`` ends the
+    mission (default: see :func:`selfrepair.team.engine.default_max_ticks`). ``max_wait_ticks``
+    is the longest wait :func:`~selfrepair.team.spacetime.schedule_path` accepts before
+    cooperative A* is tried, with ``spacetime_expansions`` nodes at most. ``seed`` is recorded
+    with the results (the engine draws nothing at random; scenarios are drawn from it).
     """
 
     strategy: str = StrategyName.TEAM_REPLACEMENT
     table: str = TeamTableName.HANDWRITTEN
     robot_strategy: str = StrategyName.REPLACEMENT
-    robot_table: str = "handwritten"
+    robot_table: str = ""
     recursion: RecursionMode = RecursionMode.FLAT
     max_depth: int = 2
     backend: str = "auto"
@@ -133,6 +136,18 @@ class FaultRecord:
     at: int
     index: int
     active: bool
+
+
+@dataclass(frozen=True, slots=True)
+class DiscoveryRecord:
+    """``robot`` learned of its team fault number ``index`` at ``at``, ``delay`` units after the
+    fault started (0 when it senses its faults at once; with detection ``on-use`` it learns a
+    fault when a command it forbids fails; an intermittent fault may also first show later)."""
+
+    at: int
+    robot: str
+    index: int
+    delay: int
 
 
 @dataclass(frozen=True, slots=True)
@@ -204,7 +219,7 @@ class TeamResult:
     with the unit at which their drop finished; ``end`` the last unit simulated. Counters:
     ``messages`` and ``plans`` over the whole mission (``plans``: every drive planning, lattice
     and space-time, with ``expansions`` their search nodes), ``yields`` (idle robots asked to clear
-    a path).
+    a path). ``discoveries``: when each robot learned of each of its wheel faults.
     """
 
     scenario: TeamScenario
@@ -226,6 +241,7 @@ class TeamResult:
     plans: int = 0
     yields: int = 0
     expansions: int = 0
+    discoveries: tuple[DiscoveryRecord, ...] = ()
 
     @property
     def makespan(self) -> Fraction:

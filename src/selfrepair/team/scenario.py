@@ -8,6 +8,7 @@ A scenario file (format in docs/team.md)::
     plugins = []                 # Python files that register robots (paths relative to this file)
     table = "handwritten"        # the robots' own table (default: the robot's default table)
     seed = 0                     # draws random robots and tasks when they are given as counts
+    detection = "now"            # how robots learn wheel faults: now (sensed) | on-use (failures)
 
     [[robots]]
     name = "r1"
@@ -24,7 +25,8 @@ A scenario file (format in docs/team.md)::
     robot = "r1"
     trigger = "pick"             # tick (default) | pick: 'at' ticks after the robot's first pick
     at = 3
-    persistence = "permanent"    # permanent | transient (then duration = ticks)
+    persistence = "permanent"    # permanent | transient (then duration = ticks) | intermittent
+                                 # (wheels and immobilised; then probability = per robot step)
 
 ``robots = 4`` and ``tasks = 6`` (counts) draw robots and tasks from ``seed`` instead
 (:mod:`selfrepair.team.randomteam`); ``grippers = "mixed"`` then leaves every third robot
@@ -47,7 +49,7 @@ import numpy as np
 from pydantic import AfterValidator, Field, ValidationInfo, field_validator, model_validator
 
 from selfrepair.errors import ConfigError, InputError, ProblemError
-from selfrepair.execution.faults import Persistence
+from selfrepair.execution.faults import Detection, Persistence
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN, file_domain, load_plugins
@@ -70,6 +72,8 @@ from selfrepair.team.randomteam import (
     draw_tasks,
     random_scenario,
 )
+from selfrepair.team.result import TeamOptions
+from selfrepair.team.robottable import robot_table
 from selfrepair.textio import read_text, strip_bom
 from selfrepair.tomlfile import Frozen, Int, find_line, read_toml, validate
 from selfrepair.world.maze import Maze
@@ -155,6 +159,7 @@ class FaultEntry(Frozen):
     trigger: Trigger = Trigger.TICK
     persistence: Persistence = Persistence.PERMANENT
     duration: Annotated[Int, Field(ge=1)] | None = None
+    probability: Annotated[float, Field(ge=0.0, le=1.0)] | None = None
 
     @field_validator("wheel_faults")
     @classmethod
@@ -188,6 +193,7 @@ class FaultEntry(Frozen):
             trigger=self.trigger,
             persistence=self.persistence,
             duration=self.duration,
+            probability=self.probability,
         )
 
 
@@ -201,6 +207,7 @@ class ScenarioFile(Frozen):
     plugins: tuple[str, ...] = ()
     table: Annotated[str, Field(min_length=1)] | None = None
     seed: Count = 0
+    detection: Detection = Detection.NOW
     grippers: GripperMix = GripperMix.ALL
     robots: Count | tuple[RobotEntry, ...] = ()
     tasks: Count | tuple[TaskEntry, ...] = ()
@@ -294,9 +301,17 @@ def parse_scenario(
     table = "" if entry.table is None else _table(entry.table, base_dir)
     scenario = TeamScenario(
         maze, robots, tasks, tuple(f.fault() for f in entry.faults), domain, name, source,
-        table=table, digest=scenario_digest(text),
+        table=table, digest=scenario_digest(text), detection=entry.detection,
     )  # fmt: skip
     check_scenario(scenario, text=text, limits=limits)
+    if table:
+        try:
+            robot_table(scenario, TeamOptions())
+        except (InputError, ProblemError) as exc:
+            reason = exc.reason if isinstance(exc, InputError) else str(exc)
+            raise ConfigError(
+                f"key 'table': {reason}", source=source, line=find_line(text, ("table",))
+            ) from None
     return scenario
 
 

@@ -4,9 +4,11 @@ records kept for the result.
 Only the engine (:mod:`selfrepair.team.engine`) and the team strategies
 (:mod:`selfrepair.team.strategies`) touch it, within one call of
 :func:`selfrepair.team.engine.run_team`; nothing of it outlives the mission. What the team
-*knows* (the known map: walls, blocked cells met so far, robots believed unable to move) is kept
-apart from what is *true* (every active blocked cell, every robot's active faults), as the
-single-robot simulator keeps the true faults apart from the executor's.
+*knows* (the known map: walls, blocked cells met so far, robots believed unable to move, each
+robot's known faults) is kept apart from what is *true* (every active blocked cell, and each
+robot's true faults, held by the robot's own
+:class:`~selfrepair.execution.simulator.Simulator` with a :class:`RobotFaultClock`), as a single
+robot's simulator keeps the true faults apart from what the robot knows.
 """
 
 from __future__ import annotations
@@ -14,18 +16,30 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
 
 from selfrepair.caching import BoundedCache, CacheKind
-from selfrepair.execution.result import StepSource
+from selfrepair.execution.faults import FaultEvent, Persistence
+from selfrepair.execution.simulator import Simulator
+from selfrepair.execution.stepper import Stepper
 from selfrepair.geometry import Cell, Pose
-from selfrepair.repair.strategies import Repairer
-from selfrepair.team.model import ActionKind, RobotSpec, TeamAction, TeamScenario, drive
+from selfrepair.robots.domain import Domain
+from selfrepair.team.model import (
+    ActionKind,
+    RobotSpec,
+    TeamAction,
+    TeamFault,
+    TeamFaultKind,
+    TeamScenario,
+    drive,
+)
 from selfrepair.team.reservations import Reservations, TimedStep
 from selfrepair.team.result import (
     ActRecord,
+    DiscoveryRecord,
     FaultRecord,
     IncidentRecord,
     MoveRecord,
@@ -36,7 +50,90 @@ from selfrepair.team.result import (
 )
 from selfrepair.world.maze import Maze
 
-__all__ = ["Drive", "Entry", "ItemState", "RobotState", "TeamWorld", "known_maze"]
+__all__ = [
+    "Drive",
+    "Entry",
+    "FaultState",
+    "ItemState",
+    "RobotFaultClock",
+    "RobotState",
+    "TeamWorld",
+    "known_maze",
+]
+
+
+@dataclass(slots=True)
+class FaultState:
+    """When team fault number ``index`` starts and ends, in units (``None``: not known yet), and
+    whether it is active now (set by the engine at each event time)."""
+
+    index: int
+    fault: TeamFault
+    on: int | None
+    off: int | None = None
+    active: bool = False
+    done: bool = False
+
+
+class RobotFaultClock:
+    """The true domain faults of one robot over time: the effects of its active team faults
+    (``immobilised``: every domain fault; ``wheels``: its wheel faults). An ``intermittent`` team
+    fault, while active, is present at the robot's step ``k`` with its probability, drawn as a
+    single robot's intermittent fault event is (:meth:`FaultEvent.active
+    <selfrepair.execution.faults.FaultEvent.active>`: ``default_rng([seed, index, k])``), so
+    replay computes the same. Team faults can start at a robot's first pick, a time no schedule
+    knows in advance, so the engine sets when each starts and clears (:class:`FaultState`) and this
+    clock answers the robot's :class:`~selfrepair.execution.simulator.Simulator` from them.
+    Mutable (it keeps the set of each combination met)."""
+
+    __slots__ = ("_draws", "_effects", "_seed", "_sets", "_states")
+
+    def __init__(
+        self, domain: Domain[Any, Any], states: list[FaultState], robot: str, seed: int
+    ) -> None:
+        self._states = [s for s in states if s.fault.robot == robot and _effect(domain, s.fault)]
+        self._effects = {s.index: _effect(domain, s.fault) for s in self._states}
+        self._draws = {
+            s.index: FaultEvent(None, persistence=Persistence.INTERMITTENT,
+                                probability=s.fault.probability)
+            for s in self._states
+            if s.fault.persistence is Persistence.INTERMITTENT
+        }  # fmt: skip
+        self._seed = seed
+        self._sets: dict[tuple[int, ...], frozenset[Any]] = {(): frozenset()}
+
+    def at(self, step: int, units: int) -> frozenset[Any]:
+        """The robot's true faults at its step ``step`` (``units``: the time, unused: the engine
+        keeps the team faults' stretches)."""
+        present = tuple(
+            s.index
+            for s in self._states
+            if s.active
+            and ((draw := self._draws.get(s.index)) is None
+                 or draw.active(s.index, step, Fraction(0), self._seed))
+        )  # fmt: skip
+        found = self._sets.get(present)
+        if found is None:
+            found = frozenset().union(*(self._effects[i] for i in present))
+            self._sets[present] = found
+        return found
+
+    def effect(self, index: int) -> frozenset[Any]:
+        """The domain faults of the robot's team fault ``index`` (empty for another one)."""
+        return self._effects.get(index, frozenset())
+
+    def states(self) -> list[FaultState]:
+        """The robot's team faults that act on its wheels, in scenario order."""
+        return self._states
+
+
+def _effect(domain: Domain[Any, Any], fault: TeamFault) -> frozenset[Any]:
+    """The domain faults a team fault gives its robot."""
+    if fault.kind is TeamFaultKind.IMMOBILISED:
+        return frozenset(domain.faults)
+    if fault.kind is TeamFaultKind.WHEELS:
+        return frozenset(domain.parse_faults(fault.wheel_faults))
+    return frozenset()
 
 
 @dataclass(slots=True)
@@ -51,31 +148,40 @@ class Entry:
 
 @dataclass(slots=True)
 class Drive:
-    """A drive being carried out: the robot's own remaining primitive plan, its placement in
-    time (one step per primitive action), and the robot's single-robot repairer for it."""
+    """A drive being carried out: the robot's :class:`~selfrepair.execution.stepper.Stepper`
+    for it (its remaining primitive plan, its single-robot repairer, the record of its own
+    repairs) and the plan's placement in time (one step per queued primitive action)."""
 
     entry: Entry
     target: Cell
-    primitives: list[tuple[Any, StepSource]]
+    stepper: Stepper
     steps: list[TimedStep]
-    repairer: Repairer | None
+
+    def actions(self) -> list[Any]:
+        """The primitive actions still to run."""
+        return [a for a, _ in self.stepper.queue]
 
 
 @dataclass(slots=True)
 class RobotState:
-    """One robot now: pose, queue, load, what it is doing and its true faults.
+    """One robot now: pose, queue, load, what it is doing and what it knows of its faults.
 
     ``busy_until`` is the unit at which its current primitive action or act ends (its
     ``footprint`` is held until then); ``pending`` is the act whose effect applies at that
-    moment. ``faults`` are its active domain faults (sensed at once, so also known) and
-    ``stuck`` whether the team believes it cannot drive (set by a ``stuck`` incident, cleared
-    when it can move again). ``retry_at`` is when a robot that could not plan tries again;
-    ``deferred`` the incident it is waiting out (the same incident is not reported again).
+    moment. ``sim`` is its own simulator (its true faults and their clock, its step count);
+    ``faults`` the domain faults it knows (sensed before every command with detection ``now``,
+    learned from failed attempts with ``on-use``); ``discovered`` the team faults it has
+    noticed. ``stuck`` says whether the team believes it cannot drive (set by a ``stuck``
+    incident, cleared when it can move again). ``retry_at`` is when a robot that could not plan
+    tries again; ``deferred`` the incident it is waiting out (the same incident is not reported
+    again).
     """
 
     spec: RobotSpec
     pose: Pose
     queue: deque[Entry]
+    sim: Simulator
+    clock: RobotFaultClock
     holding: str = ""
     busy_until: int = 0
     footprint: tuple[Cell, ...] = ()
@@ -89,6 +195,7 @@ class RobotState:
     first_pick: int | None = None
     deferred: tuple[TeamAction, str] | None = None
     failures: int = 0
+    discovered: set[int] = field(default_factory=set)
 
     @property
     def name(self) -> str:
@@ -149,6 +256,8 @@ class TeamWorld:
     incidents: list[IncidentRecord] = field(default_factory=list)
     repairs: list[TeamRepairRecord] = field(default_factory=list)
     own_repairs: list[OwnRepairRecord] = field(default_factory=list)
+    discoveries: list[DiscoveryRecord] = field(default_factory=list)
+    faults: list[FaultState] = field(default_factory=list)
     messages: int = 0
     plans: int = 0
     expansions: int = 0

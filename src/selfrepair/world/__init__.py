@@ -5,3 +5,5 @@ and ``.scen`` readers, the seeded maze generator, routes (a start pose and a goa
 rendering and the mazes bundled with the package. It may import only :mod:`selfrepair.errors` and
 :mod:`selfrepair.geometry`: it knows nothing of robots, planners or tables.
 """
+
+__all__: list[str] = []  # the names live in the modules; the curated ones are `selfrepair.*`

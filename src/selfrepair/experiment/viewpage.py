@@ -1,0 +1,96 @@
+"""The viewer's page machinery, shared by the mission page and the team page: the drawing
+helpers every payload uses (poses, wall runs) and :func:`render_html`, which puts a payload, the
+page template, its CSS and its script (package data in ``selfrepair/data/viewer/``) into one HTML
+file that needs no server and no network: everything is inline, and the page's content security
+policy forbids loading anything.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import re
+from collections.abc import Mapping
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from selfrepair.errors import InputError, ProblemError
+from selfrepair.geometry import Pose
+from selfrepair.world.maze import Maze
+
+__all__ = ["PAGES", "pose_json", "render_html", "wall_runs", "write_page"]
+
+PAGES = {"mission": ("viewer.html", "viewer.js"), "team": ("team.html", "team.js")}
+"""Each page's template and script (the CSS, ``viewer.css``, is shared)."""
+
+
+def pose_json(pose: Pose) -> dict[str, Any]:
+    """A pose for drawing: cell, heading name, unit heading vector and angle (degrees clockwise
+    from north, screen up being north)."""
+    dx, dy = pose.heading.vector
+    return {
+        "x": pose.x,
+        "y": pose.y,
+        "heading": pose.heading.name,
+        "dx": dx,
+        "dy": dy,
+        "angle": 90 * pose.heading.value,
+    }
+
+
+def wall_runs(maze: Maze) -> list[list[int]]:
+    """The walls as horizontal runs ``[x, y, length]`` (compact, and one SVG path to draw)."""
+    runs: list[list[int]] = []
+    for y in range(maze.height):
+        row = maze.walls[y]
+        x = 0
+        while x < maze.width:
+            if row[x]:
+                start = x
+                while x < maze.width and row[x]:
+                    x += 1
+                runs.append([start, y, x - start])
+            else:
+                x += 1
+    return runs
+
+
+
+_PLACEHOLDER = re.compile(r"\{\{(TITLE|STYLE|SCRIPT|DATA)\}\}")
+
+
+def _asset(name: str) -> str:
+    return resources.files("selfrepair").joinpath("data", "viewer", name).read_text("utf-8")
+
+
+def _script_safe_json(payload: Mapping[str, Any]) -> str:
+    """JSON that cannot end the ``<script>`` element it sits in (``<``, ``>``, ``&`` escaped)."""
+    text = json.dumps(payload, separators=(",", ":"), ensure_ascii=True, allow_nan=False)
+    return text.replace("<", "\\u003c").replace(">", "\\u003e").replace("&", "\\u0026")
+
+
+def render_html(payload: Mapping[str, Any], *, page: str = "mission") -> str:
+    """The self-contained ``page`` (a key of :data:`PAGES`) for ``payload``: template, CSS,
+    script and data, all inline."""
+    template, script = PAGES[page]
+    parts = {
+        "TITLE": html.escape(str(payload.get("title", "mission"))),
+        "STYLE": _asset("viewer.css"),
+        "SCRIPT": _asset(script),
+        "DATA": _script_safe_json(payload),
+    }
+    for name in ("STYLE", "SCRIPT"):
+        if re.search(r"</(style|script)", parts[name], re.IGNORECASE):
+            raise ProblemError(f"viewer {name.lower()} asset must not close its element")
+    # one pass: text put in is never scanned for placeholders again
+    return _PLACEHOLDER.sub(lambda m: parts[m.group(1)], _asset(template))
+
+
+def write_page(payload: Mapping[str, Any], out: str | Path, *, page: str = "mission") -> Path:
+    """Write the ``page`` of ``payload`` to ``out`` (an ``.html`` file); returns ``out``."""
+    out = Path(out)
+    if out.suffix.lower() not in (".html", ".htm"):
+        raise InputError("expected an output file ending in .html", source=str(out))
+    out.write_text(render_html(payload, page=page), encoding="utf-8")
+    return out
