@@ -251,6 +251,20 @@ class Stepper:
             outcome.blocking,
         )
 
+    def moved(
+        self, step: int, action: Any, source: StepSource, start: Pose, end: Pose, duration: Fraction
+    ) -> None:
+        """:meth:`record` a command that moved the robot (the mission loop's hot path)."""
+        queue = self.queue
+        if queue and ((head := queue[0][0]) is action or head == action):
+            queue.popleft()
+        else:  # off the plan: the next question replans from the new pose
+            queue.clear()
+            self.stopped, self.failure = False, None
+        self.steps.append(
+            _new_tuple(TraceStep, (step, action, start, end, duration, source, self.known))
+        )
+
     def record(
         self,
         step: int,
@@ -266,15 +280,11 @@ class Stepper:
         from ``start`` to ``end`` in ``duration``, a failed attempt revealing ``blocking``, or a
         refused command (a collision: nothing changes, nothing is recorded). See the module
         docstring."""
-        known = self.known
         if outcome is Outcome.MOVED:
-            queue = self.queue
-            if queue and ((head := queue[0][0]) is action or head == action):
-                queue.popleft()
-            else:  # off the plan: the next question replans from the new pose
-                queue.clear()
-                self.stopped, self.failure = False, None
-        elif outcome is Outcome.FAILED_ATTEMPT:
+            self.moved(step, action, source, start, end, duration)
+            return
+        known = self.known
+        if outcome is Outcome.FAILED_ATTEMPT:
             source = StepSource.FAILED_ATTEMPT
             if not blocking <= known:
                 self.known = known | blocking
