@@ -189,3 +189,15 @@ def test_a_real_strategy_drives_to_the_goal() -> None:
         stepper.record(step, entry[0], entry[1], Outcome.MOVED, pose, end, Fraction(1))
         pose, step = end, step + 1
     assert step == len(stepper.steps) and len(stepper.repairs) == 1
+
+
+def test_a_waiting_robot_lets_time_pass_forwards_only() -> None:
+    """A team robot waits for its turn: its simulator's clock advances without a step."""
+    from selfrepair.execution.faults import FaultSchedule
+    from selfrepair.execution.simulator import Simulator
+
+    sim = Simulator(FOUR_WHEEL, OPEN, START, FaultSchedule())
+    sim.wait_until(6)
+    assert (sim.units, sim.steps, sim.ticks) == (6, 0, Fraction(2))  # 3 units per tick
+    with pytest.raises(ProblemError, match="forwards"):
+        sim.wait_until(3)

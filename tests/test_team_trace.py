@@ -211,3 +211,26 @@ def test_every_trace_of_a_random_small_mission_replays_clean(
     report = replay_team(parse_team_trace(path.read_text(encoding="utf-8")))
     assert report.ok, str(report)
     assert report.delivered == len(result.delivered)
+
+
+def test_a_plug_in_robots_team_trace_replays_in_a_fresh_process(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    hopper = Path(__file__).parent / "data" / "robots" / "hopper.py"
+    text = SCENARIO.replace('maze = "wide-short"', f'maze = "wide-short"\ndomain = "hopper"\n'
+                            f'plugins = ["{hopper}"]')  # fmt: skip
+    path = tmp_path / "hop.toml"
+    path.write_text(text, encoding="utf-8")
+    trace = tmp_path / "hop.jsonl"
+    assert main(["team", "run", str(path), "--trace", str(trace)]) == 0
+    header = json.loads(trace.read_text(encoding="utf-8").splitlines()[0])
+    assert header["domain"] == "hopper" and header["plugin"]["path"] == str(hopper.resolve())
+    assert header["robot_table"] == "generated"
+    replay = subprocess.run(
+        [sys.executable, "-c", "from selfrepair.cli import run; run()", "team", "replay",
+         str(trace)],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert replay.returncode == 0, replay.stderr
+    assert "header matches scenario file" in replay.stdout

@@ -140,3 +140,26 @@ def test_the_team_page_shows_every_robot_on_one_timeline(
     )
     errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]
     assert errors == [], errors
+
+
+def test_a_stored_team_mission_is_viewed_from_its_database(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    config = tmp_path / "tiny-team.toml"
+    config.write_text(
+        'kind = "team"\nname = "tiny-team"\n[[mazes]]\nbundled = "wide-short"\n[team]\n'
+        'sizes = [2]\n[faults]\ncases = ["immobilised"]\n[[strategies]]\n'
+        'name = "team-replacement"\n',
+        encoding="utf-8",
+    )
+    db = tmp_path / "t.sqlite"
+    assert main(["experiment", str(config), "--db", str(db), "--jobs", "1"]) == 0
+    import sqlite3
+
+    with sqlite3.connect(db) as con:
+        (key,) = con.execute("SELECT key FROM missions").fetchone()
+    page = tmp_path / "team.html"
+    capsys.readouterr()
+    assert main(["view", str(db), "--key", key[:8], "-o", str(page)]) == 0
+    text = page.read_text(encoding="utf-8")
+    assert "selfrepair-team-viewer" in text and '"agrees":true' in text and key in text

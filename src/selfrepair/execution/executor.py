@@ -231,8 +231,8 @@ def _loop(
     penalty = penalty_buffer(sim.grid, spec.maze, spec.clearance_radius) if weight else b""
     moved = tally.moved
     n_actions = len(spec.domain.actions)
-    next_action, record, learn, advance, sense = (
-        stepper.next_action, stepper.record, stepper.learn, sim.advance, sim.sense
+    next_action, moved_, record, learn, advance, sense = (
+        stepper.next_action, stepper.moved, stepper.record, stepper.learn, sim.advance, sim.sense
     )  # fmt: skip
     while True:
         pose = sim.pose
@@ -241,8 +241,8 @@ def _loop(
         step = sim.steps
         if step >= limit:
             return MissionStatus.STEP_LIMIT, f"{limit} steps without reaching the goal"
-        if sense_now:
-            learn(sense())
+        if sense_now and (sensed := sense()) is not stepper.known:
+            learn(sensed)
         entry = next_action(pose, step)
         if entry is None:
             failure = stepper.failure
@@ -260,10 +260,13 @@ def _loop(
             if weight:
                 base = (pose.y + margin) * stride + pose.x + margin
                 tally.penalty += sum([penalty[base + offset] for offset in move.cells])
+            moved_(step, action, source, pose, sim.pose, move.duration)
         elif outcome is Outcome.COLLISION:
             name = spec.domain.format_action(action)
             return MissionStatus.COLLISION, f"{name} at {sim.pose} would sweep a wall"
-        record(step, action, source, outcome, pose, sim.pose, sim.last_duration, sim.last_blocking)
+        else:
+            record(step, action, source, outcome, pose, sim.pose, sim.last_duration,
+                   sim.last_blocking)  # fmt: skip
 
 
 def penalty_buffer(grid: FreeGrid, maze: Maze, radius: int) -> Sequence[int]:

@@ -284,6 +284,20 @@ class Stepper:
             outcome.blocking,
         )
 
+    def moved(
+        self, step: int, action: Any, source: StepSource, start: Pose, end: Pose, duration: Fraction
+    ) -> None:
+        """:meth:`record` a command that moved the robot (the mission loop's hot path)."""
+        queue = self.queue
+        if queue and ((head := queue[0][0]) is action or head == action):
+            queue.popleft()
+        else:  # off the plan: the next question replans from the new pose
+            queue.clear()
+            self.stopped, self.failure = False, None
+        self.steps.append(
+            _new_tuple(TraceStep, (step, action, start, end, duration, source, self.known))
+        )
+
     def record(
         self,
         step: int,
@@ -299,15 +313,11 @@ class Stepper:
         from ``start`` to ``end`` in ``duration``, a failed attempt revealing ``blocking``, or a
         refused command (a collision: nothing changes, nothing is recorded). See the module
         docstring."""
-        known = self.known
         if outcome is Outcome.MOVED:
-            queue = self.queue
-            if queue and ((head := queue[0][0]) is action or head == action):
-                queue.popleft()
-            else:  # off the plan: the next question replans from the new pose
-                queue.clear()
-                self.stopped, self.failure = False, None
-        elif outcome is Outcome.FAILED_ATTEMPT:
+            self.moved(step, action, source, start, end, duration)
+            return
+        known = self.known
+        if outcome is Outcome.FAILED_ATTEMPT:
             if source is StepSource.WAIT and self.queue and self.queue[0][1] is source:
                 self.queue.popleft()  # a wait an unknown fault forbids: ask again, not repair it
             source = StepSource.FAILED_ATTEMPT

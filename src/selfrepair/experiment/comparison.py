@@ -102,9 +102,11 @@ def common_rows(rows: Iterable[Row]) -> list[Row]:
 
 @dataclass(frozen=True, slots=True)
 class BaselineLine:
-    """One variant's line of the comparison (see the module docstring); times in ms."""
+    """One variant's line of the comparison (see the module docstring); times in ms.
+    ``strategy`` is the rows' ``strategy`` column (read as a column, not from the label)."""
 
     label: str
+    strategy: str
     missions: int
     reached: int
     met_fault: int
@@ -133,7 +135,7 @@ class BaselineLine:
 
     def cells(self) -> tuple[str, ...]:
         """The line as display strings, in :attr:`HEADERS` order."""
-        expansions = "n/a" if self.label.split("[")[0] in _NO_EFFORT else _text(self.expansions)
+        expansions = "n/a" if self.strategy in _NO_EFFORT else _text(self.expansions)
         return (
             self.label,
             f"{self.reached}/{self.missions}",
@@ -177,6 +179,7 @@ def _line(label: str, rows: list[Row], reference: dict[tuple[Value, ...], Row]) 
     ]
     return BaselineLine(
         label=label,
+        strategy=str(rows[0].get("strategy")),
         missions=len(rows),
         reached=len(reached),
         met_fault=len(met),

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping, Sequence
+from fractions import Fraction
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -69,7 +70,7 @@ from selfrepair.team.experiment import FaultCase, TeamCase, case_row
 from selfrepair.team.grid import components
 from selfrepair.team.model import TeamTableName
 from selfrepair.team.randomteam import GripperMix
-from selfrepair.team.result import TeamOptions
+from selfrepair.team.result import TeamOptions, TeamResult
 from selfrepair.tomlfile import Frozen, NonEmpty, find_line, read_toml, validate
 
 __all__ = [
@@ -78,6 +79,7 @@ __all__ = [
     "expand_team",
     "is_team_rows",
     "load_experiment",
+    "rerun_team_mission",
     "write_team_report",
 ]
 
@@ -404,6 +406,17 @@ def _choose(
     return max(rows, key=score)
 
 
+def rerun_team_mission(row: Mapping[str, Value]) -> tuple[TeamResult, Fraction]:
+    """Run the stored team mission ``row`` again from its stored configuration (deterministic:
+    the same team, tasks, faults and strategy) and its fault-free baseline."""
+    from selfrepair.team.experiment import run_case
+
+    settings = json.loads(str(row["config"]))
+    seed = int(str(row["seed"]))
+    maze = maze_of(canonical_json(settings["maze"]))
+    return run_case(maze, _case_of(settings, seed), _options_of(settings, seed))
+
+
 def write_team_report(
     rows: Sequence[Mapping[str, Value]],
     out_dir: Path,
@@ -414,16 +427,13 @@ def write_team_report(
     """Write the team report for ``rows`` into ``out_dir`` (see :mod:`selfrepair.team.report`);
     the chosen mission is run again from its stored configuration (deterministic)."""
     from selfrepair.team.draw import animate_team_trace, draw_team_frame
-    from selfrepair.team.experiment import run_case
     from selfrepair.team.report import render_team_markdown, write_team_figures
     from selfrepair.team.trace import write_team_trace
 
     written = write_team_figures(rows, out_dir)
     chosen = _choose(rows, mission_key, source)
     settings = json.loads(str(chosen["config"]))
-    seed = int(str(chosen["seed"]))
-    maze = maze_of(canonical_json(settings["maze"]))
-    result, baseline = run_case(maze, _case_of(settings, seed), _options_of(settings, seed))
+    result, baseline = rerun_team_mission(chosen)
     trace = out_dir / "mission.jsonl"
     write_team_trace(result, trace, baseline)
     picture = draw_team_frame(trace, out_dir / "mission.png")

@@ -27,7 +27,13 @@ from selfrepair.team.replay import replay_team
 from selfrepair.team.traceformat import TeamTrace
 from selfrepair.team.traceread import read_team_trace
 
-__all__ = ["TEAM_VIEWER_FORMAT", "TEAM_VIEWER_VERSION", "team_payload", "view_team_trace"]
+__all__ = [
+    "TEAM_VIEWER_FORMAT",
+    "TEAM_VIEWER_VERSION",
+    "team_payload",
+    "view_team_results",
+    "view_team_trace",
+]
 
 TEAM_VIEWER_FORMAT = "selfrepair-team-viewer"
 TEAM_VIEWER_VERSION = 1
@@ -231,3 +237,25 @@ def view_team_trace(
     """Write the team page of the team trace file ``trace`` to ``out``; returns ``out``."""
     parsed = read_team_trace(trace, max_trace_bytes=max_trace_bytes)
     return write_page(team_payload(parsed, max_steps=max_steps), out, page="team")
+
+
+def view_team_results(
+    row: Mapping[str, Any], db: str | Path, out: str | Path, max_steps: int
+) -> Path:
+    """Write the team page of the stored team mission ``row`` of ``db``, run again from its
+    stored configuration, to ``out``; the page says whether the re-run agrees with the row."""
+    from selfrepair.experiment.teams import rerun_team_mission
+    from selfrepair.team.traceread import parse_team_trace
+    from selfrepair.team.tracewrite import team_trace_lines
+
+    result, baseline = rerun_team_mission(row)
+    key = str(row["key"])
+    trace = parse_team_trace(
+        "\n".join(team_trace_lines(result, baseline)), source=f"{db} (mission {key[:12]})"
+    )
+    stored = {"delivered": row.get("delivered"), "makespan": row.get("makespan")}
+    again = {"delivered": len(result.delivered), "makespan": float(result.makespan)}
+    origin = {"kind": "results", "source": str(db), "key": key, "agrees": stored == again,
+              "experiment": row.get("experiment"), "stored": stored}  # fmt: skip
+    payload = team_payload(trace, origin=origin, max_steps=max_steps)
+    return write_page(payload, out, page="team")

@@ -418,6 +418,19 @@ def trace_from_results(db: str | Path, key_prefix: str) -> tuple[Trace, dict[str
 def view_results(
     db: str | Path, key_prefix: str, out: str | Path, *, max_steps: int = MAX_VIEW_STEPS
 ) -> Path:
-    """Write the viewer page of the stored mission ``key_prefix`` of ``db`` to ``out``."""
+    """Write the viewer page of the stored mission ``key_prefix`` of ``db`` to ``out``: the
+    team page for a mission of a team experiment (run again from its stored configuration)."""
+    from selfrepair.experiment.report import pick_mission
+    from selfrepair.experiment.store import ResultStore
+    from selfrepair.experiment.teams import is_team_rows
+
+    if not key_prefix:
+        raise InputError("expected a non-empty mission key or key prefix", source=str(db))
+    with ResultStore(db, read_only=True) as store:
+        rows = store.rows("WHERE substr(key, 1, ?) = ?", (len(key_prefix), key_prefix))
+    if is_team_rows(rows):
+        from selfrepair.experiment.teamview import view_team_results
+
+        return view_team_results(pick_mission(rows, key_prefix, str(db)), db, out, max_steps)
     trace, origin = trace_from_results(db, key_prefix)
     return write_page(mission_payload(trace, origin=origin, max_steps=max_steps), out)

@@ -111,16 +111,23 @@ def walk(
     ``replacing``; else the concrete actions in order and the state at the end."""
     out: list[Hashable] = []
     for step in steps:
-        if not world.healthy(step, state):
-            return None
-        moved = world.advance(step, state)
-        if moved is None:
+        moved = world.healthy(step, state) and _executable(world, step, state, replacing)
+        if not moved:
             return None
         bound, state = moved
-        if not replacing.isdisjoint(bound):
-            return None
         out.extend(bound)
     return tuple(out), state
+
+
+def _executable(
+    world: LiftedWorld[Step, State], step: Step, state: State, replacing: Set[Any]
+) -> tuple[tuple[Hashable, ...], State] | None:
+    """Conditions 2 and 3 for a healthy ``step``: its actions and the state after it, or
+    ``None`` when it cannot be done from ``state`` or binds to an action being replaced."""
+    moved = world.advance(step, state)
+    if moved is None or not replacing.isdisjoint(moved[0]):
+        return None
+    return moved
 
 
 Expanded = tuple[tuple[Any, ...], Any, int, tuple[int, ...]]
@@ -194,12 +201,10 @@ class CoreSearch(Generic[Step, State]):
         for b in candidate:
             runs_first = first and not out
             if world.healthy(b, state):
-                moved = world.advance(b, state)
+                moved = _executable(world, b, state, replacing)
                 if moved is None:
                     return None
                 bound, state = moved
-                if not replacing.isdisjoint(bound):
-                    return None
                 out.extend(bound)
             elif b in replacing:  # condition 3 for a step that would be replaced again
                 return None

@@ -21,7 +21,9 @@ on its cell and tries again later; idle robots standing on its path are asked to
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Mapping
 from enum import StrEnum
+from types import MappingProxyType
 
 from selfrepair.execution.executor import mission_context
 from selfrepair.execution.result import MissionSpec, StepSource
@@ -34,6 +36,7 @@ from selfrepair.repair.strategies import (
 )
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.lattice import bfs_distances, planning_actions
+from selfrepair.team.model import IncidentKind
 from selfrepair.team.model import drive as drive_action
 from selfrepair.team.reservations import FOREVER, TimedStep
 from selfrepair.team.result import OwnRepairRecord, TeamSource
@@ -66,6 +69,12 @@ class DriveStart(StrEnum):
     WAITING = "waiting"
     STUCK = "stuck"
     BLOCKED = "blocked"
+
+
+INCIDENT_OF_START: Mapping[DriveStart, IncidentKind] = MappingProxyType(
+    {DriveStart.STUCK: IncidentKind.STUCK, DriveStart.BLOCKED: IncidentKind.BLOCKED}
+)
+"""The incident a drive that could not start raises (an explicit mapping, never by value)."""
 
 
 def cancel_drive(world: TeamWorld, robot: RobotState, at: int) -> None:

@@ -54,6 +54,7 @@ from selfrepair.search.backend import use_numba
 from selfrepair.team.allocation import Job, Worker, allocate, distance_maps, job_plan
 from selfrepair.team.binding import Incident
 from selfrepair.team.driving import (
+    INCIDENT_OF_START,
     DriveStart,
     begin_drive,
     cancel_drive,
@@ -287,7 +288,7 @@ def _drive(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> int | No
             robot.queue.popleft()
             return None
         if start in (DriveStart.STUCK, DriveStart.BLOCKED):
-            _incident(world, robot, head, IncidentKind(start.value), t)
+            _incident(world, robot, head, INCIDENT_OF_START[start], t)
             return None
         if start is DriveStart.WAITING:
             return robot.retry_at

@@ -100,7 +100,10 @@ def summarize_team(rows: Sequence[Row]) -> list[TeamSummary]:
         name: i for i, name in enumerate(StrategyName.of_kind(MissionKind.TEAM))
     }
     out = []
-    for variant in sorted(groups, key=lambda v: (order.get(v.split("[")[0], 9), v)):
+    def rank(variant: str) -> tuple[int, str]:  # by the strategy column, never the label's text
+        return order.get(str(groups[variant][0].get("strategy")), 9), variant
+
+    for variant in sorted(groups, key=rank):
         group = groups[variant]
         ratios = [r for row in group if (r := _number(row, "makespan_ratio")) is not None]
         latencies = _latencies(group)

@@ -4,7 +4,9 @@ A team trace has one JSON object per line, like a single-robot trace
 (:mod:`selfrepair.execution.trace`) but for several robots:
 
 1. a header (``"type": "header"``, ``"format": "selfrepair-team-trace"``, ``"version"``): the
-   robot ``domain``, ``scale`` (time units per tick), the scenario's name and file
+   robot ``domain`` (and, for a plug-in robot, ``plugin``: the path and SHA-256 of its file,
+   which the reader loads when it still has that content), ``scale`` (time units per tick),
+   the scenario's name and file
    (``scenario_file``: ``path`` and ``sha256`` of its text, so that the header can be checked
    against the file), the maze (name, rows and ``sha256`` of the rows, one a line), the robots
    (name, start pose, gripper), the tasks, the team faults, the options, the robots' own table as

@@ -9,14 +9,14 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from selfrepair.errors import TraceError
+from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.faults import Detection, Persistence
 from selfrepair.execution.result import StepSource
 from selfrepair.execution.trace import TraceFields
 from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.robots.domain import Domain
-from selfrepair.robots.registry import get_domain
+from selfrepair.robots.registry import PluginFile, get_domain, load_recorded_plugin
 from selfrepair.team.model import (
     RobotSpec,
     Task,
@@ -144,7 +144,20 @@ def _header(f: TraceFields) -> tuple[TeamScenario, TeamOptions, int]:
     if f.data.get("version") not in TEAM_TRACE_VERSIONS:
         versions = " or ".join(str(v) for v in TEAM_TRACE_VERSIONS)
         raise f.fail(f"expected team trace version {versions}, got {f.data.get('version')!r}")
-    domain = f.parsed("domain", get_domain, f.text("domain"))
+    name = f.text("domain")
+    plugin = f.data.get("plugin")  # the plug-in file of a plug-in robot, else absent
+    if plugin is not None:
+        if not (
+            isinstance(plugin, dict)
+            and isinstance(plugin.get("path"), str)
+            and isinstance(plugin.get("sha256"), str)
+        ):
+            raise f.fail(f'expected plugin {{"path": ..., "sha256": ...}}, got {plugin!r}')
+        try:
+            load_recorded_plugin(name, PluginFile(plugin["path"], plugin["sha256"]), "team trace")
+        except InputError as exc:
+            raise f.fail(exc.reason) from None
+    domain = f.parsed("domain", get_domain, name)
     maze_data = f.get("maze")
     if not isinstance(maze_data, dict) or not isinstance(maze_data.get("rows"), list):
         raise f.fail("expected 'maze' with 'rows'")

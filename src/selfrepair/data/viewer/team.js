@@ -172,7 +172,9 @@
 
   const origin = data.origin;
   document.getElementById("origin").textContent = (origin.kind === "results"
-    ? "Mission " + origin.key.slice(0, 12) + " in " + origin.source + ", run again."
+    ? "Mission " + origin.key.slice(0, 12) + " of experiment " + origin.experiment + " in " +
+      origin.source + ", run again from its stored configuration" +
+      (origin.agrees ? "." : " (it differs from the stored row: another version made it).")
     : "Team trace " + origin.source + ".") + " Re-simulation: " + data.replay;
 
   const legend = document.getElementById("legend");
