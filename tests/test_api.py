@@ -17,12 +17,14 @@ HEAVY = ("numba", "matplotlib", "scipy", "pydantic", "gymnasium")
 
 
 def test_every_public_name_resolves_to_its_home() -> None:
-    homes = sr._HOMES
-    assert set(sr.__all__) == {"__version__", *homes}
-    for name in sorted(homes):
+    names = [n for n in sr.__all__ if n != "__version__"]
+    assert names == sorted(names) and len(set(names)) == len(names)
+    for name in names:
+        home = sr._home(name)
+        assert home is not None, name
         value = getattr(sr, name)
-        home = importlib.import_module(homes[name])
         assert value is getattr(home, name), name
+    assert sr._home("nonsense") is None
     assert isinstance(sr.__version__, str)
     with pytest.raises(AttributeError, match="no attribute 'nonsense'"):
         _ = sr.nonsense  # type: ignore[attr-defined]

@@ -168,7 +168,7 @@ def test_fault_profiles() -> None:
     assert len(set(fault_profile("all"))) == 78
 
 
-@pytest.mark.parametrize("name", ["paper", "full"])
+@pytest.mark.parametrize("name", ["paper", "full", "tolerance"])
 def test_bundled_experiments_load(name: str) -> None:
     from selfrepair.cli.experiments import resolve_experiment
 

@@ -91,8 +91,10 @@ def test_ci_installs_and_requires_the_extras_the_tests_skip_without() -> None:
     assert "SELFREPAIR_REQUIRE_EXTRAS=1" in ci
     installed = set().union(*(requirements(e) for e in re.findall(r"-e '\.\[([^\]]+)\]'", ci)))
     used = set()
-    for test in (ROOT / "tests").glob("test_*.py"):
-        used |= set(re.findall(r'need\("[\w.]+", "(\w+)"\)', test.read_text(encoding="utf-8")))
+    for test in [*(ROOT / "tests").glob("test_*.py"), ROOT / "tests" / "extras.py"]:
+        text = test.read_text(encoding="utf-8")
+        used |= set(re.findall(r'need\("[\w.]+", "(\w+)"\)', text))
+        used |= set(re.findall(r'needs_extra\([^)]*extra="(\w+)"\)', text))  # tests/extras.py marks
     assert used, "no test declares an extra"
     for extra in used:
         assert requirements(extra) <= installed, extra

@@ -54,8 +54,11 @@ class _Scripted:
         return self.answers.pop(0)
 
 
-def _stepper(repairer: Any, actions: list[Any], known: frozenset[Any] = frozenset()) -> Stepper:
-    return Stepper(_context(), repairer, actions, known, move_table(FOUR_WHEEL, 1))
+def _stepper(
+    repairer: Any, actions: list[Any], known: frozenset[Any] = frozenset(), max_wait: int = 0
+) -> Stepper:
+    table = move_table(FOUR_WHEEL, 1)
+    return Stepper(_context(), repairer, actions, known, table, max_wait=max_wait)
 
 
 def test_splice_short_and_whole_queue() -> None:
@@ -97,6 +100,35 @@ def test_a_failed_repair_stops_the_stepper_until_the_robot_leaves_the_plan() -> 
     entry = stepper.next_action(end, 1)  # the empty queue: a plain replan from the new pose
     assert entry is not None and stepper.repairs[-1].action is None
     assert stepper.repairs[-1].repair.source is RepairSource.REPLAN
+
+
+def test_a_stuck_repair_splices_a_wait_and_asks_again_until_the_bound() -> None:
+    stuck = Repair(RepairStatus.STUCK, RepairSource.REPLAN, attempts=("replan",))
+    stepper = _stepper(_Scripted(stuck, stuck, stuck), [FORWARD], FL_F, max_wait=2)
+    wait = A("SSSS")
+    for step in range(2):
+        assert stepper.next_action(START, step) == (wait, StepSource.WAIT)
+        assert list(stepper.queue) == [(wait, StepSource.WAIT), (FORWARD, StepSource.PLAN)]
+        stepper.record(step, wait, StepSource.WAIT, Outcome.MOVED, START, START, Fraction(1))
+        assert list(stepper.queue) == [(FORWARD, StepSource.PLAN)]  # the wait is consumed
+    assert stepper.waits == 2 and not stepper.stopped
+    assert stepper.next_action(START, 2) is None  # the bound ran out: the third stuck ends it
+    assert stepper.failure is stuck and len(stepper.repairs) == 3
+
+
+def test_a_failed_wait_is_dropped_and_no_wait_is_left() -> None:
+    stuck = Repair(RepairStatus.STUCK, RepairSource.REPLAN, attempts=("replan",))
+    stepper = _stepper(_Scripted(stuck, stuck), [FORWARD], FL_F, max_wait=5)
+    wait = A("SSSS")
+    assert stepper.next_action(START, 0) == (wait, StepSource.WAIT)
+    every_stop = FOUR_WHEEL.parse_faults("FL:S,FR:S,RL:S,RR:S")  # no wheel can stop: no wait
+    stepper.record(0, wait, StepSource.WAIT, Outcome.FAILED_ATTEMPT, START, START, Fraction(1),
+                   every_stop)  # fmt: skip
+    assert list(stepper.queue) == [(FORWARD, StepSource.PLAN)]
+    assert stepper.steps[-1].source is StepSource.FAILED_ATTEMPT
+    # No wheel can stop and FL cannot go forward: the first wait left is BFFB (FL, RR back).
+    assert stepper.next_action(START, 1) == (A("BFFB"), StepSource.WAIT)
+    assert stepper.waits == 2 and len(stepper.repairs) == 2
 
 
 def test_a_move_along_the_plan_consumes_it_and_is_recorded() -> None:
@@ -157,3 +189,15 @@ def test_a_real_strategy_drives_to_the_goal() -> None:
         stepper.record(step, entry[0], entry[1], Outcome.MOVED, pose, end, Fraction(1))
         pose, step = end, step + 1
     assert step == len(stepper.steps) and len(stepper.repairs) == 1
+
+
+def test_a_waiting_robot_lets_time_pass_forwards_only() -> None:
+    """A team robot waits for its turn: its simulator's clock advances without a step."""
+    from selfrepair.execution.faults import FaultSchedule
+    from selfrepair.execution.simulator import Simulator
+
+    sim = Simulator(FOUR_WHEEL, OPEN, START, FaultSchedule())
+    sim.wait_until(6)
+    assert (sim.units, sim.steps, sim.ticks) == (6, 0, Fraction(2))  # 3 units per tick
+    with pytest.raises(ProblemError, match="forwards"):
+        sim.wait_until(3)

@@ -41,13 +41,15 @@ def _mission(strategy: str = "replacement", detection: str = "now") -> MissionRe
 
 
 def _stuck_mission() -> MissionResult:
-    """A corridor where every wheel command but S fails from step 1 on: the robot is stuck."""
+    """A corridor where every wheel command but S fails from step 1 on: the robot is stuck (at
+    once: no waits, which would interleave wait steps and stuck repairs)."""
     all_moves = four_wheel.parse_faults("FL:F,FR:F,RL:F,RR:F,FL:B,FR:B,RL:B,RR:B")
     spec = MissionSpec(
         Maze(np.zeros((1, 6), dtype=bool), name="corridor"),
         Pose(0, 0, Heading.E),
         (5, 0),
         schedule=FaultSchedule.permanent(all_moves, at=1),
+        options=StrategyOptions(max_wait=0),
     )
     return run_mission(spec)
 

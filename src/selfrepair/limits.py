@@ -19,6 +19,7 @@ from __future__ import annotations
 from selfrepair.errors import LimitError
 
 __all__ = [
+    "DEFAULT_MAX_WAIT",
     "MAX_CELLS",
     "MAX_CLEARANCE_WEIGHT",
     "MAX_FILE_BYTES",
@@ -87,6 +88,12 @@ MAX_TASKS = 256
 
 Sixteen times the largest bundled load (16 tasks). The allocation solves one assignment problem
 per round over robots x open tasks; a re-allocation does it again at every incident."""
+
+DEFAULT_MAX_WAIT = 20
+"""Steps a mission may spend waiting in place, in all, when no plan exists under the faults it
+knows and they may clear (``StrategyOptions.max_wait``; ``--max-wait`` of ``selfrepair run`` and
+``compare``; see :mod:`selfrepair.execution.stepper`). A bound, so that a robot whose faults are
+permanent gives up after at most this many steps."""
 
 MAX_LOOKUP_PATTERNS = 4096
 """Occupancy patterns stored by one compiled replacement look-up (one table, fault set and

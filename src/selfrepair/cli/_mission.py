@@ -42,6 +42,7 @@ from selfrepair.cli._inputs import (
 )
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.limits import (
+    DEFAULT_MAX_WAIT,
     MAX_CELLS,
     MAX_LOOKUP_PATTERNS,
     MAX_TABLE_BYTES,
@@ -113,6 +114,16 @@ MaxDepth = Annotated[
 Window = Annotated[
     int, typer.Option("--window", metavar="K", help="Lookahead: actions after the faulty one.")
 ]
+MaxWait = Annotated[
+    int,
+    typer.Option(
+        "--max-wait",
+        metavar="N",
+        min=0,
+        help="Steps the robot may wait in place, in all, when no plan exists under the faults "
+        "it knows (they may clear; detection now only); 0 gives up at once.",
+    ),
+]
 LpgTimeLimit = Annotated[
     float,
     typer.Option(
@@ -168,6 +179,7 @@ class MissionOptions:
     recursion: Recursion = "flat"
     max_depth: MaxDepth = 2
     window: Window = 3
+    max_wait: MaxWait = DEFAULT_MAX_WAIT
     lpg_time_limit: LpgTimeLimit = 5.0
     rewrite: Rewrite = False
     clearance_weight: ClearanceWeight = "0"
@@ -334,6 +346,7 @@ def mission_spec(
             lpg_time_limit_s=m.lpg_time_limit,
             rewrite=m.rewrite,
             max_lookup_patterns=m.max_lookup_patterns,
+            max_wait=m.max_wait,
         ),
         clearance_weight=parse_weight(m.clearance_weight),
         seed=m.seed,

@@ -14,8 +14,11 @@ it, and records the steps and repairs. :func:`run_mission` runs it to the end; p
    ``on-use`` the known faults are those revealed by failed attempts so far.
 3. Ask the stepper for the next command (it repairs the queue first when its next action, or
    with a ``horizon`` one of the next few, is unavailable under the known faults; the repair
-   latency runs from meeting the faulty action to having the next executable action). A failed
-   repair ends the mission (``stuck`` or ``budget_exhausted``).
+   latency runs from meeting the faulty action to having the next executable action). When no
+   plan exists, the robot waits in place up to ``StrategyOptions.max_wait`` steps in all (the
+   faults it senses may clear; not under detection ``on-use``, whose known faults never clear)
+   and asks again; a failed repair without waits left ends the mission (``stuck`` or
+   ``budget_exhausted``).
 4. Send the command to the simulator and tell the stepper what it did. A failed attempt (a fault
    the robot did not know yet) is recorded as a step with source ``failed-attempt`` and reveals
    its blocking faults.
@@ -180,7 +183,10 @@ def run_mission(spec: MissionSpec) -> MissionResult:
         spec.start, spec.goal, spec.goal_heading, initial_known, context.replan_budget
     )
     planning_ns = time.perf_counter_ns() - t0
-    stepper = Stepper(context, factory(context), initial.actions, initial_known, sim.table)
+    waits = 0 if spec.schedule.detection is Detection.ON_USE else None  # on-use: never clears
+    stepper = Stepper(
+        context, factory(context), initial.actions, initial_known, sim.table, max_wait=waits
+    )
     tally = _Tally()
     if initial.status is not PlanStatus.SOLVED:
         reason = f"initial plan: {initial.status.value}"
@@ -225,8 +231,8 @@ def _loop(
     penalty = penalty_buffer(sim.grid, spec.maze, spec.clearance_radius) if weight else b""
     moved = tally.moved
     n_actions = len(spec.domain.actions)
-    next_action, record, learn, advance, sense = (
-        stepper.next_action, stepper.record, stepper.learn, sim.advance, sim.sense
+    next_action, moved_, record, learn, advance, sense = (
+        stepper.next_action, stepper.moved, stepper.record, stepper.learn, sim.advance, sim.sense
     )  # fmt: skip
     while True:
         pose = sim.pose
@@ -235,8 +241,8 @@ def _loop(
         step = sim.steps
         if step >= limit:
             return MissionStatus.STEP_LIMIT, f"{limit} steps without reaching the goal"
-        if sense_now:
-            learn(sense())
+        if sense_now and (sensed := sense()) is not stepper.known:
+            learn(sensed)
         entry = next_action(pose, step)
         if entry is None:
             failure = stepper.failure
@@ -254,10 +260,13 @@ def _loop(
             if weight:
                 base = (pose.y + margin) * stride + pose.x + margin
                 tally.penalty += sum([penalty[base + offset] for offset in move.cells])
+            moved_(step, action, source, pose, sim.pose, move.duration)
         elif outcome is Outcome.COLLISION:
             name = spec.domain.format_action(action)
             return MissionStatus.COLLISION, f"{name} at {sim.pose} would sweep a wall"
-        record(step, action, source, outcome, pose, sim.pose, sim.last_duration, sim.last_blocking)
+        else:
+            record(step, action, source, outcome, pose, sim.pose, sim.last_duration,
+                   sim.last_blocking)  # fmt: skip
 
 
 def penalty_buffer(grid: FreeGrid, maze: Maze, radius: int) -> Sequence[int]:
@@ -285,7 +294,8 @@ def _why(repair: Repair, spec: MissionSpec, sim: Simulator, stepper: Stepper) ->
     tried = " then ".join(repair.attempts)
     what = "no plan exists" if repair.status is RepairStatus.STUCK else "the planner budget ran out"
     known = spec.domain.format_faults(stepper.known) or "none"
-    return f"at {sim.pose} with known faults {known}: tried {tried}; {what}"
+    waited = f" after waiting {stepper.waits} steps" if stepper.waits else ""
+    return f"at {sim.pose} with known faults {known}: tried {tried}; {what}{waited}"
 
 
 def _result(

@@ -29,7 +29,13 @@ from typing import Any, NamedTuple
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.execution.faults import FaultSchedule
-from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
+from selfrepair.execution.result import (
+    MissionResult,
+    MissionSpec,
+    RepairRecord,
+    StepSource,
+    TraceStep,
+)
 from selfrepair.repair.strategies import RepairSource, RepairStatus
 from selfrepair.robots.domain import Domain
 from selfrepair.search.astar import PlanStatus
@@ -337,6 +343,7 @@ def mission_row(result: MissionResult, *, optimum: Fraction | None = None) -> Ro
         "repair_attempts": json.dumps(
             dict(sorted(Counter(a for r in repairs for a in r.repair.attempts).items()))
         ),
+        "waits": sum(1 for s in result.steps if s.source is StepSource.WAIT),
     }
     return row
 
@@ -407,5 +414,6 @@ ROW_COLUMNS: tuple[str, ...] = (
     "repair_expansions",
     "fallbacks",
     "repair_attempts",
+    "waits",
 )
 """The row's columns, in order. Stable: the experiments' SQLite schema is built from it."""

@@ -41,7 +41,8 @@ __all__ = [
 class StepSource(StrEnum):
     """Where an executed step's action came from: the initial plan, a repair (by its source:
     ``plan-repair`` is a plan repaired by LPG-adapt), or a command that a fault the executor did
-    not know yet made fail."""
+    not know yet made fail, or a wait in place while no plan exists (see
+    :mod:`selfrepair.execution.stepper`)."""
 
     PLAN = "plan"
     REPLACEMENT = RepairSource.REPLACEMENT.value
@@ -49,6 +50,7 @@ class StepSource(StrEnum):
     REPLAN = RepairSource.REPLAN.value
     PLAN_REPAIR = RepairSource.PLAN_REPAIR.value
     FAILED_ATTEMPT = "failed-attempt"
+    WAIT = "wait"
 
 
 STEP_OF_REPAIR: Mapping[RepairSource, StepSource] = {

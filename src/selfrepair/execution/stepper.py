@@ -26,6 +26,17 @@ Before each command, :meth:`Stepper.next_action`:
 4. answers the queue's first entry, or ``None`` when a repair failed (:attr:`Stepper.failure`
    says how; the stepper then answers ``None`` until the robot moves off the plan).
 
+Waiting is a repair too. When a repair ends ``stuck`` (no plan exists under the known faults) and
+the robot has waits left (:attr:`Stepper.max_wait`, ``StrategyOptions.max_wait`` unless the
+caller says otherwise; the executor gives 0 under detection ``on-use``, whose known faults never
+clear), the stepper splices the robot's wait action (the first of
+:attr:`Domain.waits <selfrepair.robots.domain.Domain.waits>` available under the known faults),
+marked ``wait``, in front of the queue and answers it; the wait moves nothing and is consumed like
+any queued action, and the next question asks the strategy again, with the faults sensed then
+(which may have cleared). A wait that fails (a fault the robot did not know forbids it) is dropped
+from the queue. A robot without an available wait action, or out of waits, gives
+up as before; :attr:`Stepper.waits` counts the waits answered.
+
 Each repair is timed with ``time.perf_counter_ns`` from the request to the spliced queue (the
 repair latency) and recorded as a :class:`~selfrepair.execution.result.RepairRecord`.
 
@@ -33,8 +44,8 @@ After the command, :meth:`Stepper.record` is told its outcome: a move of the que
 consumes it; a move of another action (an agent that does not follow the plan) empties the queue,
 so the next question replans from where the robot is; a failed attempt reveals the faults that
 blocked it (detection on use); each command is recorded as a
-:class:`~selfrepair.execution.result.TraceStep`. What the robot senses between commands (detection
-``now``) comes in through :meth:`Stepper.learn`.
+:class:`~selfrepair.execution.result.TraceStep`. What the robot senses between
+commands (detection ``now``) comes in through :meth:`Stepper.learn`.
 """
 
 from __future__ import annotations
@@ -129,7 +140,8 @@ class Stepper:
     ``actions`` is the initial plan (marked ``source``), ``known`` the faults known at the start,
     ``table`` the robot's move table (availability is looked up in it per fault set).
     ``stopped`` starts the stepper given up (an initial plan that failed): it answers ``None``
-    until the robot moves off the plan.
+    until the robot moves off the plan. ``max_wait`` bounds the waits while no plan exists
+    (``None``: ``context.options.max_wait``; see the module docstring).
     """
 
     __slots__ = (
@@ -140,11 +152,13 @@ class Stepper:
         "failure",
         "horizon",
         "known",
+        "max_wait",
         "queue",
         "repairer",
         "repairs",
         "steps",
         "stopped",
+        "waits",
     )
 
     def __init__(
@@ -157,6 +171,7 @@ class Stepper:
         *,
         source: StepSource = StepSource.PLAN,
         stopped: bool = False,
+        max_wait: int | None = None,
     ) -> None:
         self.context = context
         self.repairer = repairer
@@ -171,6 +186,9 @@ class Stepper:
         self.failure: Repair | None = None
         """The repair that failed (then :meth:`next_action` answers ``None``)."""
         self.stopped = stopped
+        self.max_wait = context.options.max_wait if max_wait is None else max_wait
+        self.waits = 0
+        """The wait actions answered so far (see the module docstring)."""
 
     def learn(self, known: frozenset[Any]) -> None:
         """The robot now knows exactly ``known`` (what its sensors report, detection ``now``)."""
@@ -204,12 +222,27 @@ class Stepper:
             else:
                 return queue[0]
             if repair.status is not RepairStatus.REPAIRED:
+                if repair.status is RepairStatus.STUCK and (wait := self._wait()) is not None:
+                    splice(queue, 0, (wait,), StepSource.WAIT)
+                    return queue[0]
                 self.failure, self.stopped = repair, True
                 return None
         raise ProblemError(
             f"strategy repaired the queue {MAX_REPAIRS_PER_STEP} times at {pose} and its first "
             "action is still unavailable: a repair must start with an available action"
         )
+
+    def _wait(self) -> Any | None:
+        """The wait action to splice in while no plan exists (counted), or ``None`` when the
+        robot has no waits left or no wait action available under the known faults."""
+        if self.waits >= self.max_wait:
+            return None
+        available = self._available
+        for action in self.context.domain.waits:
+            if action in available:
+                self.waits += 1
+                return action
+        return None
 
     def _faulty_ahead(self) -> Any | None:
         """The first of the ``horizon`` queued actions after the front that is unavailable under
@@ -251,6 +284,20 @@ class Stepper:
             outcome.blocking,
         )
 
+    def moved(
+        self, step: int, action: Any, source: StepSource, start: Pose, end: Pose, duration: Fraction
+    ) -> None:
+        """:meth:`record` a command that moved the robot (the mission loop's hot path)."""
+        queue = self.queue
+        if queue and ((head := queue[0][0]) is action or head == action):
+            queue.popleft()
+        else:  # off the plan: the next question replans from the new pose
+            queue.clear()
+            self.stopped, self.failure = False, None
+        self.steps.append(
+            _new_tuple(TraceStep, (step, action, start, end, duration, source, self.known))
+        )
+
     def record(
         self,
         step: int,
@@ -266,15 +313,13 @@ class Stepper:
         from ``start`` to ``end`` in ``duration``, a failed attempt revealing ``blocking``, or a
         refused command (a collision: nothing changes, nothing is recorded). See the module
         docstring."""
-        known = self.known
         if outcome is Outcome.MOVED:
-            queue = self.queue
-            if queue and ((head := queue[0][0]) is action or head == action):
-                queue.popleft()
-            else:  # off the plan: the next question replans from the new pose
-                queue.clear()
-                self.stopped, self.failure = False, None
-        elif outcome is Outcome.FAILED_ATTEMPT:
+            self.moved(step, action, source, start, end, duration)
+            return
+        known = self.known
+        if outcome is Outcome.FAILED_ATTEMPT:
+            if source is StepSource.WAIT and self.queue and self.queue[0][1] is source:
+                self.queue.popleft()  # a wait an unknown fault forbids: ask again, not repair it
             source = StepSource.FAILED_ATTEMPT
             if not blocking <= known:
                 self.known = known | blocking

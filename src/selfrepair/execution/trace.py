@@ -16,7 +16,7 @@ A trace has one JSON object per line:
    ``latency_ns``;
 3. one line per executed step (``"type": "step"``): ``step``, ``action``, ``from`` and ``to`` as
    ``[x, y, "N"]``, ``duration`` (exact, as text such as ``"2/3"``), ``source`` (``plan``,
-   ``replacement``, ``lookahead``, ``replan``, ``plan-repair`` or ``failed-attempt``) and
+   ``replacement``, ``lookahead``, ``replan``, ``plan-repair``, ``failed-attempt`` or ``wait``) and
    ``known`` (the faults known when the command was given, as text; a failed attempt's fault is
    known from the next step on);
 4. the mission summary (``"type": "summary"``): the row of
@@ -109,6 +109,7 @@ def header_json(spec: MissionSpec, initial_plan: Iterable[Any] = ()) -> dict[str
             "lookahead_expansions": options.lookahead_expansions,
             "lpg_time_limit_s": options.lpg_time_limit_s,
             "lpg_seed": options.lpg_seed,
+            "max_wait": options.max_wait,
         },
         "planner": {
             "heuristic": spec.heuristic,
@@ -493,6 +494,7 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
                 lookahead_expansions=int(options.get("lookahead_expansions", 20_000)),
                 lpg_time_limit_s=float(options.get("lpg_time_limit_s", 5.0)),
                 lpg_seed=int(options.get("lpg_seed", 0)),
+                max_wait=int(options.get("max_wait", 0)),  # older traces: made without waits
             ),
             clearance_weight=Fraction(str(planner.get("clearance_weight", "0"))),
             clearance_radius=int(planner.get("clearance_radius", 2)),

@@ -26,6 +26,14 @@ one of four headings; a robot without a heading simply keeps ``N``). A domain su
   grid-distance heuristic admissible for it (see docs/planner.md); without it the planner refuses
   that heuristic.
 
+Derived from these: ``waits``, the actions that keep every pose and sweep only the robot's own
+cell (the four-wheel robot's all-stop ``SSSS`` and the wheel pairs that cancel out), those the
+domain names in ``wait_actions`` first (optional: its preferred ones), then the others fastest
+first. A robot with one can
+spend time in place: the executor's stepper waits with it when no plan exists under the faults it
+knows and they may clear (see :mod:`selfrepair.execution.stepper`). A robot without one never
+waits.
+
 The contract, checked by :func:`check_domain` when a domain is registered: ``apply`` and
 ``footprint`` commute with translation (an action does the same thing in every cell), the footprint
 starts at the start cell, durations are positive, the text forms round-trip, and a domain that
@@ -91,10 +99,17 @@ class Domain(Generic[A, F]):
     description: str = ""
     canonical: Pose = field(default=CANONICAL)
     fault_parts: Callable[[F], tuple[str, ...]] | None = None
+    wait_actions: tuple[A, ...] = ()
+    """The wait actions the robot prefers, in order (each must stay in place: checked by
+    :func:`check_domain`); the other waits follow them in :attr:`waits`."""
     """What one fault is made of, for spreading chosen fault sets over them (the four-wheel
     robot: its wheel and its mode); ``None``: each fault is its own single part (see
     :meth:`parts_of`)."""
     action_set: frozenset[A] = field(init=False, repr=False)
+    waits: tuple[A, ...] = field(init=False, repr=False)
+    """The actions that keep every pose and sweep only the start cell, ``wait_actions`` first,
+    then the others fastest first (ties in ``actions`` order): what the robot can wait with (see
+    the module docstring)."""
     time_unit: int = field(init=False, repr=False)
     """Units per tick in which every duration is a whole number: the least common multiple of
     the denominators of the actions' durations (3 for the four-wheel robot, whose durations are
@@ -105,6 +120,7 @@ class Domain(Generic[A, F]):
         if not self.fault_sets:
             object.__setattr__(self, "fault_sets", singles_and_doubles(self.faults))
         object.__setattr__(self, "action_set", frozenset(self.actions))
+        object.__setattr__(self, "waits", _waits(self))
         unit = math.lcm(1, *(Fraction(self.duration(a)).denominator for a in self.actions))
         object.__setattr__(self, "time_unit", unit)
 
@@ -124,6 +140,23 @@ class Domain(Generic[A, F]):
     def blocking(self, action: A, faults: Iterable[F]) -> frozenset[F]:
         """The faults of ``faults`` that each forbid ``action`` on their own."""
         return frozenset(f for f in faults if not self.available(action, frozenset((f,))))
+
+
+def _waits(domain: Domain[A, Any]) -> tuple[A, ...]:
+    """The actions of ``domain`` that stay in place from every heading (:attr:`Domain.waits`)."""
+    probes = tuple(Pose(0, 0, heading) for heading in Heading)
+    stay = [
+        a
+        for a in domain.actions
+        if all(
+            domain.apply(p, a) == p and set(domain.footprint(p, a)) <= {p.cell} for p in probes
+        )
+    ]
+    rest = sorted(
+        (a for a in stay if a not in domain.wait_actions),
+        key=lambda a: Fraction(domain.duration(a)),
+    )
+    return tuple(a for a in domain.wait_actions if a in stay) + tuple(rest)
 
 
 def singles_and_doubles(faults: Iterable[F]) -> tuple[frozenset[F], ...]:
@@ -202,6 +235,12 @@ def check_domain(domain: Domain[Any, Any]) -> None:
             _check_translation(domain, action, text, probe, fail)
             if domain.footprint_connected:
                 _check_connected(domain, action, text, probe, fail)
+    for action in domain.wait_actions:
+        if action not in domain.waits:
+            raise fail(
+                f"wait action {domain.format_action(action)} does not stay in place (expected an "
+                "action of the domain that keeps every pose and sweeps only its own cell)"
+            )
     for faults in (frozenset(), *domain.fault_sets):
         text = domain.format_faults(faults)
         if domain.parse_faults(text) != faults:

@@ -375,8 +375,10 @@ FOUR_WHEEL: Domain[Action, Fault] = Domain(
     fault_sets=tuple(frozenset({f}) for f in SINGLE_FAULTS) + DOUBLE_FAULTS,
     footprint_connected=True,
     fault_parts=lambda fault: (fault.wheel.name, fault.mode.letter),
+    wait_actions=(parse_action("SSSS"),),
     description="four-wheeled skid-steer robot: 81 actions, 12 wheel faults (e.g. FL:F)",
 )
 """The four-wheel skid-steer robot as a :class:`~selfrepair.robots.domain.Domain`. Levels: waits,
 straight moves and in-place turns are primitive (0); arcs, which combine a move and a turn, are
-complex (1)."""
+complex (1). It waits with the all-stop ``SSSS`` first (the wheel pairs that cancel out, such as
+``FFBB``, when a fault forbids stopping a wheel)."""

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from selfrepair.errors import ProblemError, choice
-from selfrepair.limits import MAX_LOOKUP_PATTERNS
+from selfrepair.limits import DEFAULT_MAX_WAIT, MAX_LOOKUP_PATTERNS
 from selfrepair.repair.replacement import DEFAULT_MAX_DEPTH, DEFERRING, RecursionMode
 from selfrepair.tables.fileformat import resolve_table
 from selfrepair.tables.model import ReplacementTable
@@ -31,7 +31,10 @@ class StrategyOptions:
     ``max_lookup_patterns`` the patterns one compiled look-up stores at most
     (:data:`~selfrepair.limits.MAX_LOOKUP_PATTERNS`). ``lpg_time_limit_s`` and ``lpg_seed`` are
     the wall-clock limit (seconds) and the seed of each LPG-adapt call of the ``lpg-adapt``
-    strategy.
+    strategy. ``max_wait`` bounds the steps the robot spends waiting in place, in all, when a
+    repair finds that no plan exists under the known faults (faults that may clear: transient or
+    intermittent, sensed with detection ``now``); 0 gives up at once (see
+    :mod:`selfrepair.execution.stepper`).
     """
 
     table: str | ReplacementTable = "handwritten"
@@ -44,6 +47,7 @@ class StrategyOptions:
     lpg_seed: int = 0
     rewrite: bool = False
     max_lookup_patterns: int = MAX_LOOKUP_PATTERNS
+    max_wait: int = DEFAULT_MAX_WAIT
 
     def __post_init__(self) -> None:
         object.__setattr__(
@@ -59,6 +63,8 @@ class StrategyOptions:
             raise ProblemError(
                 f"max_lookup_patterns must be at least 0, got {self.max_lookup_patterns}"
             )
+        if self.max_wait < 0:
+            raise ProblemError(f"max_wait must be at least 0, got {self.max_wait}")
         if not isinstance(self.rewrite, bool):
             raise ProblemError(f"rewrite must be True or False, got {self.rewrite!r}")
         if self.rewrite and self.recursion in DEFERRING:
