@@ -51,6 +51,7 @@ NON_DEFAULT = {
     "max_table_bytes": ["--max-table-bytes", "100000"],
     "max_table_candidates": ["--max-table-candidates", "1000"],
     "max_lookup_patterns": ["--max-lookup-patterns", "7"],
+    "max_wait": ["--max-wait", "3"],
 }
 """A value other than the default for every option of :class:`MissionOptions` (a new option
 must be added here, so that the forwarding test covers it)."""

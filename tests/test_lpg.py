@@ -12,6 +12,7 @@ from dataclasses import replace
 
 import pytest
 
+import selfrepair.baselines
 from extras import LPG
 from selfrepair.baselines import lpg
 from selfrepair.baselines.lpg import LpgStatus, lpg_adapt_repair, lpg_available, lpg_plan
@@ -176,6 +177,9 @@ def test_options_reach_lpg() -> None:
 
 def test_missing_extra_raises_a_clear_error(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setitem(sys.modules, "selfrepair.baselines.unified", None)
+    # ``from selfrepair.baselines import unified`` reads the package attribute first, which an
+    # earlier import of the module has set: remove it too, as in a process without the extra
+    monkeypatch.delattr(selfrepair.baselines, "unified", raising=False)
     assert not lpg_available()
     problem = PlanningProblem(U_TURN, Pose(0, 0, Heading.E), (4, 2))
     with pytest.raises(ProblemError, match=r"pip install 'selfrepair\[pddl\]'"):

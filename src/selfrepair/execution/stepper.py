@@ -63,6 +63,7 @@ from selfrepair.execution.moves import MoveTable, available_moves
 from selfrepair.execution.result import STEP_OF_REPAIR, RepairRecord, StepSource, TraceStep
 from selfrepair.execution.simulator import Outcome, StepOutcome
 from selfrepair.geometry import Pose
+from selfrepair.repair.queue import splice
 from selfrepair.repair.strategies import (
     MissionContext,
     Repair,
@@ -118,19 +119,6 @@ class _ActionView(Sequence[Any]):
         return self._queue[index][0]
 
 
-def splice(queue: deque[Entry], consumed: int, actions: Sequence[Any], source: StepSource) -> None:
-    """Replace the first ``consumed`` queued actions by ``actions`` marked ``source``, in place.
-    A short repair pops and pushes at the front; one that covers much of the queue (a whole-plan
-    rewrite) rebuilds it in C, which is cheaper than popping item by item."""
-    if 3 * consumed > len(queue):
-        rest = list(islice(queue, consumed, None))
-        queue.clear()
-        queue.extend(zip(actions, repeat(source)))
-        queue.extend(rest)
-        return
-    for _ in range(consumed):
-        queue.popleft()
-    queue.extendleft(zip(reversed(actions), repeat(source)))
 
 
 class Stepper:

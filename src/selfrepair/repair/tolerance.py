@@ -41,11 +41,12 @@ from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
-from itertools import combinations
+from itertools import combinations, repeat
 from typing import Any
 
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
+from selfrepair.repair.queue import splice
 from selfrepair.repair.replacement import DEFERRING
 from selfrepair.repair.strategies import (
     MissionContext,
@@ -253,18 +254,17 @@ def runs_without_replan(
     executed steps (default: ``20 * len(actions) + 100``)."""
     domain = context.domain
     repairer = _repairer(context)
-    queue: deque[Any] = deque(actions)
+    queue: deque[tuple[Any, None]] = deque(zip(actions, repeat(None)))
     limit = 20 * len(actions) + 100 if max_steps is None else max_steps
     executed = 0
     while queue:
-        action = queue[0]
+        action = queue[0][0]
         if not domain.available(action, faults):
-            repair = repairer.repair(RepairRequest(pose, tuple(queue), faults, executed))
+            queued = tuple(a for a, _ in queue)
+            repair = repairer.repair(RepairRequest(pose, queued, faults, executed))
             if repair.replans or repair.status is not RepairStatus.REPAIRED:
                 return False
-            for _ in range(repair.consumed):
-                queue.popleft()
-            queue.extendleft(reversed(repair.actions))
+            splice(queue, repair.consumed, repair.actions, None)
             continue
         if executed >= limit or not context.free(domain.footprint(pose, action)):
             return False
