@@ -122,6 +122,9 @@ def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> Missio
         world=spec.maze,
         cost_scale=cost_scale(spec.domain, weight),
         start=spec.start,
+        clearance_weight=weight,
+        clearance_radius=radius,
+        backend=backend,
     )
 
 

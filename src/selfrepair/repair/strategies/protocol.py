@@ -72,7 +72,9 @@ class MissionContext:
     is the map itself (a :class:`selfrepair.world.maze.Maze`), typed loosely so that this layer does
     not depend on the world layer; only strategies that must read the map (e.g. to export it)
     use it. ``start`` is the mission's start pose (``None`` when unknown): a strategy that searches
-    ahead of its first repair, as D* Lite does, starts there.
+    ahead of its first repair, as D* Lite does, starts there. ``clearance_weight``,
+    ``clearance_radius`` and ``backend`` are the mission's planner settings, for a strategy that
+    searches with its own planner (D* Lite).
     """
 
     domain: Domain[Any, Any]
@@ -88,6 +90,9 @@ class MissionContext:
     world: object = None
     cost_scale: int = 1
     start: Pose | None = None
+    clearance_weight: Fraction = Fraction(0)
+    clearance_radius: int = 2
+    backend: str = "auto"
 
     def at_goal(self, pose: Pose) -> bool:
         """Whether ``pose`` satisfies the mission's goal."""
