@@ -173,7 +173,9 @@ class _Tally:
 def run_mission(spec: MissionSpec) -> MissionResult:
     """Plan, execute and repair one mission (see the module docstring)."""
     factory = get_strategy(spec.strategy)  # fails fast on a bad name
-    sim = Simulator(spec.domain, spec.maze, spec.start, spec.schedule, spec.seed)
+    sim = Simulator(
+        spec.domain, spec.maze, spec.start, spec.schedule, spec.seed, behaviour=spec.behaviour
+    )
     initial_known = sim.sense() if spec.initial_faults_known else frozenset()
     table = spec.options.resolved_table() if uses_table(spec.strategy) else None
     _prepare(spec, table)
@@ -183,7 +185,8 @@ def run_mission(spec: MissionSpec) -> MissionResult:
         spec.start, spec.goal, spec.goal_heading, initial_known, context.replan_budget
     )
     planning_ns = time.perf_counter_ns() - t0
-    waits = 0 if spec.schedule.detection is Detection.ON_USE else None  # on-use: never clears
+    # on-use and hidden: the known faults never clear by themselves, so waiting cannot help
+    waits = None if spec.schedule.detection is Detection.NOW else 0
     stepper = Stepper(
         context, factory(context), initial.actions, initial_known, sim.table, max_wait=waits
     )

@@ -9,6 +9,17 @@ A command whose action a true fault forbids is a *failed attempt*: the robot doe
 tick passes, and the outcome names the faults that blocked it. A command that would sweep a wall
 is refused with outcome ``"collision"`` and nothing changes (the executor never sends one; the
 tests check that).
+
+With detection ``hidden`` (the robot is never told its faults) a forbidden command is not refused:
+the wheels do what the domain's fault-behaviour model says (:meth:`Domain.effective
+<selfrepair.robots.domain.Domain.effective>`, model ``behaviour``, the domain's default unless
+given), and the robot moves accordingly. Any motion whose footprint (its swept cells) is not free
+then stops at the contact, outcome ``"bump"``: poses are whole cells and a footprint lists the
+cells a motion sweeps, not the order in which it reaches them, so the last free pose along the
+motion is the start pose. The robot stays there, heading unchanged, and the command's full
+duration passes (the motors ran against the wall); :attr:`Simulator.bumps` counts the contacts.
+A domain without a fault-behaviour model fails a forbidden command as above, but the outcome
+names no fault (``blocking`` is empty): the robot learns only that the command failed.
 """
 
 from __future__ import annotations
@@ -37,6 +48,7 @@ class Outcome(StrEnum):
     MOVED = "moved"
     FAILED_ATTEMPT = "failed-attempt"
     COLLISION = "collision"
+    BUMP = "bump"
 
 
 class StepOutcome(NamedTuple):
@@ -77,7 +89,8 @@ class Simulator:
     ``clock`` replaces the schedule's fault clock when the true faults are not a function of a
     schedule alone (a team robot's); the schedule then gives only the detection. A robot that
     waits between commands (a team robot waiting for its turn) says so with
-    :meth:`wait_until`.
+    :meth:`wait_until`. ``behaviour`` names the domain's fault-behaviour model used when the
+    faults are hidden (``None``: the default; see the module docstring).
     """
 
     def __init__(
@@ -88,6 +101,7 @@ class Simulator:
         schedule: FaultSchedule,
         seed: int = 0,
         clock: FaultSource | None = None,
+        behaviour: str | None = None,
     ) -> None:
         self.domain = domain
         self.maze = maze
@@ -113,6 +127,17 @@ class Simulator:
         self._inside = maze.in_bounds(start.x, start.y)
         self._pw = maze.width + 2
         self._poses = pose_table(maze) if self.table.ends_covered else None
+        self._hidden = schedule.detection is Detection.HIDDEN
+        self.behaviour = behaviour
+        if self._hidden and domain.behaviours:
+            domain.behaviour(behaviour)  # an unknown name fails before the first step
+        self._performed: dict[Any, Any] = {}
+        """The effective action of each commanded action under the current faults (hidden)."""
+        self.last_action: Any = None
+        """The action the wheels really performed in the last command (hidden faults: the
+        effective action; otherwise the command)."""
+        self.bumps = 0
+        """Motions stopped at a wall so far (hidden faults only)."""
 
     @property
     def ticks(self) -> Fraction:
@@ -147,7 +172,8 @@ class Simulator:
             swept: tuple[Cell, ...] = (start.cell,)
         else:  # the footprint of the move table, shifted (a collision moves nothing)
             x, y = start.x, start.y
-            shape = self.table.shapes[action][start.heading]
+            performed = self.last_action if self._hidden else action
+            shape = self.table.shapes[performed][start.heading]
             swept = tuple([(x + dx, y + dy) for dx, dy in shape])
         return StepOutcome(
             status, step, action, start, self.pose, swept, self.last_duration, self.last_blocking
@@ -157,6 +183,8 @@ class Simulator:
         """Command ``action`` and advance the world; what it did is left in ``pose``,
         ``last_move``, ``last_duration`` and ``last_blocking`` (the executor's fast path:
         :meth:`execute` wraps it into a :class:`StepOutcome`). A collision changes nothing."""
+        if self._hidden:
+            return self._advance_hidden(action)
         faults = self._clock.at(self.steps, self.units)
         if faults is not self._faults:
             self._faults = faults
@@ -191,6 +219,42 @@ class Simulator:
             self.units += move.units
         self.steps += 1
         return Outcome.MOVED if moves is not None else Outcome.FAILED_ATTEMPT
+
+    def _advance_hidden(self, action: Any) -> Outcome:
+        """:meth:`advance` with the faults hidden from the robot (see the module docstring):
+        the effective action moves, a swept wall stops the motion at the start pose (a bump)."""
+        faults = self._clock.at(self.steps, self.units)
+        if faults is not self._faults:
+            self._faults = faults
+            self._moves = available_moves(self.table, faults)
+            self._performed = {}
+        start = self.pose
+        self.last_blocking = frozenset()
+        self.steps += 1
+        performed = action
+        if action not in self._moves:
+            if not self.domain.behaviours:  # no model: the command fails, nothing is named
+                self.last_move, self.last_action = None, action
+                self.last_duration = FAILED_ATTEMPT_TICKS
+                self.units += self._failed_units
+                return Outcome.FAILED_ATTEMPT
+            performed = self._performed.get(action)
+            if performed is None:
+                performed = self.domain.effective(action, faults, self.behaviour)
+                self._performed[action] = performed
+        self.last_action = performed
+        move = self.table.moves[performed][start.heading]
+        self.last_duration = move.duration
+        self.units += move.units
+        if not self._free(start, move, performed):
+            self.last_move = None
+            self.bumps += 1
+            return Outcome.BUMP
+        x, y = start.x + move.dx, start.y + move.dy
+        self._inside = self.maze.in_bounds(x, y)
+        self.pose = make_pose(x, y, move.heading)
+        self.last_move = move
+        return Outcome.MOVED
 
     def _free(self, start: Pose, move: Move, action: Any) -> bool:
         """Whether the footprint of ``move`` from ``start`` is free (on the grid)."""

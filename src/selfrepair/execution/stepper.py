@@ -298,7 +298,8 @@ class Stepper:
         blocking: frozenset[Any] = frozenset(),
     ) -> None:
         """Tell the stepper what command ``action`` (number ``step``, of ``source``) did: a move
-        from ``start`` to ``end`` in ``duration``, a failed attempt revealing ``blocking``, or a
+        from ``start`` to ``end`` in ``duration``, a failed attempt revealing ``blocking``, a
+        motion stopped at a wall (a bump, faults hidden: recorded, the action stays queued), or a
         refused command (a collision: nothing changes, nothing is recorded). See the module
         docstring."""
         if outcome is Outcome.MOVED:
@@ -312,6 +313,8 @@ class Stepper:
             if not blocking <= known:
                 self.known = known | blocking
                 self._available = available_moves(self._table, self.known)
+        elif outcome is Outcome.BUMP:  # hidden faults: the motion stopped at a wall; retried
+            source = StepSource.BUMP
         else:
             return
         self.steps.append(
