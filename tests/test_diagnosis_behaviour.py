@@ -105,14 +105,14 @@ def test_a_motion_that_sweeps_a_wall_stops_at_the_start_pose() -> None:
     start = Pose(2, 3, Heading.N)
     sim = Simulator(FOUR_WHEEL, CORRIDOR, start, _hidden("FL:F"))
     outcome = sim.execute(parse_action("FFFF"))  # the arc to the left sweeps the wall (1, 3)
-    assert outcome.status is Outcome.BUMP
+    assert outcome.status is Outcome.BUMPED
     assert outcome.end == start and sim.pose == start
-    assert outcome.duration == Fraction(2) and sim.ticks == Fraction(2)
+    assert outcome.duration == Fraction(1) and sim.ticks == Fraction(1)
     assert sim.bumps == 1 and sim.steps == 1
     healthy = sim.execute(parse_action("SSFF"))  # a straight move up the corridor still works
     assert healthy.status is Outcome.MOVED and healthy.end == Pose(2, 2, Heading.N)
     assert sim.execute(parse_action("SSFF")).end == Pose(2, 1, Heading.N)
-    assert sim.execute(parse_action("SSFF")).status is Outcome.BUMP  # the wall ahead
+    assert sim.execute(parse_action("SSFF")).status is Outcome.BUMPED  # the wall ahead
     assert sim.pose == Pose(2, 1, Heading.N) and sim.bumps == 2
 
 
@@ -149,6 +149,6 @@ def test_a_mission_with_hidden_faults_records_its_bumps() -> None:
     # the plan's straight moves arc into the walls of the one-cell corridor: the robot, which is
     # not told its fault and does not diagnose, bumps at every step and never moves
     assert not result.reached
-    assert [s.source for s in result.steps] == [StepSource.BUMP] * 12
+    assert [s.source for s in result.steps] == [StepSource.BUMPED] * 12
     assert all(s.start == s.end == Pose(1, 1, Heading.E) for s in result.steps)
     assert run_mission(spec).steps == result.steps
