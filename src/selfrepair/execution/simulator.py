@@ -23,9 +23,9 @@ the wheels do what the domain's fault-behaviour model says (:meth:`Domain.effect
 given), and the robot moves accordingly. Any motion whose footprint (its swept cells) is not free
 then stops at the contact, a *bump* (outcome ``"bumped"``, as above): poses are whole cells and a
 footprint lists the cells a motion sweeps, not the order in which it reaches them, so the last
-free pose along the motion is the start pose. The robot stays there, heading unchanged, and one tick passes (the
-bumper stops the motors at the contact); :attr:`Simulator.bumps` counts the contacts with walls
-(``last_bumped`` names only cells blocked by world events, not walls).
+free pose along the motion is the start pose. The robot stays there, heading unchanged, and one
+tick passes (the bumper stops the motors at the contact); :attr:`Simulator.bumps` counts the
+contacts with walls (``last_bumped`` names only cells blocked by world events, not walls).
 A domain without a fault-behaviour model fails a forbidden command as above, but the outcome
 names no fault (``blocking`` is empty): the robot learns only that the command failed.
 """
