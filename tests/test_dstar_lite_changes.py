@@ -6,6 +6,7 @@ mazes, routes and update sequences); hand-made cases with known answers; misuse 
 
 from __future__ import annotations
 
+import dataclasses
 from fractions import Fraction
 from typing import Any
 
@@ -265,3 +266,24 @@ def test_the_strategy_runs_on_either_backend_with_the_same_result(backend: str) 
         result = run_mission(spec)
         results.append((result.status, result.ticks, [s.action for s in result.steps]))
     assert results[0] == results[1] and results[0][0] == "reached"
+
+
+@pytest.mark.parametrize("backend", ["python", pytest.param("numba", marks=NUMBA)])
+def test_the_strategy_drives_round_a_cell_blocked_on_its_route(backend: str) -> None:
+    """In a changing world D* Lite sees the believed-blocked cells: it is asked for the repair
+    (not a plain replan) and its kept search goes round them."""
+    from selfrepair.world.events import WorldEvent, WorldSchedule
+
+    maze = load_bundled("wide-short")
+    route = bundled_routes("wide-short")[0]
+    first = run_mission(MissionSpec(maze, route.start, route.goal, strategy="replan"))
+    cell = first.steps[6].end.cell
+    world = WorldSchedule((WorldEvent(cell, True, 2),))
+    spec = MissionSpec(
+        maze, route.start, route.goal, strategy="dstar-lite", world=world, backend=backend
+    )
+    result = run_mission(spec)
+    assert result.reached and cell not in {s.end.cell for s in result.steps}
+    assert any(r.repair.attempts == ("dstar-lite",) for r in result.repairs)
+    replanned = run_mission(dataclasses.replace(spec, strategy="replan"))
+    assert result.ticks == replanned.ticks  # both replan optimally round the believed cell

@@ -10,8 +10,10 @@ experiment and ``benchmarks/dstar_lite.py`` measure what that costs.)
 The search is :class:`selfrepair.search.dstar.DStarLite` (its docstring defines the graph, the
 heuristic and the tie-breaking), on the mission's map with the mission's clearance term and
 planner backend (``"python"``: the pure-Python reference; ``"numba"``: the compiled kernels, the
-same plans; ``"auto"``: numba when it is installed). The same object serves a changing world
-(cells that become blocked or free: :meth:`~selfrepair.search.dstar.DStarLite.update_cells`).
+same plans; ``"auto"``: numba when it is installed). In a changing world it sees cells: the
+cells the robot believes blocked (``MissionContext.belief``) reach the kept search as cell
+updates (:meth:`~selfrepair.search.dstar.DStarLite.update_cells`), so D* Lite answers blocked
+moves as well as faults, as it is meant to be used.
 Only the context is used (the domain, the free grid, the planner settings): this module knows no
 maze and no particular robot.
 """
@@ -19,11 +21,11 @@ maze and no particular robot.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
-from selfrepair.geometry import Pose
+from selfrepair.geometry import Cell, Pose
 from selfrepair.repair.strategies import (
     MissionContext,
     Repair,
@@ -58,19 +60,35 @@ def _search(context: MissionContext, pose: Pose, known: frozenset[Any]) -> DStar
 @dataclass(slots=True)
 class DStarLiteRepairer:
     """The search of one mission (mutable: it is kept between repairs; ``None`` until the first
-    search)."""
+    search). ``blocked`` are the cells the search has been told are blocked (the robot's belief,
+    ``MissionContext.belief``, at the last repair, without the cell the robot stood on).
+
+    It declares ``sees_cells``: in a changing world the stepper asks it, not a plain replan, to
+    repair an action that sweeps a cell believed blocked, and it answers with D* Lite kept
+    between changes (the newly believed cells are an :meth:`~DStarLite.update_cells`)."""
 
     context: MissionContext
     search: DStarLite | None = None
+    blocked: frozenset[Cell] = frozenset()
+    sees_cells: ClassVar[bool] = True
+
+    def _see(self, search: DStarLite, pose: Pose) -> None:
+        believed = self.context.belief.blocked
+        if pose.cell in believed:  # the robot stands there: it can drive off (as the stepper)
+            believed = believed - {pose.cell}
+        if believed != self.blocked:
+            search.update_cells(blocked=believed - self.blocked, freed=self.blocked - believed)
+            self.blocked = believed
 
     def repair(self, request: RepairRequest) -> Repair:
-        """Plan (incrementally) from the robot's pose with the known faults."""
+        """Plan (incrementally) from the robot's pose with the known faults and blocked cells."""
         search = self.search
         if search is None:
             search = self.search = _search(self.context, request.pose, request.known)
         else:
             search.move_start(request.pose)
             search.update_faults(request.known)
+        self._see(search, request.pose)
         found = search.plan(self.context.replan_budget)
         if found.status is PlanStatus.BUDGET_EXHAUSTED:
             status = RepairStatus.BUDGET_EXHAUSTED
@@ -99,6 +117,7 @@ def start_dstar_lite(context: MissionContext) -> Repairer:
     repairer = DStarLiteRepairer(context)
     if context.start is not None:
         repairer.search = _search(context, context.start, frozenset())
+        repairer._see(repairer.search, context.start)
         repairer.search.plan(context.replan_budget)  # a budget cut: repairs go on from here
     return repairer
 
