@@ -14,8 +14,8 @@ for each (action, heading, relative reading) the bit set of the hypotheses it is
 is computed once and kept (the posterior is then the prior restricted to ``alive``, made when
 asked). A noisy one also multiplies the weight vector by the kept likelihood vector. Near walls
 the prediction depends on which motions the walls stop (a bump), so the key also holds which of
-the command's motion groups are blocked there (tested in the grid only when the union of their
-footprints is not free).
+the command's motion groups are blocked there (tested in the grid once per action and pose met,
+the union of their footprints first).
 
 An observation that no hypothesis still possible explains (a fault outside the hypotheses, a
 wrong behaviour model) changes nothing and is counted in :attr:`FaultBelief.inexplicable`.
@@ -73,6 +73,7 @@ class FaultBelief:
     robot and mission. ``grid`` is the map the robot knows (``None``: an open plane)."""
 
     __slots__ = (
+        "_blocks",
         "_cache",
         "_count",
         "_unions",
@@ -97,6 +98,7 @@ class FaultBelief:
         self._count = 0
         self._cache: dict[tuple[Any, ...], tuple[int, npt.NDArray[np.float64] | None]] = {}
         self._unions: dict[tuple[int, int], tuple[int, ...]] = {}
+        self._blocks: dict[tuple[int, int, int, int], tuple[bool, ...] | None] = {}
 
     def update(self, observation: Observation) -> int:
         """Take ``observation`` in; returns the new :attr:`alive`."""
@@ -106,7 +108,12 @@ class FaultBelief:
         )  # fmt: skip
         a = self.model.index[action]
         heading = start.heading
-        blocked = self._blocked(a, start)
+        where = (a, heading, start.x, start.y)
+        blocks = self._blocks
+        if where in blocks:
+            blocked = blocks[where]
+        else:  # not looked at here yet
+            blocked = blocks[where] = self._blocked(a, start)
         key = (
             a, heading, blocked, end.x - start.x, end.y - start.y, end.heading, bumped, failed,
             noise,
