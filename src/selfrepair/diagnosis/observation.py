@@ -68,10 +68,10 @@ class Observation(NamedTuple):
 @dataclass(frozen=True, slots=True)
 class ObservationModel:
     """What the robot's sensors report after each command: odometry with error rate ``noise``
-    (0: exact) and, with ``bumps``, a bump switch (see the module docstring)."""
+    (0: exact) and, with ``bumps`` (the default), a bump switch (see the module docstring)."""
 
     noise: float = 0.0
-    bumps: bool = False
+    bumps: bool = True
 
     def __post_init__(self) -> None:
         if not isinstance(self.noise, int | float) or not 0.0 <= self.noise < 0.5:

@@ -154,6 +154,7 @@ class Stepper:
         "_available",
         "_early_at",
         "_observe",
+        "_perceived",
         "_sees_cells",
         "_table",
         "_unusable",
@@ -195,6 +196,7 @@ class Stepper:
         self._observe = getattr(repairer, "observe", None)
         self._assume = getattr(repairer, "assumption", None)
         self._unusable: frozenset[Any] = frozenset()
+        self._perceived = False  # observations came (faults hidden): take the assumption
         self.rejoin = False
         """Whether the observing repairer asked to be asked before the next command."""
         self.blocked: frozenset[Cell] = context.belief.blocked
@@ -223,6 +225,7 @@ class Stepper:
         observe = self._observe
         if observe is None:
             return
+        self._perceived = True
         if observe(observation, deviated, moved):
             self.rejoin = True
         self._sync()
@@ -330,7 +333,7 @@ class Stepper:
         if repair.status is RepairStatus.REPAIRED:
             source = STEP_OF_REPAIR[repair.source]
             splice(queue, repair.consumed, repair.actions, source)
-        if self._assume is not None:  # an observing repairer may change what it assumes
+        if self._perceived:  # an observing repairer may change what it assumes
             self._sync()
         latency = time.perf_counter_ns() - t0
         self.repairs.append(RepairRecord(step, pose, action, repair, latency))

@@ -196,7 +196,10 @@ class DiagnosingRepairer:
         return self._fix(request)
 
     def _fix(self, request: RepairRequest) -> Repair:
-        """The front is unavailable under the assumed faults."""
+        """The front is unavailable under the assumed faults (before any surprise, when the
+        faults are not hidden: they were sensed, the table repairs as ``replacement``)."""
+        if self.surprise_step is None:
+            return self._table.repair(request)
         if self._policy is Policy.ACTIVE and not self._relaxed:
             hit = table_hit(self._context, request)
             if hit is not None:
@@ -313,7 +316,12 @@ def _starter(policy: Policy) -> Any:
     return start
 
 
-register_strategy(StrategyName.ORACLE, start_replacement, uses_table=True, told=True)
-register_strategy(StrategyName.DIAGNOSE, _starter(Policy.MOST_PROBABLE), uses_table=True)
-register_strategy(StrategyName.CONFORMANT, _starter(Policy.CONFORMANT), uses_table=True)
-register_strategy(StrategyName.ACTIVE_DIAGNOSIS, _starter(Policy.ACTIVE), uses_table=True)
+register_strategy(
+    StrategyName.ORACLE, start_replacement, uses_table=True, told=True, hidden=True
+)
+for _name, _policy in (
+    (StrategyName.DIAGNOSE, Policy.MOST_PROBABLE),
+    (StrategyName.CONFORMANT, Policy.CONFORMANT),
+    (StrategyName.ACTIVE_DIAGNOSIS, Policy.ACTIVE),
+):
+    register_strategy(_name, _starter(_policy), uses_table=True, hidden=True)

@@ -77,6 +77,10 @@ class StrategyEntry(Generic[Context, Request, Answer]):
     told: bool = False
     """Whether the strategy is an oracle: the robot is told its true faults before every
     command whatever the detection (the upper bound of diagnosis; see docs/diagnosis.md)."""
+    hidden: bool = False
+    """Whether the strategy is one for faults the robot is not told (detection ``hidden``): the
+    diagnosing strategies and their oracle. A comparison runs these by default when the faults
+    are hidden, and the others when they are not."""
 
 
 _REGISTRY: dict[str, StrategyEntry[Any, Any, Any]] = {}
@@ -99,11 +103,13 @@ def register_strategy(
     replace: bool = False,
     uses_table: bool = False,
     told: bool = False,
+    hidden: bool = False,
 ) -> None:
     """Make ``factory`` available as the robot strategy ``name`` (``uses_table``: the executor
-    loads the mission's table for it; ``told``: an oracle, told its true faults). A name in use
-    raises :class:`ProblemError` unless ``replace``."""
-    register(StrategyEntry(name, ROBOT, factory, uses_table, told), replace=replace)
+    loads the mission's table for it; ``told``: an oracle, told its true faults; ``hidden``: a
+    strategy for faults the robot is not told). A name in use raises :class:`ProblemError`
+    unless ``replace``."""
+    register(StrategyEntry(name, ROBOT, factory, uses_table, told, hidden), replace=replace)
 
 
 def strategy_entry(

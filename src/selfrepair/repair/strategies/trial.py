@@ -303,4 +303,4 @@ def start_trial(context: MissionContext) -> Repairer:
     return TrialRepairer(context)
 
 
-register_strategy(StrategyName.TRIAL_AND_ERROR, start_trial, uses_table=True)
+register_strategy(StrategyName.TRIAL_AND_ERROR, start_trial, uses_table=True, hidden=True)
