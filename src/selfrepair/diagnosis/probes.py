@@ -73,7 +73,22 @@ def _split(
     return out, ticks
 
 
-def best_probe(belief: FaultBelief, pose: Pose, mask: int | None = None) -> Probe | None:
+def _better(info: float, ticks: float, length: int, best: Probe, per_tick: bool) -> bool:
+    """Whether a probe of ``info`` bits, ``ticks`` expected ticks and ``length`` commands beats
+    ``best``: more information per tick (or per command), then fewer ticks."""
+    if per_tick:
+        return info / ticks > best.information / best.ticks + 1e-12
+    mine, theirs = info / length, best.information / len(best.actions)
+    return mine > theirs + 1e-12 or (abs(mine - theirs) <= 1e-12 and ticks < best.ticks)
+
+
+def best_probe(
+    belief: FaultBelief,
+    pose: Pose,
+    mask: int | None = None,
+    *,
+    per_tick: bool = True,
+) -> Probe | None:
     """The probe of most information per tick that splits the hypotheses of ``mask`` (default:
     those still possible) from ``pose``; ``None`` when they cannot be split in two commands (one
     class left, or walls hide every difference)."""
@@ -89,7 +104,7 @@ def best_probe(belief: FaultBelief, pose: Pose, mask: int | None = None) -> Prob
     for a in range(len(actions)):
         split, ticks = _split(belief, a, pose, post, alive)
         info = _entropy(m for _, m in split.values())
-        if info > 1e-12 and (best is None or info / ticks > best.information / best.ticks + 1e-12):
+        if info > 1e-12 and (best is None or _better(info, ticks, 1, best, per_tick)):
             best = Probe((actions[a],), info, ticks)
     if best is not None:
         return best
@@ -106,9 +121,7 @@ def best_probe(belief: FaultBelief, pose: Pose, mask: int | None = None) -> Prob
                 masses.extend(m for _, m in second.values())
                 ticks += ticks2
             info = _entropy(masses)
-            if info > 1e-12 and (
-                best is None or info / ticks > best.information / best.ticks + 1e-12
-            ):
+            if info > 1e-12 and (best is None or _better(info, ticks, 2, best, per_tick)):
                 best = Probe((actions[a], actions[b]), info, ticks)
     return best
 

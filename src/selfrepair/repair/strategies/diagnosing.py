@@ -81,6 +81,7 @@ class DiagnosingRepairer:
         "_drop",
         "_error",
         "_known",
+        "_margin",
         "_policy",
         "_probing",
         "_rejoining",
@@ -105,6 +106,7 @@ class DiagnosingRepairer:
         self.belief = FaultBelief(self.model, context.grid)
         self._table = start_replacement(context)
         self._error = options.confidence
+        self._margin = 0.0  # the mass left out of what is possible: 0 while readings are exact
         self._known: frozenset[Any] = frozenset()
         self._probing = 0  # probe commands still at the front of the queue
         self._rejoining = 0  # rejoin commands still at the front of the queue
@@ -135,6 +137,8 @@ class DiagnosingRepairer:
         before = self.belief.alive
         belief = self.belief
         belief.update(observation)
+        if observation.noise > 0:
+            self._margin = self._error
         self._record(observation, deviated or not moved)
         if belief.alive != before or observation.noise > 0:
             self._relaxed = False
@@ -157,8 +161,20 @@ class DiagnosingRepairer:
             domain = self._context.domain
             self._anchor = domain.apply(observation.start, observation.action)
             rejoin = True
+        if not (self._probing or self._rejoining) and self._should_probe():
+            rejoin = True  # active diagnosis: probe before the next command
         self._wanted = rejoin
         return rejoin
+
+    def _should_probe(self) -> bool:
+        """Active diagnosis after a surprise: whether more than one class is still credible
+        (the robot does not know what its commands do) and probes are left."""
+        return (
+            self._policy is Policy.ACTIVE
+            and self.surprise_step is not None
+            and self.probes < MAX_PROBES
+            and self._ambiguous()
+        )
 
     def _record(self, observation: Observation, surprising: bool) -> None:
         if self.surprise_step is None:
@@ -169,7 +185,7 @@ class DiagnosingRepairer:
             return
         else:
             self._after += 1
-        found = self.belief.isolated(self._error if observation.noise > 0 else 0.0)
+        found = self.belief.isolated(self._margin)
         if found is not None:
             self.isolated_class, self.isolation_actions = found, self._after
 
@@ -179,12 +195,12 @@ class DiagnosingRepairer:
         if not faults or self._policy is Policy.MOST_PROBABLE or self._relaxed:
             return faults
         out: set[Any] = set()
-        for hypothesis in self.model.faults_of(self.belief.credible(self._error)):
+        for hypothesis in self.model.faults_of(self.belief.credible(self._margin)):
             out |= hypothesis
         return frozenset(out)
 
     def _ambiguous(self) -> bool:
-        return len(self.model.classes_in(self.belief.credible(self._error))) > 1
+        return len(self.model.classes_in(self.belief.credible(self._margin))) > 1
 
     # --- repairs -----------------------------------------------------------------------------
 
@@ -192,6 +208,12 @@ class DiagnosingRepairer:
         """A rejoin when asked for one, else a repair of the front under the assumed faults."""
         if self._wanted:
             self._wanted = False
+            if self._should_probe():
+                drop, self._drop = self._drop, 0
+                probe = self._probe(request, drop)
+                if probe is not None:
+                    return probe
+                self._drop = drop
             return self._rejoin(request)
         return self._fix(request)
 
@@ -224,7 +246,12 @@ class DiagnosingRepairer:
         replaced), or ``None`` when none splits the classes or the budget is spent."""
         if self.probes >= MAX_PROBES:
             return None
-        found = best_probe(self.belief, request.pose, self.belief.credible(self._error))
+        found = best_probe(
+            self.belief,
+            request.pose,
+            self.belief.credible(self._margin),
+            per_tick=False,
+        )
         if found is None:
             return None
         self.probes += 1
