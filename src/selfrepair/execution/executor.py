@@ -216,9 +216,10 @@ def run_mission(spec: MissionSpec) -> MissionResult:
         context.belief.blocked = seen
     planning_ns = time.perf_counter_ns() - t0
     waits = 0 if spec.schedule.detection is Detection.ON_USE else None  # on-use: never clears
-    stepper = Stepper(
-        context, factory(context), initial.actions, initial_known, sim.table, max_wait=waits
-    )
+    repairer = factory(context)
+    if spec.world and (expect := getattr(repairer, "expect_blocked", None)) is not None:
+        expect()  # a strategy that repairs blocked actions itself prepares before the clock runs
+    stepper = Stepper(context, repairer, initial.actions, initial_known, sim.table, max_wait=waits)
     tally = _Tally()
     if initial.status is not PlanStatus.SOLVED:
         reason = f"initial plan: {initial.status.value}"
