@@ -191,8 +191,28 @@ def run_mission(spec: MissionSpec) -> MissionResult:
     if initial.status is not PlanStatus.SOLVED:
         reason = f"initial plan: {initial.status.value}"
         return _result(spec, sim, stepper, tally, initial, planning_ns, NO_PLAN, reason)
+    status, reason, footing = _run_loop(spec, sim, stepper, tally)
+    return _result(spec, sim, stepper, tally, initial, planning_ns, status, reason, footing)
+
+
+def _run_loop(
+    spec: MissionSpec, sim: Simulator, stepper: Stepper, tally: _Tally
+) -> tuple[MissionStatus, str, str]:
+    """The mission's loop on its footing (:mod:`selfrepair.execution.compiled` where it can
+    run, unless ``spec.footing`` is ``python``), and which footing ran."""
+    if spec.footing != "python":
+        from selfrepair.execution.compiled import compiled_loop
+
+        weight = bool(Fraction(spec.clearance_weight))
+        penalty = penalty_buffer(sim.grid, spec.maze, spec.clearance_radius) if weight else b""
+        ended = compiled_loop(
+            spec, sim, stepper, tally.moved, lambda f: _why(f, spec, sim, stepper), penalty
+        )
+        if ended is not None:
+            status, reason, tally.executed_units, tally.penalty = ended
+            return status, reason, "compiled"
     status, reason = _loop(spec, sim, stepper, tally)
-    return _result(spec, sim, stepper, tally, initial, planning_ns, status, reason)
+    return status, reason, "python"
 
 
 NO_PLAN = MissionStatus.NO_INITIAL_PLAN
@@ -307,6 +327,7 @@ def _result(
     planning_ns: int,
     status: MissionStatus,
     reason: str,
+    footing: str = "python",
 ) -> MissionResult:
     removed, added, motion_removed, motion_added = _plan_distances(spec, sim, tally, initial)
     sums = MissionTally(
@@ -330,6 +351,7 @@ def _result(
         sim.pose,
         sim.ticks,
         sums,
+        footing,
     )
 
 

@@ -94,10 +94,17 @@ class MissionSpec:
     """The tolerant planner's objective for the plan made before any fault is known (``None``:
     the plain cost, duration plus clearance term); replans, made with faults known, always
     minimise the plain cost. A hard objective without a tolerant plan falls back to it too."""
+    footing: str = "auto"
+    """Which mission loop runs it: ``auto`` (the compiled loop of
+    :mod:`selfrepair.execution.compiled` when it can take the mission, else the Python loop),
+    ``compiled`` (refused with the reason when it cannot) or ``python`` (the reference). Both
+    give the same trace; the result's ``footing`` says which ran."""
 
     def __post_init__(self) -> None:
         if self.seed < 0:
             raise ProblemError(f"seed must be a non-negative integer, got {self.seed}")
+        if self.footing not in ("auto", "compiled", "python"):
+            raise ProblemError(f"footing must be auto, compiled or python, got {self.footing!r}")
 
     @property
     def planner(self) -> PlannerSettings:
@@ -178,7 +185,8 @@ class MissionTally(NamedTuple):
 class MissionResult:
     """The outcome of one mission; :func:`selfrepair.execution.metrics.mission_row` flattens it
     (columns in docs/replacement.md). ``tally`` holds sums the executor kept on the way
-    (``None`` for a result made otherwise)."""
+    (``None`` for a result made otherwise); ``footing`` the mission loop that ran it,
+    ``compiled`` or ``python`` (see :attr:`MissionSpec.footing`)."""
 
     spec: MissionSpec
     status: MissionStatus
@@ -190,6 +198,7 @@ class MissionResult:
     final_pose: Pose
     ticks: Fraction
     tally: MissionTally | None = None
+    footing: str = "python"
 
     @property
     def reached(self) -> bool:
