@@ -41,7 +41,7 @@ from __future__ import annotations
 import time
 from array import array
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from typing import Any
@@ -170,10 +170,17 @@ class _Tally:
     penalty: int = 0
 
 
-def run_mission(spec: MissionSpec) -> MissionResult:
-    """Plan, execute and repair one mission (see the module docstring)."""
+def run_mission(
+    spec: MissionSpec, *, world: Callable[[MissionSpec], Simulator] | None = None
+) -> MissionResult:
+    """Plan, execute and repair one mission (see the module docstring). ``world`` makes the
+    simulator that holds the truth (default: the lattice :class:`Simulator`; a physics one is
+    :class:`selfrepair.physics.simulator.PhysicsSimulator`)."""
     factory = get_strategy(spec.strategy)  # fails fast on a bad name
-    sim = Simulator(spec.domain, spec.maze, spec.start, spec.schedule, spec.seed)
+    if world is None:
+        sim = Simulator(spec.domain, spec.maze, spec.start, spec.schedule, spec.seed)
+    else:
+        sim = world(spec)
     initial_known = sim.sense() if spec.initial_faults_known else frozenset()
     table = spec.options.resolved_table() if uses_table(spec.strategy) else None
     _prepare(spec, table)
@@ -261,6 +268,8 @@ def _loop(
                 base = (pose.y + margin) * stride + pose.x + margin
                 tally.penalty += sum([penalty[base + offset] for offset in move.cells])
             moved_(step, action, source, pose, sim.pose, move.duration)
+            if sim.deviated:  # localised off the plan (physics): replan from where it is
+                stepper.relocalise()
         elif outcome is Outcome.COLLISION:
             name = spec.domain.format_action(action)
             return MissionStatus.COLLISION, f"{name} at {sim.pose} would sweep a wall"

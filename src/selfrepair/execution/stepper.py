@@ -257,6 +257,12 @@ class Stepper:
         self.repairs.append(RepairRecord(step, pose, action, repair, latency))
         return repair
 
+    def relocalise(self) -> None:
+        """The robot is not where the last move should have put it (a physics simulator localised
+        it elsewhere): drop the queue, so the next question replans from where it is."""
+        self.queue.clear()
+        self.stopped, self.failure = False, None
+
     def observe(self, outcome: StepOutcome, source: StepSource = StepSource.PLAN) -> None:
         """:meth:`record` a command that :meth:`Simulator.execute
         <selfrepair.execution.simulator.Simulator.execute>` reported as ``outcome``; ``source``
