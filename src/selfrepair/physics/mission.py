@@ -106,14 +106,14 @@ def run_physics_mission(
 
     def make(s: MissionSpec) -> PhysicsSimulator:
         sim = PhysicsSimulator(
-            s.domain, s.maze, s.start, s.schedule, s.seed, params=params, tracked=tracked,
-            world=world,
+            s.domain, s.maze, s.start, s.schedule, s.seed, world=s.world,
+            behaviour=s.behaviour, params=params, tracked=tracked, physics=world,
         )  # fmt: skip
         sims.append(sim)
         return sim
 
     try:
-        result = run_mission(spec, world=make)
+        result = run_mission(spec, simulator=make)
         if recorder is not None and video is not None:
             _write(recorder.frames, video)
     finally:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
 
-from selfrepair.execution.faults import FaultSchedule
+from selfrepair.execution.faults import Detection, FaultSchedule
 from selfrepair.execution.simulator import Outcome, Simulator
 from selfrepair.geometry import Pose
 from selfrepair.physics.model import DEFAULT_PARAMS, RobotParams
@@ -27,6 +27,7 @@ from selfrepair.physics.tracker import ContinuousPose, LatticeMotion
 from selfrepair.physics.world import PhysicsWorld, pose_error, snap
 from selfrepair.robots.domain import Domain
 from selfrepair.search.problem import make_pose
+from selfrepair.world.events import WorldSchedule
 from selfrepair.world.maze import Maze
 
 __all__ = ["PhysicsSimulator", "PhysicsStep", "lattice_motion", "wheel_commands"]
@@ -84,34 +85,42 @@ class PhysicsSimulator(Simulator):
         schedule: FaultSchedule,
         seed: int = 0,
         *,
+        world: WorldSchedule | None = None,
+        behaviour: str | None = None,
         params: RobotParams = DEFAULT_PARAMS,
         tracked: bool = True,
-        world: PhysicsWorld | None = None,
+        physics: PhysicsWorld | None = None,
     ) -> None:
-        super().__init__(domain, maze, start, schedule, seed)
+        super().__init__(domain, maze, start, schedule, seed, world=world, behaviour=behaviour)
         self.params = params
         self.tracked = tracked
-        self.world = world if world is not None else PhysicsWorld(maze, start, params)
-        self.world.place(start)
+        self.physics = physics if physics is not None else PhysicsWorld(maze, start, params)
+        """The MuJoCo world (``world`` is the lattice simulator's world events)."""
+        self.physics.place(start)
         self.physics_steps: list[PhysicsStep] = []
         self.deviated = False
         self._motions: dict[Any, LatticeMotion] = {}
+        self._hidden_faults = schedule.detection is Detection.HIDDEN
 
     def advance(self, action: Any) -> Outcome:
-        """The lattice simulator's step, then, for a move, the physics run and localisation."""
+        """The lattice simulator's step, then, for a move, the physics run and localisation.
+        With hidden faults the wheels run the action the fault behaviour says they perform
+        (:attr:`last_action`); a failed attempt or a bump leaves the robot where it is while
+        its duration passes (the bumper stops the motors at the contact)."""
         start, step = self.pose, self.steps
         status = super().advance(action)
         self.deviated = False
         if status is not Outcome.MOVED:
-            if status is Outcome.FAILED_ATTEMPT:  # the robot does not move; time passes
-                self.world.settle(self.params.seconds(self.last_duration))
+            if status is not Outcome.COLLISION:  # the robot stays; time passes
+                self.physics.settle(self.params.seconds(self.last_duration))
             return status
+        performed = self.last_action if self._hidden_faults else action
         lattice_end = self.pose
-        motion = self._motions.get(action)
+        motion = self._motions.get(performed)
         if motion is None:
-            motion = self._motions[action] = lattice_motion(self.domain, action)
-        run = self.world.run(
-            wheel_commands(self.domain, action),
+            motion = self._motions[performed] = lattice_motion(self.domain, performed)
+        run = self.physics.run(
+            wheel_commands(self.domain, performed),
             Fraction(self.last_duration),
             motion=motion if self.tracked else None,
             reference_start=start,
