@@ -17,7 +17,7 @@ from extras import NUMBA
 from selfrepair.caching import clear_caches
 from selfrepair.errors import ProblemError
 from selfrepair.execution.executor import run_mission
-from selfrepair.execution.faults import Clock, FaultEvent, FaultSchedule, Persistence
+from selfrepair.execution.faults import Clock, Detection, FaultEvent, FaultSchedule, Persistence
 from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionResult, MissionSpec
 from selfrepair.experiment.timing import COLD_CLEARS
@@ -25,6 +25,7 @@ from selfrepair.geometry import Heading, Pose
 from selfrepair.repair.strategies import StrategyOptions
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.world.bundled import bundled_routes, load_bundled
+from selfrepair.world.events import WorldEvent, WorldSchedule
 from selfrepair.world.mazegen import generate_maze
 from selfrepair.world.routes import random_routes
 
@@ -185,6 +186,10 @@ def test_footings_that_the_compiled_loop_cannot_take_run_in_python() -> None:
     event = FaultEvent(FAULTS[0], persistence=Persistence.INTERMITTENT, probability=0.5)
     intermittent = _spec(schedule=FaultSchedule((event,)))
     assert run_mission(intermittent).footing == "python"
+    hidden = _spec(schedule=FaultSchedule.permanent(FAULTS[:1], detection=Detection.HIDDEN))
+    assert run_mission(hidden).footing == "python"
+    changing = _spec(world=WorldSchedule((WorldEvent((3, 3), at=2),)))
+    assert run_mission(changing).footing == "python"
     assert run_mission(_spec()).footing == "compiled"
     assert run_mission(_spec(footing="python")).footing == "python"
     with pytest.raises(ProblemError, match="footing 'compiled' cannot run this mission: strategy"):

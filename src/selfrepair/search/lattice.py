@@ -169,8 +169,6 @@ def cost_scale(domain: Domain[Any, Any], weight: Fraction) -> int:
     return domain.time_unit * weight.denominator
 
 
-
-
 def _zero_distances(maze: Maze, goal: Cell, backend: str) -> npt.NDArray[np.int32]:
     return with_border(np.zeros(maze.walls.shape, dtype=np.int64))
 

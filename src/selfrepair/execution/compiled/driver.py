@@ -79,6 +79,10 @@ def refusal(spec: MissionSpec, stepper: Stepper | None = None) -> str | None:
         return "a tolerant planning objective runs in Python"
     if stepper is not None and stepper.horizon:
         return "a repair horizon runs in Python"
+    if spec.world:
+        return "world events (a changing maze) run in Python"
+    if spec.schedule.detection is Detection.HIDDEN:
+        return "faults hidden from the robot (detection hidden) run in Python"
     events = spec.schedule.events
     if any(e.persistence is Persistence.INTERMITTENT for e in events):
         return "intermittent faults run in Python (their draws are numpy generators)"
@@ -296,6 +300,11 @@ def compiled_loop(
     executed steps; ``why(failure)`` is the reason of a mission that ends on a failed repair;
     ``penalty`` the clearance penalties in the simulator grid's layout (read when the clearance
     weight is not zero)."""
+    if type(sim) is not Simulator:  # another world holds the truth (physics)
+        if spec.footing == "compiled":
+            raise ProblemError("footing 'compiled' cannot run this mission: its simulator is "
+                               f"a {type(sim).__name__}, not the lattice Simulator")  # fmt: skip
+        return None
     if not _check_footing(spec, stepper):
         return None
     try:
