@@ -16,6 +16,18 @@ copy of the free-cell buffer, and a command whose motion would sweep a blocked c
 the robot's own) is a *bump* (outcome ``"bumped"``): the robot does not move, one tick passes and
 ``last_bumped`` names the blocked cells. :meth:`Simulator.sense_cells` is what the robot's range
 sensors report (see :mod:`selfrepair.world.events`).
+
+With detection ``hidden`` (the robot is never told its faults) a forbidden command is not refused:
+the wheels do what the domain's fault-behaviour model says (:meth:`Domain.effective
+<selfrepair.robots.domain.Domain.effective>`, model ``behaviour``, the domain's default unless
+given), and the robot moves accordingly. Any motion whose footprint (its swept cells) is not free
+then stops at the contact, a *bump* (outcome ``"bumped"``, as above): poses are whole cells and a
+footprint lists the cells a motion sweeps, not the order in which it reaches them, so the last
+free pose along the motion is the start pose. The robot stays there, heading unchanged, and one
+tick passes (the bumper stops the motors at the contact); :attr:`Simulator.bumps` counts the
+contacts with walls (``last_bumped`` names only cells blocked by world events, not walls).
+A domain without a fault-behaviour model fails a forbidden command as above, but the outcome
+names no fault (``blocking`` is empty): the robot learns only that the command failed.
 """
 
 from __future__ import annotations
@@ -86,8 +98,14 @@ class Simulator:
     ``clock`` replaces the schedule's fault clock when the true faults are not a function of a
     schedule alone (a team robot's); the schedule then gives only the detection. A robot that
     waits between commands (a team robot waiting for its turn) says so with
-    :meth:`wait_until`.
+    :meth:`wait_until`. ``behaviour`` names the domain's fault-behaviour model used when the
+    faults are hidden (``None``: the default; see the module docstring).
     """
+
+    deviated = False
+    """Whether the last move ended elsewhere than the domain says (never, here: a physics
+    simulator, :mod:`selfrepair.physics.simulator`, sets it after localising the robot); the
+    mission loop then replans from the pose the robot is at."""
 
     def __init__(
         self,
@@ -98,6 +116,7 @@ class Simulator:
         seed: int = 0,
         clock: FaultSource | None = None,
         world: WorldSchedule | None = None,
+        behaviour: str | None = None,
     ) -> None:
         self.domain = domain
         self.maze = maze
@@ -132,6 +151,17 @@ class Simulator:
         self._data = bytearray(self.grid.data) if self.world else self.grid.data
         self._next_event = 0
         self._event_cells = frozenset(self.world.cells()) if self.world else frozenset()
+        self._hidden = schedule.detection is Detection.HIDDEN
+        self.behaviour = behaviour
+        if self._hidden and domain.behaviours:
+            domain.behaviour(behaviour)  # an unknown name fails before the first step
+        self._performed: dict[Any, Any] = {}
+        """The effective action of each commanded action under the current faults (hidden)."""
+        self.last_action: Any = None
+        """The action the wheels really performed in the last command (hidden faults: the
+        effective action; otherwise the command)."""
+        self.bumps = 0
+        """Motions stopped at a wall so far (hidden faults only)."""
 
     @property
     def ticks(self) -> Fraction:
@@ -166,7 +196,8 @@ class Simulator:
             swept: tuple[Cell, ...] = (start.cell,)
         else:  # the footprint of the move table, shifted (a collision moves nothing)
             x, y = start.x, start.y
-            shape = self.table.shapes[action][start.heading]
+            performed = self.last_action if self._hidden else action
+            shape = self.table.shapes[performed][start.heading]
             swept = tuple([(x + dx, y + dy) for dx, dy in shape])
         return StepOutcome(
             status, step, action, start, self.pose, swept, self.last_duration, self.last_blocking
@@ -178,6 +209,8 @@ class Simulator:
         :meth:`execute` wraps it into a :class:`StepOutcome`). A collision changes nothing."""
         if self.world is not None:
             self._apply_events()
+        if self._hidden:
+            return self._advance_hidden(action)
         faults = self._clock.at(self.steps, self.units)
         if faults is not self._faults:
             self._faults = faults
@@ -220,6 +253,49 @@ class Simulator:
             self.units += move.units
         self.steps += 1
         return Outcome.MOVED if moves is not None else Outcome.FAILED_ATTEMPT
+
+    def _advance_hidden(self, action: Any) -> Outcome:
+        """:meth:`advance` with the faults hidden from the robot (see the module docstring):
+        the effective action moves, a swept wall stops the motion at the start pose (a bump)."""
+        faults = self._clock.at(self.steps, self.units)
+        if faults is not self._faults:
+            self._faults = faults
+            self._moves = available_moves(self.table, faults)
+            self._performed = {}
+        start = self.pose
+        self.last_blocking = frozenset()
+        self.steps += 1
+        performed = action
+        if action not in self._moves:
+            if not self.domain.behaviours:  # no model: the command fails, nothing is named
+                self.last_move, self.last_action = None, action
+                self.last_duration = FAILED_ATTEMPT_TICKS
+                self.units += self._failed_units
+                return Outcome.FAILED_ATTEMPT
+            performed = self._performed.get(action)
+            if performed is None:
+                performed = self.domain.effective(action, faults, self.behaviour)
+                self._performed[action] = performed
+        self.last_action = performed
+        move = self.table.moves[performed][start.heading]
+        self.last_bumped = ()
+        wall = not self._free(start, move, performed)
+        if wall or (self.world is not None and (bumped := self._bumped(start, move))):
+            self.last_move = None
+            self.last_duration = FAILED_ATTEMPT_TICKS
+            self.units += self._failed_units
+            if wall:
+                self.bumps += 1
+            else:
+                self.last_bumped = bumped
+            return Outcome.BUMPED
+        self.last_duration = move.duration
+        self.units += move.units
+        x, y = start.x + move.dx, start.y + move.dy
+        self._inside = self.maze.in_bounds(x, y)
+        self.pose = make_pose(x, y, move.heading)
+        self.last_move = move
+        return Outcome.MOVED
 
     def _apply_events(self) -> None:
         """Apply the world events due by now to the occupancy (``blocked`` and the buffer)."""

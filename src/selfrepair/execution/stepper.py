@@ -52,8 +52,10 @@ through :meth:`Stepper.see` (its range sensors) and from bumps (a command that b
 reveals it). When the queue's first action would sweep a cell believed blocked (other than the
 robot's own), the stepper asks for a repair as for a faulty action: a strategy that has a method
 ``repair_blocked(request)`` is asked through it and must answer with actions that avoid the
-believed-blocked cells (the replacement strategy's local detours); any other is answered by a
-plain replan around them (the mission's planner plans around ``MissionContext.belief``).
+believed-blocked cells (the replacement strategy's local detours), one that declares
+``sees_cells`` (true) is asked through its ``repair`` (D* Lite, whose kept search takes the
+cells as updates); any other is answered by a plain replan around them (the mission's planner
+plans around ``MissionContext.belief``).
 """
 
 from __future__ import annotations
@@ -181,6 +183,8 @@ class Stepper:
         self._blocked_repair: Callable[[RepairRequest], Repair] | None = getattr(
             repairer, "repair_blocked", None
         )
+        if self._blocked_repair is None and getattr(repairer, "sees_cells", False):
+            self._blocked_repair = repairer.repair  # its one repair also sees the cells
         self.blocked: frozenset[Cell] = context.belief.blocked
         """The cells the robot believes blocked by world events (see the module docstring)."""
         self._early_at = -1  # the step of the last early repair: at most one per step
@@ -296,6 +300,12 @@ class Stepper:
         self.repairs.append(RepairRecord(step, pose, action, repair, latency))
         return repair
 
+    def relocalise(self) -> None:
+        """The robot is not where the last move should have put it (a physics simulator localised
+        it elsewhere): drop the queue, so the next question replans from where it is."""
+        self.queue.clear()
+        self.stopped, self.failure = False, None
+
     def observe(self, outcome: StepOutcome, source: StepSource = StepSource.PLAN) -> None:
         """:meth:`record` a command that :meth:`Simulator.execute
         <selfrepair.execution.simulator.Simulator.execute>` reported as ``outcome``; ``source``
@@ -340,7 +350,8 @@ class Stepper:
         """Tell the stepper what command ``action`` (number ``step``, of ``source``) did: a move
         from ``start`` to ``end`` in ``duration``, a failed attempt revealing ``blocking``, or a
         refused command (a collision: nothing changes, nothing is recorded), or a bump into the
-        blocked cells ``bumped`` (learned). See the module docstring."""
+        blocked cells ``bumped`` (learned) or, faults hidden, into a wall (recorded; the action
+        stays queued). See the module docstring."""
         if outcome is Outcome.MOVED:
             self.moved(step, action, source, start, end, duration)
             return

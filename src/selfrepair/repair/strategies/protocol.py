@@ -85,7 +85,9 @@ class MissionContext:
     use it. ``start`` is the mission's start pose (``None`` when unknown): a strategy that searches
     ahead of its first repair, as D* Lite does, starts there. ``belief`` holds the cells the
     robot believes blocked by world events (the stepper keeps it up to date; ``plan`` plans
-    around them, ``grid`` and ``free`` know only the maze's walls).
+    around them, ``grid`` and ``free`` know only the maze's walls). ``clearance_weight``,
+    ``clearance_radius`` and ``backend`` are the mission's planner settings, for a strategy that
+    searches with its own planner (D* Lite).
     """
 
     domain: Domain[Any, Any]
@@ -101,6 +103,9 @@ class MissionContext:
     world: object = None
     cost_scale: int = 1
     start: Pose | None = None
+    clearance_weight: Fraction = Fraction(0)
+    clearance_radius: int = 2
+    backend: str = "auto"
     belief: Belief = field(default_factory=Belief)
 
     def at_goal(self, pose: Pose) -> bool:
@@ -178,7 +183,9 @@ class Repairer(Protocol[RequestT, AnswerT]):
     In a changing world (:mod:`selfrepair.world.events`) a robot's repairer may also have a
     method ``repair_blocked(request)``: asked when the first queued action is available but
     sweeps a cell believed blocked (``MissionContext.belief``), it answers with actions that
-    avoid those cells; a repairer without it is answered by a replan there. It may have
+    avoid those cells; one that declares ``sees_cells = True`` instead is asked through
+    :meth:`repair`, which then also sees the cells; any other is answered by a replan there. It
+    may have
     ``expect_blocked()`` too, called once before the mission's clock runs when the world
     changes (to prepare what ``repair_blocked`` needs outside the timed repairs).
     """

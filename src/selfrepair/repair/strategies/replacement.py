@@ -17,6 +17,7 @@ from itertools import chain
 from typing import Any
 
 from selfrepair.errors import ProblemError
+from selfrepair.geometry import FreeGrid
 from selfrepair.repair.detours import DetourFinder
 from selfrepair.repair.lookups import (
     MISSING,
@@ -43,7 +44,13 @@ from selfrepair.repair.strategies.replan import replan
 from selfrepair.status import RepairStatus
 from selfrepair.tables.model import ReplacementTable
 
-__all__ = ["DeferringRepairer", "ReplacementRepairer", "replacement", "start_replacement"]
+__all__ = [
+    "DeferringRepairer",
+    "ReplacementRepairer",
+    "replacement",
+    "start_replacement",
+    "strategy_lookups",
+]
 
 
 def _hit(found: Replacement) -> Repair:
@@ -97,6 +104,14 @@ def _lookups(context: MissionContext, known: frozenset[Any]) -> FaultLookups[Rep
         answer=_hit,
         max_patterns=options.max_lookup_patterns,
     )
+
+
+def strategy_lookups(
+    context: MissionContext, known: frozenset[Any], grid: FreeGrid
+) -> GridLookups[Repair]:
+    """The look-ups the strategy reads under ``known`` on ``grid`` (the compiled mission loop
+    copies their answers: :mod:`selfrepair.execution.compiled`)."""
+    return grid_lookups(_lookups(context, known), grid)
 
 
 def _miss(context: MissionContext, request: RepairRequest, action: Any) -> Repair:
