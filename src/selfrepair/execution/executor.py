@@ -46,7 +46,7 @@ from __future__ import annotations
 import time
 from array import array
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from typing import Any
@@ -205,19 +205,26 @@ class _Tally:
     penalty: int = 0
 
 
-def run_mission(spec: MissionSpec) -> MissionResult:
-    """Plan, execute and repair one mission (see the module docstring)."""
+def run_mission(
+    spec: MissionSpec, *, simulator: Callable[[MissionSpec], Simulator] | None = None
+) -> MissionResult:
+    """Plan, execute and repair one mission (see the module docstring). ``simulator`` makes the
+    simulator that holds the truth (default: the lattice :class:`Simulator`; a physics one is
+    :class:`selfrepair.physics.simulator.PhysicsSimulator`)."""
     factory = get_strategy(spec.strategy)  # fails fast on a bad name
-    sim = Simulator(
-        spec.domain,
-        spec.maze,
-        spec.start,
-        spec.schedule,
-        spec.seed,
-        world=spec.world,
-        behaviour=spec.behaviour,
-        observation=spec.observation,
-    )
+    if simulator is not None:
+        sim = simulator(spec)
+    else:
+        sim = Simulator(
+            spec.domain,
+            spec.maze,
+            spec.start,
+            spec.schedule,
+            spec.seed,
+            world=spec.world,
+            behaviour=spec.behaviour,
+            observation=spec.observation,
+        )
     initial_known = sim.sense() if spec.initial_faults_known else frozenset()
     table = spec.options.resolved_table() if uses_table(spec.strategy) else None
     _prepare(spec, table)
@@ -236,15 +243,36 @@ def run_mission(spec: MissionSpec) -> MissionResult:
     planning_ns = time.perf_counter_ns() - t0
     # on-use and hidden: the known faults never clear by themselves, so waiting cannot help
     waits = None if spec.schedule.detection is Detection.NOW else 0
-    stepper = Stepper(
-        context, factory(context), initial.actions, initial_known, sim.table, max_wait=waits
-    )
+    repairer = factory(context)
+    if spec.world and (expect := getattr(repairer, "expect_blocked", None)) is not None:
+        expect()  # a strategy that repairs blocked actions itself prepares before the clock runs
+    stepper = Stepper(context, repairer, initial.actions, initial_known, sim.table, max_wait=waits)
     tally = _Tally()
     if initial.status is not PlanStatus.SOLVED:
         reason = f"initial plan: {initial.status.value}"
         return _result(spec, sim, stepper, tally, initial, planning_ns, NO_PLAN, reason)
+    status, reason, footing = _run_loop(spec, sim, stepper, tally)
+    return _result(spec, sim, stepper, tally, initial, planning_ns, status, reason, footing)
+
+
+def _run_loop(
+    spec: MissionSpec, sim: Simulator, stepper: Stepper, tally: _Tally
+) -> tuple[MissionStatus, str, str]:
+    """The mission's loop on its footing (:mod:`selfrepair.execution.compiled` where it can
+    run, unless ``spec.footing`` is ``python``), and which footing ran."""
+    if spec.footing != "python":
+        from selfrepair.execution.compiled import compiled_loop
+
+        weight = bool(Fraction(spec.clearance_weight))
+        penalty = penalty_buffer(sim.grid, spec.maze, spec.clearance_radius) if weight else b""
+        ended = compiled_loop(
+            spec, sim, stepper, tally.moved, lambda f: _why(f, spec, sim, stepper), penalty
+        )
+        if ended is not None:
+            status, reason, tally.executed_units, tally.penalty = ended
+            return status, reason, "compiled"
     status, reason = _loop(spec, sim, stepper, tally)
-    return _result(spec, sim, stepper, tally, initial, planning_ns, status, reason)
+    return status, reason, "python"
 
 
 NO_PLAN = MissionStatus.NO_INITIAL_PLAN
@@ -321,6 +349,8 @@ def _loop(
                 base = (pose.y + margin) * stride + pose.x + margin
                 tally.penalty += sum([penalty[base + offset] for offset in move.cells])
             moved_(step, action, source, pose, sim.pose, move.duration)
+            if sim.deviated:  # localised off the plan (physics): replan from where it is
+                stepper.relocalise()
         elif outcome is Outcome.COLLISION:
             name = spec.domain.format_action(action)
             return MissionStatus.COLLISION, f"{name} at {sim.pose} would sweep a wall"
@@ -375,6 +405,7 @@ def _result(
     planning_ns: int,
     status: MissionStatus,
     reason: str,
+    footing: str = "python",
 ) -> MissionResult:
     removed, added, motion_removed, motion_added = _plan_distances(spec, sim, tally, initial)
     sums = MissionTally(
@@ -398,6 +429,7 @@ def _result(
         sim.pose,
         sim.ticks,
         sums,
+        footing,
         diagnosis_report(stepper.repairer),
     )
 

@@ -52,6 +52,7 @@ class StepSource(StrEnum):
     LOOKAHEAD = RepairSource.LOOKAHEAD.value
     REPLAN = RepairSource.REPLAN.value
     PLAN_REPAIR = RepairSource.PLAN_REPAIR.value
+    DETOUR = RepairSource.DETOUR.value
     PROBE = RepairSource.PROBE.value
     FAILED_ATTEMPT = "failed-attempt"
     WAIT = "wait"
@@ -63,6 +64,7 @@ STEP_OF_REPAIR: Mapping[RepairSource, StepSource] = {
         RepairSource.LOOKAHEAD: StepSource.LOOKAHEAD,
         RepairSource.REPLAN: StepSource.REPLAN,
         RepairSource.PLAN_REPAIR: StepSource.PLAN_REPAIR,
+        RepairSource.DETOUR: StepSource.DETOUR,
         RepairSource.PROBE: StepSource.PROBE,
 }
 """The step source of the actions a repair spliced in, by the repair's source: an explicit
@@ -110,10 +112,17 @@ class MissionSpec:
     world: WorldSchedule = field(default_factory=WorldSchedule)
     """Cells that become blocked or free during the mission, and how the robot senses them (see
     :mod:`selfrepair.world.events`; empty: the maze never changes)."""
+    footing: str = "auto"
+    """Which mission loop runs it: ``auto`` (the compiled loop of
+    :mod:`selfrepair.execution.compiled` when it can take the mission, else the Python loop),
+    ``compiled`` (refused with the reason when it cannot) or ``python`` (the reference). Both
+    give the same trace; the result's ``footing`` says which ran."""
 
     def __post_init__(self) -> None:
         if self.seed < 0:
             raise ProblemError(f"seed must be a non-negative integer, got {self.seed}")
+        if self.footing not in ("auto", "compiled", "python"):
+            raise ProblemError(f"footing must be auto, compiled or python, got {self.footing!r}")
 
     @property
     def planner(self) -> PlannerSettings:
@@ -194,7 +203,8 @@ class MissionTally(NamedTuple):
 class MissionResult:
     """The outcome of one mission; :func:`selfrepair.execution.metrics.mission_row` flattens it
     (columns in docs/replacement.md). ``tally`` holds sums the executor kept on the way
-    (``None`` for a result made otherwise)."""
+    (``None`` for a result made otherwise); ``footing`` the mission loop that ran it,
+    ``compiled`` or ``python`` (see :attr:`MissionSpec.footing`)."""
 
     spec: MissionSpec
     status: MissionStatus
@@ -206,6 +216,7 @@ class MissionResult:
     final_pose: Pose
     ticks: Fraction
     tally: MissionTally | None = None
+    footing: str = "python"
     diagnosis: Mapping[str, Any] | None = None
     """What a diagnosing strategy recorded (faults hidden; ``None`` for any other): the step of
     the first surprise, the commands to isolation, the class isolated (its fault sets), probes

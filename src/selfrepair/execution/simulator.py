@@ -116,6 +116,11 @@ class Simulator:
     faults are hidden (``None``: the default; see the module docstring).
     """
 
+    deviated = False
+    """Whether the last move ended elsewhere than the domain says (never, here: a physics
+    simulator, :mod:`selfrepair.physics.simulator`, sets it after localising the robot); the
+    mission loop then replans from the pose the robot is at."""
+
     def __init__(
         self,
         domain: Domain[Any, Any],

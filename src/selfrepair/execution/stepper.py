@@ -50,10 +50,12 @@ commands (detection ``now``) comes in through :meth:`Stepper.learn`.
 A changing world (:mod:`selfrepair.world.events`): the cells the robot believes blocked come in
 through :meth:`Stepper.see` (its range sensors) and from bumps (a command that bumped into a cell
 reveals it). When the queue's first action would sweep a cell believed blocked (other than the
-robot's own), the stepper asks for a repair as for a faulty action: a strategy that declares
-``sees_cells`` (an attribute, true) is asked itself and must answer with actions that avoid the
-believed-blocked cells (the replacement strategy's local detours); any other is answered by a
-plain replan around them (the mission's planner plans around ``MissionContext.belief``).
+robot's own), the stepper asks for a repair as for a faulty action: a strategy that has a method
+``repair_blocked(request)`` is asked through it and must answer with actions that avoid the
+believed-blocked cells (the replacement strategy's local detours), one that declares
+``sees_cells`` (true) is asked through its ``repair`` (D* Lite, whose kept search takes the
+cells as updates); any other is answered by a plain replan around them (the mission's planner
+plans around ``MissionContext.belief``).
 
 Faults hidden (detection ``hidden``, docs/diagnosis.md): after each command the caller gives the
 stepper what the robot observed (:meth:`Stepper.perceive`). A repairer that observes (one with
@@ -69,7 +71,7 @@ from __future__ import annotations
 
 import time
 from collections import deque
-from collections.abc import Container, Iterable, Iterator, Sequence
+from collections.abc import Callable, Container, Iterable, Iterator, Sequence
 from fractions import Fraction
 from itertools import islice, repeat
 from operator import itemgetter
@@ -152,10 +154,10 @@ class Stepper:
     __slots__ = (
         "_assume",
         "_available",
+        "_blocked_repair",
         "_early_at",
         "_observe",
         "_perceived",
-        "_sees_cells",
         "_table",
         "_unusable",
         "blocked",
@@ -192,7 +194,11 @@ class Stepper:
         self._table = table
         self._available: Container[Any] = available_moves(table, known)
         self.horizon = int(getattr(repairer, "horizon", 0))
-        self._sees_cells = bool(getattr(repairer, "sees_cells", False))
+        self._blocked_repair: Callable[[RepairRequest], Repair] | None = getattr(
+            repairer, "repair_blocked", None
+        )
+        if self._blocked_repair is None and getattr(repairer, "sees_cells", False):
+            self._blocked_repair = repairer.repair  # its one repair also sees the cells
         self._observe = getattr(repairer, "observe", None)
         self._assume = getattr(repairer, "assumption", None)
         self._unusable: frozenset[Any] = frozenset()
@@ -328,8 +334,13 @@ class Stepper:
         t0 = time.perf_counter_ns()
         queue = self.queue
         request = RepairRequest(pose, _ActionView(queue), self.known, step)
-        fallback = (action is None and not asked) or (blocked and not self._sees_cells)
-        repair = replan(self.context, request) if fallback else self.repairer.repair(request)
+        blocked_repair = self._blocked_repair
+        if (action is None and not asked) or (blocked and blocked_repair is None):
+            repair = replan(self.context, request)  # no queue, or a strategy blind to cells
+        elif blocked_repair is not None and blocked:
+            repair = blocked_repair(request)
+        else:
+            repair = self.repairer.repair(request)
         if repair.status is RepairStatus.REPAIRED:
             source = STEP_OF_REPAIR[repair.source]
             splice(queue, repair.consumed, repair.actions, source)
@@ -338,6 +349,12 @@ class Stepper:
         latency = time.perf_counter_ns() - t0
         self.repairs.append(RepairRecord(step, pose, action, repair, latency))
         return repair
+
+    def relocalise(self) -> None:
+        """The robot is not where the last move should have put it (a physics simulator localised
+        it elsewhere): drop the queue, so the next question replans from where it is."""
+        self.queue.clear()
+        self.stopped, self.failure = False, None
 
     def observe(self, outcome: StepOutcome, source: StepSource = StepSource.PLAN) -> None:
         """:meth:`record` a command that :meth:`Simulator.execute

@@ -34,6 +34,7 @@ SOURCE_COLOURS: Mapping[StepSource, str] = MappingProxyType(
         StepSource.WAIT: "#F0E442",
         StepSource.BUMPED: "#000000",
         StepSource.PROBE: "#999999",
+        StepSource.DETOUR: "#8C564B",
     }
 )
 """Step colours by source, in every figure, animation and the HTML viewer. A repair's source

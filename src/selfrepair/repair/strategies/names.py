@@ -75,12 +75,14 @@ _TEAM = frozenset({StrategyName.TEAM_REPLACEMENT, StrategyName.REALLOCATION, Str
 
 class RepairSource(StrEnum):
     """Where the actions of a robot's repair came from (named after the strategy that made
-    them, but for ``plan-repair``: a plan repaired by LPG-adapt, and ``probe``: commands that
-    active diagnosis runs to tell fault hypotheses apart)."""
+    them, but for ``plan-repair``: a plan repaired by LPG-adapt, ``detour``: a local detour
+    round cells believed blocked, from the replacement strategy's detour table, and ``probe``:
+    commands that active diagnosis runs to tell fault hypotheses apart)."""
 
     REPLACEMENT = StrategyName.REPLACEMENT.value
     LOOKAHEAD = StrategyName.LOOKAHEAD.value
     REPLAN = StrategyName.REPLAN.value
     PLAN_REPAIR = "plan-repair"
+    DETOUR = "detour"
     PROBE = "probe"
     """A command chosen to tell fault hypotheses apart (active diagnosis)."""
