@@ -58,6 +58,14 @@ def test_every_strategy_reaches_the_goal_with_hidden_faults(strategy: str, fault
         assert row["isolated_right"] == 1  # exact observations never isolate a wrong class
 
 
+@pytest.mark.parametrize("faults", ["FR:B,RL:S", "RL:B,RL:S"])
+def test_a_conformant_robot_without_a_conformant_plan_falls_back(faults: str) -> None:
+    # here no plan avoids every fault still credible near the goal: the robot assumes the most
+    # probable class instead of giving up (it was stuck before)
+    result = run_mission(_spec(faults, StrategyName.CONFORMANT, maze="wide-short"))
+    assert result.reached, result.reason
+
+
 def test_a_strategy_that_does_not_observe_is_lost_with_hidden_faults() -> None:
     result = run_mission(_spec("FL:F", StrategyName.REPLACEMENT))
     assert not result.reached and mission_row(result)["bumps"] > 100

@@ -17,7 +17,8 @@ command (:meth:`Stepper.next_action`), sends the command to its world, and tells
 Before each command, :meth:`Stepper.next_action`:
 
 1. if the queue is empty (away from the goal: the caller checks the goal), replans (the
-   defensive replan, recorded with ``action=None``);
+   defensive replan, recorded with ``action=None``; with the faults hidden an observing
+   repairer is asked instead: it may assume other faults than the stepper checks);
 2. if the queue's first action is unavailable under the known faults, asks the strategy for a
    repair and splices it into the queue (:func:`splice`, the one splice of the code base);
 3. if the strategy has a ``horizon`` (lookahead with a window before the faulty action), asks it
@@ -335,7 +336,9 @@ class Stepper:
         queue = self.queue
         request = RepairRequest(pose, _ActionView(queue), self.known, step)
         blocked_repair = self._blocked_repair
-        if (action is None and not asked) or (blocked and blocked_repair is None):
+        if (action is None and not (asked or self._perceived)) or (
+            blocked and blocked_repair is None
+        ):
             repair = replan(self.context, request)  # no queue, or a strategy blind to cells
         elif blocked_repair is not None and blocked:
             repair = blocked_repair(request)

@@ -205,7 +205,10 @@ class DiagnosingRepairer:
     # --- repairs -----------------------------------------------------------------------------
 
     def repair(self, request: RepairRequest) -> Repair:
-        """A rejoin when asked for one, else a repair of the front under the assumed faults."""
+        """A rejoin when asked for one, a plan to the goal for an empty queue, else a repair of
+        the front under the assumed faults."""
+        if not self._wanted and not request.queue:
+            return self._replan(request)
         if self._wanted:
             self._wanted = False
             if self._should_probe():
@@ -307,9 +310,17 @@ class DiagnosingRepairer:
         )
 
     def _replan(self, request: RepairRequest) -> Repair:
-        """Plan from scratch to the goal under the assumed faults (the whole queue goes)."""
+        """Plan from scratch to the goal under the assumed faults (the whole queue goes); when no
+        plan exists under a conformant assumption, under the most probable class's."""
         self._probing = self._rejoining = 0
-        return replan(self._context, request._replace(known=self._known))
+        found = replan(self._context, request._replace(known=self._known))
+        if found.status is RepairStatus.REPAIRED or self._policy is Policy.MOST_PROBABLE:
+            return found
+        if not self._relaxed:
+            self._relaxed = True
+            self._known = self.belief.most_probable()[1]
+        again = replan(self._context, request._replace(known=self._known))
+        return chained(again, found.attempts, expansions=found.expansions)
 
     def report(self) -> dict[str, Any]:
         """What the result row records of the diagnosis (see :func:`diagnosis_report`)."""

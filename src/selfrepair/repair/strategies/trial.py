@@ -168,6 +168,8 @@ class TrialRepairer:
         if self._wanted:
             self._wanted = False
             return self._rejoin(request)
+        if not request.queue:
+            return self._goal(request, 0)
         action = request.queue[0]
         domain = self._context.domain
         first = self.kept.get(action)
