@@ -235,9 +235,10 @@ def run_mission(
     planning_ns = time.perf_counter_ns() - t0
     # on-use and hidden: the known faults never clear by themselves, so waiting cannot help
     waits = None if spec.schedule.detection is Detection.NOW else 0
-    stepper = Stepper(
-        context, factory(context), initial.actions, initial_known, sim.table, max_wait=waits
-    )
+    repairer = factory(context)
+    if spec.world and (expect := getattr(repairer, "expect_blocked", None)) is not None:
+        expect()  # a strategy that repairs blocked actions itself prepares before the clock runs
+    stepper = Stepper(context, repairer, initial.actions, initial_known, sim.table, max_wait=waits)
     tally = _Tally()
     if initial.status is not PlanStatus.SOLVED:
         reason = f"initial plan: {initial.status.value}"

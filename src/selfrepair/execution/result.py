@@ -51,6 +51,7 @@ class StepSource(StrEnum):
     LOOKAHEAD = RepairSource.LOOKAHEAD.value
     REPLAN = RepairSource.REPLAN.value
     PLAN_REPAIR = RepairSource.PLAN_REPAIR.value
+    DETOUR = RepairSource.DETOUR.value
     FAILED_ATTEMPT = "failed-attempt"
     WAIT = "wait"
     BUMPED = "bumped"
@@ -61,6 +62,7 @@ STEP_OF_REPAIR: Mapping[RepairSource, StepSource] = {
         RepairSource.LOOKAHEAD: StepSource.LOOKAHEAD,
         RepairSource.REPLAN: StepSource.REPLAN,
         RepairSource.PLAN_REPAIR: StepSource.PLAN_REPAIR,
+        RepairSource.DETOUR: StepSource.DETOUR,
 }
 """The step source of the actions a repair spliced in, by the repair's source: an explicit
 mapping, never a conversion by value (a plain dictionary, typed read-only: one look-up inside the

@@ -50,17 +50,19 @@ commands (detection ``now``) comes in through :meth:`Stepper.learn`.
 A changing world (:mod:`selfrepair.world.events`): the cells the robot believes blocked come in
 through :meth:`Stepper.see` (its range sensors) and from bumps (a command that bumped into a cell
 reveals it). When the queue's first action would sweep a cell believed blocked (other than the
-robot's own), the stepper asks for a repair as for a faulty action: a strategy that declares
-``sees_cells`` (an attribute, true) is asked itself and must answer with actions that avoid the
-believed-blocked cells (the replacement strategy's local detours); any other is answered by a
-plain replan around them (the mission's planner plans around ``MissionContext.belief``).
+robot's own), the stepper asks for a repair as for a faulty action: a strategy that has a method
+``repair_blocked(request)`` is asked through it and must answer with actions that avoid the
+believed-blocked cells (the replacement strategy's local detours), one that declares
+``sees_cells`` (true) is asked through its ``repair`` (D* Lite, whose kept search takes the
+cells as updates); any other is answered by a plain replan around them (the mission's planner
+plans around ``MissionContext.belief``).
 """
 
 from __future__ import annotations
 
 import time
 from collections import deque
-from collections.abc import Container, Iterable, Iterator, Sequence
+from collections.abc import Callable, Container, Iterable, Iterator, Sequence
 from fractions import Fraction
 from itertools import islice, repeat
 from operator import itemgetter
@@ -142,8 +144,8 @@ class Stepper:
 
     __slots__ = (
         "_available",
+        "_blocked_repair",
         "_early_at",
-        "_sees_cells",
         "_table",
         "blocked",
         "context",
@@ -178,7 +180,11 @@ class Stepper:
         self._table = table
         self._available: Container[Any] = available_moves(table, known)
         self.horizon = int(getattr(repairer, "horizon", 0))
-        self._sees_cells = bool(getattr(repairer, "sees_cells", False))
+        self._blocked_repair: Callable[[RepairRequest], Repair] | None = getattr(
+            repairer, "repair_blocked", None
+        )
+        if self._blocked_repair is None and getattr(repairer, "sees_cells", False):
+            self._blocked_repair = repairer.repair  # its one repair also sees the cells
         self.blocked: frozenset[Cell] = context.belief.blocked
         """The cells the robot believes blocked by world events (see the module docstring)."""
         self._early_at = -1  # the step of the last early repair: at most one per step
@@ -280,8 +286,13 @@ class Stepper:
         t0 = time.perf_counter_ns()
         queue = self.queue
         request = RepairRequest(pose, _ActionView(queue), self.known, step)
-        fallback = action is None or (blocked and not self._sees_cells)
-        repair = replan(self.context, request) if fallback else self.repairer.repair(request)
+        blocked_repair = self._blocked_repair
+        if action is None or (blocked and blocked_repair is None):
+            repair = replan(self.context, request)  # no queue, or a strategy blind to cells
+        elif blocked_repair is not None and blocked:
+            repair = blocked_repair(request)
+        else:
+            repair = self.repairer.repair(request)
         if repair.status is RepairStatus.REPAIRED:
             source = STEP_OF_REPAIR[repair.source]
             splice(queue, repair.consumed, repair.actions, source)

@@ -179,6 +179,15 @@ class Repairer(Protocol[RequestT, AnswerT]):
     first is faulty under the known faults, not only when the first one is (the first faulty
     action is then not at the front of ``RepairRequest.queue``; see
     :func:`~selfrepair.repair.strategies.lookahead.lookahead`).
+
+    In a changing world (:mod:`selfrepair.world.events`) a robot's repairer may also have a
+    method ``repair_blocked(request)``: asked when the first queued action is available but
+    sweeps a cell believed blocked (``MissionContext.belief``), it answers with actions that
+    avoid those cells; one that declares ``sees_cells = True`` instead is asked through
+    :meth:`repair`, which then also sees the cells; any other is answered by a replan there. It
+    may have
+    ``expect_blocked()`` too, called once before the mission's clock runs when the world
+    changes (to prepare what ``repair_blocked`` needs outside the timed repairs).
     """
 
     def repair(self, request: RequestT) -> AnswerT:
