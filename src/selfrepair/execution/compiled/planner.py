@@ -30,7 +30,8 @@ from selfrepair.execution.result import MissionSpec
 from selfrepair.repair.lookups import action_index
 from selfrepair.search import _kernels as kn
 from selfrepair.search.backend import use_numba
-from selfrepair.search.lattice import _bound, _setup, cost_scale
+from selfrepair.search.heuristics import heuristic_bound
+from selfrepair.search.lattice import _setup, cost_scale
 from selfrepair.search.problem import PlanningProblem
 
 __all__ = ["KernelPlanner", "cached_planner", "kernel_planner", "plan_in_kernel"]
@@ -83,7 +84,7 @@ def _make(spec: MissionSpec, known: frozenset[Any]) -> KernelPlanner | None:
                               spec.clearance_radius, domain)  # fmt: skip
     setup = _setup(domain, known)
     moves = setup.actions
-    bound, largest = _bound(problem, spec.heuristic, setup, "numba")
+    bound, largest = heuristic_bound(problem, spec.heuristic, moves, setup.rate, "numba")
     scale = cost_scale(domain, weight)
     height, width = maze.walls.shape
     pw = width + 2
