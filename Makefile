@@ -67,6 +67,7 @@ bench: $(BENCH_STAMP)
 	$(PY) benchmarks/mazegen.py
 	$(PY) benchmarks/memory.py
 	$(PY) benchmarks/missions.py
+	$(PY) benchmarks/diagnosis.py --jobs 2
 
 clean:
 	rm -rf $(VENV) build dist .pytest_cache .ruff_cache .hypothesis

@@ -57,7 +57,7 @@ NON_DEFAULT = {
     "max_wait": ["--max-wait", "3"],
     "fault_behaviour": [],  # needs --detect hidden and a robot with a model: test_diagnosis_cli
     "noise": [],  # needs --detect hidden: test_diagnosis_cli
-    "bump_switch": ["--no-bump-switch"],
+    "bump_switch": ["--no-bumps"],
     "max_faults": ["--max-faults", "1"],
     "fault_prior": ["--fault-prior", "0.1"],
     "confidence": ["--confidence", "0.05"],

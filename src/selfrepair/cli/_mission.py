@@ -106,7 +106,7 @@ Noise = Annotated[
 BumpSwitch = Annotated[
     bool,
     typer.Option(
-        "--bump-switch/--no-bump-switch",
+        "--bumps/--no-bumps",
         help="Faults hidden: the robot senses when a motion stops at a wall.",
     ),
 ]
