@@ -3,7 +3,9 @@ active diagnosis and trial and error."""
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
+from pathlib import Path
 
 import pytest
 
@@ -106,3 +108,26 @@ def test_a_robot_without_a_behaviour_model_diagnoses_from_failed_commands() -> N
     assert result.reached, result.reason
     assert row["failed_attempts"] >= 1 and row["behaviour"] is None
     assert row["isolated_right"] == 1
+
+
+def test_a_trace_with_hidden_faults_replays_under_the_behaviour_model(tmp_path: Path) -> None:
+    from selfrepair.execution.replay import replay
+    from selfrepair.execution.tracewrite import write_trace
+
+    spec = _spec("FL:F,RR:B", StrategyName.ACTIVE_DIAGNOSIS, noise=0.01, seed=2)
+    path = tmp_path / "t.jsonl"
+    write_trace(run_mission(spec), path)
+    lines = path.read_text().splitlines()
+    header = json.loads(lines[0])
+    assert header["hidden"]["noise"] == 0.01 and header["hidden"]["behaviour"] is None
+    assert replay(path).ok
+    # the first command went astray (an arc for a straight move): say it went straight instead
+    first = next(i for i, line in enumerate(lines) if json.loads(line).get("type") == "step")
+    step = json.loads(lines[first])
+    straight = run_mission(replace(spec, schedule=FaultSchedule()))  # the fault-free motion
+    end = straight.steps[0].end
+    step["to"] = [end.x, end.y, end.heading.name]
+    lines[first] = json.dumps(step)
+    path.write_text("\n".join(lines) + "\n")
+    report = replay(path)
+    assert not report.ok and report.first_bad_step == 0

@@ -46,7 +46,10 @@ def replay(trace: Trace | str | Path) -> ReplayReport:
     report at that step (the true ones). A moving step must also be allowed by the true faults
     of the schedule at that step, sweep only free cells, and end at the pose and after the
     duration that the domain's ``step`` gives. A failed attempt must use an action the true
-    faults forbid, stay put and last one tick. The summary, when present, must agree on the
+    faults forbid, stay put and last one tick. With the faults hidden (detection ``hidden``) a
+    step is checked against the action the wheels performed (``Domain.effective`` under the true
+    faults and the trace's behaviour model), and a bump must be a motion that sweeps a wall,
+    staying put for one tick. The summary, when present, must agree on the
     number of steps, the final pose, the ticks and whether the goal was reached.
     """
     if not isinstance(trace, Trace):
@@ -86,9 +89,19 @@ def _check_step(
         if step.end != step.start or step.duration != FAILED_ATTEMPT_TICKS:
             return "a failed attempt must stay put and last one tick"
         return None
-    if not domain.available(step.action, true):
+    performed = step.action
+    if spec.schedule.detection is Detection.HIDDEN and domain.behaviours:
+        performed = domain.effective(step.action, true, spec.behaviour)  # what the wheels did
+        if step.source is StepSource.BUMPED:
+            if spec.maze.all_free(domain.footprint(pose, performed)):
+                did = domain.format_action(performed)
+                return f"a bump of {name} (performing {did}), but its motion sweeps no wall"
+            if step.end != step.start or step.duration != FAILED_ATTEMPT_TICKS:
+                return "a bump must stay put and last one tick"
+            return None
+    elif not domain.available(step.action, true):
         return f"{name} is forbidden by the true faults {domain.format_faults(true)}"
-    end, swept, duration = domain.step(pose, step.action)
+    end, swept, duration = domain.step(pose, performed)
     if not spec.maze.all_free(swept):
         return f"{name} at {pose} sweeps a wall or leaves the grid"
     if end != step.end:

@@ -15,6 +15,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+from selfrepair.diagnosis import ObservationModel
 from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.result import MissionSpec, StepSource, TraceStep
@@ -220,6 +221,7 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
         heading = header.get("goal_heading")
         options = header.get("options", {})
         planner = header.get("planner", {})
+        hidden = header.get("hidden") or {}
         return MissionSpec(
             maze=maze,
             start=f.pose("start"),
@@ -236,6 +238,13 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
                 lpg_time_limit_s=float(options.get("lpg_time_limit_s", 5.0)),
                 lpg_seed=int(options.get("lpg_seed", 0)),
                 max_wait=int(options.get("max_wait", 0)),  # older traces: made without waits
+                max_faults=int(hidden.get("max_faults", 2)),
+                fault_prior=float(hidden.get("fault_prior", 0.05)),
+                confidence=float(hidden.get("confidence", 0.01)),
+            ),
+            behaviour=hidden.get("behaviour"),
+            observation=ObservationModel(
+                float(hidden.get("noise", 0.0)), bool(hidden.get("bumps", True))
             ),
             clearance_weight=Fraction(str(planner.get("clearance_weight", "0"))),
             clearance_radius=int(planner.get("clearance_radius", 2)),

@@ -8,6 +8,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
+from selfrepair.execution.faults import Detection
 from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
 from selfrepair.execution.traceformat import TRACE_FORMAT, TRACE_VERSION
@@ -62,6 +63,25 @@ def header_json(spec: MissionSpec, initial_plan: Iterable[Any] = ()) -> dict[str
         "initial_faults_known": spec.initial_faults_known,
         "max_steps": spec.max_steps,
         "initial_plan": [domain.format_action(a) for a in initial_plan],
+        **_hidden_json(spec),
+    }
+
+
+def _hidden_json(spec: MissionSpec) -> dict[str, Any]:
+    """Faults hidden (docs/diagnosis.md): the behaviour model, the observation model and the
+    diagnosis options, under ``"hidden"`` (absent otherwise, so other traces are as before)."""
+    if spec.schedule.detection is not Detection.HIDDEN:
+        return {}
+    options = spec.options
+    return {
+        "hidden": {
+            "behaviour": spec.behaviour,
+            "noise": spec.observation.noise,
+            "bumps": spec.observation.bumps,
+            "max_faults": options.max_faults,
+            "fault_prior": options.fault_prior,
+            "confidence": options.confidence,
+        }
     }
 
 
