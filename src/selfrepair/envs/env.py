@@ -61,15 +61,15 @@ from selfrepair.envs.scenarios import (
     Scenario,
     draw_scenario,
     maze_sources,
-    random_route,
+    with_options,
 )
 from selfrepair.errors import ProblemError, choice
 from selfrepair.execution.executor import mission_context
-from selfrepair.execution.faults import Detection, FaultSchedule
+from selfrepair.execution.faults import Detection
 from selfrepair.execution.result import MissionSpec, RepairRecord, StepSource
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS, Outcome, Simulator, StepOutcome
 from selfrepair.execution.stepper import Entry, Stepper
-from selfrepair.geometry import Cell, Heading, Pose, parse_cell, parse_pose
+from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import (
     RepairSource,
@@ -83,17 +83,22 @@ from selfrepair.robots.registry import get_domain
 from selfrepair.search.astar import PlanStatus
 from selfrepair.tables.fileformat import default_table, resolve_table
 from selfrepair.tables.model import ReplacementTable
-from selfrepair.world.bundled import resolve_maze
-from selfrepair.world.maze import Maze
 
-__all__ = ["MAX_VIEW_RADIUS", "FaultyMazeEnv", "Rewards", "ask", "default_table"]
+__all__ = [
+    "MAX_VIEW_RADIUS",
+    "FaultyMazeEnv",
+    "Rewards",
+    "ask",
+    "check_settings",
+    "default_table",
+    "observation_space",
+]
 
 MAX_VIEW_RADIUS = 32
 """The largest ``view_radius`` accepted (the window has ``(2r+1)**2`` cells)."""
 
 Observation = dict[str, Any]
 
-_RESET_OPTIONS = frozenset({"maze", "start", "goal", "faults"})
 _HEADING_LETTERS = "".join(h.name for h in Heading)
 _FAILED_TICKS = float(FAILED_ATTEMPT_TICKS)
 
@@ -160,21 +165,11 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         self.table = self._table(table)
         self.recursion = choice(RecursionMode, recursion, "recursion mode")
         self.rewards = rewards or Rewards()
-        if max_steps is not None and max_steps < 1:
-            raise ProblemError(f"max_steps must be at least 1, got {max_steps}")
+        check_settings(max_steps, view_radius, render_mode, self.metadata["render_modes"])
         self.max_steps = max_steps
-        if not 0 <= view_radius <= MAX_VIEW_RADIUS:
-            raise ProblemError(
-                f"view_radius must be from 0 to {MAX_VIEW_RADIUS}, got {view_radius}"
-            )
         self.view_radius = view_radius
         self._side = 2 * view_radius + 1
         self.guide = guide
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ProblemError(
-                f"render_mode must be one of {', '.join(self.metadata['render_modes'])} or None, "
-                f"got {render_mode!r}"
-            )
         self.render_mode = render_mode
         self.cell_pixels = check_cell_pixels(cell_pixels)
         self._setup_spaces()
@@ -210,16 +205,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         self._index = {action: i for i, action in enumerate(self.actions)}
         self._durations = tuple(float(domain.duration(a)) for a in self.actions)
         self._fault_index = {fault: i for i, fault in enumerate(domain.faults)}
-        side = 2 * self.view_radius + 1
-        reach = max(source.largest_side for source in self.sources) - 1
-        observation: dict[str, spaces.Space[Any]] = {
-            "window": spaces.MultiBinary((side, side)),
-            "heading": spaces.Discrete(4),
-            "goal": spaces.Box(-reach, reach, shape=(2,), dtype=np.int32),
-        }
-        if domain.faults:
-            observation["faults"] = spaces.MultiBinary(len(domain.faults))
-        self.observation_space = spaces.Dict(observation)
+        self.observation_space = observation_space(domain, self.sources, self.view_radius)
         self.action_space = spaces.Discrete(len(self.actions))
 
     # --- episode state, read by policies ------------------------------------------------------
@@ -306,7 +292,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
             self.sources, self.routes, self.domain, self.faults, self.np_random, self._fault_sets
         )
         if options:
-            scenario = self._with_options(scenario, options)
+            scenario = with_options(scenario, options, self.domain, self.np_random)
         self._begin(scenario)
         pose = self._simulator().pose
         info = self._info(pose, None)
@@ -366,33 +352,6 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         return rgb_frame(self._base_frame, pose, self.cell_pixels)
 
     # --- internals -------------------------------------------------------------------------
-
-    def _with_options(self, scenario: Scenario, options: dict[str, Any]) -> Scenario:
-        unknown = set(options) - _RESET_OPTIONS
-        if unknown:
-            raise ProblemError(
-                f"unknown reset option(s) {', '.join(sorted(unknown))}; expected "
-                f"{', '.join(sorted(_RESET_OPTIONS))}"
-            )
-        maze, label, route = scenario.maze, scenario.maze_label, scenario.route
-        if "maze" in options:
-            given = options["maze"]
-            maze = given if isinstance(given, Maze) else resolve_maze(str(given))
-            label = maze.name or str(given)
-            route = random_route(maze, self.np_random)
-        start = _pose(options.get("start", route.start))
-        goal = _cell(options.get("goal", route.goal))
-        for what, cell in (("start", start.cell), ("goal", goal)):
-            if not maze.is_free(*cell):
-                raise ProblemError(f"reset option {what}: {cell} is not a free cell of the maze")
-        schedule = scenario.schedule
-        if "faults" in options:
-            given = options["faults"]
-            schedule = given if isinstance(given, FaultSchedule) else FaultSchedule.permanent(
-                self.domain.parse_faults(str(given))
-            )  # fmt: skip
-        route = type(route)(route.name, start, goal)
-        return Scenario(maze, label, route, schedule, scenario.fault_seed)
 
     def _begin(self, scenario: Scenario) -> None:
         self._scenario = scenario
@@ -481,6 +440,40 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         }
 
 
+def check_settings(
+    max_steps: int | None, view_radius: int, render_mode: str | None, modes: list[str]
+) -> None:
+    """A :class:`ProblemError` naming the keyword when ``max_steps``, ``view_radius`` or
+    ``render_mode`` (one of ``modes`` or ``None``) is out of range (the single and the vector
+    environment check alike)."""
+    if max_steps is not None and max_steps < 1:
+        raise ProblemError(f"max_steps must be at least 1, got {max_steps}")
+    if not 0 <= view_radius <= MAX_VIEW_RADIUS:
+        raise ProblemError(f"view_radius must be from 0 to {MAX_VIEW_RADIUS}, got {view_radius}")
+    if render_mode is not None and render_mode not in modes:
+        raise ProblemError(
+            f"render_mode must be one of {', '.join(modes)} or None, got {render_mode!r}"
+        )
+
+
+def observation_space(
+    domain: Domain[Any, Any], sources: tuple[MazeSource, ...], view_radius: int
+) -> spaces.Dict:
+    """One robot's observation space (see the module docstring): the window of ``view_radius``,
+    the heading, the goal offset bounded by the longest maze side of ``sources``, and the known
+    faults when ``domain`` has any."""
+    side = 2 * view_radius + 1
+    reach = max(source.largest_side for source in sources) - 1
+    observation: dict[str, spaces.Space[Any]] = {
+        "window": spaces.MultiBinary((side, side)),
+        "heading": spaces.Discrete(4),
+        "goal": spaces.Box(-reach, reach, shape=(2,), dtype=np.int32),
+    }
+    if domain.faults:
+        observation["faults"] = spaces.MultiBinary(len(domain.faults))
+    return spaces.Dict(observation)
+
+
 def ask(
     stepper: Stepper, pose: Pose, known: frozenset[Any], step: int
 ) -> tuple[Entry | None, RepairRecord | None]:
@@ -500,13 +493,3 @@ def _followed(entry: Entry | None, command: Any) -> StepSource:
     if entry is not None and entry[0] == command:
         return entry[1]
     return StepSource.PLAN
-
-
-def _pose(value: Pose | str) -> Pose:
-    return value if isinstance(value, Pose) else parse_pose(str(value), source="reset option start")
-
-
-def _cell(value: Cell | str) -> Cell:
-    if isinstance(value, tuple):
-        return (int(value[0]), int(value[1]))
-    return parse_cell(str(value), source="reset option goal")
