@@ -118,14 +118,21 @@ def _step_robots(
     ``RESET``; ``reward``, ``terminated`` and ``truncated`` are then not written). ``terms`` holds
     the fault penalty, blocked penalty, goal bonus and a failed attempt's ticks (floats);
     ``draws[r, j]`` the intermittent draw of event ``j`` at the robot's next step. See the module
-    docstring for the layout."""
+    docstring for the layout.
+
+    The observation arrays (``window``, ``heading``, ``goal``, ``fault_flags``) persist from one
+    call to the next: a robot's window is rewritten only when its cell changed (or it was reset),
+    its fault flags only when its known faults did; copying the whole window array is much
+    cheaper than writing every window byte by byte."""
     side = 2 * radius + 1
     n_faults = fault_flags.shape[1]
     for k in range(which.shape[0]):
         r = which[k]
         x = state[r, _X]
         y = state[r, _Y]
-        if state[r, _PENDING] != 0:
+        was_known = known[r]
+        fresh = state[r, _PENDING] != 0
+        if fresh:
             state[r, _PENDING] = 0
             outcome[r] = RESET
             known[r] = 0
@@ -158,8 +165,6 @@ def _step_robots(
                     outcome[r] = MOVED
                     x += moves[a, h, _DX]
                     y += moves[a, h, _DY]
-                    state[r, _X] = x
-                    state[r, _Y] = y
                     state[r, _HEAD] = moves[a, h, _NH]
                     state[r, _UNITS] += moves[a, h, _UNITS_OF]
                     state[r, _SIM] += 1
@@ -196,24 +201,30 @@ def _step_robots(
             current[r] = subsets[r, mask]
         if state[r, _SENSES] != 0:
             known[r] = set_bits[current[r]]
-        top = state[r, _BASE] + (y - radius) * state[r, _STRIDE] + (x - radius)
-        for row in range(side):
-            start = top + row * state[r, _STRIDE]
-            for col in range(side):
-                window[r, row, col] = grid[start + col]
+        if fresh or x != state[r, _X] or y != state[r, _Y]:  # the window moved with the robot
+            state[r, _X] = x
+            state[r, _Y] = y
+            stride = state[r, _STRIDE]
+            top = state[r, _BASE] + (y - radius) * stride + (x - radius)
+            for row in range(side):
+                start = top + row * stride
+                for col in range(side):
+                    window[r, row, col] = grid[start + col]
         heading[r] = state[r, _HEAD]
         goal[r, 0] = state[r, _GX] - x
         goal[r, 1] = state[r, _GY] - y
         bits = known[r]
-        for f in range(n_faults):
-            fault_flags[r, f] = (bits >> np.uint64(f)) & np.uint64(1)
+        if fresh or bits != was_known:
+            for f in range(n_faults):
+                fault_flags[r, f] = (bits >> np.uint64(f)) & np.uint64(1)
 
 
 STEP_PYTHON = _step_robots
 """The reference kernel: :func:`_step_robots` run by the interpreter."""
 
-STEP_NUMBA = njit(cache=True, nogil=True)(_step_robots) if NUMBA else None
-"""The compiled kernel (``None`` without numba)."""
+STEP_NUMBA = njit(cache=True, nogil=True, _nrt=False)(_step_robots) if NUMBA else None
+"""The compiled kernel (``None`` without numba); without numba's reference counting, as the
+search kernels (it only reads and writes the arrays handed in)."""
 
 
 def intermittent_draws_numpy(which: Array, state: Array, events: Array, draws: Array) -> None:

@@ -175,7 +175,7 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         self._no_actions = np.zeros(num_envs, dtype=np.int64)
         self._intermittent = np.zeros(num_envs, dtype=np.bool_)
         self._outcome = np.zeros(num_envs, dtype=np.int8)
-        self._obs: dict[str, Array] | None = None
+        self._obs = self._outputs()
         self._frames: list[Any] = [None] * num_envs
         self._no_faults = np.zeros((n, 0), dtype=np.int8)
         use_numba = self.backend == "numba"
@@ -224,12 +224,10 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
                 raise ProblemError("reset_mask needs a first reset() of every robot")
             which = np.flatnonzero(mask).astype(np.int64)
         infos = self._reset_robots(which, seeds, options)
-        obs = self._fresh_outputs(copy_last=mask is not None)
-        self._run(which, self._no_actions, obs, *self._flags())
-        self._obs = obs
+        self._run(which, self._no_actions, *self._flags())
         self._started = True
         self._ended[which] = False
-        return _copy_obs(obs), self._info(which, infos)
+        return _copy_obs(self._obs), self._info(which, infos)
 
     def step(
         self, actions: Array | Sequence[int]
@@ -255,24 +253,22 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
             reset_now = np.flatnonzero(self._ended).astype(np.int64)
             infos = self._reset_robots(reset_now, [None] * self.num_envs, {})
             self._ended[:] = False
-        obs = self._fresh_outputs(copy_last=False)
         reward, terminated, truncated, outcome = self._flags()
-        self._run(self._all, acts, obs, reward, terminated, truncated, outcome)
+        self._run(self._all, acts, reward, terminated, truncated, outcome)
         done = terminated | truncated
         info_robots = self._all
         final: dict[str, Any] = {}
         if self.autoreset_mode is AutoresetMode.SAME_STEP and done.any():
             ended = np.flatnonzero(done).astype(np.int64)
-            final = self._final(ended, obs)
+            final = self._final(ended)
             infos = self._reset_robots(ended, [None] * self.num_envs, {})
-            self._run(ended, acts, obs, reward, terminated, truncated, outcome)
+            self._run(ended, acts, reward, terminated, truncated, outcome)
             reset_now = ended
         else:
             self._ended = done
-        self._obs = obs
         info = self._info(info_robots, infos, reset_now)
         info.update(final)
-        return _copy_obs(obs), reward, terminated, truncated, info
+        return _copy_obs(self._obs), reward, terminated, truncated, info
 
     def render(self) -> tuple[Any, ...] | None:
         """Every robot's frame of ``render_mode`` (``None`` without a render mode)."""
@@ -317,10 +313,12 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
     # --- internals ------------------------------------------------------------------------------
 
     def _run(
-        self, which: Array, actions: Array, obs: dict[str, Array], reward: Array,
-        terminated: Array, truncated: Array, outcome: Array,
+        self, which: Array, actions: Array, reward: Array, terminated: Array, truncated: Array,
+        outcome: Array,
     ) -> None:  # fmt: skip
-        """One kernel call over robots ``which`` (intermittent draws first, when any)."""
+        """One kernel call over robots ``which`` (intermittent draws first, when any); it
+        updates the environment's own observation arrays, which the API returns copies of."""
+        obs = self._obs
         if self._intermittent.any():
             self._draw(which, self._state, self._events, self._draws)
         sets, motion = self._sets, self._motion
@@ -345,10 +343,8 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
             np.zeros(n, dtype=np.int8),
         )
 
-    def _fresh_outputs(self, copy_last: bool) -> dict[str, Array]:
+    def _outputs(self) -> dict[str, Array]:
         n, side = self.num_envs, 2 * self.view_radius + 1
-        if copy_last and self._obs is not None:
-            return _copy_obs(self._obs)
         obs: dict[str, Array] = {
             "window": np.empty((n, side, side), dtype=np.int8),
             "heading": np.empty(n, dtype=np.int64),
@@ -460,12 +456,13 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
                 info[key], info[f"_{key}"] = array, reset_mask.copy()
         return info
 
-    def _final(self, ended: Array, obs: dict[str, Array]) -> dict[str, Any]:
+    def _final(self, ended: Array) -> dict[str, Any]:
         """``final_obs`` and ``final_info`` of the robots ``ended`` (same-step autoreset)."""
         n = self.num_envs
         mask = np.zeros(n, dtype=np.bool_)
         mask[ended] = True
         final_obs = np.full(n, None, dtype=object)
+        obs = self._obs
         for robot in ended.tolist():  # one robot's observation, as the single env gives it
             final_obs[robot] = {key: value[robot].copy() for key, value in obs.items()}
             final_obs[robot]["heading"] = int(obs["heading"][robot])
