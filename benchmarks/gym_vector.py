@@ -47,7 +47,9 @@ from selfrepair.execution.faults import Detection, Persistence
 ROOT = Path(__file__).resolve().parents[1]
 TARGET_RATE = 1_000_000
 TARGET_RATIO = 100.0
-ALL_KINDS = FaultSpec(persistence=tuple(Persistence), detection=tuple(Detection), at=(0, 20))
+ALL_KINDS = FaultSpec(
+    persistence=tuple(Persistence), detection=(Detection.NOW, Detection.ON_USE), at=(0, 20)
+)
 
 
 def vector_steps_per_second(vec: FaultyMazeVectorEnv, rounds: int, seed: int) -> Rate:

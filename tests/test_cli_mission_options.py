@@ -34,6 +34,9 @@ NON_DEFAULT = {
     "detect": ["--detect", "on-use"],
     "transient": ["--transient", "5"],
     "intermittent": [],  # at most one of --transient and --intermittent
+    "events": ["--events", "3,13@2..9"],
+    "sensing": ["--sensing", "bump"],
+    "sensing_range": ["--sensing-range", "4"],
     "table": ["--table", "three-action"],
     "recursion": ["--recursion", "guarded"],
     "max_depth": ["--max-depth", "3"],
@@ -123,6 +126,8 @@ def test_every_mission_option_reaches_the_spec_of_both_commands(
     assert (got.lpg_time_limit_s, got.max_lookup_patterns, got.rewrite) == (0.5, 7, True)
     assert (got.recursion, got.max_depth, got.window) == ("guarded", 3, 4)
     assert compare.domain.name == "three-action" and compare.initial_faults_known
+    assert compare.world.to_json()["events"][0] == {"cell": [3, 13], "blocked": True, "at": 2}
+    assert (compare.world.sensing, compare.world.sensing_range) == ("bump", 4)
 
 
 def _compare_json(capsys: pytest.CaptureFixture[str], *args: str) -> dict[str, Any]:

@@ -35,6 +35,8 @@ from selfrepair.geometry import Heading
 from selfrepair.robots.registry import get_domain
 
 MODES = tuple(AutoresetMode)
+SEEN = [Detection.NOW, Detection.ON_USE]
+"""The detection modes in which the robot is told of its faults (the vector env's)."""
 CORNER = {"maze": "narrow-short", "start": "1,1,E", "goal": "2,1"}
 """A narrow-short mission whose goal is the cell ahead of the start."""
 
@@ -105,9 +107,7 @@ _FAULTS = st.builds(
     persistence=st.lists(
         st.sampled_from(list(Persistence)), min_size=1, max_size=3, unique=True
     ).map(tuple),
-    detection=st.lists(st.sampled_from(list(Detection)), min_size=1, max_size=2, unique=True).map(
-        tuple
-    ),
+    detection=st.lists(st.sampled_from(SEEN), min_size=1, max_size=2, unique=True).map(tuple),
     at=st.tuples(st.just(0), st.integers(0, 6)),
     duration=st.tuples(st.just(1), st.integers(1, 8)),
     probability=st.tuples(st.floats(0.0, 0.5), st.floats(0.5, 1.0)),
@@ -246,7 +246,7 @@ def _same_raw(expected: tuple[Any, ...], got: tuple[Any, ...]) -> None:
 def test_the_compiled_kernel_agrees_with_the_interpreted_one() -> None:
     task = {
         "faults": FaultSpec(
-            persistence=tuple(Persistence), detection=tuple(Detection), at=(0, 4), duration=(1, 9)
+            persistence=tuple(Persistence), detection=tuple(SEEN), at=(0, 4), duration=(1, 9)
         ),
         "mazes": ("bundled", MazeGenerator(11, 11)),
         "routes": "random",
@@ -353,9 +353,17 @@ def test_misuse_is_a_problem_error() -> None:
         vec.step(np.array([0, 0]))
     vec.reset(options={"reset_mask": np.array([True, True])})
     vec.step(np.array([0, 0]))
-    for bad in ({"guide": True}, {"backend": "gpu"}, {"view_radius": 40}, {"max_steps": 0}):
+    hidden = FaultSpec(detection=(Detection.HIDDEN,))
+    for bad in (
+        {"guide": True}, {"backend": "gpu"}, {"view_radius": 40}, {"max_steps": 0},
+        {"faults": hidden},
+    ):  # fmt: skip
         with pytest.raises(ProblemError):
             FaultyMazeVectorEnv(2, **bad)
+    schedule = FaultSchedule.permanent(get_domain("four-wheel").parse_faults("FL:F"),
+                                       detection=Detection.HIDDEN)  # fmt: skip
+    with pytest.raises(ProblemError, match="hidden"):
+        FaultyMazeVectorEnv(1).reset(options={"faults": schedule})
     with pytest.raises(ProblemError, match="seeds"):
         FaultyMazeVectorEnv(2).reset(seed=[1])
     with pytest.raises(ProblemError, match="reset_mask"):

@@ -61,6 +61,7 @@ if TYPE_CHECKING:  # what the names are, for type checkers and editors; nothing 
     from selfrepair.team.result import TeamOptions, TeamResult
     from selfrepair.team.scenario import resolve_scenario
     from selfrepair.world.bundled import bundled_routes, load_bundled, maze_names, resolve_maze
+    from selfrepair.world.events import Sensing, WorldEvent, WorldSchedule, random_world
     from selfrepair.world.loading import load_maze
     from selfrepair.world.maze import Maze
     from selfrepair.world.routes import Route
@@ -118,6 +119,9 @@ def _home(name: str) -> ModuleType | None:
         case "Maze":
             from selfrepair.world import maze as world_maze
             return world_maze
+        case "WorldEvent" | "WorldSchedule" | "Sensing" | "random_world":
+            from selfrepair.world import events as world_events
+            return world_events
         case "load_bundled" | "bundled_routes" | "maze_names" | "resolve_maze":
             from selfrepair.world import bundled as world_bundled
             return world_bundled
@@ -179,6 +183,7 @@ __all__ = [
     "ReplacementTable",
     "Route",
     "SelfRepairError",
+    "Sensing",
     "StepSource",
     "StrategyName",
     "StrategyOptions",
@@ -187,6 +192,8 @@ __all__ = [
     "TeamResult",
     "TeamScenario",
     "TraceError",
+    "WorldEvent",
+    "WorldSchedule",
     "__version__",
     "bundled_routes",
     "bundled_table",
@@ -204,6 +211,7 @@ __all__ = [
     "parse_cell",
     "parse_pose",
     "plan",
+    "random_world",
     "read_trace",
     "register_domain",
     "register_strategy",

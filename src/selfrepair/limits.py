@@ -20,6 +20,7 @@ from selfrepair.errors import LimitError
 
 __all__ = [
     "DEFAULT_MAX_WAIT",
+    "DEFAULT_SENSING_RANGE",
     "MAX_CELLS",
     "MAX_CLEARANCE_WEIGHT",
     "MAX_FILE_BYTES",
@@ -94,6 +95,11 @@ DEFAULT_MAX_WAIT = 20
 knows and they may clear (``StrategyOptions.max_wait``; ``--max-wait`` of ``selfrepair run`` and
 ``compare``; see :mod:`selfrepair.execution.stepper`). A bound, so that a robot whose faults are
 permanent gives up after at most this many steps."""
+
+DEFAULT_SENSING_RANGE = 2
+"""Chebyshev cells a robot sees around its own cell in ``range`` sensing of world events
+(:mod:`selfrepair.world.events`; ``--sensing-range``): the four-wheel robot's reach, so that with
+the default it sees every cell its next motion sweeps."""
 
 MAX_LOOKUP_PATTERNS = 4096
 """Occupancy patterns stored by one compiled replacement look-up (one table, fault set and

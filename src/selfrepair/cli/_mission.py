@@ -43,6 +43,7 @@ from selfrepair.cli._inputs import (
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.limits import (
     DEFAULT_MAX_WAIT,
+    DEFAULT_SENSING_RANGE,
     MAX_CELLS,
     MAX_LOOKUP_PATTERNS,
     MAX_TABLE_BYTES,
@@ -88,6 +89,30 @@ Intermittent = Annotated[
     float | None,
     typer.Option(
         "--intermittent", metavar="P", help="Faults are active at each step with probability P."
+    ),
+]
+Events = Annotated[
+    str,
+    typer.Option(
+        "--events",
+        metavar="EVENTS",
+        help="World events, ';'-separated: X,Y@T (cell blocked from tick T), X,Y@T..U (blocked "
+        "from T, free from U), -X,Y@T (free from T).",
+    ),
+]
+SensingOpt = Annotated[
+    str,
+    typer.Option(
+        "--sensing",
+        metavar="MODE",
+        help="How the robot learns of blocked cells: range (sees cells within --sensing-range) "
+        "or bump (only by bumping).",
+    ),
+]
+SensingRange = Annotated[
+    int,
+    typer.Option(
+        "--sensing-range", metavar="R", min=0, help="Chebyshev cells the robot sees around it."
     ),
 ]
 TableOpt = Annotated[
@@ -175,6 +200,9 @@ class MissionOptions:
     detect: Detect = "now"
     transient: Transient = None
     intermittent: Intermittent = None
+    events: Events = ""
+    sensing: SensingOpt = "range"
+    sensing_range: SensingRange = DEFAULT_SENSING_RANGE
     table: TableOpt = None
     recursion: Recursion = "flat"
     max_depth: MaxDepth = 2
@@ -308,6 +336,7 @@ def mission_spec(
     from selfrepair.tables.fileformat import default_table, default_table_name, resolve_table
     from selfrepair.tables.model import ReplacementTable
     from selfrepair.world.bundled import resolve_maze
+    from selfrepair.world.events import Sensing, WorldSchedule, parse_events
 
     m = mission
     domain = domain_named(m.domain_name)
@@ -332,11 +361,14 @@ def mission_spec(
     schedule = build_schedule(
         domain, m.faults, m.at, m.clock, m.detect, m.transient, m.intermittent
     )
+    check_choice(m.sensing, tuple(Sensing), "--sensing")
+    world = WorldSchedule(parse_events(m.events), Sensing(m.sensing), m.sensing_range)
     return MissionSpec(
         maze=resolve_maze(find_input(m.maze), max_cells=m.max_cells),
         start=parse_pose(m.start, source="--start"),
         goal=parse_cell(m.goal, source="--goal"),
         schedule=schedule,
+        world=world,
         strategy=strategy,
         options=StrategyOptions(
             table=loaded,

@@ -222,7 +222,8 @@ def _step_robots(
 STEP_PYTHON = _step_robots
 """The reference kernel: :func:`_step_robots` run by the interpreter."""
 
-STEP_NUMBA = njit(cache=True, nogil=True, _nrt=False)(_step_robots) if NUMBA else None
+_OPTIONS: dict[str, Any] = {"cache": True, "nogil": True, "_nrt": False}
+STEP_NUMBA = njit(**_OPTIONS)(_step_robots) if NUMBA else None
 """The compiled kernel (``None`` without numba); without numba's reference counting, as the
 search kernels (it only reads and writes the arrays handed in)."""
 

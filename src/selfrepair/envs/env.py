@@ -51,6 +51,7 @@ import numpy as np
 import numpy.typing as npt
 from gymnasium import spaces
 
+from selfrepair.envs.guide import ask, followed
 from selfrepair.envs.render import ansi_frame, check_cell_pixels, maze_frame, rgb_frame
 from selfrepair.envs.scenarios import (
     BUNDLED,
@@ -66,7 +67,7 @@ from selfrepair.envs.scenarios import (
 from selfrepair.errors import ProblemError, choice
 from selfrepair.execution.executor import mission_context
 from selfrepair.execution.faults import Detection
-from selfrepair.execution.result import MissionSpec, RepairRecord, StepSource
+from selfrepair.execution.result import MissionSpec
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS, Outcome, Simulator, StepOutcome
 from selfrepair.execution.stepper import Entry, Stepper
 from selfrepair.geometry import Cell, Heading, Pose
@@ -333,7 +334,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
             reward += rewards.goal_bonus
         truncated = not terminated and self._steps >= self._limit
         if self._guide is not None:
-            self._guide.observe(outcome, _followed(self._guided, command))
+            self._guide.observe(outcome, followed(self._guided, command))
         return self._observe(pose), reward, terminated, truncated, self._info(pose, status)
 
     def render(self) -> str | npt.NDArray[np.uint8] | None:
@@ -473,23 +474,3 @@ def observation_space(
         observation["faults"] = spaces.MultiBinary(len(domain.faults))
     return spaces.Dict(observation)
 
-
-def ask(
-    stepper: Stepper, pose: Pose, known: frozenset[Any], step: int
-) -> tuple[Entry | None, RepairRecord | None]:
-    """What ``stepper`` commands at ``pose`` knowing exactly ``known`` after ``step`` commands
-    (``None`` at the goal or when no repair exists), and the last repair it made to answer
-    (``None`` when it made none)."""
-    if stepper.context.at_goal(pose):
-        return None, None
-    stepper.learn(known)
-    before = len(stepper.repairs)
-    entry = stepper.next_action(pose, step)
-    return entry, stepper.repairs[-1] if len(stepper.repairs) > before else None
-
-
-def _followed(entry: Entry | None, command: Any) -> StepSource:
-    """The source of ``command``: that of the stepper's answer when the agent followed it."""
-    if entry is not None and entry[0] == command:
-        return entry[1]
-    return StepSource.PLAN

@@ -85,6 +85,10 @@ _EPISODE_KEYS = (
     "fault_seed", "np_random_seed", "max_steps",
 )  # fmt: skip
 Array = npt.NDArray[Any]
+_HIDDEN = (
+    "the vector environment takes detection 'now' or 'on-use', not 'hidden'; use "
+    "gymnasium.vector.SyncVectorEnv over FaultyMazeEnv"
+)
 
 
 class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
@@ -131,6 +135,8 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         self.sources = maze_sources(mazes)
         self.routes = choice(RouteChoice, routes, "route choice")
         self.faults = faults or FaultSpec()
+        if Detection.HIDDEN in self.faults.detection:
+            raise ProblemError(_HIDDEN)
         self._fault_sets = self.faults.fault_sets(self.domain)
         self.rewards = rewards or Rewards()
         self.max_steps = max_steps
@@ -385,6 +391,8 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
     def _load(self, robot: int, scenario: Scenario) -> None:
         """Put ``scenario`` into robot ``robot``'s rows, pending its first observation."""
         maze, schedule = scenario.maze, scenario.schedule
+        if schedule.detection is Detection.HIDDEN:
+            raise ProblemError(_HIDDEN)
         events = schedule.events
         if len(events) > MAX_EVENTS:
             raise ProblemError(

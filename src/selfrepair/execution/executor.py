@@ -24,7 +24,9 @@ it, and records the steps and repairs. :func:`run_mission` runs it to the end; p
    its blocking faults.
 
 The initial plan is made, by default, before any fault is known (``initial_faults_known=False``),
-as in the original experiment. The executor holds only detected faults; the true ones live in the
+as in the original experiment. In a changing world it avoids the cells the robot sees blocked at
+the start; when none avoids them, it is made on the maze alone, and the robot waits at them. The
+executor holds only detected faults; the true ones live in the
 :class:`~selfrepair.execution.simulator.Simulator`.
 
 Why ``replacement`` never replans more than ``replan`` when every fault is permanent, present from
@@ -41,7 +43,7 @@ from __future__ import annotations
 import time
 from array import array
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from typing import Any
@@ -57,6 +59,7 @@ from selfrepair.execution.stepper import Stepper
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.repair.replacement import FreeTest, table_reach
 from selfrepair.repair.strategies import (
+    Belief,
     MissionContext,
     Repair,
     RepairStatus,
@@ -86,11 +89,13 @@ def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> Missio
     heuristic, backend = settings.heuristic, settings.backend
 
     objective = spec.objective
+    belief = Belief()
 
     def plan_to(
         start: Pose, goal: Cell, heading: Heading | None, known: frozenset[Any], budget: int | None
     ) -> PlanResult:
-        problem = PlanningProblem(maze, start, goal, heading, known, weight, radius, domain)
+        world = believed_maze(maze, belief.blocked - {start.cell}) if belief.blocked else maze
+        problem = PlanningProblem(world, start, goal, heading, known, weight, radius, domain)
         if objective is not None and not known:  # the tolerant objective: before any fault
             term = _objective_term(spec, objective, table)
             found = plan(
@@ -122,7 +127,30 @@ def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> Missio
         world=spec.maze,
         cost_scale=cost_scale(spec.domain, weight),
         start=spec.start,
+        clearance_weight=weight,
+        clearance_radius=radius,
+        backend=backend,
+        belief=belief,
     )
+
+
+def believed_maze(maze: Maze, blocked: frozenset[Cell]) -> Maze:
+    """``maze`` with the cells ``blocked`` (world events the robot believes in) as walls: the map
+    the robot plans on in a changing world (the last few are kept)."""
+    return _BELIEVED.get((maze, blocked), lambda: _with_walls(maze, blocked))
+
+
+def _with_walls(maze: Maze, blocked: frozenset[Cell]) -> Maze:
+    walls = maze.walls.copy()
+    for x, y in blocked:
+        if maze.in_bounds(x, y):
+            walls[y, x] = True
+    return Maze(walls, name=maze.name)
+
+
+_BELIEVED: BoundedCache[tuple[Maze, frozenset[Cell]], Maze] = BoundedCache(
+    "mazes with believed-blocked cells", 4, kind=CacheKind.PLAN
+)
 
 
 def _objective_term(
@@ -170,29 +198,73 @@ class _Tally:
     penalty: int = 0
 
 
-def run_mission(spec: MissionSpec) -> MissionResult:
-    """Plan, execute and repair one mission (see the module docstring)."""
+def run_mission(
+    spec: MissionSpec, *, simulator: Callable[[MissionSpec], Simulator] | None = None
+) -> MissionResult:
+    """Plan, execute and repair one mission (see the module docstring). ``simulator`` makes the
+    simulator that holds the truth (default: the lattice :class:`Simulator`; a physics one is
+    :class:`selfrepair.physics.simulator.PhysicsSimulator`)."""
     factory = get_strategy(spec.strategy)  # fails fast on a bad name
-    sim = Simulator(spec.domain, spec.maze, spec.start, spec.schedule, spec.seed)
+    if simulator is not None:
+        sim = simulator(spec)
+    else:
+        sim = Simulator(
+            spec.domain,
+            spec.maze,
+            spec.start,
+            spec.schedule,
+            spec.seed,
+            world=spec.world,
+            behaviour=spec.behaviour,
+        )
     initial_known = sim.sense() if spec.initial_faults_known else frozenset()
     table = spec.options.resolved_table() if uses_table(spec.strategy) else None
     _prepare(spec, table)
     context = mission_context(spec, table)
+    context.belief.blocked = sim.sense_cells(frozenset())  # what the robot sees at the start
     t0 = time.perf_counter_ns()
     initial = context.plan(
         spec.start, spec.goal, spec.goal_heading, initial_known, context.replan_budget
     )
+    if initial.status is PlanStatus.UNSOLVABLE and context.belief.blocked:
+        seen, context.belief.blocked = context.belief.blocked, frozenset()
+        initial = context.plan(  # no way round what it sees: plan on the maze, wait at them
+            spec.start, spec.goal, spec.goal_heading, initial_known, context.replan_budget
+        )
+        context.belief.blocked = seen
     planning_ns = time.perf_counter_ns() - t0
-    waits = 0 if spec.schedule.detection is Detection.ON_USE else None  # on-use: never clears
-    stepper = Stepper(
-        context, factory(context), initial.actions, initial_known, sim.table, max_wait=waits
-    )
+    # on-use and hidden: the known faults never clear by themselves, so waiting cannot help
+    waits = None if spec.schedule.detection is Detection.NOW else 0
+    repairer = factory(context)
+    if spec.world and (expect := getattr(repairer, "expect_blocked", None)) is not None:
+        expect()  # a strategy that repairs blocked actions itself prepares before the clock runs
+    stepper = Stepper(context, repairer, initial.actions, initial_known, sim.table, max_wait=waits)
     tally = _Tally()
     if initial.status is not PlanStatus.SOLVED:
         reason = f"initial plan: {initial.status.value}"
         return _result(spec, sim, stepper, tally, initial, planning_ns, NO_PLAN, reason)
+    status, reason, footing = _run_loop(spec, sim, stepper, tally)
+    return _result(spec, sim, stepper, tally, initial, planning_ns, status, reason, footing)
+
+
+def _run_loop(
+    spec: MissionSpec, sim: Simulator, stepper: Stepper, tally: _Tally
+) -> tuple[MissionStatus, str, str]:
+    """The mission's loop on its footing (:mod:`selfrepair.execution.compiled` where it can
+    run, unless ``spec.footing`` is ``python``), and which footing ran."""
+    if spec.footing != "python":
+        from selfrepair.execution.compiled import compiled_loop
+
+        weight = bool(Fraction(spec.clearance_weight))
+        penalty = penalty_buffer(sim.grid, spec.maze, spec.clearance_radius) if weight else b""
+        ended = compiled_loop(
+            spec, sim, stepper, tally.moved, lambda f: _why(f, spec, sim, stepper), penalty
+        )
+        if ended is not None:
+            status, reason, tally.executed_units, tally.penalty = ended
+            return status, reason, "compiled"
     status, reason = _loop(spec, sim, stepper, tally)
-    return _result(spec, sim, stepper, tally, initial, planning_ns, status, reason)
+    return status, reason, "python"
 
 
 NO_PLAN = MissionStatus.NO_INITIAL_PLAN
@@ -231,6 +303,7 @@ def _loop(
     penalty = penalty_buffer(sim.grid, spec.maze, spec.clearance_radius) if weight else b""
     moved = tally.moved
     n_actions = len(spec.domain.actions)
+    world = sim.world is not None
     next_action, moved_, record, learn, advance, sense = (
         stepper.next_action, stepper.moved, stepper.record, stepper.learn, sim.advance, sim.sense
     )  # fmt: skip
@@ -243,6 +316,8 @@ def _loop(
             return MissionStatus.STEP_LIMIT, f"{limit} steps without reaching the goal"
         if sense_now and (sensed := sense()) is not stepper.known:
             learn(sensed)
+        if world and (seen := sim.sense_cells(stepper.blocked)) is not stepper.blocked:
+            stepper.see(seen)
         entry = next_action(pose, step)
         if entry is None:
             failure = stepper.failure
@@ -261,12 +336,14 @@ def _loop(
                 base = (pose.y + margin) * stride + pose.x + margin
                 tally.penalty += sum([penalty[base + offset] for offset in move.cells])
             moved_(step, action, source, pose, sim.pose, move.duration)
+            if sim.deviated:  # localised off the plan (physics): replan from where it is
+                stepper.relocalise()
         elif outcome is Outcome.COLLISION:
             name = spec.domain.format_action(action)
             return MissionStatus.COLLISION, f"{name} at {sim.pose} would sweep a wall"
         else:
             record(step, action, source, outcome, pose, sim.pose, sim.last_duration,
-                   sim.last_blocking)  # fmt: skip
+                   sim.last_blocking, sim.last_bumped)  # fmt: skip
 
 
 def penalty_buffer(grid: FreeGrid, maze: Maze, radius: int) -> Sequence[int]:
@@ -307,6 +384,7 @@ def _result(
     planning_ns: int,
     status: MissionStatus,
     reason: str,
+    footing: str = "python",
 ) -> MissionResult:
     removed, added, motion_removed, motion_added = _plan_distances(spec, sim, tally, initial)
     sums = MissionTally(
@@ -330,6 +408,7 @@ def _result(
         sim.pose,
         sim.ticks,
         sums,
+        footing,
     )
 
 

@@ -25,6 +25,14 @@ the start of the step. Detection:
     The robot learns of a fault only when it commands an action the fault forbids: the attempt
     fails without moving, costs one tick, and reveals the faults that blocked it (as a wheel sensor
     would). Faults once learned this way are never forgotten.
+``hidden``
+    The robot is never told its faults. A forbidden command does what the domain's
+    fault-behaviour model says (:meth:`Domain.effective
+    <selfrepair.robots.domain.Domain.effective>`): the robot moves differently, and a motion
+    that sweeps a wall stops at the contact (a bump; see
+    :mod:`selfrepair.execution.simulator`). A domain without such a model fails the command
+    without moving, and the robot is told only that it failed, not why. What the robot learns is
+    what it observes (its pose after each command; see :mod:`selfrepair.diagnosis`).
 
 The default, :meth:`FaultSchedule.permanent` with ``at=0`` and detection ``now``, is the original
 experiment's setting: every fault present from the first step and known at once.
@@ -73,6 +81,7 @@ class Detection(StrEnum):
 
     NOW = "now"
     ON_USE = "on-use"
+    HIDDEN = "hidden"
 
 
 def _member(kind: type[_E], value: object, what: str) -> _E:

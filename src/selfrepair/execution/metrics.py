@@ -205,6 +205,7 @@ class _RepairTotals(NamedTuple):
     latencies: list[int]
     replacements: int
     lookaheads: int
+    detours: int
     replans: int
     replans_failed: int
     lengths: Counter[int]
@@ -213,7 +214,7 @@ class _RepairTotals(NamedTuple):
 
 def _repair_totals(repairs: Sequence[RepairRecord]) -> _RepairTotals:
     latencies: list[int] = []
-    replacements = lookaheads = replans = failed = 0
+    replacements = lookaheads = detours = replans = failed = 0
     lengths: Counter[int] = Counter()
     depths: Counter[int] = Counter()
     for record in repairs:
@@ -227,9 +228,13 @@ def _repair_totals(repairs: Sequence[RepairRecord]) -> _RepairTotals:
                 depths[repair.depth or 0] += 1
             elif repair.source is RepairSource.LOOKAHEAD:
                 lookaheads += 1
+            elif repair.source is RepairSource.DETOUR:
+                detours += 1
         elif repair.source is RepairSource.REPLAN:
             failed += 1
-    return _RepairTotals(latencies, replacements, lookaheads, replans, failed, lengths, depths)
+    return _RepairTotals(
+        latencies, replacements, lookaheads, detours, replans, failed, lengths, depths
+    )
 
 
 def _schedule_texts(schedule: FaultSchedule, domain: Domain[Any, Any]) -> tuple[str, str]:
@@ -290,6 +295,7 @@ def mission_row(result: MissionResult, *, optimum: Fraction | None = None) -> Ro
         "heuristic": spec.heuristic,
         "backend": spec.backend,
         "backend_ran": backend_ran(spec.backend, spec.domain),
+        "footing": result.footing,
         "status": result.status.value,
         "reached": int(result.reached),
         "reason": result.reason,
@@ -344,6 +350,9 @@ def mission_row(result: MissionResult, *, optimum: Fraction | None = None) -> Ro
             dict(sorted(Counter(a for r in repairs for a in r.repair.attempts).items()))
         ),
         "waits": sum(1 for s in result.steps if s.source is StepSource.WAIT),
+        "world_events": len(spec.world.events),
+        "detours": totals.detours,
+        "bumps": sum(1 for s in result.steps if s.source is StepSource.BUMPED),
     }
     return row
 
@@ -370,6 +379,7 @@ ROW_COLUMNS: tuple[str, ...] = (
     "heuristic",
     "backend",
     "backend_ran",
+    "footing",
     "status",
     "reached",
     "reason",
@@ -415,5 +425,8 @@ ROW_COLUMNS: tuple[str, ...] = (
     "fallbacks",
     "repair_attempts",
     "waits",
+    "world_events",
+    "detours",
+    "bumps",
 )
 """The row's columns, in order. Stable: the experiments' SQLite schema is built from it."""

@@ -24,6 +24,7 @@ from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import PlanResult
 from selfrepair.search.problem import PlannerSettings
 from selfrepair.status import MissionStatus
+from selfrepair.world.events import WorldSchedule
 from selfrepair.world.maze import Maze
 
 __all__ = [
@@ -41,16 +42,19 @@ __all__ = [
 class StepSource(StrEnum):
     """Where an executed step's action came from: the initial plan, a repair (by its source:
     ``plan-repair`` is a plan repaired by LPG-adapt), or a command that a fault the executor did
-    not know yet made fail, or a wait in place while no plan exists (see
-    :mod:`selfrepair.execution.stepper`)."""
+    not know yet made fail, or a wait in place while no plan exists, or a command that bumped
+    into a blocked cell the robot did not know of or, with the faults hidden, whose motion hit a
+    wall (see :mod:`selfrepair.execution.stepper` and :mod:`selfrepair.execution.simulator`)."""
 
     PLAN = "plan"
     REPLACEMENT = RepairSource.REPLACEMENT.value
     LOOKAHEAD = RepairSource.LOOKAHEAD.value
     REPLAN = RepairSource.REPLAN.value
     PLAN_REPAIR = RepairSource.PLAN_REPAIR.value
+    DETOUR = RepairSource.DETOUR.value
     FAILED_ATTEMPT = "failed-attempt"
     WAIT = "wait"
+    BUMPED = "bumped"
 
 
 STEP_OF_REPAIR: Mapping[RepairSource, StepSource] = {
@@ -58,6 +62,7 @@ STEP_OF_REPAIR: Mapping[RepairSource, StepSource] = {
         RepairSource.LOOKAHEAD: StepSource.LOOKAHEAD,
         RepairSource.REPLAN: StepSource.REPLAN,
         RepairSource.PLAN_REPAIR: StepSource.PLAN_REPAIR,
+        RepairSource.DETOUR: StepSource.DETOUR,
 }
 """The step source of the actions a repair spliced in, by the repair's source: an explicit
 mapping, never a conversion by value (a plain dictionary, typed read-only: one look-up inside the
@@ -94,10 +99,24 @@ class MissionSpec:
     """The tolerant planner's objective for the plan made before any fault is known (``None``:
     the plain cost, duration plus clearance term); replans, made with faults known, always
     minimise the plain cost. A hard objective without a tolerant plan falls back to it too."""
+    behaviour: str | None = None
+    """The domain's fault-behaviour model the simulator uses when the faults are hidden from the
+    robot (detection ``hidden``; ``None``: the domain's default; see
+    :meth:`Domain.effective <selfrepair.robots.domain.Domain.effective>`)."""
+    world: WorldSchedule = field(default_factory=WorldSchedule)
+    """Cells that become blocked or free during the mission, and how the robot senses them (see
+    :mod:`selfrepair.world.events`; empty: the maze never changes)."""
+    footing: str = "auto"
+    """Which mission loop runs it: ``auto`` (the compiled loop of
+    :mod:`selfrepair.execution.compiled` when it can take the mission, else the Python loop),
+    ``compiled`` (refused with the reason when it cannot) or ``python`` (the reference). Both
+    give the same trace; the result's ``footing`` says which ran."""
 
     def __post_init__(self) -> None:
         if self.seed < 0:
             raise ProblemError(f"seed must be a non-negative integer, got {self.seed}")
+        if self.footing not in ("auto", "compiled", "python"):
+            raise ProblemError(f"footing must be auto, compiled or python, got {self.footing!r}")
 
     @property
     def planner(self) -> PlannerSettings:
@@ -178,7 +197,8 @@ class MissionTally(NamedTuple):
 class MissionResult:
     """The outcome of one mission; :func:`selfrepair.execution.metrics.mission_row` flattens it
     (columns in docs/replacement.md). ``tally`` holds sums the executor kept on the way
-    (``None`` for a result made otherwise)."""
+    (``None`` for a result made otherwise); ``footing`` the mission loop that ran it,
+    ``compiled`` or ``python`` (see :attr:`MissionSpec.footing`)."""
 
     spec: MissionSpec
     status: MissionStatus
@@ -190,6 +210,7 @@ class MissionResult:
     final_pose: Pose
     ticks: Fraction
     tally: MissionTally | None = None
+    footing: str = "python"
 
     @property
     def reached(self) -> bool:
@@ -198,5 +219,9 @@ class MissionResult:
 
     @property
     def executed(self) -> tuple[TraceStep, ...]:
-        """The steps that moved the robot (failed attempts left out): the executed plan."""
-        return tuple(s for s in self.steps if s.source is not StepSource.FAILED_ATTEMPT)
+        """The steps that moved the robot (failed attempts and bumps left out): the executed
+        plan."""
+        return tuple(s for s in self.steps if s.source not in _NOT_EXECUTED)
+
+
+_NOT_EXECUTED = frozenset({StepSource.FAILED_ATTEMPT, StepSource.BUMPED})

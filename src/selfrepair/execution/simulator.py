@@ -9,6 +9,25 @@ A command whose action a true fault forbids is a *failed attempt*: the robot doe
 tick passes, and the outcome names the faults that blocked it. A command that would sweep a wall
 is refused with outcome ``"collision"`` and nothing changes (the executor never sends one; the
 tests check that).
+
+With a :class:`~selfrepair.world.events.WorldSchedule` the simulator also holds the true
+occupancy over time: before each command it applies the events whose time has come to its own
+copy of the free-cell buffer, and a command whose motion would sweep a blocked cell (other than
+the robot's own) is a *bump* (outcome ``"bumped"``): the robot does not move, one tick passes and
+``last_bumped`` names the blocked cells. :meth:`Simulator.sense_cells` is what the robot's range
+sensors report (see :mod:`selfrepair.world.events`).
+
+With detection ``hidden`` (the robot is never told its faults) a forbidden command is not refused:
+the wheels do what the domain's fault-behaviour model says (:meth:`Domain.effective
+<selfrepair.robots.domain.Domain.effective>`, model ``behaviour``, the domain's default unless
+given), and the robot moves accordingly. Any motion whose footprint (its swept cells) is not free
+then stops at the contact, a *bump* (outcome ``"bumped"``, as above): poses are whole cells and a
+footprint lists the cells a motion sweeps, not the order in which it reaches them, so the last
+free pose along the motion is the start pose. The robot stays there, heading unchanged, and one
+tick passes (the bumper stops the motors at the contact); :attr:`Simulator.bumps` counts the
+contacts with walls (``last_bumped`` names only cells blocked by world events, not walls).
+A domain without a fault-behaviour model fails a forbidden command as above, but the outcome
+names no fault (``blocking`` is empty): the robot learns only that the command failed.
 """
 
 from __future__ import annotations
@@ -23,6 +42,7 @@ from selfrepair.execution.moves import Move, MoveTable, available_moves, move_ta
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain
 from selfrepair.search.problem import make_pose, pose_table
+from selfrepair.world.events import Sensing, WorldSchedule
 from selfrepair.world.maze import Maze
 
 __all__ = ["FAILED_ATTEMPT_TICKS", "FaultSource", "Outcome", "Simulator", "StepOutcome"]
@@ -37,6 +57,7 @@ class Outcome(StrEnum):
     MOVED = "moved"
     FAILED_ATTEMPT = "failed-attempt"
     COLLISION = "collision"
+    BUMPED = "bumped"
 
 
 class StepOutcome(NamedTuple):
@@ -77,8 +98,14 @@ class Simulator:
     ``clock`` replaces the schedule's fault clock when the true faults are not a function of a
     schedule alone (a team robot's); the schedule then gives only the detection. A robot that
     waits between commands (a team robot waiting for its turn) says so with
-    :meth:`wait_until`.
+    :meth:`wait_until`. ``behaviour`` names the domain's fault-behaviour model used when the
+    faults are hidden (``None``: the default; see the module docstring).
     """
+
+    deviated = False
+    """Whether the last move ended elsewhere than the domain says (never, here: a physics
+    simulator, :mod:`selfrepair.physics.simulator`, sets it after localising the robot); the
+    mission loop then replans from the pose the robot is at."""
 
     def __init__(
         self,
@@ -88,6 +115,8 @@ class Simulator:
         schedule: FaultSchedule,
         seed: int = 0,
         clock: FaultSource | None = None,
+        world: WorldSchedule | None = None,
+        behaviour: str | None = None,
     ) -> None:
         self.domain = domain
         self.maze = maze
@@ -113,6 +142,26 @@ class Simulator:
         self._inside = maze.in_bounds(start.x, start.y)
         self._pw = maze.width + 2
         self._poses = pose_table(maze) if self.table.ends_covered else None
+        self.world = world or None
+        """The world events (``None``: the maze never changes)."""
+        self.blocked: dict[Cell, None] = {}
+        """The cells blocked now by world events, in the order they were blocked."""
+        self.last_bumped: tuple[Cell, ...] = ()
+        """The blocked cells the last command bumped into (empty unless it bumped)."""
+        self._data = bytearray(self.grid.data) if self.world else self.grid.data
+        self._next_event = 0
+        self._event_cells = frozenset(self.world.cells()) if self.world else frozenset()
+        self._hidden = schedule.detection is Detection.HIDDEN
+        self.behaviour = behaviour
+        if self._hidden and domain.behaviours:
+            domain.behaviour(behaviour)  # an unknown name fails before the first step
+        self._performed: dict[Any, Any] = {}
+        """The effective action of each commanded action under the current faults (hidden)."""
+        self.last_action: Any = None
+        """The action the wheels really performed in the last command (hidden faults: the
+        effective action; otherwise the command)."""
+        self.bumps = 0
+        """Motions stopped at a wall so far (hidden faults only)."""
 
     @property
     def ticks(self) -> Fraction:
@@ -143,11 +192,12 @@ class Simulator:
         """Command ``action`` from the current pose and advance the world."""
         start, step = self.pose, self.steps
         status = self.advance(action)
-        if status is Outcome.FAILED_ATTEMPT:
+        if status is Outcome.FAILED_ATTEMPT or status is Outcome.BUMPED:
             swept: tuple[Cell, ...] = (start.cell,)
         else:  # the footprint of the move table, shifted (a collision moves nothing)
             x, y = start.x, start.y
-            shape = self.table.shapes[action][start.heading]
+            performed = self.last_action if self._hidden else action
+            shape = self.table.shapes[performed][start.heading]
             swept = tuple([(x + dx, y + dy) for dx, dy in shape])
         return StepOutcome(
             status, step, action, start, self.pose, swept, self.last_duration, self.last_blocking
@@ -157,6 +207,10 @@ class Simulator:
         """Command ``action`` and advance the world; what it did is left in ``pose``,
         ``last_move``, ``last_duration`` and ``last_blocking`` (the executor's fast path:
         :meth:`execute` wraps it into a :class:`StepOutcome`). A collision changes nothing."""
+        if self.world is not None:
+            self._apply_events()
+        if self._hidden:
+            return self._advance_hidden(action)
         faults = self._clock.at(self.steps, self.units)
         if faults is not self._faults:
             self._faults = faults
@@ -175,6 +229,14 @@ class Simulator:
                 self.last_duration = Fraction(0)
                 self.last_blocking = frozenset()
                 return Outcome.COLLISION
+            if self.world is not None and (bumped := self._bumped(start, move)):
+                self.last_move = None
+                self.last_duration = FAILED_ATTEMPT_TICKS
+                self.last_blocking = frozenset()
+                self.last_bumped = bumped
+                self.units += self._failed_units
+                self.steps += 1
+                return Outcome.BUMPED
             x, y, heading = start.x + move.dx, start.y + move.dy, move.heading
             poses = self._poses
             if poses is not None and self._inside:  # the end is on the grid: a shared pose
@@ -191,6 +253,101 @@ class Simulator:
             self.units += move.units
         self.steps += 1
         return Outcome.MOVED if moves is not None else Outcome.FAILED_ATTEMPT
+
+    def _advance_hidden(self, action: Any) -> Outcome:
+        """:meth:`advance` with the faults hidden from the robot (see the module docstring):
+        the effective action moves, a swept wall stops the motion at the start pose (a bump)."""
+        faults = self._clock.at(self.steps, self.units)
+        if faults is not self._faults:
+            self._faults = faults
+            self._moves = available_moves(self.table, faults)
+            self._performed = {}
+        start = self.pose
+        self.last_blocking = frozenset()
+        self.steps += 1
+        performed = action
+        if action not in self._moves:
+            if not self.domain.behaviours:  # no model: the command fails, nothing is named
+                self.last_move, self.last_action = None, action
+                self.last_duration = FAILED_ATTEMPT_TICKS
+                self.units += self._failed_units
+                return Outcome.FAILED_ATTEMPT
+            performed = self._performed.get(action)
+            if performed is None:
+                performed = self.domain.effective(action, faults, self.behaviour)
+                self._performed[action] = performed
+        self.last_action = performed
+        move = self.table.moves[performed][start.heading]
+        self.last_bumped = ()
+        wall = not self._free(start, move, performed)
+        if wall or (self.world is not None and (bumped := self._bumped(start, move))):
+            self.last_move = None
+            self.last_duration = FAILED_ATTEMPT_TICKS
+            self.units += self._failed_units
+            if wall:
+                self.bumps += 1
+            else:
+                self.last_bumped = bumped
+            return Outcome.BUMPED
+        self.last_duration = move.duration
+        self.units += move.units
+        x, y = start.x + move.dx, start.y + move.dy
+        self._inside = self.maze.in_bounds(x, y)
+        self.pose = make_pose(x, y, move.heading)
+        self.last_move = move
+        return Outcome.MOVED
+
+    def _apply_events(self) -> None:
+        """Apply the world events due by now to the occupancy (``blocked`` and the buffer)."""
+        assert self.world is not None
+        events, now = self.world.events, self.units
+        grid, data = self.grid, self._data
+        assert isinstance(data, bytearray)
+        while self._next_event < len(events) and events[self._next_event].at * self.unit <= now:
+            event = events[self._next_event]
+            self._next_event += 1
+            x, y = event.cell
+            if not self.maze.is_free(x, y):
+                continue  # the maze's walls never change
+            if event.blocked:
+                self.blocked[event.cell] = None
+            else:
+                self.blocked.pop(event.cell, None)
+            data[grid.index(x, y)] = 0 if event.blocked else 1
+
+    def _bumped(self, start: Pose, move: Move) -> tuple[Cell, ...]:
+        """The cells of ``move``'s footprint from ``start`` blocked now, but the start cell."""
+        grid, data = self.grid, self._data
+        base = (start.y + grid.margin) * grid.stride + start.x + grid.margin
+        if all(data[base + offset] for offset in move.cells[1:]):
+            return ()
+        shape = self.table.shapes[self.domain.actions[move.action_index]][start.heading]
+        swept = [(start.x + dx, start.y + dy) for dx, dy in shape[1:]]
+        return tuple(cell for cell in swept if cell in self.blocked)
+
+    def sense_cells(self, believed: frozenset[Cell]) -> frozenset[Cell]:
+        """What the robot believes blocked after its sensors look, given what it believed
+        (``believed``, returned as it is when nothing changed): in ``range`` sensing the true
+        state of every cell that an event names within the sensing range; in ``bump`` sensing
+        nothing (the robot learns only by bumping)."""
+        world = self.world
+        if world is None or world.sensing is Sensing.BUMP:
+            return believed
+        self._apply_events()
+        reach, (x0, y0) = world.sensing_range, self.pose.cell
+        cells, blocked = self._event_cells, self.blocked
+        added, removed = [], []
+        for y in range(y0 - reach, y0 + reach + 1):
+            for x in range(x0 - reach, x0 + reach + 1):
+                if (cell := (x, y)) in cells:
+                    if cell in blocked:
+                        if cell not in believed:
+                            added.append(cell)
+                    elif cell in believed:
+                        removed.append(cell)
+        if not added and not removed:
+            return believed
+        return (believed - frozenset(removed)) | frozenset(added)
 
     def _free(self, start: Pose, move: Move, action: Any) -> bool:
         """Whether the footprint of ``move`` from ``start`` is free (on the grid)."""

@@ -46,13 +46,23 @@ so the next question replans from where the robot is; a failed attempt reveals t
 blocked it (detection on use); each command is recorded as a
 :class:`~selfrepair.execution.result.TraceStep`. What the robot senses between
 commands (detection ``now``) comes in through :meth:`Stepper.learn`.
+
+A changing world (:mod:`selfrepair.world.events`): the cells the robot believes blocked come in
+through :meth:`Stepper.see` (its range sensors) and from bumps (a command that bumped into a cell
+reveals it). When the queue's first action would sweep a cell believed blocked (other than the
+robot's own), the stepper asks for a repair as for a faulty action: a strategy that has a method
+``repair_blocked(request)`` is asked through it and must answer with actions that avoid the
+believed-blocked cells (the replacement strategy's local detours), one that declares
+``sees_cells`` (true) is asked through its ``repair`` (D* Lite, whose kept search takes the
+cells as updates); any other is answered by a plain replan around them (the mission's planner
+plans around ``MissionContext.belief``).
 """
 
 from __future__ import annotations
 
 import time
 from collections import deque
-from collections.abc import Container, Iterable, Iterator, Sequence
+from collections.abc import Callable, Container, Iterable, Iterator, Sequence
 from fractions import Fraction
 from itertools import islice, repeat
 from operator import itemgetter
@@ -62,7 +72,7 @@ from selfrepair.errors import ProblemError
 from selfrepair.execution.moves import MoveTable, available_moves
 from selfrepair.execution.result import STEP_OF_REPAIR, RepairRecord, StepSource, TraceStep
 from selfrepair.execution.simulator import Outcome, StepOutcome
-from selfrepair.geometry import Pose
+from selfrepair.geometry import Cell, Pose
 from selfrepair.repair.queue import splice
 from selfrepair.repair.strategies import (
     MissionContext,
@@ -134,8 +144,10 @@ class Stepper:
 
     __slots__ = (
         "_available",
+        "_blocked_repair",
         "_early_at",
         "_table",
+        "blocked",
         "context",
         "failure",
         "horizon",
@@ -168,6 +180,13 @@ class Stepper:
         self._table = table
         self._available: Container[Any] = available_moves(table, known)
         self.horizon = int(getattr(repairer, "horizon", 0))
+        self._blocked_repair: Callable[[RepairRequest], Repair] | None = getattr(
+            repairer, "repair_blocked", None
+        )
+        if self._blocked_repair is None and getattr(repairer, "sees_cells", False):
+            self._blocked_repair = repairer.repair  # its one repair also sees the cells
+        self.blocked: frozenset[Cell] = context.belief.blocked
+        """The cells the robot believes blocked by world events (see the module docstring)."""
         self._early_at = -1  # the step of the last early repair: at most one per step
         self.steps: list[TraceStep] = []
         self.repairs: list[RepairRecord] = []
@@ -184,6 +203,20 @@ class Stepper:
             self.known = known
             self._available = available_moves(self._table, known)
 
+    def see(self, blocked: frozenset[Cell]) -> None:
+        """The robot now believes exactly ``blocked`` blocked (its sensors, or a bump)."""
+        if blocked is not self.blocked:
+            self.blocked = blocked
+            self.context.belief.blocked = blocked
+
+    def sweeps_blocked(self, pose: Pose, action: Any) -> bool:
+        """Whether ``action`` from ``pose`` sweeps a cell believed blocked, other than the cell
+        the robot stands on."""
+        blocked = self.blocked
+        x, y = pose.x, pose.y
+        shape = self._table.shapes[action][pose.heading]
+        return any((x + dx, y + dy) in blocked for dx, dy in shape[1:])
+
     def available(self, action: Any) -> bool:
         """Whether ``action`` is available under the known faults."""
         return action in self._available
@@ -193,13 +226,17 @@ class Stepper:
         queue first when needed (see the module docstring); ``None`` when a repair failed or the
         stepper is stopped."""
         queue = self.queue
-        if queue and queue[0][0] in self._available and not (self.horizon or self.stopped):
+        if queue and queue[0][0] in self._available and not (
+            self.horizon or self.stopped or self.blocked
+        ):
             return queue[0]  # the hot path: nothing to repair
         if self.stopped:
             return None
         for _ in range(MAX_REPAIRS_PER_STEP):
             if not queue or queue[0][0] not in self._available:
                 repair = self._repair(pose, step, queue[0][0] if queue else None)
+            elif self.blocked and self.sweeps_blocked(pose, queue[0][0]):
+                repair = self._repair(pose, step, queue[0][0], blocked=True)
             elif (
                 self.horizon
                 and self._early_at != step
@@ -242,20 +279,32 @@ class Stepper:
                 return action
         return None
 
-    def _repair(self, pose: Pose, step: int, action: Any | None) -> Repair:
-        """Ask the strategy (or, with an empty queue, a plain replan) for a repair of ``action``
-        and splice it into the queue; the latency covers both."""
+    def _repair(self, pose: Pose, step: int, action: Any | None, blocked: bool = False) -> Repair:
+        """Ask the strategy (or, with an empty queue or for a blocked action the strategy does not
+        see, a plain replan) for a repair of ``action`` and splice it into the queue; the
+        latency covers both."""
         t0 = time.perf_counter_ns()
         queue = self.queue
         request = RepairRequest(pose, _ActionView(queue), self.known, step)
-        fallback = action is None  # the queue ran out away from the goal: plain replan
-        repair = replan(self.context, request) if fallback else self.repairer.repair(request)
+        blocked_repair = self._blocked_repair
+        if action is None or (blocked and blocked_repair is None):
+            repair = replan(self.context, request)  # no queue, or a strategy blind to cells
+        elif blocked_repair is not None and blocked:
+            repair = blocked_repair(request)
+        else:
+            repair = self.repairer.repair(request)
         if repair.status is RepairStatus.REPAIRED:
             source = STEP_OF_REPAIR[repair.source]
             splice(queue, repair.consumed, repair.actions, source)
         latency = time.perf_counter_ns() - t0
         self.repairs.append(RepairRecord(step, pose, action, repair, latency))
         return repair
+
+    def relocalise(self) -> None:
+        """The robot is not where the last move should have put it (a physics simulator localised
+        it elsewhere): drop the queue, so the next question replans from where it is."""
+        self.queue.clear()
+        self.stopped, self.failure = False, None
 
     def observe(self, outcome: StepOutcome, source: StepSource = StepSource.PLAN) -> None:
         """:meth:`record` a command that :meth:`Simulator.execute
@@ -296,11 +345,13 @@ class Stepper:
         end: Pose,
         duration: Fraction,
         blocking: frozenset[Any] = frozenset(),
+        bumped: tuple[Cell, ...] = (),
     ) -> None:
         """Tell the stepper what command ``action`` (number ``step``, of ``source``) did: a move
         from ``start`` to ``end`` in ``duration``, a failed attempt revealing ``blocking``, or a
-        refused command (a collision: nothing changes, nothing is recorded). See the module
-        docstring."""
+        refused command (a collision: nothing changes, nothing is recorded), or a bump into the
+        blocked cells ``bumped`` (learned) or, faults hidden, into a wall (recorded; the action
+        stays queued). See the module docstring."""
         if outcome is Outcome.MOVED:
             self.moved(step, action, source, start, end, duration)
             return
@@ -312,6 +363,9 @@ class Stepper:
             if not blocking <= known:
                 self.known = known | blocking
                 self._available = available_moves(self._table, self.known)
+        elif outcome is Outcome.BUMPED:
+            source = StepSource.BUMPED
+            self.see(self.blocked | frozenset(bumped))
         else:
             return
         self.steps.append(

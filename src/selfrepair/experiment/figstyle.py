@@ -32,6 +32,7 @@ SOURCE_COLOURS: Mapping[StepSource, str] = MappingProxyType(
         StepSource.PLAN_REPAIR: "#56B4E9",
         StepSource.FAILED_ATTEMPT: "#D55E00",
         StepSource.WAIT: "#F0E442",
+        StepSource.BUMPED: "#000000",
     }
 )
 """Step colours by source, in every figure, animation and the HTML viewer. A repair's source

@@ -26,6 +26,15 @@ one of four headings; a robot without a heading simply keeps ``N``). A domain su
   grid-distance heuristic admissible for it (see docs/planner.md); without it the planner refuses
   that heuristic.
 
+A domain may also say what its actuators really do when given a command that a fault forbids:
+``behaviours``, a tuple of named :class:`FaultBehaviour` models (the first is the default; empty:
+the domain has no such model, and a forbidden command simply fails without moving).
+:meth:`Domain.effective` is the one definition of that: ``effective(action, faults, behaviour)``
+is the action the robot really performs when commanded ``action`` under ``faults``, and it is
+``action`` itself whenever ``available(action, faults)``. It is a pure function of its three
+arguments, so callers (the simulator, the diagnoser, the compiled loop, the physics model)
+tabulate it per fault set and never define it a second time.
+
 Derived from these: ``waits``, the actions that keep every pose and sweep only the robot's own
 cell (the four-wheel robot's all-stop ``SSSS`` and the wheel pairs that cancel out), those the
 domain names in ``wait_actions`` first (optional: its preferred ones), then the others fastest
@@ -37,7 +46,9 @@ waits.
 The contract, checked by :func:`check_domain` when a domain is registered: ``apply`` and
 ``footprint`` commute with translation (an action does the same thing in every cell), the footprint
 starts at the start cell, durations are positive, the text forms round-trip, and a domain that
-declares ``footprint_connected`` has such footprints. Nothing else is assumed: actions and faults
+declares ``footprint_connected`` has such footprints, and every fault behaviour maps each action,
+under every fault set in scope, to an action of the domain, the action itself when it is available.
+Nothing else is assumed: actions and faults
 may be any hashable values.
 """
 
@@ -56,6 +67,7 @@ from selfrepair.geometry import Cell, Heading, Pose
 __all__ = [
     "CANONICAL",
     "Domain",
+    "FaultBehaviour",
     "check_domain",
     "primitive_by_motion",
     "progress_rate",
@@ -72,6 +84,21 @@ CANONICAL = Pose(0, 0, Heading.N)
 
 def _no_level(action: Any) -> int:
     return 0
+
+
+@dataclass(frozen=True, slots=True)
+class FaultBehaviour(Generic[A, F]):
+    """One model of what a robot's actuators do under faults: ``effective(action, faults)`` is
+    the action really performed when ``action`` is commanded while ``faults`` are active.
+
+    The contract (checked by :func:`check_domain`): the result is an action of the domain, and it
+    is ``action`` itself whenever no fault in ``faults`` forbids it. ``name`` is how options,
+    experiment files and traces name the model; ``description`` says in one sentence what it
+    assumes (and why)."""
+
+    name: str
+    description: str
+    effective: Callable[[A, frozenset[F]], A]
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -105,6 +132,9 @@ class Domain(Generic[A, F]):
     """What one fault is made of, for spreading chosen fault sets over them (the four-wheel
     robot: its wheel and its mode); ``None``: each fault is its own single part (see
     :meth:`parts_of`)."""
+    behaviours: tuple[FaultBehaviour[A, F], ...] = ()
+    """What the actuators do under a forbidden command, as named models (the first is the
+    default; empty: no model, a forbidden command fails; see :meth:`effective`)."""
     action_set: frozenset[A] = field(init=False, repr=False)
     waits: tuple[A, ...] = field(init=False, repr=False)
     """The actions that keep every pose and sweep only the start cell, ``wait_actions`` first,
@@ -136,6 +166,38 @@ class Domain(Generic[A, F]):
         if self.fault_parts is None:
             return (self.format_faults((fault,)),)
         return self.fault_parts(fault)
+
+    def behaviour(self, name: str | None = None) -> FaultBehaviour[A, F]:
+        """The fault-behaviour model called ``name`` (``None``: the default, the first).
+
+        A domain without models, or an unknown name, raises :class:`ProblemError` naming the
+        models there are."""
+        if not self.behaviours:
+            raise ProblemError(
+                f"domain {self.name!r} has no fault-behaviour model (a forbidden command fails)"
+            )
+        if name is None:
+            return self.behaviours[0]
+        for model in self.behaviours:
+            if model.name == name:
+                return model
+        names = ", ".join(m.name for m in self.behaviours)
+        raise ProblemError(
+            f"unknown fault behaviour {name!r} for domain {self.name!r}; expected one of {names}"
+        )
+
+    def behaviour_names(self) -> tuple[str, ...]:
+        """The names of the fault-behaviour models, the default first."""
+        return tuple(m.name for m in self.behaviours)
+
+    def effective(self, action: A, faults: frozenset[F], behaviour: str | None = None) -> A:
+        """What the actuators really do when commanded ``action`` under ``faults`` in the
+        fault-behaviour model ``behaviour`` (``None``: the default): ``action`` itself whenever it
+        is available; otherwise the model's answer. A forbidden action in a domain without a
+        model raises :class:`ProblemError` (there, a forbidden command fails)."""
+        if self.available(action, faults):
+            return action
+        return self.behaviour(behaviour).effective(action, faults)
 
     def blocking(self, action: A, faults: Iterable[F]) -> frozenset[F]:
         """The faults of ``faults`` that each forbid ``action`` on their own."""
@@ -245,6 +307,29 @@ def check_domain(domain: Domain[Any, Any]) -> None:
         text = domain.format_faults(faults)
         if domain.parse_faults(text) != faults:
             raise fail(f"fault text {text!r} does not parse back to the same set")
+    _check_behaviours(domain, fail)
+
+
+def _check_behaviours(domain: Domain[Any, Any], fail: Callable[[str], ProblemError]) -> None:
+    """Fail unless every fault-behaviour model has a distinct, non-empty name and maps every
+    action, under every fault set in scope (and none), to an action of the domain: the action
+    itself when it is available."""
+    names = [m.name for m in domain.behaviours]
+    if any(not n for n in names) or len(set(names)) != len(names):
+        raise fail(f"expected distinct, non-empty fault-behaviour names, got {names}")
+    for model in domain.behaviours:
+        for faults in (frozenset(), *domain.fault_sets):
+            for action in domain.actions:
+                got = model.effective(action, faults)
+                text = domain.format_action(action)
+                where = f"fault behaviour {model.name!r} under {domain.format_faults(faults)!r}"
+                if got not in domain.action_set:
+                    raise fail(f"{where} turns {text} into {got!r}, not an action of the domain")
+                if got != action and domain.available(action, faults):
+                    raise fail(
+                        f"{where} turns the available action {text} into "
+                        f"{domain.format_action(got)} (expected the action itself)"
+                    )
 
 
 def _check_translation(

@@ -32,10 +32,11 @@ from fractions import Fraction
 
 from selfrepair.errors import InputError
 from selfrepair.geometry import Cell, Pose, relative_cell
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import Domain, FaultBehaviour
 
 __all__ = [
     "ACTIONS",
+    "BEHAVIOURS",
     "DOUBLE_FAULTS",
     "FOUR_WHEEL",
     "MOTIONS",
@@ -50,6 +51,7 @@ __all__ = [
     "Wheel",
     "available",
     "duration",
+    "effective",
     "fastest_by_motion",
     "format_faults",
     "motion",
@@ -329,6 +331,84 @@ def fastest_by_motion(faults: Iterable[Fault] = ()) -> dict[Motion, Action]:
     return best
 
 
+# --- what a fault really does ---------------------------------------------------------------
+
+_FALLBACKS: dict[str, dict[Mode, tuple[Mode, ...]]] = {
+    "stall": {Mode.F: (Mode.S, Mode.B), Mode.B: (Mode.S, Mode.F), Mode.S: (Mode.F, Mode.B)},
+    "runaway-backward": {
+        Mode.F: (Mode.S, Mode.B),
+        Mode.B: (Mode.S, Mode.F),
+        Mode.S: (Mode.B, Mode.F),
+    },
+    "reverse": {Mode.F: (Mode.B, Mode.S), Mode.B: (Mode.F, Mode.S), Mode.S: (Mode.F, Mode.B)},
+}
+"""Per model, for each commanded wheel mode, the modes the wheel falls back to when a fault
+forbids it, in order: the wheel does the first one no fault of that wheel forbids."""
+
+_DESCRIPTIONS = {
+    "stall": (
+        "a wheel that cannot go forward or backward stops (a dead driver channel gives no "
+        "torque and the wheel's gearbox holds it); a wheel that cannot stop keeps running "
+        "forward (a driver stuck on)"
+    ),
+    "runaway-backward": (
+        "as stall, but a wheel that cannot stop keeps running backward"
+    ),
+    "reverse": (
+        "a wheel commanded a direction it cannot go turns the other way (a stuck direction "
+        "line); a wheel that cannot stop runs forward"
+    ),
+}
+
+
+def effective(action: Action, faults: Iterable[Fault], behaviour: str = "stall") -> Action:
+    """The action the wheels really perform when ``action`` is commanded under ``faults`` in the
+    fault-behaviour model ``behaviour`` (see :data:`BEHAVIOURS`): each wheel whose commanded mode
+    a fault of that wheel forbids does the first mode of the model's fallback order that no
+    fault of that wheel forbids (a wheel all of whose modes are forbidden stops). ``action``
+    itself when it is available."""
+    fallbacks = _FALLBACKS[behaviour]
+    forbidden: dict[int, set[str]] = {}
+    for fault in faults:
+        forbidden.setdefault(fault.wheel, set()).add(fault.mode.letter)
+    letters = list(action.code)
+    for wheel, letter in enumerate(letters):
+        banned = forbidden.get(wheel)
+        if banned is None or letter not in banned:
+            continue
+        letters[wheel] = next(
+            (m.letter for m in fallbacks[_MODE_BY_LETTER[letter]] if m.letter not in banned), "S"
+        )
+    return _ACTION_BY_CODE["".join(letters)]
+
+
+def _model(name: str) -> FaultBehaviour[Action, Fault]:
+    def model(action: Action, faults: frozenset[Fault]) -> Action:
+        return effective(action, faults, name)
+
+    model.__doc__ = f"The {name!r} fault behaviour: {_DESCRIPTIONS[name]}."
+    return FaultBehaviour(name, _DESCRIPTIONS[name], model)
+
+
+BEHAVIOURS: tuple[FaultBehaviour[Action, Fault], ...] = tuple(_model(n) for n in _FALLBACKS)
+"""The four-wheel robot's fault-behaviour models, the default first.
+
+``stall`` (the default) is what a skid-steer drive most plausibly does. Each wheel has its own
+motor, driver channel and (usually worm or high-ratio, hence not back-drivable) gearbox. A
+wheel that "cannot go forward" has lost that half of its driver (a failed H-bridge leg, a
+broken encoder channel that the controller trips on, a burnt winding): it gives no torque that
+way and its gearbox holds it, so kinematically it is a stopped wheel, and the other wheel of
+its side drags the robot around it (a skid-steer robot already skids: its side's drive is the
+sum of its two wheels). A wheel that "cannot stop" has a driver stuck on (a welded relay, a
+runaway controller); it keeps running in the direction the drive runs when enabled, forward.
+So ``FFFF`` under ``FL:F`` performs ``SFFF`` (an arc to the left, not a straight move), and
+``SSSS`` under ``FL:S`` performs ``FSSS`` (a turn to the right, not a wait). When the fallback
+is forbidden too (two faults on one wheel), the wheel does the mode it still can.
+
+``runaway-backward`` is ``stall`` with a stuck-on driver running backward; ``reverse`` models a
+stuck direction line: a wheel commanded a direction it cannot go turns the other way."""
+
+
 # --- the domain value ---------------------------------------------------------------------------
 
 
@@ -376,9 +456,11 @@ FOUR_WHEEL: Domain[Action, Fault] = Domain(
     footprint_connected=True,
     fault_parts=lambda fault: (fault.wheel.name, fault.mode.letter),
     wait_actions=(parse_action("SSSS"),),
+    behaviours=BEHAVIOURS,
     description="four-wheeled skid-steer robot: 81 actions, 12 wheel faults (e.g. FL:F)",
 )
 """The four-wheel skid-steer robot as a :class:`~selfrepair.robots.domain.Domain`. Levels: waits,
 straight moves and in-place turns are primitive (0); arcs, which combine a move and a turn, are
 complex (1). It waits with the all-stop ``SSSS`` first (the wheel pairs that cancel out, such as
-``FFBB``, when a fault forbids stopping a wheel)."""
+``FFBB``, when a fault forbids stopping a wheel). Its fault-behaviour models are
+:data:`BEHAVIOURS` (``stall`` by default)."""

@@ -40,6 +40,7 @@ from selfrepair.repair.strategies.lookahead import lookahead, start_lookahead
 from selfrepair.repair.strategies.names import MissionKind, RepairSource, StrategyName
 from selfrepair.repair.strategies.options import StrategyOptions
 from selfrepair.repair.strategies.protocol import (
+    Belief,
     FunctionRepairer,
     MissionContext,
     PlanFn,
@@ -74,6 +75,7 @@ from selfrepair.status import RepairStatus
 
 __all__ = [
     "ROBOT",
+    "Belief",
     "DeferringRepairer",
     "FunctionRepairer",
     "Kind",

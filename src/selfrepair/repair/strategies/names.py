@@ -68,9 +68,11 @@ _TEAM = frozenset({StrategyName.TEAM_REPLACEMENT, StrategyName.REALLOCATION, Str
 
 class RepairSource(StrEnum):
     """Where the actions of a robot's repair came from (named after the strategy that made
-    them, but for ``plan-repair``: a plan repaired by LPG-adapt)."""
+    them, but for ``plan-repair``: a plan repaired by LPG-adapt, and ``detour``: a local detour
+    round cells believed blocked, from the replacement strategy's detour table)."""
 
     REPLACEMENT = StrategyName.REPLACEMENT.value
     LOOKAHEAD = StrategyName.LOOKAHEAD.value
     REPLAN = StrategyName.REPLAN.value
     PLAN_REPAIR = "plan-repair"
+    DETOUR = "detour"

@@ -27,7 +27,7 @@ it is available under the known faults, so the repaired queue starts with an exe
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from fractions import Fraction
 from typing import Any, Generic, NamedTuple, Protocol
 
@@ -43,6 +43,7 @@ from selfrepair.status import RepairStatus
 from selfrepair.tables.model import ReplacementTable
 
 __all__ = [
+    "Belief",
     "FunctionRepairer",
     "MissionContext",
     "PlanFn",
@@ -60,6 +61,16 @@ PlanFn = Callable[[Pose, Cell, Heading | None, frozenset[Any], int | None], Plan
 mission's map with the mission's planner settings."""
 
 
+@dataclass(slots=True)
+class Belief:
+    """The cells the robot believes blocked by world events (a changing world, see
+    :mod:`selfrepair.world.events`); empty when the world never changes. Mutable: the stepper
+    updates it as the robot senses or bumps into cells, and the mission's planner
+    (``MissionContext.plan``) plans around them."""
+
+    blocked: frozenset[Cell] = frozenset()
+
+
 @dataclass(frozen=True, slots=True)
 class MissionContext:
     """What a strategy knows about its mission from the start.
@@ -72,7 +83,11 @@ class MissionContext:
     is the map itself (a :class:`selfrepair.world.maze.Maze`), typed loosely so that this layer does
     not depend on the world layer; only strategies that must read the map (e.g. to export it)
     use it. ``start`` is the mission's start pose (``None`` when unknown): a strategy that searches
-    ahead of its first repair, as D* Lite does, starts there.
+    ahead of its first repair, as D* Lite does, starts there. ``belief`` holds the cells the
+    robot believes blocked by world events (the stepper keeps it up to date; ``plan`` plans
+    around them, ``grid`` and ``free`` know only the maze's walls). ``clearance_weight``,
+    ``clearance_radius`` and ``backend`` are the mission's planner settings, for a strategy that
+    searches with its own planner (D* Lite).
     """
 
     domain: Domain[Any, Any]
@@ -88,6 +103,10 @@ class MissionContext:
     world: object = None
     cost_scale: int = 1
     start: Pose | None = None
+    clearance_weight: Fraction = Fraction(0)
+    clearance_radius: int = 2
+    backend: str = "auto"
+    belief: Belief = field(default_factory=Belief)
 
     def at_goal(self, pose: Pose) -> bool:
         """Whether ``pose`` satisfies the mission's goal."""
@@ -160,6 +179,15 @@ class Repairer(Protocol[RequestT, AnswerT]):
     first is faulty under the known faults, not only when the first one is (the first faulty
     action is then not at the front of ``RepairRequest.queue``; see
     :func:`~selfrepair.repair.strategies.lookahead.lookahead`).
+
+    In a changing world (:mod:`selfrepair.world.events`) a robot's repairer may also have a
+    method ``repair_blocked(request)``: asked when the first queued action is available but
+    sweeps a cell believed blocked (``MissionContext.belief``), it answers with actions that
+    avoid those cells; one that declares ``sees_cells = True`` instead is asked through
+    :meth:`repair`, which then also sees the cells; any other is answered by a replan there. It
+    may have
+    ``expect_blocked()`` too, called once before the mission's clock runs when the world
+    changes (to prepare what ``repair_blocked`` needs outside the timed repairs).
     """
 
     def repair(self, request: RequestT) -> AnswerT:

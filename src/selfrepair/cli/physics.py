@@ -1,0 +1,171 @@
+"""``selfrepair physics ...``: the four-wheel robot in MuJoCo (the ``physics`` extra).
+
+* ``physics fidelity``: every action run in physics against the lattice (open loop and tracked);
+  ``--write-domain FILE`` writes the domain identified from it. Exit 0.
+* ``physics run``: one mission (every option of ``run``) driven through MuJoCo by the same loop;
+  ``--video FILE`` renders it headless (GIF or MP4), ``--trace FILE`` writes the lattice trace
+  (localised poses) that ``selfrepair view`` shows. Exit 0 when the goal is reached, 1 otherwise.
+
+MuJoCo and imageio are imported inside the commands; without the extra a command says what to
+install (exit 2).
+"""
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+import typer
+
+from selfrepair.cli._app import app, command_group, echo, echo_json, number_json
+from selfrepair.cli._mission import MissionOptions, mission_options, mission_spec
+from selfrepair.errors import InputError
+
+if TYPE_CHECKING:
+    from selfrepair.physics.fidelity import FidelityReport
+    from selfrepair.physics.mission import PhysicsMission
+
+__all__ = ["physics_fidelity", "physics_run"]
+
+physics_app = command_group(help="The four-wheel robot in MuJoCo: model fidelity and missions.")
+app.add_typer(physics_app, name="physics")
+
+OpenLoop = Annotated[
+    bool,
+    typer.Option("--open-loop", help="Run wheel speeds open loop instead of tracking the lattice."),
+]
+
+
+@physics_app.command("fidelity")
+def physics_fidelity(
+    as_json: Annotated[bool, typer.Option("--json", help="Print every row as JSON.")] = False,
+    write_domain: Annotated[
+        Path | None,
+        typer.Option("--write-domain", metavar="FILE", help="Write the identified domain here."),
+    ] = None,
+) -> int:
+    """Run every action in physics and compare its end pose with the lattice's.
+
+    Per action: position error (cells) and heading error (degrees), open loop and tracked;
+    physics confirms an action whose tracked end is within 0.05 cells and 3 degrees.
+    """
+    from selfrepair.physics.fidelity import measure
+
+    report = measure()
+    if write_domain is not None:
+        import json
+
+        text = json.dumps(report.identified(), indent=1) + "\n"
+        write_domain.write_text(text, encoding="utf-8")
+    if as_json:
+        echo_json({"summary": report.summary(), "rows": [_row_json(r) for r in report.rows]})
+        return 0
+    echo(fidelity_markdown(report))
+    return 0
+
+
+def _row_json(row: Any) -> dict[str, Any]:
+    return {
+        "action": row.action,
+        "motion": row.motion,
+        "faults": row.faults,
+        "behaviour": row.behaviour,
+        "executed": row.executed,
+        "open_position": number_json(row.open_position),
+        "open_heading": number_json(row.open_heading),
+        "tracked_position": number_json(row.tracked_position),
+        "tracked_heading": number_json(row.tracked_heading),
+        "confirmed": row.confirmed,
+        "snapped": list(row.snapped) if row.snapped is not None else None,
+        "why": row.why,
+    }
+
+
+def fidelity_markdown(report: "FidelityReport") -> str:
+    """The fidelity table as Markdown: the summary, then one row per action."""
+    lines = []
+    for label, s in report.summary().items():
+        lines.append(
+            f"{label}: tracked {s['tracked_confirmed']}/{s['actions']} confirmed "
+            f"({100 * s['tracked_share']:.0f}%), open loop {s['open_loop_confirmed']}/"
+            f"{s['actions']} ({100 * s['open_loop_share']:.0f}%); median tracked error "
+            f"{s['tracked_position_median']:.3f} cells, {s['tracked_heading_median']:.1f} deg; "
+            f"{s['snapped']} snap to the lattice"
+        )
+    lines += [
+        "",
+        "| action | motion | open: cells | open: deg | tracked: cells | tracked: deg | "
+        "confirmed | note |",
+        "|---|---|---:|---:|---:|---:|---|---|",
+    ]
+    for r in report.rows:
+        lines.append(
+            f"| {r.action} | {r.motion} | {r.open_position:.3f} | {r.open_heading:.1f} | "
+            f"{r.tracked_position:.3f} | {r.tracked_heading:.1f} | "
+            f"{'yes' if r.confirmed else 'no'} | {r.why} |"
+        )
+    return "\n".join(lines)
+
+
+@physics_app.command("run")
+@mission_options
+def physics_run(
+    *,
+    strategy: Annotated[
+        str,
+        typer.Option("--strategy", metavar="NAME", help="Repair strategy (as for run)."),
+    ] = "replacement",
+    mission: MissionOptions,
+    open_loop: OpenLoop = False,
+    video: Annotated[
+        Path | None,
+        typer.Option("--video", metavar="FILE", help="Render the mission to a .gif or .mp4."),
+    ] = None,
+    trace: Annotated[
+        Path | None,
+        typer.Option("--trace", metavar="FILE", help="Write the JSON Lines trace here."),
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the outcome as JSON.")] = False,
+) -> int:
+    """Run one mission in MuJoCo: the same planner and strategy, localised after each action.
+
+    Reports goal reached, wall contacts, the final pose error, simulated seconds and repairs.
+    Exit 1 when the goal is not reached.
+    """
+    if video is not None and video.suffix.lower() not in (".gif", ".mp4"):
+        raise InputError(f"expected a .gif or .mp4 file, got {video.name!r}", source="--video")
+    from selfrepair.execution.trace import write_trace
+    from selfrepair.physics.mission import VideoSpec, run_physics_mission
+
+    spec = mission_spec(mission, strategy)
+    done = run_physics_mission(
+        spec, tracked=not open_loop, video=VideoSpec(video) if video is not None else None
+    )
+    if trace is not None:
+        write_trace(done.result, trace)
+    if as_json:
+        echo_json(outcome_json(done))
+    else:
+        for key, value in outcome_json(done).items():
+            echo(f"{key}: {value}")
+    return 0 if done.result.reached else 1
+
+
+def outcome_json(done: "PhysicsMission") -> dict[str, Any]:
+    """A physics mission's outcome as JSON-ready values."""
+    o, r = done.outcome, done.result
+    return {
+        "status": r.status.value,
+        "reason": r.reason,
+        "strategy": r.spec.strategy,
+        "tracked": o.tracked,
+        "reached": o.reached,
+        "wall_contacts": o.wall_contacts,
+        "final_error_cells": number_json(o.final_error),
+        "seconds": number_json(o.seconds),
+        "ticks": str(r.ticks),
+        "physics_steps": o.physics_steps,
+        "actions": len(done.steps),
+        "repairs": o.repairs,
+        "deviations": o.deviations,
+        "max_position_error_cells": number_json(o.max_position_error),
+        "max_heading_error_degrees": number_json(o.max_heading_error),
+    }

@@ -1,0 +1,375 @@
+"""Numba kernels of D* Lite: the search of :mod:`selfrepair.search.dstar`'s reference, compiled.
+
+Optional: without numba, :data:`NUMBA` is false and :mod:`selfrepair.search.dstar` runs the
+pure-Python reference. Everything that defines the graph (the lattice's integer offsets, the
+footprints, the scaled durations of the chosen actions, the free cells and clearance penalties)
+is computed in Python and handed in as integer arrays; the kernels only search, and keep all
+their state in arrays owned by the caller, so a search is kept between calls.
+
+Layout (as :mod:`selfrepair.search.dstar` documents): a node is ``4 * cell + heading`` with
+``cell`` an index into a padded, flattened grid; the virtual goal is node ``N`` (one past the
+last lattice node). ``g`` and ``rhs`` are ``int64[N + 1]`` with :data:`INF` for infinity.
+
+Arrays of the graph: ``free`` (``uint8`` per padded cell), ``pen`` (clearance penalty per padded
+cell, read only when ``wmul``), ``dur[k]`` (scaled duration of motion class ``k``'s chosen action,
+-1 when no action of the class is available), ``step[k, h]`` (node offset), ``nsw[k, h]`` and
+``sw[k, h, j]`` (footprint cells as offsets), ``backk[he, i]``, ``backo[he, i]`` and ``nback[he]``
+(the ``(class, node offset)`` pairs that arrive at a node facing ``he``).
+
+The open list is an indexed binary heap over ``(k1, k2, node)`` (``hk1``, ``hk2``, ``hn``;
+``pos[node]`` its slot, -1 when the node is not queued): a node is queued at most once, with its
+current key. That order is total (nodes are unique), so the kernels pop exactly the nodes that
+the reference's lazy-deletion heap pops, in the same order, whatever the heap's arrangement.
+
+``sc`` holds the scalars: :data:`SIZE`, :data:`KM`, :data:`START`, :data:`EXPANSIONS` (written
+back) and the constants :data:`GOAL_CELL`, :data:`GOAL_HEAD` (-1: any heading), :data:`RNUM`,
+:data:`RDEN` (the heuristic is ``manhattan * RNUM // RDEN``), :data:`WMUL` (clearance weight
+times the cost scale), :data:`PW` (padded row length) and :data:`NODES` (``N``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+import numpy as np
+
+try:
+    from numba import njit
+
+    NUMBA = True
+except ImportError:  # pragma: no cover - depends on the environment
+    NUMBA = False
+
+    def njit(*args: Any, **kwargs: Any) -> Any:  # type: ignore[no-redef]
+        """Stand-in so the module imports without numba (its kernels are then never called)."""
+        if args and callable(args[0]):
+            return args[0]
+        return lambda f: f
+
+
+__all__ = ["INF", "NUMBA", "compute", "faults_sweep", "update_nodes", "walk"]
+
+INF = 1 << 60
+"""Infinity of ``g``, ``rhs`` and edge costs (finite sums stay far below ``2**63``)."""
+
+SIZE, KM, START, EXPANSIONS = 0, 1, 2, 3
+GOAL_CELL, GOAL_HEAD, RNUM, RDEN, WMUL, PW, NODES = 4, 5, 6, 7, 8, 9, 10
+N_SCALARS = 11
+
+_Fn = TypeVar("_Fn", bound=Callable[..., Any])
+
+
+def _kernel(fn: _Fn) -> _Fn:
+    """Compile ``fn`` without numba's reference counting (the search kernels never allocate;
+    see :mod:`selfrepair.search._kernels`)."""
+    options: dict[str, Any] = {"cache": True, "_nrt": False}
+    return njit(**options)(fn)  # type: ignore[no-any-return]
+
+
+def _inline(fn: _Fn) -> _Fn:
+    """Compile ``fn`` as :func:`_kernel`, inlined into its callers."""
+    options: dict[str, Any] = {"cache": True, "_nrt": False, "inline": "always"}
+    return njit(**options)(fn)  # type: ignore[no-any-return]
+
+
+def _allocating(fn: _Fn) -> _Fn:
+    """Compile ``fn`` with reference counting (it returns a new array)."""
+    options: dict[str, Any] = {"cache": True}
+    return njit(**options)(fn)  # type: ignore[no-any-return]
+
+
+@_inline
+def _cost(free: Any, pen: Any, dur: Any, nsw: Any, sw: Any, wmul: int, u: int, k: int) -> int:
+    """Scaled cost of class ``k`` from node ``u`` (INF: no action, or a footprint cell blocked)."""
+    d = dur[k]
+    if d < 0:
+        return INF
+    cell = u >> 2
+    h = u & 3
+    n = nsw[k, h]
+    for j in range(n):
+        if free[cell + sw[k, h, j]] == 0:
+            return INF
+    if wmul:
+        p = 0
+        for j in range(n):
+            p += pen[cell + sw[k, h, j]]
+        d += wmul * p
+    return int(d)
+
+
+@_inline
+def _at_goal(sc: Any, free: Any, u: int) -> bool:
+    gh = sc[GOAL_HEAD]
+    return bool(
+        (u >> 2) == sc[GOAL_CELL] and (gh < 0 or (u & 3) == gh) and free[sc[GOAL_CELL]] != 0
+    )
+
+
+@_inline
+def _h(sc: Any, u: int) -> int:
+    if u == sc[NODES]:
+        return 0
+    pw = sc[PW]
+    a = u >> 2
+    b = sc[START] >> 2
+    d = abs(a % pw - b % pw) + abs(a // pw - b // pw)
+    return int(d * sc[RNUM] // sc[RDEN])
+
+
+@_inline
+def _less(a1: int, a2: int, an: int, b1: int, b2: int, bn: int) -> bool:
+    if a1 != b1:
+        return a1 < b1
+    if a2 != b2:
+        return a2 < b2
+    return an < bn
+
+
+@_kernel
+def _sift_up(hk1: Any, hk2: Any, hn: Any, pos: Any, i: int) -> None:
+    k1, k2, n = hk1[i], hk2[i], hn[i]
+    while i > 0:
+        up = (i - 1) >> 1
+        if not _less(k1, k2, n, hk1[up], hk2[up], hn[up]):
+            break
+        hk1[i], hk2[i], hn[i] = hk1[up], hk2[up], hn[up]
+        pos[hn[i]] = i
+        i = up
+    hk1[i], hk2[i], hn[i] = k1, k2, n
+    pos[n] = i
+
+
+@_kernel
+def _sift_down(hk1: Any, hk2: Any, hn: Any, pos: Any, i: int, size: int) -> None:
+    k1, k2, n = hk1[i], hk2[i], hn[i]
+    while True:
+        c = 2 * i + 1
+        if c >= size:
+            break
+        if c + 1 < size and _less(hk1[c + 1], hk2[c + 1], hn[c + 1], hk1[c], hk2[c], hn[c]):
+            c += 1
+        if not _less(hk1[c], hk2[c], hn[c], k1, k2, n):
+            break
+        hk1[i], hk2[i], hn[i] = hk1[c], hk2[c], hn[c]
+        pos[hn[i]] = i
+        i = c
+    hk1[i], hk2[i], hn[i] = k1, k2, n
+    pos[n] = i
+
+
+@_kernel
+def _remove(hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, u: int) -> None:
+    i = pos[u]
+    if i < 0:
+        return
+    pos[u] = -1
+    size = sc[SIZE] - 1
+    sc[SIZE] = size
+    if i == size:
+        return
+    hk1[i], hk2[i], hn[i] = hk1[size], hk2[size], hn[size]
+    pos[hn[i]] = i
+    if i > 0 and _less(
+        hk1[i], hk2[i], hn[i], hk1[(i - 1) >> 1], hk2[(i - 1) >> 1], hn[(i - 1) >> 1]
+    ):
+        _sift_up(hk1, hk2, hn, pos, i)
+    else:
+        _sift_down(hk1, hk2, hn, pos, i, size)
+
+
+@_kernel
+def _requeue(g: Any, rhs: Any, hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, u: int) -> None:
+    """Queue ``u`` with its current key when it is inconsistent, else take it off the queue."""
+    gu, ru = g[u], rhs[u]
+    if gu == ru:
+        _remove(hk1, hk2, hn, pos, sc, u)
+        return
+    m = min(gu, ru)
+    k1 = m + _h(sc, u) + sc[KM]
+    i = pos[u]
+    if i < 0:
+        i = sc[SIZE]
+        sc[SIZE] = i + 1
+        hk1[i], hk2[i], hn[i] = k1, m, u
+        _sift_up(hk1, hk2, hn, pos, i)
+    else:
+        old1, old2 = hk1[i], hk2[i]
+        hk1[i], hk2[i] = k1, m
+        if _less(k1, m, u, old1, old2, u):
+            _sift_up(hk1, hk2, hn, pos, i)
+        else:
+            _sift_down(hk1, hk2, hn, pos, i, sc[SIZE])
+
+
+@_kernel
+def _update(
+    free: Any, pen: Any, dur: Any, step: Any, nsw: Any, sw: Any,
+    g: Any, rhs: Any, hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, u: int,
+) -> None:  # fmt: skip
+    """Recompute ``rhs(u)`` from its successors, then requeue it."""
+    goal = sc[NODES]
+    if u != goal:
+        wmul = sc[WMUL]
+        h = u & 3
+        best = INF
+        for k in range(dur.shape[0]):
+            c = _cost(free, pen, dur, nsw, sw, wmul, u, k)
+            if c < INF:
+                gv = g[u + step[k, h]]
+                if gv < INF and c + gv < best:
+                    best = c + gv
+        if _at_goal(sc, free, u) and g[goal] < best:
+            best = g[goal]
+        rhs[u] = best
+    _requeue(g, rhs, hk1, hk2, hn, pos, sc, u)
+
+
+@_kernel
+def update_nodes(
+    free: Any, pen: Any, dur: Any, step: Any, nsw: Any, sw: Any,
+    g: Any, rhs: Any, hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, nodes: Any,
+) -> None:  # fmt: skip
+    """:func:`_update` every node of ``nodes`` (edges out of them changed cost)."""
+    for i in range(nodes.shape[0]):
+        _update(free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, nodes[i])
+
+
+@_kernel
+def faults_sweep(
+    free: Any, pen: Any, dur: Any, step: Any, nsw: Any, sw: Any,
+    backk: Any, backo: Any, nback: Any,
+    g: Any, rhs: Any, hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any,
+) -> int:  # fmt: skip
+    """After the chosen actions changed (``dur``): update every node the search has touched and
+    every predecessor of a node with a finite ``g`` (an edge that was impassable may have become
+    usable). Returns the number of updates."""
+    goal = sc[NODES]
+    wmul = sc[WMUL]
+    count = 0
+    for u in range(goal):
+        if g[u] < INF or rhs[u] < INF:
+            _update(free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, u)
+            count += 1
+    for u in range(goal):
+        if g[u] < INF:
+            he = u & 3
+            for i in range(nback[he]):
+                p = u - backo[he, i]
+                if 0 <= p < goal and _cost(free, pen, dur, nsw, sw, wmul, p, backk[he, i]) < INF:
+                    _update(free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, p)
+                    count += 1
+    return count
+
+
+@_kernel
+def compute(
+    free: Any, pen: Any, dur: Any, step: Any, nsw: Any, sw: Any,
+    backk: Any, backo: Any, nback: Any,
+    g: Any, rhs: Any, hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, budget: int,
+) -> int:  # fmt: skip
+    """D* Lite's ComputeShortestPath: run until the start is consistent and no queued key is
+    below its key (returns 1), or until ``sc[EXPANSIONS]`` reaches ``budget`` (returns 0)."""
+    goal = sc[NODES]
+    wmul = sc[WMUL]
+    gcell = sc[GOAL_CELL]
+    gh = sc[GOAL_HEAD]
+    while True:
+        start = sc[START]
+        ms = min(g[start], rhs[start])
+        s1 = INF if ms >= INF else ms + _h(sc, start) + sc[KM]
+        s2 = INF if ms >= INF else ms
+        if sc[SIZE] == 0 or (not _less(hk1[0], hk2[0], 0, s1, s2, 0) and g[start] == rhs[start]):
+            return 1
+        if sc[EXPANSIONS] >= budget:
+            return 0
+        u = hn[0]
+        o1, o2 = hk1[0], hk2[0]
+        _remove(hk1, hk2, hn, pos, sc, u)
+        sc[EXPANSIONS] += 1
+        gu, ru = g[u], rhs[u]
+        m = min(gu, ru)
+        n1 = m + _h(sc, u) + sc[KM]
+        if _less(o1, o2, 0, n1, m, 0):
+            _requeue(g, rhs, hk1, hk2, hn, pos, sc, u)
+        elif gu > ru:  # over-consistent: settle it; its predecessors may now go through it
+            g[u] = ru
+            if u == goal:
+                if free[gcell] != 0:
+                    for h in range(4):
+                        if gh < 0 or h == gh:
+                            p = 4 * gcell + h
+                            if ru < rhs[p]:
+                                rhs[p] = ru
+                                _requeue(g, rhs, hk1, hk2, hn, pos, sc, p)
+                continue
+            he = u & 3
+            for i in range(nback[he]):
+                p = u - backo[he, i]
+                if not 0 <= p < goal:
+                    continue
+                c = _cost(free, pen, dur, nsw, sw, wmul, p, backk[he, i])
+                if c < INF and c + ru < rhs[p]:
+                    rhs[p] = c + ru
+                    _requeue(g, rhs, hk1, hk2, hn, pos, sc, p)
+        else:  # under-consistent: forget it; recompute whoever went through it
+            g[u] = INF
+            _update(free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, u)
+            if u == goal:
+                if free[gcell] != 0:
+                    for h in range(4):
+                        if gh < 0 or h == gh:
+                            p = 4 * gcell + h
+                            if rhs[p] == gu:
+                                _update(
+                                    free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, p
+                                )
+                continue
+            he = u & 3
+            for i in range(nback[he]):
+                p = u - backo[he, i]
+                if not 0 <= p < goal:
+                    continue
+                c = _cost(free, pen, dur, nsw, sw, wmul, p, backk[he, i])
+                if c < INF and rhs[p] == c + gu:
+                    _update(free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, p)
+
+
+@_allocating
+def walk(
+    free: Any, pen: Any, dur: Any, step: Any, nsw: Any, sw: Any, g: Any, sc: Any
+) -> Any:  # fmt: skip
+    """The classes of the plan from the start, following ``argmin(c + g)`` (ties: the lowest
+    class), then its scaled cost as the last element; an empty array when there is none."""
+    goal = sc[NODES]
+    wmul = sc[WMUL]
+    u = sc[START]
+    if g[u] >= INF:
+        return np.empty(0, dtype=np.int64)
+    out = np.empty(16, dtype=np.int64)
+    n = 0
+    total = 0
+    while not _at_goal(sc, free, u):
+        h = u & 3
+        best = INF
+        bk = -1
+        bc = 0
+        for k in range(dur.shape[0]):
+            c = _cost(free, pen, dur, nsw, sw, wmul, u, k)
+            if c < INF:
+                gv = g[u + step[k, h]]
+                if gv < INF and c + gv < best:
+                    best, bk, bc = c + gv, k, c
+        if bk < 0 or n > goal:
+            return np.empty(0, dtype=np.int64)
+        if n + 1 >= out.shape[0]:
+            bigger = np.empty(2 * out.shape[0], dtype=np.int64)
+            bigger[:n] = out[:n]
+            out = bigger
+        out[n] = bk
+        n += 1
+        total += bc
+        u += step[bk, h]
+    out[n] = total
+    return out[: n + 1].copy()

@@ -1,0 +1,211 @@
+"""selfrepair.physics: the MJCF model, the tracker, the fidelity report, the identified domain and
+missions in MuJoCo (the ``physics`` extra; under SELFREPAIR_REQUIRE_EXTRAS=1 a missing mujoco
+fails these tests instead of skipping them)."""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("MUJOCO_GL", "osmesa")  # headless rendering, before mujoco is imported
+
+import itertools
+import json
+import math
+from fractions import Fraction
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from extras import needs_extra
+from selfrepair.cli import main
+from selfrepair.errors import ProblemError
+from selfrepair.execution.result import MissionSpec
+from selfrepair.execution.stepper import Stepper
+from selfrepair.geometry import Heading, Pose
+from selfrepair.physics.identified import load_identified
+from selfrepair.physics.model import ORIGIN, RobotParams, WallBox, heading_yaw, wall_boxes
+from selfrepair.physics.simulator import lattice_motion
+from selfrepair.physics.tracker import ContinuousPose, _side, reference
+from selfrepair.physics.world import lattice_pose, snap
+from selfrepair.robots.domain import check_domain
+from selfrepair.robots.four_wheel import ACTIONS, FOUR_WHEEL, parse_action
+from selfrepair.world.maze import Maze, parse_maze
+
+PHYSICS = needs_extra("mujoco", "imageio", extra="physics")
+
+OPEN = parse_maze("......\n......\n......\n......\n......\n......\n", name="open")
+
+
+# --- the model, without MuJoCo --------------------------------------------------------------
+
+
+def test_wall_boxes_merge_each_rows_runs_and_add_the_border() -> None:
+    maze = Maze(np.array([[True, True, False, True], [False, False, False, False]]))
+    boxes = wall_boxes(maze, 1.0)
+    assert boxes[:2] == (WallBox(0.5, 0.0, 1.0, 0.5), WallBox(3.0, 0.0, 0.5, 0.5))
+    assert len(boxes) == 2 + 4
+    north, south, west, east = boxes[2:]
+    assert (north.y, south.y, west.x, east.x) == (1.0, -2.0, -1.0, 4.0)
+    assert north.half_x == 3.0  # the border spans the grid and the corners
+
+
+def test_params_refuse_a_robot_that_does_not_fit_in_a_cell() -> None:
+    with pytest.raises(ProblemError, match="does not fit"):
+        RobotParams(cell=0.3)
+    with pytest.raises(ProblemError, match="friction"):
+        RobotParams(friction=0)
+
+
+def test_snap_inverts_lattice_pose_for_every_heading() -> None:
+    for heading in Heading:
+        pose = Pose(3, 5, heading)
+        assert snap(lattice_pose(pose)) == pose
+    assert heading_yaw(Heading.E) == 0.0
+    assert snap(ContinuousPose(2.4, -0.6, math.radians(80))) == Pose(2, 1, Heading.N)
+
+
+def test_reference_ends_at_the_lattice_end_pose_for_every_action() -> None:
+    for heading in Heading:
+        start = Pose(0, 0, heading)
+        for action in ACTIONS:
+            end, _, _ = reference(lattice_pose(start), lattice_motion(FOUR_WHEEL, action), 1.0)
+            want = lattice_pose(FOUR_WHEEL.apply(start, action))
+            assert math.hypot(end.x - want.x, end.y - want.y) < 1e-9, (heading, action)
+            assert abs(math.remainder(end.yaw - want.yaw, 2 * math.pi)) < 1e-9
+
+
+@given(
+    st.sampled_from((-1, 0, 1)),
+    st.sampled_from((-1, 0, 1)),
+    st.floats(-5, 5, allow_nan=False),
+)
+def test_the_tracker_keeps_every_wheel_within_its_commands_sign(
+    front: int, rear: int, speed: float
+) -> None:
+    a, b = _side(front, rear, speed, 3.0)
+    for command, wheel in ((front, a), (rear, b)):
+        assert wheel * command >= 0 and (command != 0 or wheel == 0)
+        assert abs(wheel) <= 3.0
+
+
+def test_bundled_identified_domain_keeps_what_snaps_and_drops_pivots_on_a_stopped_side() -> None:
+    domain = load_identified()
+    check_domain(domain)
+    kept = {a.code for a in domain.actions}
+    assert "FSSS" not in kept and "SSSF" not in kept  # pivots about a braked side
+    assert {"FFFF", "FBFB", "SFFF", "SSSS", "BBBB"} <= kept
+    for action in domain.actions[:10]:
+        if domain.motion_class(action) == FOUR_WHEEL.motion_class(action):
+            assert domain.apply(Pose(2, 2, Heading.E), action) == FOUR_WHEEL.apply(
+                Pose(2, 2, Heading.E), action
+            )
+    assert domain.waits[0] == parse_action("SSSS")
+
+
+def test_stepper_relocalise_drops_the_queue() -> None:
+    stepper = Stepper.__new__(Stepper)
+    from collections import deque
+
+    stepper.queue = deque([(parse_action("FFFF"), None)])
+    stepper.stopped, stepper.failure = True, None
+    stepper.relocalise()
+    assert not stepper.queue and not stepper.stopped
+
+
+# --- MuJoCo ---------------------------------------------------------------------------------
+
+
+@PHYSICS
+def test_straight_and_spin_are_confirmed_and_a_pivot_on_a_stopped_side_is_not() -> None:
+    from selfrepair.physics.fidelity import measure
+
+    report = measure(actions=[parse_action(c) for c in ("FFFF", "FBFB", "FSSS")])
+    rows = {r.action: r for r in report.rows}
+    assert rows["FFFF"].confirmed and rows["FBFB"].confirmed
+    assert rows["FFFF"].snapped == (1, 0, 0) and rows["FFFF"].swept == ((0, 0), (1, 0))
+    assert not rows["FSSS"].confirmed and rows["FSSS"].snapped is None
+    assert rows["FSSS"].tracked_position > 0.3  # its centre swings about the braked wheels
+    assert report.summary()["nominal"]["tracked_confirmed"] == 2
+
+
+@PHYSICS
+def test_open_loop_ffff_drives_about_one_cell_north() -> None:
+    from selfrepair.physics.world import PhysicsWorld
+
+    world = PhysicsWorld(None, ORIGIN)
+    end = world.run((1, 1, 1, 1), Fraction(1)).end
+    assert 0.7 < end.y < 1.0 and abs(end.x) < 0.01 and abs(end.yaw - math.pi / 2) < 0.01
+
+
+@PHYSICS
+def test_a_physics_mission_reaches_the_goal_without_touching_a_wall() -> None:
+    from selfrepair.execution.executor import run_mission
+    from selfrepair.physics.mission import run_physics_mission
+    from selfrepair.world.bundled import bundled_routes, load_bundled
+
+    maze = load_bundled("wide-short")
+    route = bundled_routes("wide-short")[0]
+    spec = MissionSpec(maze, route.start, route.goal, strategy="replacement")
+    done = run_physics_mission(spec)
+    lattice = run_mission(spec)
+    assert done.result.reached and done.outcome.wall_contacts == 0
+    assert done.outcome.final_error < 0.1
+    assert [s.action for s in done.result.steps] == [s.action for s in lattice.steps]
+    assert done.outcome.physics_steps == round(float(lattice.ticks) / 0.002)
+
+
+@PHYSICS
+def test_an_open_loop_mission_is_relocalised_and_replanned() -> None:
+    from selfrepair.physics.mission import run_physics_mission
+
+    spec = MissionSpec(OPEN, Pose(0, 5, Heading.N), (5, 0), strategy="replan")
+    done = run_physics_mission(spec, tracked=False)
+    assert done.outcome.deviations > 0  # open loop, the lattice's motions do not hold
+    executed = done.result.steps
+    for before, after in itertools.pairwise(executed):
+        assert after.start == before.end  # the loop continued from the localised pose
+    deviated = {s.step for s in done.steps if s.snapped != s.lattice_end}
+    replans = {r.step for r in done.result.repairs}
+    assert all(step + 1 in replans for step in deviated if step + 1 < len(executed))
+
+
+@PHYSICS
+def test_physics_run_cli_renders_a_gif_and_writes_json(tmp_path, capsys) -> None:
+    maze = tmp_path / "m.maze"
+    maze.write_text("....\n....\n", encoding="utf-8")
+    gif = tmp_path / "run.gif"
+    code = main(["physics", "run", str(maze), "--start", "0,1,E", "--goal", "2,1",
+                 "--video", str(gif), "--json", "--no-warm-up"])  # fmt: skip
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["reached"] and out["wall_contacts"] == 0
+    import imageio.v2 as iio
+
+    frames = iio.mimread(gif)
+    assert len(frames) >= 10 and frames[0].shape[:2] == (360, 480)
+    assert np.ptp(np.asarray(frames[0])) > 0  # a picture, not a blank frame
+
+
+def test_physics_run_cli_refuses_a_bad_video_name(tmp_path, capsys) -> None:
+    maze = tmp_path / "m.maze"
+    maze.write_text("....\n", encoding="utf-8")
+    code = main(["physics", "run", str(maze), "--start", "0,0,E", "--goal", "2,0",
+                 "--video", str(tmp_path / "x.txt")])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and ".gif or .mp4" in err
+
+
+@PHYSICS
+@pytest.mark.slow
+def test_the_bundled_identified_domain_is_what_fidelity_measures_now() -> None:
+    from importlib import resources
+
+    from selfrepair.physics.fidelity import measure
+
+    bundled = json.loads(
+        resources.files("selfrepair")
+        .joinpath("data", "physics", "four-wheel-physics.json")
+        .read_text("utf-8")
+    )
+    assert json.loads(json.dumps(measure().identified())) == bundled
