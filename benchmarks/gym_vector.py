@@ -19,6 +19,9 @@ Rows:
 ``vector, all fault kinds``
     The same with faults drawn from every persistence (intermittent faults draw at every step)
     and both detection modes, starting within the first 20 steps.
+``vector, hidden faults``
+    ``vector`` with the faults hidden (``selfrepair/FaultyMazeHidden-v0``: forbidden commands
+    perform ``Domain.effective``'s action, walls bump).
 
 The numba kernels are compiled (or loaded from numba's cache) before timing. The process is
 pinned to one CPU (``--cpu``, default the first allowed) where the OS allows it. Writes
@@ -85,10 +88,12 @@ def main() -> None:
     robots, rounds, steps = args.robots, args.rounds, args.steps
     vec = FaultyMazeVectorEnv(robots)
     mixed = FaultyMazeVectorEnv(robots, faults=ALL_KINDS)
+    hidden = FaultyMazeVectorEnv(robots, faults=FaultSpec(detection=(Detection.HIDDEN,)))
     single = FaultyMazeEnv()
     # Warm up: the kernels (compiled or loaded from numba's cache), tables, free grids.
     vector_steps_per_second(vec, 20, 0)
     vector_steps_per_second(mixed, 20, 0)
+    vector_steps_per_second(hidden, 20, 0)
     steps_per_second(single, 2_000, 0)
     t0 = time.perf_counter()
     samples = measure(
@@ -97,6 +102,7 @@ def main() -> None:
             "single": lambda s: steps_per_second(single, steps, s),
             "vector": lambda s: vector_steps_per_second(vec, rounds, s),
             "vector, all fault kinds": lambda s: vector_steps_per_second(mixed, rounds, s),
+            "vector, hidden faults": lambda s: vector_steps_per_second(hidden, rounds, s),
         },
     )
     elapsed = time.perf_counter() - t0

@@ -26,7 +26,14 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from extras import NUMBA
-from selfrepair.envs import ENV_ID, FaultSpec, FaultyMazeEnv, MazeGenerator, Rewards
+from selfrepair.envs import (
+    ENV_ID,
+    HIDDEN_ENV_ID,
+    FaultSpec,
+    FaultyMazeEnv,
+    MazeGenerator,
+    Rewards,
+)
 from selfrepair.envs import _vector_kernels as kernels
 from selfrepair.envs.vector import OUTCOME_NAMES, FaultyMazeVectorEnv
 from selfrepair.errors import ProblemError
@@ -107,7 +114,8 @@ _FAULTS = st.builds(
     persistence=st.lists(
         st.sampled_from(list(Persistence)), min_size=1, max_size=3, unique=True
     ).map(tuple),
-    detection=st.lists(st.sampled_from(SEEN), min_size=1, max_size=2, unique=True).map(tuple),
+    detection=st.lists(st.sampled_from(SEEN), min_size=1, max_size=2, unique=True).map(tuple)
+    | st.just((Detection.HIDDEN,)),
     at=st.tuples(st.just(0), st.integers(0, 6)),
     duration=st.tuples(st.just(1), st.integers(1, 8)),
     probability=st.tuples(st.floats(0.0, 0.5), st.floats(0.5, 1.0)),
@@ -137,8 +145,12 @@ _TASKS = st.fixed_dictionaries(
 def test_same_transitions_as_the_single_environment(
     task: dict[str, Any], n: int, mode: AutoresetMode, seed: int, data: st.DataObject
 ) -> None:
+    domain = get_domain(task["domain"])
+    if task["faults"].hidden:  # the partially observable variant, under any behaviour model
+        names = [None, *domain.behaviour_names()]
+        task = {**task, "behaviour": data.draw(st.sampled_from(names), label="behaviour")}
     sync, vec = _pair(n, mode, **task)
-    count = len(get_domain(task["domain"]).actions)
+    count = len(domain.actions)
     _same_reset(sync.reset(seed=seed), vec.reset(seed=seed), vec)
     ended = np.zeros(n, dtype=np.bool_)
     for _ in range(data.draw(st.integers(1, 40), label="steps")):
@@ -353,18 +365,79 @@ def test_misuse_is_a_problem_error() -> None:
         vec.step(np.array([0, 0]))
     vec.reset(options={"reset_mask": np.array([True, True])})
     vec.step(np.array([0, 0]))
-    hidden = FaultSpec(detection=(Detection.HIDDEN,))
     for bad in (
         {"guide": True}, {"backend": "gpu"}, {"view_radius": 40}, {"max_steps": 0},
-        {"faults": hidden},
+        {"behaviour": "stall"},
     ):  # fmt: skip
         with pytest.raises(ProblemError):
             FaultyMazeVectorEnv(2, **bad)
     schedule = FaultSchedule.permanent(get_domain("four-wheel").parse_faults("FL:F"),
                                        detection=Detection.HIDDEN)  # fmt: skip
-    with pytest.raises(ProblemError, match="hidden"):
+    with pytest.raises(ProblemError, match="tells the robot its faults"):
         FaultyMazeVectorEnv(1).reset(options={"faults": schedule})
+    with pytest.raises(ProblemError, match="hidden"):
+        FaultSpec(detection=(Detection.HIDDEN, Detection.NOW))
     with pytest.raises(ProblemError, match="seeds"):
         FaultyMazeVectorEnv(2).reset(seed=[1])
     with pytest.raises(ProblemError, match="reset_mask"):
         FaultyMazeVectorEnv(2).reset(options={"reset_mask": np.array([True, False])})
+
+
+HIDDEN = FaultSpec(detection=(Detection.HIDDEN,))
+
+
+def test_hidden_faults_single_env_passes_the_checker_and_shows_no_faults() -> None:
+    """The partially observable variant: Gymnasium's checker passes, the observation has no
+    fault flags, a fault-set reset option is hidden too."""
+    from gymnasium.utils.env_checker import check_env
+
+    env = gym.make(HIDDEN_ENV_ID, behaviour="reverse")
+    check_env(env.unwrapped, skip_render_check=True)
+    obs, info = env.reset(seed=0, options={"faults": "FL:F"})
+    assert "faults" not in obs and "faults" not in env.observation_space.spaces
+    assert info["detection"] == "hidden"
+    assert FaultyMazeEnv(faults=HIDDEN).observation_space == env.observation_space
+    with pytest.raises(ProblemError, match="hidden"):
+        FaultyMazeEnv(behaviour="stall")
+    with pytest.raises(ProblemError, match="unknown fault behaviour"):
+        FaultyMazeEnv(faults=HIDDEN, behaviour="no-such-model")
+
+
+def test_hidden_faults_bump_into_walls_in_both_envs() -> None:
+    """Hand-made: three-action robot (no fault-behaviour model), faults hidden, facing the wall
+    north of 1,1: forward is a bump (one tick and the blocked penalty, no move); its fault F
+    makes forward fail (one tick and the fault penalty) and names nothing."""
+    options = {"maze": "narrow-short", "start": "1,1,N", "goal": "2,1", "faults": ""}
+    sync, vec = _pair(1, AutoresetMode.NEXT_STEP, domain="three-action", faults=HIDDEN)
+    _same_reset(sync.reset(seed=0, options=options), vec.reset(seed=0, options=options), vec)
+    forward = np.array([get_domain("three-action").actions.index("F")])
+    _same_step(sync.step(forward), got := vec.step(forward), vec)
+    assert OUTCOME_NAMES[got[4]["outcome"][0]] == "bumped"
+    assert got[1][0] == -2.0 and got[4]["ticks"][0] == 1.0
+    assert got[4]["pose"][0].tolist() == [1, 1, int(Heading.N)]
+    options = {**options, "start": "1,1,E", "faults": "F"}
+    _same_reset(sync.reset(options=options), vec.reset(options=options), vec)
+    _same_step(sync.step(forward), got := vec.step(forward), vec)
+    assert OUTCOME_NAMES[got[4]["outcome"][0]] == "failed-attempt" and not vec.known(0)
+
+
+def test_hidden_faults_perform_the_effective_action() -> None:
+    """Four-wheel robot, FL:F hidden: each forbidden command moves as Domain.effective says, in
+    every fault-behaviour model, in both environments."""
+    domain = get_domain("four-wheel")
+    faults = domain.parse_faults("FL:F")
+    options = {"maze": "wide-long", "faults": "FL:F"}
+    forbidden = [i for i, a in enumerate(domain.actions) if not domain.available(a, faults)]
+    for behaviour in domain.behaviour_names():
+        sync, vec = _pair(2, AutoresetMode.NEXT_STEP, faults=HIDDEN, behaviour=behaviour)
+        _same_reset(sync.reset(seed=5, options=options), vec.reset(seed=5, options=options), vec)
+        moved = 0
+        for index in forbidden[:12]:
+            before = vec.pose(0)
+            actions = np.array([index, index])
+            _same_step(sync.step(actions), got := vec.step(actions), vec)
+            performed = domain.effective(domain.actions[index], faults, behaviour)
+            if OUTCOME_NAMES[got[4]["outcome"][0]] == "moved":
+                moved += 1
+                assert vec.pose(0) == domain.apply(before, performed)
+        assert moved > 0

@@ -14,9 +14,11 @@ from gymnasium.envs.registration import register, registry
 from selfrepair.envs.env import FaultyMazeEnv, Rewards, default_table
 from selfrepair.envs.scenarios import FaultSpec, MazeGenerator, RouteChoice
 from selfrepair.envs.vector import FaultyMazeVectorEnv
+from selfrepair.execution.faults import Detection
 
 __all__ = [
     "ENV_ID",
+    "HIDDEN_ENV_ID",
     "FaultSpec",
     "FaultyMazeEnv",
     "FaultyMazeVectorEnv",
@@ -29,10 +31,22 @@ __all__ = [
 ENV_ID = "selfrepair/FaultyMaze-v0"
 """The Gymnasium id of :class:`FaultyMazeEnv`."""
 
+HIDDEN_ENV_ID = "selfrepair/FaultyMazeHidden-v0"
+"""The partially observable variant: the faults are hidden from the agent (detection ``hidden``:
+no ``faults`` observation, the robot performs what ``Domain.effective`` says)."""
+
 if ENV_ID not in registry:
     register(
         id=ENV_ID,
         entry_point="selfrepair.envs.env:FaultyMazeEnv",
         vector_entry_point="selfrepair.envs.vector:FaultyMazeVectorEnv",
         nondeterministic=False,
+    )
+if HIDDEN_ENV_ID not in registry:
+    register(
+        id=HIDDEN_ENV_ID,
+        entry_point="selfrepair.envs.env:FaultyMazeEnv",
+        vector_entry_point="selfrepair.envs.vector:FaultyMazeVectorEnv",
+        nondeterministic=False,
+        kwargs={"faults": FaultSpec(detection=(Detection.HIDDEN,))},
     )

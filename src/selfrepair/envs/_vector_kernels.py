@@ -65,8 +65,8 @@ __all__ = [
 
 # state columns (one int64 row per robot)
 _X, _Y, _HEAD, _GX, _GY, _STEPS, _SIM, _UNITS, _LIMIT, _BASE, _STRIDE, _SENSES, _PENDING = range(13)
-_EVENTS, _SEED = 13, 14
-STATE_COLUMNS = 15
+_EVENTS, _SEED, _HIDDEN = 13, 14, 15
+STATE_COLUMNS = 16
 # event columns (one int64 row per robot and schedule event)
 _BIT, _AT, _END, _KIND, _TICK = range(5)
 EVENT_COLUMNS = 5
@@ -74,8 +74,8 @@ PERMANENT, TRANSIENT, INTERMITTENT = 0, 1, 2
 # move columns per action and heading
 _DX, _DY, _NH, _UNITS_OF = range(4)
 # outcome codes
-RESET, MOVED, FAILED, COLLISION = 0, 1, 2, 3
-OUTCOME_NAMES = ("", "moved", "failed-attempt", "collision")
+RESET, MOVED, FAILED, COLLISION, BUMPED = 0, 1, 2, 3, 4
+OUTCOME_NAMES = ("", "moved", "failed-attempt", "collision", "bumped")
 """The single environment's ``info["outcome"]`` text of each outcome code (0 is a reset)."""
 # penalties
 _FAULT_PENALTY, _BLOCKED_PENALTY, _GOAL_BONUS, _FAILED_TICKS = range(4)
@@ -97,6 +97,7 @@ def _step_robots(
     set_bits: Array,
     avail: Array,
     blocking: Array,
+    effective: Array,
     moves: Array,
     durations: Array,
     footprints: Array,
@@ -142,7 +143,17 @@ def _step_robots(
             h = state[r, _HEAD]
             sid = current[r]
             gain = 0.0
-            if avail[sid, a] == 0:  # a true fault forbids it: a failed attempt
+            hidden = state[r, _HIDDEN] != 0
+            if hidden:  # the wheels do what the fault-behaviour model says (-1: the command fails)
+                a = effective[sid, a]
+            if hidden and a < 0:  # a domain without a model: a failed attempt naming no fault
+                outcome[r] = FAILED
+                state[r, _UNITS] += failed_units
+                state[r, _SIM] += 1
+                gain = -terms[_FAILED_TICKS] - terms[_FAULT_PENALTY]
+                elapsed[r] += terms[_FAILED_TICKS]
+                moved_clock = True
+            elif not hidden and avail[sid, a] == 0:  # a true fault forbids it: a failed attempt
                 outcome[r] = FAILED
                 state[r, _UNITS] += failed_units
                 state[r, _SIM] += 1
@@ -170,6 +181,13 @@ def _step_robots(
                     state[r, _SIM] += 1
                     gain = -durations[a]
                     elapsed[r] += durations[a]
+                    moved_clock = True
+                elif hidden:  # the motion stops at the wall: a bump, one tick, no move
+                    outcome[r] = BUMPED
+                    state[r, _UNITS] += failed_units
+                    state[r, _SIM] += 1
+                    gain = -terms[_FAILED_TICKS] - terms[_BLOCKED_PENALTY]
+                    elapsed[r] += terms[_FAILED_TICKS]
                     moved_clock = True
                 else:  # the footprint is not free: refused, nothing changes
                     outcome[r] = COLLISION

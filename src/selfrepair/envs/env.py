@@ -64,6 +64,12 @@ from selfrepair.envs.scenarios import (
     maze_sources,
     with_options,
 )
+from selfrepair.envs.settings import (
+    MAX_VIEW_RADIUS,
+    check_behaviour,
+    check_settings,
+    observation_space,
+)
 from selfrepair.errors import ProblemError, choice
 from selfrepair.execution.executor import mission_context
 from selfrepair.execution.faults import Detection
@@ -85,18 +91,7 @@ from selfrepair.search.astar import PlanStatus
 from selfrepair.tables.fileformat import default_table, resolve_table
 from selfrepair.tables.model import ReplacementTable
 
-__all__ = [
-    "MAX_VIEW_RADIUS",
-    "FaultyMazeEnv",
-    "Rewards",
-    "ask",
-    "check_settings",
-    "default_table",
-    "observation_space",
-]
-
-MAX_VIEW_RADIUS = 32
-"""The largest ``view_radius`` accepted (the window has ``(2r+1)**2`` cells)."""
+__all__ = ["MAX_VIEW_RADIUS", "FaultyMazeEnv", "Rewards", "ask", "default_table"]
 
 Observation = dict[str, Any]
 
@@ -138,6 +133,12 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         for every step off the guide's plan).
     ``render_mode``, ``cell_pixels``
         ``"ansi"`` or ``"rgb_array"``; pixels per cell of an RGB frame (default 8).
+    ``behaviour``
+        With hidden faults (``faults=FaultSpec(detection=("hidden",))``, the partially observable
+        variant ``selfrepair/FaultyMazeHidden-v0``): the domain's fault-behaviour model
+        (:meth:`Domain.effective <selfrepair.robots.domain.Domain.effective>`; default its
+        first). The observation then has no ``faults`` key, a forbidden command does what the
+        model says, and a motion into a wall is a bump (one tick, the blocked penalty).
     """
 
     metadata = {"render_modes": ["ansi", "rgb_array"], "render_fps": 8}  # noqa: RUF012 (Gymnasium's)
@@ -157,11 +158,14 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         guide: bool = False,
         render_mode: str | None = None,
         cell_pixels: int = 8,
+        behaviour: str | None = None,
     ) -> None:
         self.domain = get_domain(domain) if isinstance(domain, str) else domain
         self.sources: tuple[MazeSource, ...] = maze_sources(mazes)
         self.routes = choice(RouteChoice, routes, "route choice")
         self.faults = faults or FaultSpec()
+        self.hidden = self.faults.hidden
+        self.behaviour = check_behaviour(self.domain, self.hidden, behaviour)
         self._fault_sets = self.faults.fault_sets(self.domain)
         self.table = self._table(table)
         self.recursion = choice(RecursionMode, recursion, "recursion mode")
@@ -206,7 +210,9 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         self._index = {action: i for i, action in enumerate(self.actions)}
         self._durations = tuple(float(domain.duration(a)) for a in self.actions)
         self._fault_index = {fault: i for i, fault in enumerate(domain.faults)}
-        self.observation_space = observation_space(domain, self.sources, self.view_radius)
+        self.observation_space = observation_space(
+            domain, self.sources, self.view_radius, self.hidden
+        )
         self.action_space = spaces.Discrete(len(self.actions))
 
     # --- episode state, read by policies ------------------------------------------------------
@@ -293,7 +299,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
             self.sources, self.routes, self.domain, self.faults, self.np_random, self._fault_sets
         )
         if options:
-            scenario = with_options(scenario, options, self.domain, self.np_random)
+            scenario = with_options(scenario, options, self.domain, self.np_random, self.hidden)
         self._begin(scenario)
         pose = self._simulator().pose
         info = self._info(pose, None)
@@ -314,14 +320,17 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         self._steps += 1
         status = outcome.status
         rewards = self.rewards
-        if status is Outcome.MOVED:
-            duration = self._durations[index]
+        if status is Outcome.MOVED:  # hidden faults: the action the wheels performed
+            duration = self._durations[self._index[sim.last_action] if self.hidden else index]
             reward = -duration
         elif status is Outcome.FAILED_ATTEMPT:
             duration = _FAILED_TICKS
             reward = -duration - rewards.fault_penalty
             if not self._senses:
                 self._known = self._known | outcome.blocking
+        elif status is Outcome.BUMPED:  # hidden faults: stopped at a wall, one tick
+            duration = _FAILED_TICKS
+            reward = -duration - rewards.blocked_penalty
         else:
             duration = 0.0
             reward = -rewards.blocked_penalty
@@ -358,7 +367,12 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         self._scenario = scenario
         maze = scenario.maze
         self._sim = Simulator(
-            self.domain, maze, scenario.start, scenario.schedule, scenario.fault_seed
+            self.domain,
+            maze,
+            scenario.start,
+            scenario.schedule,
+            scenario.fault_seed,
+            behaviour=self.behaviour,
         )
         self._senses = scenario.schedule.detection is Detection.NOW
         self._known = self._sim.sense()
@@ -384,7 +398,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
             "heading": int(pose.heading),
             "goal": np.array((goal[0] - x, goal[1] - y), dtype=np.int32),
         }
-        if self._fault_index:
+        if self._fault_index and not self.hidden:
             observation["faults"] = self._fault_view(self._known)[0].copy()
         return observation
 
@@ -439,38 +453,3 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
             "np_random_seed": self.np_random_seed,
             "max_steps": self._limit,
         }
-
-
-def check_settings(
-    max_steps: int | None, view_radius: int, render_mode: str | None, modes: list[str]
-) -> None:
-    """A :class:`ProblemError` naming the keyword when ``max_steps``, ``view_radius`` or
-    ``render_mode`` (one of ``modes`` or ``None``) is out of range (the single and the vector
-    environment check alike)."""
-    if max_steps is not None and max_steps < 1:
-        raise ProblemError(f"max_steps must be at least 1, got {max_steps}")
-    if not 0 <= view_radius <= MAX_VIEW_RADIUS:
-        raise ProblemError(f"view_radius must be from 0 to {MAX_VIEW_RADIUS}, got {view_radius}")
-    if render_mode is not None and render_mode not in modes:
-        raise ProblemError(
-            f"render_mode must be one of {', '.join(modes)} or None, got {render_mode!r}"
-        )
-
-
-def observation_space(
-    domain: Domain[Any, Any], sources: tuple[MazeSource, ...], view_radius: int
-) -> spaces.Dict:
-    """One robot's observation space (see the module docstring): the window of ``view_radius``,
-    the heading, the goal offset bounded by the longest maze side of ``sources``, and the known
-    faults when ``domain`` has any."""
-    side = 2 * view_radius + 1
-    reach = max(source.largest_side for source in sources) - 1
-    observation: dict[str, spaces.Space[Any]] = {
-        "window": spaces.MultiBinary((side, side)),
-        "heading": spaces.Discrete(4),
-        "goal": spaces.Box(-reach, reach, shape=(2,), dtype=np.int32),
-    }
-    if domain.faults:
-        observation["faults"] = spaces.MultiBinary(len(domain.faults))
-    return spaces.Dict(observation)
-

@@ -211,11 +211,22 @@ class FaultSpec:
             object.__setattr__(self, "sets", tuple(self.sets))
         if self.sets == () or not self.persistence or not self.detection:
             raise ProblemError("expected at least one fault set, persistence and detection")
+        if Detection.HIDDEN in self.detection and len(self.detection) > 1:
+            raise ProblemError(
+                "detection 'hidden' cannot be drawn with other modes: the agent's observation "
+                "(no fault flags) must be the same in every episode"
+            )
         _check_range(self.at, "at", 0)
         _check_range(self.duration, "duration", 1)
         low, high = self.probability
         if not 0.0 <= low <= high <= 1.0:
             raise ProblemError(f"expected 0 <= probability range <= 1, got {self.probability}")
+
+    @property
+    def hidden(self) -> bool:
+        """Whether the faults are hidden from the robot (detection ``hidden``): the Gymnasium
+        environments' partially observable variant."""
+        return self.detection == (Detection.HIDDEN,)
 
     def fault_sets(self, domain: Domain[Any, Any]) -> tuple[frozenset[Any], ...]:
         """The fault sets to draw from, parsed for ``domain``."""
@@ -302,13 +313,17 @@ def draw_scenario(
 
 
 def with_options(
-    scenario: Scenario, options: dict[str, Any], domain: Domain[Any, Any], rng: np.random.Generator
+    scenario: Scenario,
+    options: dict[str, Any],
+    domain: Domain[Any, Any],
+    rng: np.random.Generator,
+    hidden: bool = False,
 ) -> Scenario:
     """``scenario`` with the parts ``options`` fixes (``reset(options=...)`` of the Gymnasium
     environments): ``maze`` (a bundled name, file or ``Maze``; a route is then drawn on it from
     ``rng`` unless given), ``start`` (a pose ``"x,y,H"`` or a ``Pose``), ``goal`` (a cell
     ``"x,y"``) and ``faults`` (a fault-set text, permanent from the first step and detected at
-    once, or a ``FaultSchedule``)."""
+    once, or hidden when ``hidden``; or a ``FaultSchedule``, hidden exactly when ``hidden``)."""
     unknown = sorted(set(options) - set(RESET_OPTIONS))
     if unknown:
         raise ProblemError(
@@ -328,9 +343,16 @@ def with_options(
     schedule = scenario.schedule
     if "faults" in options:
         given = options["faults"]
+        detection = Detection.HIDDEN if hidden else Detection.NOW
         schedule = given if isinstance(given, FaultSchedule) else FaultSchedule.permanent(
-            domain.parse_faults(str(given))
+            domain.parse_faults(str(given)), detection=detection
         )  # fmt: skip
+        if (schedule.detection is Detection.HIDDEN) != hidden:
+            raise ProblemError(
+                "reset option faults: this environment "
+                + ("hides faults; expected detection 'hidden'" if hidden else "tells the robot "
+                   "its faults; expected detection 'now' or 'on-use'")
+            )  # fmt: skip
     route = type(route)(route.name, start, goal)
     return Scenario(maze, label, route, schedule, scenario.fault_seed)
 

@@ -9,7 +9,9 @@ from the robot's own ``np_random``; the steps run in :mod:`~selfrepair.envs._vec
 integer tables made from the domain (:mod:`~selfrepair.envs.vector_tables`): the move table, the
 actions each fault set leaves available and the faults a failed attempt reveals. Faults appear and
 clear as the episode's fault schedule says (permanent, transient, intermittent; step or tick
-clock), with detection ``now`` or ``on-use``, as in the simulator.
+clock), with detection ``now`` or ``on-use``, as in the simulator; or, in the partially observable
+variant (detection ``hidden``, ``selfrepair/FaultyMazeHidden-v0``), the agent is told nothing of
+its faults (no ``faults`` key) and the wheels do what ``Domain.effective`` says.
 
 Spaces: ``single_observation_space`` and ``single_action_space`` are the single environment's;
 ``observation_space`` and ``action_space`` are Gymnasium's batches of them
@@ -45,7 +47,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from selfrepair.envs import _vector_kernels as kernels
-from selfrepair.envs.env import Rewards, check_settings, observation_space
+from selfrepair.envs.env import Rewards
 from selfrepair.envs.render import ansi_frame, check_cell_pixels, maze_frame, rgb_frame
 from selfrepair.envs.scenarios import (
     BUNDLED,
@@ -57,6 +59,7 @@ from selfrepair.envs.scenarios import (
     maze_sources,
     with_options,
 )
+from selfrepair.envs.settings import check_behaviour, check_settings, observation_space
 from selfrepair.envs.vector_tables import FaultSets, GridStore, motion_tables
 from selfrepair.errors import ProblemError, choice
 from selfrepair.execution.faults import Clock, Detection, Persistence
@@ -85,16 +88,13 @@ _EPISODE_KEYS = (
     "fault_seed", "np_random_seed", "max_steps",
 )  # fmt: skip
 Array = npt.NDArray[Any]
-_HIDDEN = (
-    "the vector environment takes detection 'now' or 'on-use', not 'hidden'; use "
-    "gymnasium.vector.SyncVectorEnv over FaultyMazeEnv"
-)
 
 
 class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
     """See the module docstring. ``num_envs`` robots; the keywords ``domain``, ``mazes``,
     ``routes``, ``faults``, ``rewards``, ``max_steps``, ``view_radius``, ``render_mode`` and
-    ``cell_pixels`` mean what they mean for :class:`~selfrepair.envs.env.FaultyMazeEnv`.
+    ``cell_pixels`` and ``behaviour`` mean what they mean for
+    :class:`~selfrepair.envs.env.FaultyMazeEnv`.
     ``autoreset_mode``: an :class:`~gymnasium.vector.AutoresetMode` or its value.
     ``backend``: ``"numba"`` (the compiled kernel, the ``fast`` extra), ``"python"`` (the same
     kernel interpreted: the reference, slow) or ``"auto"`` (numba when installed)."""
@@ -120,6 +120,7 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         backend: str = "auto",
         render_mode: str | None = None,
         cell_pixels: int = 8,
+        behaviour: str | None = None,
         guide: bool = False,
     ) -> None:
         if guide:
@@ -135,8 +136,8 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         self.sources = maze_sources(mazes)
         self.routes = choice(RouteChoice, routes, "route choice")
         self.faults = faults or FaultSpec()
-        if Detection.HIDDEN in self.faults.detection:
-            raise ProblemError(_HIDDEN)
+        self.hidden = self.faults.hidden
+        self.behaviour = check_behaviour(self.domain, self.hidden, behaviour)
         self._fault_sets = self.faults.fault_sets(self.domain)
         self.rewards = rewards or Rewards()
         self.max_steps = max_steps
@@ -146,12 +147,14 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         self.autoreset_mode = AutoresetMode(autoreset_mode)
         self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
         self.backend = choice_backend(backend)
-        self.single_observation_space = observation_space(self.domain, self.sources, view_radius)
+        self.single_observation_space = observation_space(
+            self.domain, self.sources, view_radius, self.hidden
+        )
         self.single_action_space = _discrete(len(self.domain.actions))
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.action_space = batch_space(self.single_action_space, num_envs)
         self._motion = motion_tables(self.domain)
-        self._sets = FaultSets(self.domain, self._motion.table)
+        self._sets = FaultSets(self.domain, self._motion.table, self.hidden, self.behaviour)
         margin = max(view_radius, self._motion.reach, 1)
         fixed = tuple(s.maze for s in self.sources if s.maze is not None)
         generated = [s.generator for s in self.sources if s.generator is not None]
@@ -332,7 +335,7 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         self._step(
             which, actions, self._state, self._known, self._elapsed, self._current,
             self._events, self._chance, self._draws, self._subsets,
-            sets.set_bits, sets.avail, sets.blocking,
+            sets.set_bits, sets.avail, sets.blocking, sets.effective,
             motion.moves, motion.durations, motion.footprints, self._grids.grid, self._terms,
             self.view_radius, motion.failed_units,
             obs["window"], obs["heading"], obs["goal"], flags,
@@ -356,7 +359,7 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
             "heading": np.empty(n, dtype=np.int64),
             "goal": np.empty((n, 2), dtype=np.int32),
         }
-        if self.domain.faults:
+        if self.domain.faults and not self.hidden:
             obs["faults"] = np.empty((n, len(self.domain.faults)), dtype=np.int8)
         return obs
 
@@ -375,7 +378,7 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
                 self.sources, self.routes, self.domain, self.faults, rng, self._fault_sets
             )
             if options:
-                scenario = with_options(scenario, options, self.domain, rng)
+                scenario = with_options(scenario, options, self.domain, rng, self.hidden)
             self._load(robot, scenario)
             schedule = scenario.schedule
             row = (
@@ -391,8 +394,6 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
     def _load(self, robot: int, scenario: Scenario) -> None:
         """Put ``scenario`` into robot ``robot``'s rows, pending its first observation."""
         maze, schedule = scenario.maze, scenario.schedule
-        if schedule.detection is Detection.HIDDEN:
-            raise ProblemError(_HIDDEN)
         events = schedule.events
         if len(events) > MAX_EVENTS:
             raise ProblemError(
@@ -420,6 +421,7 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         row[_S._PENDING] = 1
         row[_S._EVENTS] = len(events)
         row[_S._SEED] = scenario.fault_seed
+        row[_S._HIDDEN] = schedule.detection is Detection.HIDDEN
         table = self._events[robot]
         table[:] = 0
         self._chance[robot] = 0.0

@@ -5,7 +5,8 @@ heading, time units, footprint) from the domain's move table (:func:`~selfrepair
 move_table`, itself computed by ``Domain.apply``, ``footprint`` and ``duration``), which actions a
 fault set leaves available from :func:`~selfrepair.execution.moves.available_moves` (that is,
 ``Domain.available``, as the simulator asks it), and which faults a failed attempt reveals from
-``Domain.blocking``. The fault sets are numbered as they are first met (:class:`FaultSets`); the
+``Domain.blocking``; with hidden faults, what a command really does from ``Domain.effective``
+(the simulator's rule). The fault sets are numbered as they are first met (:class:`FaultSets`); the
 mazes of all robots share one padded byte buffer (:class:`GridStore`).
 """
 
@@ -86,15 +87,25 @@ class FaultSets:
     ``domain.faults``, which actions are available (``avail``) and, per action, the faults that
     forbid it on their own (``blocking``, a mask). Mutable: the arrays grow as sets are met."""
 
-    def __init__(self, domain: Domain[Any, Any], table: MoveTable) -> None:
+    def __init__(
+        self,
+        domain: Domain[Any, Any],
+        table: MoveTable,
+        hidden: bool = False,
+        behaviour: str | None = None,
+    ) -> None:
         self.domain = domain
         self.table = table
+        self.hidden = hidden
+        self.behaviour = behaviour
+        self.index = {action: i for i, action in enumerate(domain.actions)}
         self.bit_of = {fault: i for i, fault in enumerate(domain.faults)}
         self._ids: dict[frozenset[Any], int] = {}
         count = len(domain.actions)
         self.set_bits = np.zeros(16, dtype=np.uint64)
         self.avail = np.zeros((16, count), dtype=np.uint8)
         self.blocking = np.zeros((16, count), dtype=np.uint64)
+        self.effective = np.zeros((16, count), dtype=np.int64)
 
     def __len__(self) -> int:
         return len(self._ids)
@@ -117,14 +128,26 @@ class FaultSets:
             self.set_bits = np.concatenate([self.set_bits, np.zeros_like(self.set_bits)])
             self.avail = np.concatenate([self.avail, np.zeros_like(self.avail)])
             self.blocking = np.concatenate([self.blocking, np.zeros_like(self.blocking)])
+            self.effective = np.concatenate([self.effective, np.zeros_like(self.effective)])
         available = available_moves(self.table, faults)
         domain = self.domain
         self.set_bits[sid] = self.mask(faults)
         for index, action in enumerate(domain.actions):
             self.avail[sid, index] = action in available
             self.blocking[sid, index] = self.mask(domain.blocking(action, faults))
+            self.effective[sid, index] = self._effective(action, faults, action in available)
         self._ids[faults] = sid
         return sid
+
+    def _effective(self, action: Any, faults: frozenset[Any], available: bool) -> int:
+        """With hidden faults, the index of the action the wheels perform when ``action`` is
+        commanded under ``faults`` (``Domain.effective``), or -1 when the command fails (a
+        forbidden action of a domain without a fault-behaviour model); else the action's own."""
+        if available or not self.hidden:
+            return self.index[action]
+        if not self.domain.behaviours:
+            return -1
+        return self.index[self.domain.effective(action, faults, self.behaviour)]
 
 
 class GridStore:
