@@ -242,9 +242,19 @@ def run_mission(
     tally = _Tally()
     if initial.status is not PlanStatus.SOLVED:
         reason = f"initial plan: {initial.status.value}"
-        return _result(spec, sim, stepper, tally, initial, planning_ns, NO_PLAN, reason)
+        footing = _footing(spec, sim, stepper)
+        return _result(spec, sim, stepper, tally, initial, planning_ns, NO_PLAN, reason, footing)
     status, reason, footing = _run_loop(spec, sim, stepper, tally)
     return _result(spec, sim, stepper, tally, initial, planning_ns, status, reason, footing)
+
+
+def _footing(spec: MissionSpec, sim: Simulator, stepper: Stepper) -> str:
+    """The footing the mission's loop would run on (for a mission that ends before it)."""
+    if spec.footing == "python":
+        return "python"
+    from selfrepair.execution.compiled import runs_compiled
+
+    return "compiled" if runs_compiled(spec, sim, stepper) else "python"
 
 
 def _run_loop(
