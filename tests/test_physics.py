@@ -209,3 +209,40 @@ def test_the_bundled_identified_domain_is_what_fidelity_measures_now() -> None:
         .read_text("utf-8")
     )
     assert json.loads(json.dumps(measure().identified())) == bundled
+
+
+@PHYSICS
+def test_faulty_rows_carry_the_performed_actions_measurement() -> None:
+    from selfrepair.physics.fidelity import faulty_rows, measure
+
+    report = measure(actions=[parse_action(c) for c in ("SFFF", "FFFF")], faulty=False)
+    sfff, ffff = report.rows
+    rows = {
+        (r.action, r.faults, r.behaviour): r for r in faulty_rows(FOUR_WHEEL, list(report.rows))
+    }
+    stalled = rows[("FFFF", "FL:F", "stall")]  # the front-left wheel stops: SFFF is performed
+    assert stalled.executed == "SFFF" and stalled.motion == "forward"
+    assert (stalled.tracked_position, stalled.snapped) == (sfff.tracked_position, sfff.snapped)
+    stuck_on = rows[("SFFF", "FL:S", "stall")]  # it cannot stop: it runs forward, FFFF
+    assert stuck_on.executed == "FFFF" and stuck_on.confirmed == ffff.confirmed
+    assert ("FFFF", "FL:F", "reverse") not in rows  # BFFF was not measured
+    assert all(r.executed in ("SFFF", "FFFF") and r.action != r.executed for r in rows.values())
+
+
+@PHYSICS
+def test_physics_experiment_compares_the_footings_per_strategy() -> None:
+    from selfrepair.experiment.physics import footing_summary, physics_experiment
+
+    rows = physics_experiment(("wide-short",), ("replacement",), ("FL:F",))
+    assert [(r.route, r.faults, r.strategy) for r in rows] == [
+        (f"r{i}", "FL:F", "replacement") for i in range(1, 5)
+    ]
+    summary = footing_summary(rows)["replacement"]
+    assert summary["missions"] == 4 and summary["lattice_reached"] == 4
+    assert summary["both_reached"] == sum(r.physics_reached for r in rows)
+
+
+def test_physics_experiment_refuses_an_unknown_strategy(capsys) -> None:
+    code = main(["physics", "experiment", "--strategy", "teleport"])
+    err = capsys.readouterr().err
+    assert code == 2 and "teleport" in err and err.count("\n") == 1
