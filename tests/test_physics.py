@@ -246,3 +246,38 @@ def test_physics_experiment_refuses_an_unknown_strategy(capsys) -> None:
     code = main(["physics", "experiment", "--strategy", "teleport"])
     err = capsys.readouterr().err
     assert code == 2 and "teleport" in err and err.count("\n") == 1
+
+
+@PHYSICS
+def test_a_robots_own_mjcf_runs_and_a_model_without_a_robot_is_refused() -> None:
+    from selfrepair.physics.model import mjcf
+    from selfrepair.physics.world import PhysicsWorld
+
+    slippery = mjcf(OPEN).replace('friction="0.8 0 0"', 'friction="0.2 0 0"')
+    assert slippery != mjcf(OPEN)
+    world = PhysicsWorld(OPEN, Pose(0, 5, Heading.N), xml=slippery)
+    end = world.run((1, -1, 1, -1), Fraction(1)).end  # FBFB spins less on a slippery floor
+    grippy = PhysicsWorld(OPEN, Pose(0, 5, Heading.N)).run((1, -1, 1, -1), Fraction(1)).end
+    assert abs(end.yaw - math.pi / 2) != abs(grippy.yaw - math.pi / 2)
+    with pytest.raises(ProblemError, match="robot"):
+        PhysicsWorld(OPEN, xml="<mujoco><worldbody/></mujoco>")
+
+
+@PHYSICS
+@needs_extra("gymnasium", extra="gym")
+def test_the_physics_gym_variant_steps_in_mujoco_with_a_continuous_pose() -> None:
+    import gymnasium as gym
+
+    from selfrepair.envs import PHYSICS_ENV_ID
+
+    env = gym.make(PHYSICS_ENV_ID, mazes="wide-short")
+    observation, _ = env.reset(seed=1, options={"start": "1,1,E", "goal": "3,1", "faults": ""})
+    assert env.observation_space.contains(observation)
+    assert np.allclose(observation["pose"], (1.0, 1.0, math.pi / 2))
+    forward = FOUR_WHEEL.actions.index(parse_action("FFFF"))
+    observation, reward, terminated, _, info = env.step(forward)
+    x, y, heading = observation["pose"]
+    assert info["pose"] == "2,1,E" and abs(x - 2) < 0.05 and abs(y - 1) < 0.05
+    assert abs(heading - math.pi / 2) < math.radians(3) and info["wall_contacts"] == 0
+    assert float(reward) == -1.0 and not terminated
+    env.close()

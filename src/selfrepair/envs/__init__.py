@@ -14,6 +14,7 @@ from selfrepair.envs.scenarios import FaultSpec, MazeGenerator, RouteChoice
 
 __all__ = [
     "ENV_ID",
+    "PHYSICS_ENV_ID",
     "FaultSpec",
     "FaultyMazeEnv",
     "MazeGenerator",
@@ -27,3 +28,10 @@ ENV_ID = "selfrepair/FaultyMaze-v0"
 
 if ENV_ID not in registry:
     register(id=ENV_ID, entry_point="selfrepair.envs.env:FaultyMazeEnv", nondeterministic=False)
+
+PHYSICS_ENV_ID = "selfrepair/FaultyMazePhysics-v0"
+"""The Gymnasium id of :class:`selfrepair.envs.physics.PhysicsMazeEnv` (MuJoCo underneath; the
+``physics`` extra)."""
+
+if PHYSICS_ENV_ID not in registry:
+    register(id=PHYSICS_ENV_ID, entry_point="selfrepair.envs.physics:PhysicsMazeEnv")
