@@ -281,3 +281,16 @@ def test_the_physics_gym_variant_steps_in_mujoco_with_a_continuous_pose() -> Non
     assert abs(heading - math.pi / 2) < math.radians(3) and info["wall_contacts"] == 0
     assert float(reward) == -1.0 and not terminated
     env.close()
+
+
+def test_the_confirmed_only_domain_keeps_the_confirmed_actions_and_every_basic_motion() -> None:
+    from selfrepair.physics.identified import CONFIRMED_NAME
+
+    domain = load_identified(name=CONFIRMED_NAME, confirmed_only=True)
+    check_domain(domain)
+    kept = {a.code for a in domain.actions}
+    assert len(kept) == 49 and "FFFB" not in kept and "FSSB" in kept  # drifts / turns in place
+    assert kept < {a.code for a in load_identified().actions}
+    for fault in FOUR_WHEEL.faults:  # every single fault leaves a way to turn and drive
+        motions = {domain.motion_class(a) for a in domain.actions if domain.available(a, {fault})}
+        assert {"forward", "backward", "turn-left", "turn-right"} <= motions, fault

@@ -200,6 +200,15 @@ def physics_experiment(
         ),
     ] = None,
     open_loop: OpenLoop = False,
+    robot: Annotated[
+        str,
+        typer.Option(
+            "--robot",
+            metavar="MODEL",
+            help="four-wheel (the lattice's 81 actions, hand-written table) or "
+            "four-wheel-confirmed (only the actions physics confirms, a generated table).",
+        ),
+    ] = "four-wheel",
     workers: Annotated[
         int, typer.Option("--workers", metavar="N", min=1, help="Processes to run missions in.")
     ] = 1,
@@ -224,6 +233,7 @@ def physics_experiment(
         tuple(strategies or STRATEGIES),
         tracked=not open_loop,
         workers=workers,
+        robot=robot,
     )
     summary = footing_summary(rows)
     if as_json:

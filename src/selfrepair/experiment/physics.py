@@ -8,6 +8,10 @@ lattice (:func:`~selfrepair.execution.executor.run_mission`) and in physics
 holds both outcomes; :func:`footing_summary` gives, per strategy, how many of the missions the
 lattice completes physics completes too, and how many of those without touching a wall.
 
+``robot="four-wheel-confirmed"`` plans and repairs with only the actions physics confirms
+(:func:`selfrepair.physics.identified.identified_domain` with ``confirmed_only``) and a table
+generated for them; the lattice footing then simulates that robot too.
+
 The default is small enough for a 2-core machine (two mazes, 96 missions per strategy); the four
 bundled mazes are one option away.
 """
@@ -16,7 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from selfrepair.errors import InputError
@@ -24,14 +28,19 @@ from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.result import MissionSpec
 from selfrepair.experiment.faultsets import PAPER_FAULT_SETS
+from selfrepair.physics.identified import CONFIRMED_NAME, load_identified
 from selfrepair.physics.mission import run_physics_mission
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import StrategyOptions
+from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.tables.generate import generate_table
+from selfrepair.tables.model import ReplacementTable
 from selfrepair.world.bundled import bundled_routes, load_bundled, maze_names
 
 __all__ = [
     "DEFAULT_MAZES",
+    "ROBOTS",
     "STRATEGIES",
     "FootingRow",
     "footing_summary",
@@ -71,18 +80,41 @@ class FootingRow:
     deviations: int
 
 
-def _spec(maze: str, route: int, faults: str, label: str) -> MissionSpec:
+ROBOTS = ("four-wheel", CONFIRMED_NAME)
+"""The robot models a run may plan with: the lattice's four-wheel robot (hand-written table), or
+the one that commands only the 49 actions physics confirms (its generated fault-agnostic table,
+made once per process)."""
+
+_ROBOTS: dict[str, tuple[Domain[Any, Any], ReplacementTable | None]] = {}
+
+
+def _robot(name: str) -> tuple[Domain[Any, Any], ReplacementTable | None]:
+    """The domain and table of robot model ``name`` (made once per process)."""
+    if name not in _ROBOTS:
+        if name == CONFIRMED_NAME:
+            domain = load_identified(name=CONFIRMED_NAME, confirmed_only=True)
+            _ROBOTS[name] = (domain, generate_table(domain))
+        else:
+            _ROBOTS[name] = (FOUR_WHEEL, None)
+    return _ROBOTS[name]
+
+
+def _spec(maze: str, route: int, faults: str, label: str, robot: str) -> MissionSpec:
     strategy, options = STRATEGIES[label]
+    domain, table = _robot(robot)
+    if table is not None:
+        options = replace(options, table=table)
     r = bundled_routes(maze)[route]
-    schedule = FaultSchedule.permanent(FOUR_WHEEL.parse_faults(faults))
+    schedule = FaultSchedule.permanent(domain.parse_faults(faults))
     return MissionSpec(
-        load_bundled(maze), r.start, r.goal, schedule=schedule, strategy=strategy, options=options
-    )
+        load_bundled(maze), r.start, r.goal, schedule=schedule, strategy=strategy,
+        options=options, domain=domain,
+    )  # fmt: skip
 
 
-def _run(job: tuple[str, int, str, str, bool]) -> FootingRow:
-    maze, route, faults, label, tracked = job
-    spec = _spec(maze, route, faults, label)
+def _run(job: tuple[str, int, str, str, bool, str]) -> FootingRow:
+    maze, route, faults, label, tracked, robot = job
+    spec = _spec(maze, route, faults, label, robot)
     lattice = run_mission(spec)
     done = run_physics_mission(spec, tracked=tracked)
     o = done.outcome
@@ -99,9 +131,15 @@ def physics_experiment(
     *,
     tracked: bool = True,
     workers: int = 1,
+    robot: str = "four-wheel",
 ) -> list[FootingRow]:
     """Every mission of the design on both footings, maze by maze, route by route, fault set by
-    fault set, strategy by strategy (in that order, also with ``workers`` processes)."""
+    fault set, strategy by strategy (in that order, also with ``workers`` processes), planned
+    and repaired with robot model ``robot`` (:data:`ROBOTS`)."""
+    if robot not in ROBOTS:
+        raise InputError(
+            f"expected a robot model of {', '.join(ROBOTS)}, got {robot!r}", source="<robot>"
+        )
     for name in mazes:
         if name not in maze_names():
             raise InputError(
@@ -116,7 +154,7 @@ def physics_experiment(
             )
     sets = tuple(fault_sets)
     jobs = [
-        (maze, route, faults, label, tracked)
+        (maze, route, faults, label, tracked, robot)
         for maze in mazes
         for route in range(len(bundled_routes(maze)))
         for faults in sets

@@ -130,6 +130,7 @@ class FidelityReport:
                 "swept": [list(c) for c in row.swept],
                 "position_error": round(row.tracked_position, 4),
                 "heading_error": round(row.tracked_heading, 3),
+                "confirmed": row.confirmed,
             })  # fmt: skip
         return {
             "domain": name,
