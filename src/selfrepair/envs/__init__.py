@@ -19,6 +19,7 @@ from selfrepair.execution.faults import Detection
 __all__ = [
     "ENV_ID",
     "HIDDEN_ENV_ID",
+    "PHYSICS_ENV_ID",
     "FaultSpec",
     "FaultyMazeEnv",
     "FaultyMazeVectorEnv",
@@ -50,3 +51,10 @@ if HIDDEN_ENV_ID not in registry:
         nondeterministic=False,
         kwargs={"faults": FaultSpec(detection=(Detection.HIDDEN,))},
     )
+
+PHYSICS_ENV_ID = "selfrepair/FaultyMazePhysics-v0"
+"""The Gymnasium id of :class:`selfrepair.envs.physics.PhysicsMazeEnv` (MuJoCo underneath; the
+``physics`` extra)."""
+
+if PHYSICS_ENV_ID not in registry:
+    register(id=PHYSICS_ENV_ID, entry_point="selfrepair.envs.physics:PhysicsMazeEnv")
