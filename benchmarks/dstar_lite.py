@@ -31,7 +31,9 @@ map, ``cold`` = the first, with the per-map set-up) and the peer's A* (its nativ
 
 **The four-wheel robot** (no peer can plan for it): D* Lite kept from the mission's start
 against a fresh lattice A* after the same blocked cells and after a fault (``FL:F``: the forward
-move loses its fastest action everywhere), both compiled, the same way (one run each).
+move loses its fastest action everywhere), both compiled, the same way (one run each); A* with
+the Manhattan heuristic (D* Lite's) and with the planner's default, ``grid-distance`` (a BFS
+from the goal on the changed map, timed with it and without it).
 
 Targets (issue 25 item 3): compiled D* Lite at most 1.5x the peer's time on the same updates
 (median over queries and repeats of the per-update ratio, with a 95% bootstrap interval); and
@@ -138,13 +140,14 @@ def blocked_cells(route: list[Pose], at: int, case: str) -> list[Cell]:
 
 def astar(
     walls: np.ndarray, domain: Domain[Any, Any], start: Pose, goal: Cell, heading: Heading | None,
-    faults: frozenset[Any],
+    faults: frozenset[Any], heuristic: str = "manhattan",
 ) -> tuple[float, float, Any]:  # fmt: skip
     """selfrepair's compiled lattice A* from scratch on the map ``walls``: CPU seconds of the
-    first call (per-map set-up included) and of a second (search only), and the result."""
+    first call (per-map set-up included: for ``grid-distance`` a BFS from the goal) and of a
+    second (search only), and the result."""
     problem = PlanningProblem(Maze(walls), start, goal, heading, faults, domain=domain)
-    cold, _ = cpu(lambda: plan(problem, heuristic="manhattan", backend="numba"))
-    warm, result = cpu(lambda: plan(problem, heuristic="manhattan", backend="numba"))
+    cold, _ = cpu(lambda: plan(problem, heuristic=heuristic, backend="numba"))
+    warm, result = cpu(lambda: plan(problem, heuristic=heuristic, backend="numba"))
     return cold, warm, result
 
 
@@ -300,6 +303,10 @@ def run_four_wheel(
     cold, warm, fresh = astar(walls, FOUR_WHEEL, at, goal, None, faults)
     assert found.cost == fresh.cost, (found.cost, fresh.cost)
     row["astar_cold_s"], row["astar_s"], row["astar_expansions"] = cold, warm, fresh.expansions
+    cold, warm, fresh = astar(walls, FOUR_WHEEL, at, goal, None, faults, "grid-distance")
+    assert found.cost == fresh.cost, (found.cost, fresh.cost)
+    row["astar_bfs_cold_s"], row["astar_bfs_s"] = cold, warm
+    row["astar_bfs_expansions"] = fresh.expansions
     return row
 
 
@@ -422,6 +429,21 @@ def main() -> None:
                 "astar_expansions": statistics.median(
                     r["astar_expansions"] for r in robot if r["case"] == case
                 ),
+                "astar_bfs_ms": interval(
+                    [1e3 * r["astar_bfs_s"] for r in robot if r["case"] == case]
+                ),
+                "astar_bfs_cold_ms": interval(
+                    [1e3 * r["astar_bfs_cold_s"] for r in robot if r["case"] == case]
+                ),
+                "dstar_vs_astar_bfs": interval(
+                    [r["ours_s"] / r["astar_bfs_s"] for r in robot if r["case"] == case]
+                ),
+                "dstar_vs_astar_bfs_cold": interval(
+                    [r["ours_s"] / r["astar_bfs_cold_s"] for r in robot if r["case"] == case]
+                ),
+                "astar_bfs_expansions": statistics.median(
+                    r["astar_bfs_expansions"] for r in robot if r["case"] == case
+                ),
             }
             for case in cases
         }
@@ -463,9 +485,15 @@ def print_summary(name: str, summary: dict[str, Any], robot: dict[str, Any]) -> 
     print(f"{name}: four-wheel robot, D* Lite kept against a fresh A* (both compiled)")
     for case, s in robot.items():
         print(
-            f"  {case:9} D* Lite {fmt(s['dstar_ms'])} ms, A* {fmt(s['astar_ms'])} ms,"
+            f"  {case:9} D* Lite {fmt(s['dstar_ms'])} ms, A* (Manhattan) {fmt(s['astar_ms'])} ms,"
             f" ratio {fmt(s['dstar_vs_astar'])}; expansions {s['dstar_expansions']:.0f}"
             f" against {s['astar_expansions']:.0f}"
+        )
+        print(
+            f"  {'':9} A* (grid-distance, the default) {fmt(s['astar_bfs_ms'])} ms search,"
+            f" {fmt(s['astar_bfs_cold_ms'])} ms with its BFS; ratio"
+            f" {fmt(s['dstar_vs_astar_bfs'])} and {fmt(s['dstar_vs_astar_bfs_cold'])};"
+            f" expansions {s['astar_bfs_expansions']:.0f}"
         )
 
 

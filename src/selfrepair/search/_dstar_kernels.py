@@ -240,26 +240,33 @@ def update_nodes(
 def faults_sweep(
     free: Any, pen: Any, dur: Any, step: Any, nsw: Any, sw: Any,
     backk: Any, backo: Any, nback: Any,
-    g: Any, rhs: Any, hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any,
+    g: Any, rhs: Any, hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, mark: Any,
 ) -> int:  # fmt: skip
     """After the chosen actions changed (``dur``): update every node the search has touched and
     every predecessor of a node with a finite ``g`` (an edge that was impassable may have become
-    usable). Returns the number of updates."""
+    usable), each once (``mark``: scratch of ``N`` bytes). Returns the number of updates (an
+    update reads only ``g``, which none changes, so their order does not matter)."""
     goal = sc[NODES]
     wmul = sc[WMUL]
-    count = 0
     for u in range(goal):
-        if g[u] < INF or rhs[u] < INF:
-            _update(free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, u)
-            count += 1
+        mark[u] = 1 if g[u] < INF or rhs[u] < INF else 0
     for u in range(goal):
         if g[u] < INF:
             he = u & 3
             for i in range(nback[he]):
                 p = u - backo[he, i]
-                if 0 <= p < goal and _cost(free, pen, dur, nsw, sw, wmul, p, backk[he, i]) < INF:
-                    _update(free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, p)
-                    count += 1
+                k = backk[he, i]
+                if (
+                    0 <= p < goal
+                    and mark[p] == 0
+                    and _cost(free, pen, dur, nsw, sw, wmul, p, k) < INF
+                ):
+                    mark[p] = 1
+    count = 0
+    for u in range(goal):
+        if mark[u]:
+            _update(free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, u)
+            count += 1
     return count
 
 
@@ -390,6 +397,7 @@ class CompiledCore:
         self.hk2 = np.zeros(n, dtype=np.int64)
         self.hn = np.zeros(n, dtype=np.int64)
         self.pos = np.full(n, -1, dtype=np.int64)
+        self.mark: npt.NDArray[np.uint8] | None = None  # scratch of the fault sweep, made on use
         self.step = np.array(geo.step, dtype=np.int64).reshape(k, 4)
         width = max([len(c) for per in geo.sweep for c in per] or [1])
         self.nsw = np.zeros((k, 4), dtype=np.int64)
@@ -457,7 +465,9 @@ class CompiledCore:
         update_nodes(*self._graph(), *self._state(), array)
 
     def faults_sweep(self) -> int:
-        return int(faults_sweep(*self._graph(), *self._back(), *self._state()))
+        if self.mark is None:
+            self.mark = np.zeros(self.d.geometry.nodes, dtype=np.uint8)
+        return int(faults_sweep(*self._graph(), *self._back(), *self._state(), self.mark))
 
     def compute(self, budget: int) -> bool:
         return bool(compute(*self._graph(), *self._back(), *self._state(), budget))

@@ -113,8 +113,8 @@ class Core(Protocol):
         """Recompute ``rhs`` of ``nodes`` (their out-edges changed) and requeue them."""
 
     def faults_sweep(self) -> int:
-        """Update every touched node and the predecessors of every node with a finite ``g``;
-        returns the number of updates."""
+        """Update every touched node and the predecessors of every node with a finite ``g``,
+        each once; returns the number of updates."""
 
     def compute(self, budget: int) -> bool:
         """Run until the start is consistent (true) or ``expansions`` reaches ``budget``."""
@@ -236,16 +236,13 @@ class PythonCore:
 
     def faults_sweep(self) -> int:
         g, rhs = self.g, self.rhs
-        touched = [u for u in range(self.goal) if g[u] < INF or rhs[u] < INF]
-        for u in touched:
-            self.update(u)
-        count = len(touched)
+        nodes = {u for u in range(self.goal) if g[u] < INF or rhs[u] < INF}
         for u in range(self.goal):
             if g[u] < INF:
-                for p, _ in self.predecessors(u):
-                    self.update(p)
-                    count += 1
-        return count
+                nodes.update(p for p, _ in self.predecessors(u))
+        for u in sorted(nodes):  # an update reads only g, which none changes: any order will do
+            self.update(u)
+        return len(nodes)
 
     def top(self) -> tuple[int, int, int] | None:
         heap, keys = self.heap, self.keys

@@ -52,7 +52,7 @@ ties differently).
 (:class:`~selfrepair.search._dstar_reference.PythonCore`); ``"numba"`` runs the kernels of
 :mod:`selfrepair.search._dstar_kernels` (optional, the ``fast`` extra); ``"auto"`` uses numba when
 it is importable, as for the planner (:func:`selfrepair.search.backend.use_numba`). A blocked
-goal cell or start cell means no plan (``UNSOLVABLE``).
+goal cell or start cell means no plan (``UNSOLVABLE``, at once: the search is not run then).
 """
 
 from __future__ import annotations
@@ -360,6 +360,10 @@ class DStarLite:
         t0 = time.perf_counter_ns()
         core = self.core
         core.expansions = 0
+        if not (self.free[core.start >> 2] and self.free[self.goal_cell]):
+            # no plan; the search would find that out by settling every node it can reach, so
+            # the queue is left as it is for a later plan (when the cell is free again)
+            return DStarPlan(PlanStatus.UNSOLVABLE, (), None, 0, 0, time.perf_counter_ns() - t0)
         budget = (1 << 62) if max_expansions is None else max_expansions
         done = core.compute(budget)
         expansions = core.expansions
