@@ -9,7 +9,8 @@ PY := $(VENV)/bin/python
 # Each target installs only the extras it needs (see pyproject.toml):
 #   demo: fast (numba) and viz (matplotlib);  test and lint: also test (pytest, linters,
 #   selenium), gym (the environment's tests need Gymnasium), pddl (unified-planning and LPG
-#   for the baselines' tests) and team (SciPy for the team engine);  bench: also bench (the
+#   for the baselines' tests), physics (MuJoCo and imageio for the physics tests; rendering
+#   needs an OpenGL library such as Debian's libosmesa6) and team (SciPy for the team engine);  bench: also bench (the
 #   peers: networkx, nano-astar, pathplanning).
 # The dask, ray and parquet extras are not installed: the tests that need them skip with the
 # reason (CI installs dask and parquet and requires them, see .ci/run).
@@ -22,7 +23,7 @@ MAKE_VENV = test -x $(PY) || { $(PYTHON) -m venv $(VENV) && $(PY) -m pip install
 
 $(STAMP): pyproject.toml
 	$(MAKE_VENV)
-	$(PY) -m pip install --quiet -e '.[fast,viz,test,gym,pddl]'
+	$(PY) -m pip install --quiet -e '.[fast,viz,test,gym,pddl,physics]'
 	touch $(STAMP)
 
 $(DEMO_STAMP): pyproject.toml
@@ -31,7 +32,7 @@ $(DEMO_STAMP): pyproject.toml
 	touch $(DEMO_STAMP)
 
 $(BENCH_STAMP): $(STAMP)
-	$(PY) -m pip install --quiet -e '.[fast,viz,test,gym,pddl,bench]'
+	$(PY) -m pip install --quiet -e '.[fast,viz,test,gym,pddl,physics,bench]'
 	touch $(BENCH_STAMP)
 
 # The main job: the replacement-vs-replanning study on the bundled mazes, then

@@ -45,7 +45,7 @@ def test_the_commands_are_the_documented_ones() -> None:
         "experiment", "report", "animate", "view", "gym-eval", "pddl", "maze show", "maze list",
         "maze generate", "maze routes", "table show", "table check", "table generate",
         "table coverage", "team run", "team compare", "team replay", "team table", "team frame",
-        "tolerance",
+        "tolerance", "physics fidelity", "physics run", "physics experiment",
     }  # fmt: skip
 
 
@@ -175,13 +175,13 @@ def test_a_file_in_the_working_directory_wins(
 
 FLAG = re.compile(r"(?<![\w-])--[a-z][a-z-]+")
 ALLOWED = {
-    # execution/trace.py is owned by another change; its message names a flag that `replay`
+    # execution/traceread.py is owned by another change; its message names a flag that `replay`
     # now has (--partial). Limit messages may name the flag that raises the limit.
-    ("execution/trace.py", "--partial"),
+    ("execution/traceread.py", "--partial"),
     # A file that records a plug-in robot (a trace) whose file is gone or changed: the one way to
     # give the robot to any command is the global --plugin (issue 29 item 3 asks to name it).
     ("robots/registry.py", "--plugin"),
-    ("execution/trace.py", "--plugin"),
+    ("execution/traceread.py", "--plugin"),
 }
 
 

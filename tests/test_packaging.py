@@ -58,6 +58,8 @@ EXTRA_OF = {
     "up_lpg": "pddl",
     "selenium": "test",
     "hypothesis": "test",
+    "mujoco": "physics",
+    "imageio": "physics",
 }
 
 

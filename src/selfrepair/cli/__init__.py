@@ -21,6 +21,7 @@ from selfrepair.cli import (  # noqa: F401
     experiments,
     gym,
     pddl,
+    physics,
     planning,
     tables,
     team,

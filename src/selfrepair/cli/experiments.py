@@ -1,9 +1,7 @@
 """Experiment commands: ``selfrepair experiment``, ``selfrepair report``, ``selfrepair animate``."""
 
 import sys
-import textwrap
-from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
@@ -16,19 +14,21 @@ from selfrepair.cli._app import (
     MaxMissions,
     MaxTraceBytes,
     app,
-    console,
     echo,
 )
+from selfrepair.cli._printing import (
+    print_baselines,
+    print_crossover,
+    print_fault_sets,
+    print_findings,
+    print_summary,
+)
+from selfrepair.cli._progress import frames_progress, mission_progress
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES, MAX_MISSIONS, MAX_TRACE_BYTES
 
 if TYPE_CHECKING:
-    from rich.table import Table
-
-    from selfrepair.experiment.findings import Finding, StrategySummary
     from selfrepair.experiment.keys import Mission
-    from selfrepair.experiment.store import Value
-    from selfrepair.experiment.summary import FaultSetBite
 
 __all__ = [
     "animate",
@@ -42,8 +42,8 @@ __all__ = [
 
 
 def resolve_experiment(spec: str) -> Path:
-    """A bundled experiment name (``paper``, ``scale``, ``baselines``, ``full``, ``team``) or a
-    path to a TOML file."""
+    """A bundled experiment name (``paper``, ``scale``, ``baselines``, ``full``, ``team``,
+    ``dynamic``, ...) or a path to a TOML file."""
     from importlib import resources
 
     folder = resources.files("selfrepair").joinpath("data", "experiments")
@@ -78,7 +78,8 @@ def experiment(
         str,
         typer.Argument(
             metavar="CONFIG",
-            help="Bundled experiment (paper, scale, baselines, full, team) or FILE.toml.",
+            help="Bundled experiment (paper, scale, baselines, full, team, dynamic, ...) or "
+            "FILE.toml.",
         ),
     ],
     db: Annotated[
@@ -143,6 +144,7 @@ def experiment(
     import joblib
 
     from selfrepair.experiment.backends import check_backend
+    from selfrepair.experiment.dynamic_findings import dynamic_findings
     from selfrepair.experiment.findings import check_findings, reference_note, summarize
     from selfrepair.experiment.missions import expand
     from selfrepair.experiment.runner import run_missions
@@ -177,7 +179,7 @@ def experiment(
                 address=address,
                 export_csv=export_csv,
                 export_parquet=export_parquet,
-                progress=_progress,
+                progress=mission_progress,
                 max_missions=max_missions,
                 max_cells=max_cells,
             )
@@ -186,7 +188,7 @@ def experiment(
         db_path = db if db is not None else Path("results") / f"{cfg.name}.sqlite"
         n_jobs = joblib.cpu_count() if jobs == -1 else jobs
         with ResultStore(db_path) as store:
-            with _progress(f"{cfg.name}: {len(missions)} missions") as on_progress:
+            with mission_progress(f"{cfg.name}: {len(missions)} missions") as on_progress:
                 summary = run_missions(
                     missions,
                     store,
@@ -207,11 +209,12 @@ def experiment(
             print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
             print_fault_sets(fault_set_bite(rows))
             print_findings(
-                [*check_findings(rows), *tolerance_findings(rows)], reference_note(rows)
+                [*check_findings(rows), *tolerance_findings(rows), *dynamic_findings(rows)],
+                reference_note(rows),
             )
             print_baselines(rows)
             if cfg.crossover:
-                _print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
+                print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
             if export_csv is not None:
                 echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
             if export_parquet is not None:
@@ -253,201 +256,6 @@ def _stored_after_interrupt(missions: "Sequence[Mission]", db_path: Path | None)
         f"{stored} of {len(missions)} missions are stored in {db_path}; "
         "run the same command again to resume"
     )
-
-
-@contextmanager
-def _progress(label: str) -> Iterator[Callable[[int, int], None] | None]:
-    """A rich progress bar (done/total, rate, ETA) on a terminal; nothing when piped."""
-    if not sys.stdout.isatty():
-        yield None
-        return
-    from rich.progress import (
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TaskProgressColumn,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
-
-    columns = (
-        TextColumn("{task.description}"),
-        BarColumn(),
-        MofNCompleteColumn(),
-        TaskProgressColumn(),
-        TextColumn("{task.fields[rate]}"),
-        TimeElapsedColumn(),
-        TextColumn("ETA"),
-        TimeRemainingColumn(),
-    )
-    with Progress(*columns, console=console(), transient=False) as progress:
-        task = progress.add_task(label, total=None, rate="")
-
-        def update(done: int, total: int) -> None:
-            speed = progress.tasks[0].speed
-            rate = f"{speed:.1f}/s" if speed else ""
-            progress.update(task, completed=done, total=total, rate=rate)
-
-        yield update
-
-
-_SHORT_HEADERS = {
-    "completed": "done",
-    "met a fault": "met a\nfault",
-    "no replan": "no replan\n(missions)",
-    "resolved locally (per encounter)": "resolved\nlocally\n(per enc.)",
-    "replans/mission": "replans/\nmission",
-    "ticks over optimum": "ticks over\noptimum",
-    "plan distance": "plan\ndistance",
-    "plan distance by motion": "plan dist.\nby motion",
-    "repair compute/mission µs": "repair\ncompute/\nmission µs",
-    "first repair cold µs": "first\nrepair\ncold µs",
-    "first repair warm µs": "first\nrepair\nwarm µs",
-    "repair latency median µs": "repair\nlatency\nmedian µs",
-    "repair latency p99 µs": "repair\nlatency\np99 µs",
-    "repairs/mission": "repairs/\nmission",
-    "hit latency median µs": "hit\nlatency\nmedian µs",
-}
-"""Stacked headers for a terminal, where every column must fit without truncating a number."""
-
-
-def print_summary(summaries: "list[StrategySummary]", *, title: str) -> None:
-    """The per-strategy summary as a rich table: one wide table with full headers when piped
-    (logs and files are never cut, whatever ``COLUMNS`` says), stacked headers on a terminal,
-    split into as many tables as the terminal's width needs. Numbers are never truncated; long
-    strategy names wrap after a comma on a terminal."""
-    from selfrepair.experiment.findings import StrategySummary
-
-    rows = [s.cells() for s in summaries]
-    headers = StrategySummary.HEADERS
-    out = console()  # piped: as wide as the table needs (see console())
-    if not sys.stdout.isatty():
-        out.print(_table(title, headers, rows, range(1, len(headers)), short=False))
-        return
-    groups = _column_groups(headers, rows, out.width)
-    for part, columns in enumerate(groups, start=1):
-        label = title if len(groups) == 1 else f"{title} ({part}/{len(groups)})"
-        out.print(_table(label, headers, rows, columns, short=True))
-
-
-_NAME_WIDTH = 24
-"""Room kept for the strategy column on a terminal (names wrap after a comma)."""
-
-
-def _column_groups(
-    headers: tuple[str, ...], rows: list[tuple[str, ...]], width: int
-) -> list[list[int]]:
-    """The summary's columns packed, in order, into tables that each fit ``width``."""
-    groups: list[list[int]] = [[]]
-    used = _NAME_WIDTH
-    for i in range(1, len(headers)):
-        header = max(len(part) for part in _SHORT_HEADERS[headers[i]].split("\n"))
-        need = max([header, *(len(r[i]) for r in rows)]) + 3  # padding and rule
-        if groups[-1] and used + need > width:
-            groups.append([])
-            used = _NAME_WIDTH
-        groups[-1].append(i)
-        used += need
-    return groups
-
-
-def _table(
-    title: str,
-    headers: tuple[str, ...],
-    rows: list[tuple[str, ...]],
-    columns: Sequence[int],
-    *,
-    short: bool,
-) -> "Table":
-    from rich import box
-    from rich.table import Table
-    from rich.text import Text
-
-    table = Table(title=title, box=box.SIMPLE_HEAD if short else box.HEAVY_HEAD)
-    table.add_column(headers[0], overflow="fold", no_wrap=not short)
-    for i in columns:
-        header = _SHORT_HEADERS[headers[i]] if short else headers[i]
-        widest = max([len(r[i]) for r in rows] + ([] if short else [len(header)]))
-        table.add_column(header, justify="right", no_wrap=True, min_width=widest)
-    for row in rows:
-        name = row[0].replace(",", ", ") if short else row[0]
-        table.add_row(Text(name), *(Text(row[i]) for i in columns))
-    return table
-
-
-def print_findings(findings: "list[Finding]", note: str | None = None) -> None:
-    """Each finding as a short paragraph: its outcome and claim, then the evidence (wrapped);
-    ``note`` (:func:`~selfrepair.experiment.findings.reference_note`) first, when given."""
-    if note is not None:
-        echo(textwrap.fill(note, 96, subsequent_indent="  "))
-    for f in findings:
-        echo(f.paragraph())
-
-
-def _print_crossover(rows: "list[dict[str, Value]]", figure: Path) -> None:
-    """The crossover analysis of every replacement variant, and its figure when matplotlib is
-    installed."""
-    from selfrepair.experiment.scale import crossover
-    from selfrepair.repair.strategies import StrategyName
-
-    replacing = StrategyName.REPLACEMENT
-    variants = sorted({str(r["variant"]) for r in rows if r.get("strategy") == replacing})
-    results = [crossover(rows, v) for v in variants]
-    echo(
-        "Crossover: the maze side where repair compute per mission falls below 1/10 of the "
-        "replanner's"
-    )
-    for result in results:
-        for line in result.lines():
-            echo("  " + line)
-    from importlib.util import find_spec
-
-    if find_spec("matplotlib") is None:  # extra viz missing: the numbers are enough
-        echo("(no figure: it needs matplotlib, pip install 'selfrepair[viz]')")
-        return
-    from selfrepair.experiment.plots import figure_crossover
-
-    echo(f"wrote {figure_crossover(results, figure)}")
-
-
-def print_baselines(rows: "list[dict[str, Value]]") -> None:
-    """When the rows hold D* Lite or LPG-adapt missions: the comparison on the missions every
-    strategy ran, with 95% intervals, and repair time by maze (see docs/baselines.md)."""
-    from selfrepair.experiment.comparison import (
-        FIRST_REPAIR,
-        REPAIR_COMPUTE,
-        BaselineLine,
-        common_rows,
-        compare_baselines,
-        has_baselines,
-        maze_table,
-    )
-
-    if not has_baselines(rows):
-        return
-    lines = compare_baselines(rows)
-    mazes = ", ".join(sorted({str(r.get("maze")) for r in common_rows(rows)}))
-    title = f"Baselines on the same missions ({mazes}): medians [95% intervals]"
-    out = console()  # piped: as wide as the table needs (see console())
-    headers = BaselineLine.HEADERS
-    body = [line.cells() for line in lines]
-    out.print(_table(title, headers, body, range(1, len(headers)), short=False))
-    for column, what in ((FIRST_REPAIR, "First repair ms"), (REPAIR_COMPUTE, "Repair ms/mission")):
-        headers, body = maze_table(rows, column)
-        title = f"{what} by maze: medians [95% intervals]"
-        out.print(_table(title, headers, body, range(1, len(headers)), short=False))
-
-
-def print_fault_sets(bites: "list[FaultSetBite]") -> None:
-    """Per fault set: missions that met a faulty action, of all missions and of variant
-    ``replan``'s (the A* replanner the findings compare with)."""
-    echo("Fault sets: missions that met a faulty action (all strategies; variant replan)")
-    for b in bites:
-        echo(
-            f"  {b.faults or '(none)':<12} {b.met:>5}/{b.missions:<5} "
-            f"{b.replan_met:>4}/{b.replan_missions}"
-        )
 
 
 @app.command()
@@ -514,7 +322,7 @@ def animate(
     """
     from selfrepair.experiment.animate import animate_trace
 
-    with _frames_progress(f"drawing {out.name}") as on_frame:
+    with frames_progress(f"drawing {out.name}") as on_frame:
         frames = animate_trace(
             trace,
             out,
@@ -525,21 +333,3 @@ def animate(
         )
     echo(f"wrote {out} ({frames} frames)")
     return 0
-
-
-@contextmanager
-def _frames_progress(label: str) -> Iterator[Callable[[int, int], None] | None]:
-    """A progress bar of the frames drawn, on a terminal only."""
-    if not sys.stdout.isatty():
-        yield None
-        return
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn
-
-    columns = (TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn())
-    with Progress(*columns, console=console(), transient=True) as progress:
-        task = progress.add_task(label, total=None)
-
-        def update(done: int, total: int) -> None:
-            progress.update(task, completed=done, total=total)
-
-        yield update

@@ -21,7 +21,10 @@ it, and records the steps and repairs. :func:`run_mission` runs it to the end; p
    ``budget_exhausted``).
 4. Send the command to the simulator and tell the stepper what it did. A failed attempt (a fault
    the robot did not know yet) is recorded as a step with source ``failed-attempt`` and reveals
-   its blocking faults.
+   its blocking faults. With detection ``hidden`` the stepper is also given what the robot
+   observed (:meth:`Simulator.observe`) and whether the command took it elsewhere than it should
+   have (see :mod:`selfrepair.execution.stepper`). An oracle strategy (registered ``told``) is
+   told the true faults before every command, whatever the detection.
 
 The initial plan is made, by default, before any fault is known (``initial_faults_known=False``),
 as in the original experiment. In a changing world it avoids the cells the robot sees blocked at
@@ -43,7 +46,7 @@ from __future__ import annotations
 import time
 from array import array
 from collections import Counter
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
 from typing import Any
@@ -59,11 +62,14 @@ from selfrepair.execution.stepper import Stepper
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.repair.replacement import FreeTest, table_reach
 from selfrepair.repair.strategies import (
+    ROBOT,
     Belief,
     MissionContext,
     Repair,
     RepairStatus,
+    diagnosis_report,
     get_strategy,
+    strategy_entry,
     uses_table,
 )
 from selfrepair.repair.tolerance import PlanObjective, fault_model
@@ -131,6 +137,7 @@ def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> Missio
         clearance_radius=radius,
         backend=backend,
         belief=belief,
+        behaviour=spec.behaviour,
     )
 
 
@@ -198,18 +205,26 @@ class _Tally:
     penalty: int = 0
 
 
-def run_mission(spec: MissionSpec) -> MissionResult:
-    """Plan, execute and repair one mission (see the module docstring)."""
+def run_mission(
+    spec: MissionSpec, *, simulator: Callable[[MissionSpec], Simulator] | None = None
+) -> MissionResult:
+    """Plan, execute and repair one mission (see the module docstring). ``simulator`` makes the
+    simulator that holds the truth (default: the lattice :class:`Simulator`; a physics one is
+    :class:`selfrepair.physics.simulator.PhysicsSimulator`)."""
     factory = get_strategy(spec.strategy)  # fails fast on a bad name
-    sim = Simulator(
-        spec.domain,
-        spec.maze,
-        spec.start,
-        spec.schedule,
-        spec.seed,
-        world=spec.world,
-        behaviour=spec.behaviour,
-    )
+    if simulator is not None:
+        sim = simulator(spec)
+    else:
+        sim = Simulator(
+            spec.domain,
+            spec.maze,
+            spec.start,
+            spec.schedule,
+            spec.seed,
+            world=spec.world,
+            behaviour=spec.behaviour,
+            observation=spec.observation,
+        )
     initial_known = sim.sense() if spec.initial_faults_known else frozenset()
     table = spec.options.resolved_table() if uses_table(spec.strategy) else None
     _prepare(spec, table)
@@ -228,15 +243,46 @@ def run_mission(spec: MissionSpec) -> MissionResult:
     planning_ns = time.perf_counter_ns() - t0
     # on-use and hidden: the known faults never clear by themselves, so waiting cannot help
     waits = None if spec.schedule.detection is Detection.NOW else 0
-    stepper = Stepper(
-        context, factory(context), initial.actions, initial_known, sim.table, max_wait=waits
-    )
+    repairer = factory(context)
+    if spec.world and (expect := getattr(repairer, "expect_blocked", None)) is not None:
+        expect()  # a strategy that repairs blocked actions itself prepares before the clock runs
+    stepper = Stepper(context, repairer, initial.actions, initial_known, sim.table, max_wait=waits)
     tally = _Tally()
     if initial.status is not PlanStatus.SOLVED:
         reason = f"initial plan: {initial.status.value}"
-        return _result(spec, sim, stepper, tally, initial, planning_ns, NO_PLAN, reason)
+        footing = _footing(spec, sim, stepper)
+        return _result(spec, sim, stepper, tally, initial, planning_ns, NO_PLAN, reason, footing)
+    status, reason, footing = _run_loop(spec, sim, stepper, tally)
+    return _result(spec, sim, stepper, tally, initial, planning_ns, status, reason, footing)
+
+
+def _footing(spec: MissionSpec, sim: Simulator, stepper: Stepper) -> str:
+    """The footing the mission's loop would run on (for a mission that ends before it)."""
+    if spec.footing == "python":
+        return "python"
+    from selfrepair.execution.compiled import runs_compiled
+
+    return "compiled" if runs_compiled(spec, sim, stepper) else "python"
+
+
+def _run_loop(
+    spec: MissionSpec, sim: Simulator, stepper: Stepper, tally: _Tally
+) -> tuple[MissionStatus, str, str]:
+    """The mission's loop on its footing (:mod:`selfrepair.execution.compiled` where it can
+    run, unless ``spec.footing`` is ``python``), and which footing ran."""
+    if spec.footing != "python":
+        from selfrepair.execution.compiled import compiled_loop
+
+        weight = bool(Fraction(spec.clearance_weight))
+        penalty = penalty_buffer(sim.grid, spec.maze, spec.clearance_radius) if weight else b""
+        ended = compiled_loop(
+            spec, sim, stepper, tally.moved, lambda f: _why(f, spec, sim, stepper), penalty
+        )
+        if ended is not None:
+            status, reason, tally.executed_units, tally.penalty = ended
+            return status, reason, "compiled"
     status, reason = _loop(spec, sim, stepper, tally)
-    return _result(spec, sim, stepper, tally, initial, planning_ns, status, reason)
+    return status, reason, "python"
 
 
 NO_PLAN = MissionStatus.NO_INITIAL_PLAN
@@ -269,7 +315,10 @@ def _loop(
     """
     limit = spec.step_limit()
     goal, goal_heading = spec.goal, spec.goal_heading
-    sense_now = spec.schedule.detection is Detection.NOW
+    told = strategy_entry(spec.strategy, ROBOT).told  # an oracle: told the true faults
+    sense_now = spec.schedule.detection is Detection.NOW or told
+    hidden = spec.schedule.detection is Detection.HIDDEN
+    expect = sim.table.moves
     weight = bool(Fraction(spec.clearance_weight))
     margin, stride = sim.grid.margin, sim.grid.stride
     penalty = penalty_buffer(sim.grid, spec.maze, spec.clearance_radius) if weight else b""
@@ -279,6 +328,8 @@ def _loop(
     next_action, moved_, record, learn, advance, sense = (
         stepper.next_action, stepper.moved, stepper.record, stepper.learn, sim.advance, sim.sense
     )  # fmt: skip
+    if told:
+        sense = sim.true_faults
     while True:
         pose = sim.pose
         if pose.cell == goal and (goal_heading is None or pose.heading == goal_heading):
@@ -308,12 +359,22 @@ def _loop(
                 base = (pose.y + margin) * stride + pose.x + margin
                 tally.penalty += sum([penalty[base + offset] for offset in move.cells])
             moved_(step, action, source, pose, sim.pose, move.duration)
+            if sim.deviated:  # localised off the plan (physics): replan from where it is
+                stepper.relocalise()
         elif outcome is Outcome.COLLISION:
             name = spec.domain.format_action(action)
             return MissionStatus.COLLISION, f"{name} at {sim.pose} would sweep a wall"
         else:
             record(step, action, source, outcome, pose, sim.pose, sim.last_duration,
                    sim.last_blocking, sim.last_bumped)  # fmt: skip
+        if hidden:  # what the robot observes of its command, and whether it went astray
+            end, want = sim.pose, expect[action][pose.heading]
+            deviated = outcome is Outcome.MOVED and (
+                (end.x - pose.x, end.y - pose.y, end.heading) != (want.dx, want.dy, want.heading)
+            )
+            stepper.perceive(
+                sim.observe(step, action, pose, outcome), deviated, outcome is Outcome.MOVED
+            )
 
 
 def penalty_buffer(grid: FreeGrid, maze: Maze, radius: int) -> Sequence[int]:
@@ -354,6 +415,7 @@ def _result(
     planning_ns: int,
     status: MissionStatus,
     reason: str,
+    footing: str = "python",
 ) -> MissionResult:
     removed, added, motion_removed, motion_added = _plan_distances(spec, sim, tally, initial)
     sums = MissionTally(
@@ -377,6 +439,8 @@ def _result(
         sim.pose,
         sim.ticks,
         sums,
+        footing,
+        diagnosis_report(stepper.repairer),
     )
 
 

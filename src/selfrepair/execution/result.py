@@ -14,6 +14,7 @@ from enum import StrEnum
 from fractions import Fraction
 from typing import Any, NamedTuple
 
+from selfrepair.diagnosis.observation import ObservationModel
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.geometry import Cell, Heading, Pose
@@ -51,6 +52,8 @@ class StepSource(StrEnum):
     LOOKAHEAD = RepairSource.LOOKAHEAD.value
     REPLAN = RepairSource.REPLAN.value
     PLAN_REPAIR = RepairSource.PLAN_REPAIR.value
+    DETOUR = RepairSource.DETOUR.value
+    PROBE = RepairSource.PROBE.value
     FAILED_ATTEMPT = "failed-attempt"
     WAIT = "wait"
     BUMPED = "bumped"
@@ -61,6 +64,8 @@ STEP_OF_REPAIR: Mapping[RepairSource, StepSource] = {
         RepairSource.LOOKAHEAD: StepSource.LOOKAHEAD,
         RepairSource.REPLAN: StepSource.REPLAN,
         RepairSource.PLAN_REPAIR: StepSource.PLAN_REPAIR,
+        RepairSource.DETOUR: StepSource.DETOUR,
+        RepairSource.PROBE: StepSource.PROBE,
 }
 """The step source of the actions a repair spliced in, by the repair's source: an explicit
 mapping, never a conversion by value (a plain dictionary, typed read-only: one look-up inside the
@@ -101,13 +106,23 @@ class MissionSpec:
     """The domain's fault-behaviour model the simulator uses when the faults are hidden from the
     robot (detection ``hidden``; ``None``: the domain's default; see
     :meth:`Domain.effective <selfrepair.robots.domain.Domain.effective>`)."""
+    observation: ObservationModel = field(default_factory=ObservationModel)
+    """What the robot observes after each command when the faults are hidden (odometry noise,
+    bump switch; see :mod:`selfrepair.diagnosis.observation`)."""
     world: WorldSchedule = field(default_factory=WorldSchedule)
     """Cells that become blocked or free during the mission, and how the robot senses them (see
     :mod:`selfrepair.world.events`; empty: the maze never changes)."""
+    footing: str = "auto"
+    """Which mission loop runs it: ``auto`` (the compiled loop of
+    :mod:`selfrepair.execution.compiled` when it can take the mission, else the Python loop),
+    ``compiled`` (refused with the reason when it cannot) or ``python`` (the reference). Both
+    give the same trace; the result's ``footing`` says which ran."""
 
     def __post_init__(self) -> None:
         if self.seed < 0:
             raise ProblemError(f"seed must be a non-negative integer, got {self.seed}")
+        if self.footing not in ("auto", "compiled", "python"):
+            raise ProblemError(f"footing must be auto, compiled or python, got {self.footing!r}")
 
     @property
     def planner(self) -> PlannerSettings:
@@ -188,7 +203,8 @@ class MissionTally(NamedTuple):
 class MissionResult:
     """The outcome of one mission; :func:`selfrepair.execution.metrics.mission_row` flattens it
     (columns in docs/replacement.md). ``tally`` holds sums the executor kept on the way
-    (``None`` for a result made otherwise)."""
+    (``None`` for a result made otherwise); ``footing`` the mission loop that ran it,
+    ``compiled`` or ``python`` (see :attr:`MissionSpec.footing`)."""
 
     spec: MissionSpec
     status: MissionStatus
@@ -200,6 +216,11 @@ class MissionResult:
     final_pose: Pose
     ticks: Fraction
     tally: MissionTally | None = None
+    footing: str = "python"
+    diagnosis: Mapping[str, Any] | None = None
+    """What a diagnosing strategy recorded (faults hidden; ``None`` for any other): the step of
+    the first surprise, the commands to isolation, the class isolated (its fault sets), probes
+    (see :mod:`selfrepair.repair.strategies.diagnosing`)."""
 
     @property
     def reached(self) -> bool:

@@ -41,9 +41,9 @@ from dataclasses import dataclass
 from fractions import Fraction
 from typing import ClassVar
 
-from selfrepair.experiment.findings import situation
 from selfrepair.experiment.store import Value
 from selfrepair.experiment.summary import Row, group_label, met_fault, num, strategy_order
+from selfrepair.experiment.verdicts import situation
 from selfrepair.repair.strategies import StrategyName
 from selfrepair.stats import Interval, bootstrap_interval
 

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from selfrepair.experiment.findings import NEGLIGIBLE, situation
 from selfrepair.experiment.summary import Row, is_reference_replan, met_fault, num
+from selfrepair.experiment.verdicts import NEGLIGIBLE, situation
 from selfrepair.stats import (
     BOOTSTRAP_RESAMPLES,
     BOOTSTRAP_SEED,

@@ -26,23 +26,31 @@ writer acts on a stale view of the table.
 
 from __future__ import annotations
 
-import csv
-import json
 import os
-import re
 import socket
 import sqlite3
 import time
 import uuid
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Iterable, Iterator, Mapping, Sequence
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TypeVar
 
-from selfrepair import __version__
 from selfrepair.errors import InputError, ProblemError
+from selfrepair.experiment.export import require_pyarrow, write_csv, write_parquet
 from selfrepair.experiment.keys import Mission
+from selfrepair.experiment.liveness import LEASE_SECONDS, process_start, writer_is_dead
+from selfrepair.experiment.sqlitefile import immutable_is_safe, retry_locked, sqlite_errors
+from selfrepair.experiment.storerows import (
+    FIXED_COLUMNS,
+    SCHEMA,
+    Finished,
+    Value,
+    is_timing_column,
+    quote_column,
+    stored_row,
+    without_timings,
+)
 
 __all__ = [
     "FIXED_COLUMNS",
@@ -57,75 +65,11 @@ __all__ = [
     "without_timings",
 ]
 
-Value = int | float | str | None
-
-FIXED_COLUMNS = ("key", "experiment", "seed", "version", "config", "finished_at", "worker_seconds")
-
-LEASE_SECONDS = 300.0
-"""A writer whose heartbeat is older than this is taken for dead and its claims are free again.
-Writers beat at least every few seconds while they run (see the runner), so only a dead or hung
-writer, or one on another host that cannot be asked directly, ever reaches it."""
-
 LOCK_TIMEOUT_SECONDS = 60.0
 """How long a write waits for another writer's transaction before giving up."""
 
-_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
-_SCHEMA = (
-    """CREATE TABLE IF NOT EXISTS missions (
-        key TEXT PRIMARY KEY NOT NULL,
-        experiment TEXT NOT NULL,
-        seed INTEGER NOT NULL,
-        version TEXT NOT NULL,
-        config TEXT NOT NULL,
-        finished_at TEXT NOT NULL,
-        worker_seconds REAL
-    )""",
-    "CREATE TABLE IF NOT EXISTS meta (name TEXT PRIMARY KEY NOT NULL, value TEXT NOT NULL)",
-    "INSERT OR IGNORE INTO meta VALUES ('schema', '1')",
-    """CREATE TABLE IF NOT EXISTS writers (
-        owner TEXT PRIMARY KEY NOT NULL,
-        host TEXT NOT NULL,
-        pid INTEGER NOT NULL,
-        pid_start TEXT,
-        started_at REAL NOT NULL,
-        heartbeat REAL NOT NULL
-    )""",
-    """CREATE TABLE IF NOT EXISTS claims (
-        key TEXT PRIMARY KEY NOT NULL,
-        owner TEXT NOT NULL,
-        claimed_at REAL NOT NULL
-    )""",
-    "CREATE INDEX IF NOT EXISTS claims_by_owner ON claims (owner)",
-)
 _REAP_EVERY_SECONDS = 1.0
 """Dead writers are looked for at most this often (each look asks the OS about their pids)."""
-
-_T = TypeVar("_T")
-
-
-def is_timing_column(name: str) -> bool:
-    """Whether a column holds wall-clock measurements (which differ between identical runs)."""
-    return name in (
-        "finished_at",
-        "worker_seconds",
-        "version",
-        "compute_per_action_ns",
-    ) or name.endswith("_ns")
-
-
-def without_timings(row: Mapping[str, Value]) -> dict[str, Value]:
-    """``row`` without its timing columns: what two runs with the same seed must agree on."""
-    return {k: v for k, v in row.items() if not is_timing_column(k)}
-
-
-@dataclass(frozen=True, slots=True)
-class Finished:
-    """One finished mission on its way into the store: the mission, its metric row and the
-    worker's wall time in seconds."""
-
-    mission: Mission
-    metrics: Mapping[str, Value]
-    seconds: float
 
 
 @dataclass(frozen=True, slots=True)
@@ -185,12 +129,14 @@ class ResultStore:
         try:
             with self._errors("not a results database"):
                 # Changing the journal mode does not wait for other connections: retry.
-                self._retry_locked(lambda: db.execute("PRAGMA journal_mode=WAL").fetchone())
+                retry_locked(
+                    self._lock_timeout, lambda: db.execute("PRAGMA journal_mode=WAL").fetchone()
+                )
                 db.execute("PRAGMA synchronous=NORMAL")
                 with self._write():  # the whole schema at once, by whichever writer is first
-                    db.execute(_SCHEMA[0])
+                    db.execute(SCHEMA[0])
                     self._check_fixed_columns()  # a foreign 'missions' table: nothing is changed
-                    for statement in _SCHEMA[1:]:
+                    for statement in SCHEMA[1:]:
                         db.execute(statement)
         except BaseException:
             db.close()
@@ -205,7 +151,7 @@ class ResultStore:
             try:
                 db = self._open_uri(f"{uri}?mode=ro")
             except sqlite3.OperationalError:
-                if not self._immutable_is_safe():
+                if not immutable_is_safe(self.path):
                     raise
                 # WAL mode needs a shared-memory file next to the database; in a directory this
                 # process cannot write, and with no write-ahead log left over, the file alone
@@ -230,13 +176,6 @@ class ResultStore:
         self._db = db
         self._check_fixed_columns()
         return db
-
-    def _immutable_is_safe(self) -> bool:
-        """Whether the database may be read as an immutable file: its directory is not writable
-        and there is no write-ahead log with rows not yet copied into the file."""
-        wal = self.path.with_name(self.path.name + "-wal")
-        has_log = wal.exists() and wal.stat().st_size > 0
-        return not has_log and not os.access(self.path.parent, os.W_OK)
 
     def _check_fixed_columns(self) -> None:
         missing = [c for c in FIXED_COLUMNS if c not in self.columns]
@@ -264,36 +203,9 @@ class ResultStore:
 
     # --- plumbing ------------------------------------------------------------------------------
 
-    @contextmanager
-    def _errors(self, what: str) -> Iterator[None]:
+    def _errors(self, what: str) -> AbstractContextManager[None]:
         """SQLite failures as one-line :class:`InputError`s naming the file."""
-        try:
-            yield
-        except sqlite3.ProgrammingError:
-            raise  # misuse of the connection: a bug, not bad input
-        except sqlite3.DatabaseError as exc:
-            reason = " ".join(str(exc).split())  # SQLite may quote multi-line schema text
-            if "locked" in reason or "busy" in reason:
-                reason += f" (another process held it for more than {self._lock_timeout:g} s)"
-            raise InputError(f"{what}: {reason}", source=str(self.path)) from None
-        except UnicodeDecodeError as exc:  # damaged text in a table or in the schema
-            byte = exc.object[exc.start]
-            raise InputError(
-                f"{what}: text that is not UTF-8 ({exc.reason}, byte 0x{byte:02x})",
-                source=str(self.path),
-            ) from None
-
-    def _retry_locked(self, action: Callable[[], _T]) -> _T:
-        deadline = time.monotonic() + self._lock_timeout
-        delay = 0.005
-        while True:
-            try:
-                return action()
-            except sqlite3.OperationalError as exc:
-                if "locked" not in str(exc) or time.monotonic() > deadline:
-                    raise
-                time.sleep(delay)
-                delay = min(delay * 2, 0.2)
+        return sqlite_errors(self.path, what, self._lock_timeout)
 
     @contextmanager
     def _write(self) -> Iterator[sqlite3.Connection]:
@@ -302,7 +214,7 @@ class ResultStore:
         ``ROLLBACK`` only runs while the transaction is still open: an interrupt that arrives
         just after ``COMMIT`` returned leaves the committed rows alone and is re-raised as it is.
         """
-        self._retry_locked(lambda: self._db.execute("BEGIN IMMEDIATE"))
+        retry_locked(self._lock_timeout, lambda: self._db.execute("BEGIN IMMEDIATE"))
         try:
             yield self._db
             self._db.execute("COMMIT")
@@ -347,22 +259,22 @@ class ResultStore:
         """Store a batch of finished missions in one transaction (all or none); returns how many
         were new (a key already stored keeps its first row). Frees this writer's claims on them.
         """
-        rows = [_row(f.mission, f.metrics, f.seconds) for f in finished]
+        rows = [stored_row(f.mission, f.metrics, f.seconds) for f in finished]
         groups: dict[tuple[str, ...], list[list[Value]]] = {}
         for row in rows:
             groups.setdefault(tuple(row), []).append(list(row.values()))
         needed = {name for names in groups for name in names}
         for name in needed:
-            _quote(name)  # bad names are misuse: refused before any write
+            quote_column(name)  # bad names are misuse: refused before any write
         added = 0
         with self._errors("cannot write to the results database"), self._write() as db:
             if not needed <= self._known_columns:
                 self._known_columns = frozenset(self.columns)  # fresh: under the write lock
                 for name in sorted(needed - self._known_columns):
-                    db.execute(f"ALTER TABLE missions ADD COLUMN {_quote(name)}")
+                    db.execute(f"ALTER TABLE missions ADD COLUMN {quote_column(name)}")
             for names, values in groups.items():
                 sql = (
-                    f"INSERT OR IGNORE INTO missions ({','.join(_quote(n) for n in names)}) "
+                    f"INSERT OR IGNORE INTO missions ({','.join(quote_column(n) for n in names)}) "
                     f"VALUES ({','.join('?' * len(names))})"
                 )
                 added += db.executemany(sql, values).rowcount
@@ -389,7 +301,7 @@ class ResultStore:
         with self._errors("cannot write to the results database"), self._write() as db:
             db.execute(
                 "INSERT INTO writers VALUES (?, ?, ?, ?, ?, ?)",
-                (owner, socket.gethostname(), os.getpid(), _process_start(os.getpid()), now, now),
+                (owner, socket.gethostname(), os.getpid(), process_start(os.getpid()), now, now),
             )
         self._owner = owner
         return owner
@@ -460,7 +372,7 @@ class ResultStore:
                 "SELECT owner, host, pid, pid_start, heartbeat FROM writers WHERE owner != ?",
                 (self._owner,),
             ).fetchall()
-            if _is_dead(str(host), int(pid), pid_start, float(heartbeat), now)
+            if writer_is_dead(str(host), int(pid), pid_start, float(heartbeat), now)
         ]
         for owner in dead:
             db.execute("DELETE FROM claims WHERE owner = ?", (owner,))
@@ -473,121 +385,10 @@ class ResultStore:
     def export_csv(self, path: str | Path) -> int:
         """Write every row to a CSV file (header first); returns the number of rows."""
         rows = self.rows()
-        columns = self.columns
-        with Path(path).open("w", newline="", encoding="utf-8") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(columns)
-            for row in rows:
-                writer.writerow(["" if row[c] is None else row[c] for c in columns])
-        return len(rows)
+        return write_csv(path, self.columns, rows)
 
     def export_parquet(self, path: str | Path) -> int:
         """Write every row to a Parquet file (needs pyarrow); returns the number of rows."""
         require_pyarrow()
-        import pyarrow as pa
-        import pyarrow.parquet as pq
-
         rows = self.rows()
-        columns = {c: [row[c] for row in rows] for c in self.columns}
-        table = pa.table({c: pa.array(v, type=_arrow_type(pa, v)) for c, v in columns.items()})
-        pq.write_table(table, str(path))
-        return len(rows)
-
-
-def require_pyarrow() -> None:
-    """Raise :class:`ProblemError` when pyarrow (needed for Parquet export) is missing."""
-    try:
-        import pyarrow  # noqa: F401
-    except ImportError:
-        raise ProblemError(
-            "Parquet export needs pyarrow, which is not installed: pip install "
-            "'selfrepair[parquet]' (or export CSV instead)"
-        ) from None
-
-
-def _row(mission: Mission, metrics: Mapping[str, Value], worker_seconds: float) -> dict[str, Value]:
-    """The stored row of one mission: fixed columns, its labels, then its metrics."""
-    row: dict[str, Value] = {
-        "key": mission.key,
-        "experiment": mission.experiment,
-        "seed": mission.seed,
-        "version": __version__,
-        "config": mission.config,
-        "finished_at": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
-        "worker_seconds": float(worker_seconds),
-    }
-    for name, label in mission.labels:
-        row[name] = label
-    for name, value in metrics.items():
-        column = name if name not in row else f"result_{name}"
-        row[column] = _check_value(name, value)
-    return row
-
-
-def _is_dead(host: str, pid: int, pid_start: object, heartbeat: float, now: float) -> bool:
-    """Whether a registered writer is gone: silent for longer than the lease, or (same host)
-    its process no longer exists, is a zombie, or is another process that reused the pid."""
-    if now - heartbeat > LEASE_SECONDS:
-        return True
-    if host != socket.gethostname():
-        return False
-    if not _pid_alive(pid):
-        return True
-    start = _process_start(pid)
-    return pid_start is not None and start is not None and start != pid_start
-
-
-def _pid_alive(pid: int) -> bool:
-    stat = Path(f"/proc/{pid}/stat")
-    if Path("/proc/self/stat").exists():
-        try:
-            state = stat.read_text().rsplit(")", 1)[1].split()[0]
-        except (OSError, IndexError):
-            return False
-        return state not in ("Z", "X")
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
-def _process_start(pid: int) -> str | None:
-    """When process ``pid`` started (clock ticks since boot, from /proc), to tell a reused pid;
-    ``None`` where /proc is not available."""
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[19]
-    except (OSError, IndexError):
-        return None
-
-
-def _quote(name: str) -> str:
-    if not _NAME.match(name):
-        raise ProblemError(f"metric name {name!r} is not a valid column name")
-    return f'"{name}"'
-
-
-def _check_value(name: str, value: object) -> Value:
-    if value is None or isinstance(value, int | float | str):
-        return value
-    raise ProblemError(
-        f"metric {name!r} must be int, float, str or None, got {type(value).__name__}"
-    )
-
-
-def _arrow_type(pa: Any, values: list[Value]) -> Any:
-    """One Arrow type per column: int64, float64 (ints and floats mixed) or string."""
-    kinds = {type(v) for v in values if v is not None}
-    if kinds <= {int, bool} and kinds:
-        return pa.int64()
-    if kinds <= {int, float, bool} and kinds:
-        return pa.float64()
-    if not kinds:
-        return pa.null()
-    if kinds - {str}:
-        for i, v in enumerate(values):
-            if v is not None and not isinstance(v, str):
-                values[i] = json.dumps(v) if not isinstance(v, int | float) else str(v)
-    return pa.string()
+        return write_parquet(path, self.columns, rows)

@@ -18,20 +18,20 @@ from collections import defaultdict
 from collections.abc import Sequence
 from fractions import Fraction
 
-from selfrepair.experiment.findings import (
-    _PAIRED,
+from selfrepair.experiment.summary import Row
+from selfrepair.experiment.verdicts import (
+    PAIRED,
     Comparison,
     Finding,
-    _is_replacement,
-    _judge,
-    _pairs,
-    _tick_cost,
-    _weight,
     compare,
+    is_replacement,
     is_rewrite,
     is_tolerant,
+    judge,
+    pair_up,
+    tick_cost,
+    weight_of,
 )
-from selfrepair.experiment.summary import Row
 
 __all__ = ["base_variant", "tolerance_findings"]
 
@@ -48,15 +48,15 @@ def base_variant(row: Row) -> str:
 
 def tolerance_findings(rows: Sequence[Row]) -> list[Finding]:
     """Finding 2t when ``rows`` hold missions planned by the tolerant planner (else none)."""
-    replacing = [r for r in rows if _is_replacement(r) and not is_rewrite(r)]
+    replacing = [r for r in rows if is_replacement(r) and not is_rewrite(r)]
     tolerant: dict[tuple[str, str], list[Row]] = defaultdict(list)
     clearance: dict[str, dict[Fraction, list[Row]]] = defaultdict(lambda: defaultdict(list))
     for r in replacing:
         if is_tolerant(r):
-            if _weight(r) == 0:
+            if weight_of(r) == 0:
                 tolerant[base_variant(r), str(r.get("objective"))].append(r)
         else:
-            clearance[str(r.get("variant"))][_weight(r)].append(r)
+            clearance[str(r.get("variant"))][weight_of(r)].append(r)
     if not tolerant:
         return []
     judged: list[Comparison] = []
@@ -66,15 +66,15 @@ def tolerance_findings(rows: Sequence[Row]) -> list[Finding]:
         top = max(weights, default=Fraction(0))
         if top == 0:
             continue
-        judged.append(compare(f"{base} {objective} vs w={top}", _pairs(weights[top], group)))
+        judged.append(compare(f"{base} {objective} vs w={top}", pair_up(weights[top], group)))
         for weight in sorted(w for w in weights if 0 < w < top):
-            found = compare(f"{base} {objective} vs w={weight}", _pairs(weights[weight], group))
+            found = compare(f"{base} {objective} vs w={weight}", pair_up(weights[weight], group))
             extra.append(f"For comparison, {found.line()}")
         if 0 in weights:
-            extra.append(_tick_cost(f"{base} {objective}", _pairs(weights[Fraction(0)], group)))
-            extra.append(_tick_cost(f"{base} w={top}", _pairs(weights[Fraction(0)], weights[top])))
+            extra.append(tick_cost(f"{base} {objective}", pair_up(weights[Fraction(0)], group)))
+            extra.append(tick_cost(f"{base} w={top}", pair_up(weights[Fraction(0)], weights[top])))
     missing = (
         "No variant run with a tolerant objective is also run at a clearance weight above 0, "
         "so tolerance cannot be compared with clearance."
     )
-    return [_judge("2t", judged, _PAIRED, [line for line in extra if line], missing=missing)]
+    return [judge("2t", judged, PAIRED, [line for line in extra if line], missing=missing)]

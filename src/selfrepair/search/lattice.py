@@ -23,20 +23,9 @@ Cost (exact formula)
     ``clearance_weight == 0`` the cost of a plan is its total duration, so the plan found has the
     minimum total duration.
 
-Heuristics (:data:`HEURISTICS`), all admissible and consistent
-    Each is ``h(pose) = rate * d(pose.cell)`` with ``rate`` the least number of ticks per cell of
-    Manhattan progress over the available actions, from any heading (:func:`progress_rate`; 1 for a
-    healthy four-wheel robot). ``"zero"`` uses ``d = 0``; ``"manhattan"`` the Manhattan distance to
-    the goal cell; ``"grid-distance"`` the exact 4-connected BFS distance to the goal cell on the
-    maze (cells that cannot reach the goal are pruned). Consistency: an action whose endpoints are
-    ``a`` and ``b`` with Manhattan displacement ``m`` changes the Manhattan distance by at most
-    ``m``, so ``cost >= duration >= rate * m >= rate * (d(a) - d(b))``. For the BFS distance this
-    needs one more property of the domain, ``Domain.footprint_connected``: the footprint holds a
-    4-connected free path from ``a`` to ``b`` of length ``m`` (true for the four-wheel robot: a
-    straight move is one step; an arc sweeps ``a``, the cell ahead, and ``b`` beside it). For a
-    domain without it ``"grid-distance"`` is refused. The clearance term is non-negative, so the
-    bound holds for any weight, and ``d(goal) = 0``. Internally costs are scaled to integers
-    (``S = domain.time_unit * weight denominator``) and ``h`` is rounded down,
+Heuristics
+    See :mod:`selfrepair.search.heuristics` (all admissible and consistent). Internally costs are
+    scaled to integers (``S = domain.time_unit * weight denominator``) and ``h`` is rounded down,
     which keeps it consistent because edge costs are integers.
 
 Determinism
@@ -51,32 +40,35 @@ from __future__ import annotations
 
 import sys
 import time
-from collections import deque
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
-from selfrepair.geometry import Cell, Heading, Pose
+from selfrepair.geometry import Heading, Pose
 from selfrepair.limits import MAX_CLEARANCE_WEIGHT
 from selfrepair.robots.domain import Domain, primitive_by_motion
-from selfrepair.robots.domain import progress_rate as domain_progress_rate
-from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import PlanResult, PlanStatus, astar, deadline_from
 from selfrepair.search.backend import BACKENDS, numba_available, use_numba
+from selfrepair.search.cost import action_cost, plan_cost
+from selfrepair.search.heuristics import (
+    HEURISTICS,
+    NEEDS_CONNECTED_FOOTPRINTS,
+    bfs_distances,
+    heuristic_bound,
+    progress_rate,
+)
 from selfrepair.search.problem import (
     CellBound,
     PlanningProblem,
     StepTerm,
     check_search_inputs,
-    with_border,
 )
-from selfrepair.world.maze import Maze, clearance_map, clearance_penalties
+from selfrepair.world.maze import Maze, clearance_penalties
 
 __all__ = [
     "BACKENDS",
@@ -95,20 +87,6 @@ __all__ = [
     "planning_actions",
     "progress_rate",
 ]
-
-
-class HeuristicFn(Protocol):
-    """A heuristic builder: ``(maze, goal, domain, actions, *, backend) -> CellBound``."""
-
-    def __call__(
-        self,
-        maze: Maze,
-        goal: Cell,
-        domain: Domain[Any, Any],
-        actions: Sequence[Any],
-        *,
-        backend: str = "auto",
-    ) -> CellBound: ...
 
 
 def planning_actions(domain: Domain[Any, Any], faults: frozenset[Any]) -> tuple[Any, ...]:
@@ -147,242 +125,11 @@ def _no_op(domain: Domain[Any, Any], action: Any) -> bool:
     return all(domain.apply(Pose(0, 0, h), action) == Pose(0, 0, h) for h in Heading)
 
 
-def progress_rate(domain: Domain[Any, Any], actions: Sequence[Any]) -> Fraction:
-    """Least ticks per cell of Manhattan displacement over ``actions`` from any heading (0 if none
-    moves)."""
-    return _RATES.get((domain, tuple(actions)), lambda: _progress_rate(domain, actions))
-
-
-_RATES: BoundedCache[tuple[Domain[Any, Any], tuple[Any, ...]], Fraction] = BoundedCache(
-    "planner progress rates", 1024, kind=CacheKind.PLAN
-)
-
-
-def _progress_rate(domain: Domain[Any, Any], actions: Sequence[Any]) -> Fraction:
-    return domain_progress_rate(domain, actions)
-
-
 def cost_scale(domain: Domain[Any, Any], weight: Fraction) -> int:
     """The factor that makes every edge cost an integer: the domain's time unit
     (:attr:`~selfrepair.robots.domain.Domain.time_unit`) times the clearance weight's
     denominator."""
     return domain.time_unit * weight.denominator
-
-
-def _zero_distances(maze: Maze, goal: Cell, backend: str) -> npt.NDArray[np.int32]:
-    return with_border(np.zeros(maze.walls.shape, dtype=np.int64))
-
-
-def _manhattan_distances(maze: Maze, goal: Cell, backend: str) -> npt.NDArray[np.int32]:
-    ys, xs = np.indices(maze.walls.shape, dtype=np.int64)
-    return with_border(np.abs(xs - goal[0]) + np.abs(ys - goal[1]))
-
-
-_DistanceFn = Callable[[Maze, Cell, str], npt.NDArray[np.int32]]
-
-
-def _zero_bound(
-    maze: Maze,
-    goal: Cell,
-    domain: Domain[Any, Any],
-    actions: Sequence[Any],
-    *,
-    backend: str = "auto",
-) -> CellBound:
-    return CellBound(_goal_distances(_zero_distances, maze, (0, 0), backend)[0], Fraction(0))
-
-
-def _manhattan_bound(
-    maze: Maze,
-    goal: Cell,
-    domain: Domain[Any, Any],
-    actions: Sequence[Any],
-    *,
-    backend: str = "auto",
-) -> CellBound:
-    distance, _ = _goal_distances(_manhattan_distances, maze, goal, backend)
-    return CellBound(distance, progress_rate(domain, actions))
-
-
-def _grid_distance_bound(
-    maze: Maze,
-    goal: Cell,
-    domain: Domain[Any, Any],
-    actions: Sequence[Any],
-    *,
-    backend: str = "auto",
-) -> CellBound:
-    distance, _ = _goal_distances(_bfs_padded, maze, goal, backend)
-    return CellBound(distance, progress_rate(domain, actions))
-
-
-def _goal_distances(
-    make: _DistanceFn, maze: Maze, goal: Cell, backend: str
-) -> tuple[npt.NDArray[np.int32], int]:
-    """The padded distances of a built-in heuristic to one goal and their maximum, made once and
-    reused by every query to that goal on that maze (any faults, any start, either backend: both
-    compute the same distances): read-only arrays in a bounded cache, a small one for large mazes
-    (an entry costs 4 bytes per cell)."""
-    cache = _DISTANCES if maze.width * maze.height <= _SMALL_MAZE else _LARGE_DISTANCES
-
-    def made() -> tuple[npt.NDArray[np.int32], int]:
-        distance = make(maze, goal, backend)
-        distance.setflags(write=False)
-        return distance, int(distance.max(initial=0))
-
-    return cache.get((make, maze, goal), made)
-
-
-_SMALL_MAZE = 1 << 18
-"""Mazes up to this many cells (512 x 512) share the larger cache of goal distances."""
-
-_Distances = tuple[npt.NDArray[np.int32], int]
-_DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], _Distances] = BoundedCache(
-    "goal distances (mazes up to 512x512)", 32, kind=CacheKind.PLAN
-)
-_LARGE_DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], _Distances] = BoundedCache(
-    "goal distances (larger mazes)", 4, kind=CacheKind.PLAN
-)
-
-
-HEURISTICS: dict[str, HeuristicFn] = {
-    "zero": _zero_bound,
-    "manhattan": _manhattan_bound,
-    "grid-distance": _grid_distance_bound,
-}
-"""Heuristic registry: name -> function ``(maze, goal, domain, actions, *, backend) ->
-CellBound``."""
-
-
-NEEDS_CONNECTED_FOOTPRINTS = frozenset({"grid-distance"})
-"""Heuristics that are admissible only for domains with ``footprint_connected``."""
-
-
-def bfs_distances(maze: Maze, goal: Cell, *, backend: str = "auto") -> npt.NDArray[np.int32]:
-    """Exact 4-connected step distance from every cell to ``goal`` (-1: unreachable or wall)."""
-    return np.maximum(_bfs_padded(maze, goal, backend)[1:-1, 1:-1], -1)
-
-
-def _bfs_padded(maze: Maze, goal: Cell, backend: str) -> npt.NDArray[np.int32]:
-    if use_numba(backend):
-        from selfrepair.search import _kernels
-
-        return _kernels.bfs_padded(maze, goal)
-    h, w = maze.walls.shape
-    free = (~maze.walls).tolist()
-    dist = [[-1] * w for _ in range(h)]
-    gx, gy = goal
-    dist[gy][gx] = 0
-    queue = deque([(gx, gy)])
-    while queue:
-        x, y = queue.popleft()
-        d = dist[y][x] + 1
-        for nx, ny in ((x, y - 1), (x + 1, y), (x, y + 1), (x - 1, y)):
-            if 0 <= nx < w and 0 <= ny < h and free[ny][nx] and dist[ny][nx] < 0:
-                dist[ny][nx] = d
-                queue.append((nx, ny))
-    return with_border(np.array(dist, dtype=np.int32))
-
-
-_BUILT_IN: dict[HeuristicFn, tuple[_DistanceFn, bool]] = {
-    _zero_bound: (_zero_distances, False),
-    _manhattan_bound: (_manhattan_distances, True),
-    _grid_distance_bound: (_bfs_padded, True),
-}
-"""The built-in heuristics as (cached distances, whether scaled by the progress rate): what
-:func:`plan` builds their bound from without calling them (the same bound, with the rate taken
-from the per-fault-set setup)."""
-
-
-def _bound(
-    problem: PlanningProblem, heuristic: str, setup: _Setup, backend: str
-) -> tuple[CellBound, int | None]:
-    """The heuristic bound of ``problem`` (see :data:`_BUILT_IN`) and its largest distance when
-    known without a scan."""
-    fn = HEURISTICS[heuristic]
-    built_in = _BUILT_IN.get(fn)
-    if built_in is None:
-        bound = fn(problem.maze, problem.goal, problem.domain, setup.actions, backend=backend)
-        return bound, None
-    make, scaled = built_in
-    goal = problem.goal if make is not _zero_distances else (0, 0)
-    distance, largest = _goal_distances(make, problem.maze, goal, backend)
-    return CellBound(distance, setup.rate if scaled else Fraction(0)), largest
-
-
-def action_cost(
-    maze: Maze,
-    pose: Pose,
-    action: Any,
-    *,
-    clearance_weight: Fraction,
-    clearance_radius: int,
-    domain: Domain[Any, Any] = FOUR_WHEEL,
-) -> Fraction:
-    """The exact cost of ``action`` at ``pose`` (see the module docstring for the formula), for
-    the four-wheel robot unless ``domain`` is given.
-
-    Does not check that the footprint cells are free; :func:`plan_cost` does.
-    """
-    cost = Fraction(domain.duration(action))
-    if clearance_weight:
-        clearance = clearance_map(maze)
-        penalty = sum(
-            max(0, clearance_radius - int(clearance[y, x]))
-            if maze.in_bounds(x, y)
-            else clearance_radius
-            for x, y in domain.footprint(pose, action)
-        )
-        cost += clearance_weight * penalty
-    return cost
-
-
-def plan_cost(problem: PlanningProblem, actions: Sequence[Any]) -> Fraction:
-    """Re-simulate ``actions`` from ``problem.start`` and return their total cost.
-
-    Raises :class:`ProblemError` if an action is unavailable under ``problem.faults``, sweeps a wall
-    or leaves the grid, or if the plan does not end at the goal.
-    """
-    domain = problem.domain
-    pose = problem.start
-    total = Fraction(0)
-    for index, action in enumerate(actions):
-        name = domain.format_action(action)
-        if not domain.available(action, problem.faults):
-            raise ProblemError(f"action {index} ({name}) is not available under the faults")
-        end, swept, _ = domain.step(pose, action)
-        if not problem.maze.all_free(swept):
-            raise ProblemError(
-                f"action {index} ({name}) at {pose} sweeps a wall or leaves the grid"
-            )
-        total += action_cost(
-            problem.maze,
-            pose,
-            action,
-            clearance_weight=Fraction(problem.clearance_weight),
-            clearance_radius=problem.clearance_radius,
-            domain=domain,
-        )
-        total += _term_cost(problem.step_term, pose, action, index, name)
-        pose = end
-    if not problem.at_goal(pose):
-        raise ProblemError(f"the plan ends at {pose}, not at the goal")
-    return total
-
-
-def _term_cost(term: StepTerm | None, pose: Pose, action: Any, index: int, name: str) -> Fraction:
-    """The step term's cost of ``action`` at ``pose`` (0 without a term); a step a hard term
-    forbids, or an action it has no count for, raises :class:`ProblemError`."""
-    if term is None:
-        return Fraction(0)
-    if action not in term.actions:
-        raise ProblemError(f"action {index} ({name}) is not one the step term was made for")
-    count = int(term.counts[pose.y, pose.x, pose.heading, term.actions.index(action)])
-    if term.penalty is None:
-        if count:
-            raise ProblemError(f"action {index} ({name}) at {pose} is forbidden by the hard term")
-        return Fraction(0)
-    return term.penalty * count
 
 
 def plan(
@@ -418,7 +165,9 @@ def plan(
     domain = problem.domain
     setup = _setup(domain, problem.faults)
     actions = setup.actions
-    bound, largest = _bound(problem, heuristic, setup, "numba" if fast else "python")
+    bound, largest = heuristic_bound(
+        problem, heuristic, setup.actions, setup.rate, "numba" if fast else "python"
+    )
     scale = domain.time_unit * problem.clearance_weight.denominator
     term = problem.step_term
     if term is not None:

@@ -40,50 +40,23 @@ options give the same result (the timings aside).
 
 from __future__ import annotations
 
-import gc
 import time
 from collections import deque
 
 from selfrepair.errors import ProblemError
-from selfrepair.execution.faults import Detection, FaultSchedule
-from selfrepair.execution.result import StepSource
-from selfrepair.execution.simulator import Outcome, Simulator
+from selfrepair.execution.faults import FaultSchedule
+from selfrepair.execution.simulator import Simulator
 from selfrepair.geometry import Cell
 from selfrepair.repair.strategies import StrategyName
 from selfrepair.search.backend import use_numba
+from selfrepair.team.acts import finish, handover, pick_or_drop
 from selfrepair.team.allocation import Job, Worker, allocate, distance_maps, job_plan
-from selfrepair.team.binding import Incident
-from selfrepair.team.driving import (
-    INCIDENT_OF_START,
-    DriveStart,
-    begin_drive,
-    cancel_drive,
-    mark_stale,
-    own_repair,
-    place,
-)
-from selfrepair.team.faults import fault_times, faults_due, know
-from selfrepair.team.model import (
-    DROP_TICKS,
-    HANDOVER_TICKS,
-    PICK_TICKS,
-    ActionKind,
-    IncidentKind,
-    Load,
-    TeamFaultKind,
-    TeamScenario,
-    Trigger,
-)
-from selfrepair.team.reservations import FOREVER, TimedStep
-from selfrepair.team.result import (
-    ActRecord,
-    IncidentRecord,
-    MoveRecord,
-    TeamOptions,
-    TeamRepairRecord,
-    TeamResult,
-    TeamStatus,
-)
+from selfrepair.team.driving import cancel_drive
+from selfrepair.team.faults import fault_times, faults_due
+from selfrepair.team.model import ActionKind, TeamScenario, Trigger
+from selfrepair.team.moves import drive_once
+from selfrepair.team.reservations import FOREVER
+from selfrepair.team.result import TeamOptions, TeamResult, TeamStatus
 from selfrepair.team.robottable import robot_table
 from selfrepair.team.scenario import check_scenario
 from selfrepair.team.spacetime import clear_cost_to_go
@@ -94,7 +67,6 @@ from selfrepair.team.state import (
     RobotFaultClock,
     RobotState,
     TeamWorld,
-    item_task_of,
 )
 from selfrepair.team.strategies import get_team_strategy
 from selfrepair.team.table import get_team_table
@@ -256,7 +228,7 @@ def _advance(world: TeamWorld, robot: RobotState, t: int) -> int:
         if robot.busy_until > t:
             return robot.busy_until
         if robot.pending is not None:
-            _finish(world, robot, t)
+            finish(world, robot, t)
         if not robot.queue:
             if robot.drive is not None:
                 cancel_drive(world, robot, t)
@@ -266,281 +238,11 @@ def _advance(world: TeamWorld, robot: RobotState, t: int) -> int:
         head = robot.queue[0]
         kind = head.action.kind
         if kind is ActionKind.DRIVE:
-            wait = _drive(world, robot, head, t)
+            wait = drive_once(world, robot, head, t)
         elif kind is ActionKind.HANDOVER:
-            wait = _handover(world, robot, head, t)
+            wait = handover(world, robot, head, t)
         else:
-            wait = _pick_or_drop(world, robot, head, t)
+            wait = pick_or_drop(world, robot, head, t)
         if wait is not None:
             return wait
     return t + 1
-
-
-def _drive(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> int | None:
-    """One go at the head drive; ``None`` to look at the robot again at once."""
-    drive = robot.drive
-    if drive is not None and drive.target != head.action.target:
-        cancel_drive(world, robot, t)
-        drive = None
-    if drive is None:
-        start = begin_drive(world, robot, head, t)
-        if start is DriveStart.ARRIVED:
-            robot.queue.popleft()
-            return None
-        if start in (DriveStart.STUCK, DriveStart.BLOCKED):
-            _incident(world, robot, head, INCIDENT_OF_START[start], t)
-            return None
-        if start is DriveStart.WAITING:
-            return robot.retry_at
-        drive = robot.drive
-        assert drive is not None
-    drive.entry = head
-    if robot.stale and not place(world, robot, t):
-        return robot.retry_at
-    if not drive.steps:
-        if drive.stepper.queue:
-            return robot.retry_at if not place(world, robot, t) else None
-        robot.drive = None
-        robot.queue.popleft()
-        return None
-    step = drive.steps[0]
-    if step.start > t:
-        return step.start
-    if step.start < t:
-        return robot.retry_at if not place(world, robot, t) else None
-    sim, stepper = robot.sim, drive.stepper
-    if world.scenario.detection is Detection.NOW:
-        sensed = sim.sense()  # the robot senses its faults before every command
-        if sensed is not robot.faults and sensed != robot.faults:
-            know(world, robot, sensed, t)
-    if not stepper.available(step.action):
-        if not own_repair(world, robot, t):
-            _incident(world, robot, head, IncidentKind.STUCK, t)
-        return None
-    if any(c in world.blocked for c in step.cells[1:]):
-        _learn_blocked(world, robot, step.cells)
-        _incident(world, robot, head, IncidentKind.BLOCKED, t)
-        return None
-    if not _safe(world, robot, step.cells, t):
-        _hold(world, robot, t)
-        robot.retry_at = t + 1
-        return t + 1
-    return _command(world, robot, step, t)
-
-
-def _command(world: TeamWorld, robot: RobotState, step: TimedStep, t: int) -> int:
-    """Send the placed primitive ``step`` to the robot's simulator at ``t``; returns when the
-    robot is free again. A failed attempt (a fault the robot did not know) teaches it the
-    faults that blocked the command; its drive is placed again after the attempt."""
-    drive, sim = robot.drive, robot.sim
-    assert drive is not None
-    stepper, pose = drive.stepper, robot.pose
-    source = stepper.queue[0][1]
-    number = sim.steps
-    sim.wait_until(t)
-    outcome = sim.advance(step.action)
-    stepper.record(
-        number, step.action, source, outcome, pose, sim.pose, sim.last_duration,
-        sim.last_blocking,
-    )  # fmt: skip
-    if outcome is Outcome.FAILED_ATTEMPT:
-        end = sim.units
-        robot.busy_until, robot.footprint = end, (pose.cell,)
-        world.moves.append(
-            MoveRecord(robot.name, t, end, step.action, pose, pose, StepSource.FAILED_ATTEMPT)
-        )
-        know(world, robot, stepper.known, t)
-        _hold(world, robot, t)
-        return end
-    if outcome is not Outcome.MOVED or sim.pose != step.after or sim.units != step.end:
-        raise ProblemError(f"{robot.name}: the placed step {step} is not what the robot does")
-    robot.pose, robot.busy_until, robot.footprint = step.after, step.end, step.cells
-    world.moves.append(
-        MoveRecord(robot.name, t, step.end, step.action, step.before, step.after, source)
-    )
-    drive.steps.pop(0)
-    world.last_progress = t
-    return step.end
-
-
-def _hold(world: TeamWorld, robot: RobotState, t: int) -> None:
-    """``robot`` keeps its cell from ``t`` and places its drive again when it next acts."""
-    assert robot.drive is not None
-    world.reservations.release_from(robot.name, t)
-    world.reservations.park(robot.name, robot.pose.cell, t)
-    mark_stale(world, robot)
-    robot.drive.steps = []
-
-
-def _safe(world: TeamWorld, robot: RobotState, cells: tuple[Cell, ...], t: int) -> bool:
-    """Whether no other robot holds a cell of ``cells`` now."""
-    wanted = set(cells)
-    return not any(
-        wanted.intersection(other.occupancy(t))
-        for other in world.robots.values()
-        if other is not robot
-    )
-
-
-def _learn_blocked(world: TeamWorld, robot: RobotState, cells: tuple[Cell, ...]) -> None:
-    """The robot sees the blocked cells in its way (the whole blocked group) and tells all."""
-    for fault in world.scenario.faults:
-        if fault.kind is TeamFaultKind.BLOCKED and any(c in fault.cells for c in cells[1:]):
-            world.known_blocked.update(c for c in fault.cells if c in world.blocked)
-    world.broadcast(robot.name)
-
-
-def _pick_or_drop(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> int | None:
-    action = head.action
-    state = world.items[action.item]
-    if state.delivered_at is not None or state.lost:
-        robot.queue.popleft()
-        return None
-    if action.kind is ActionKind.DROP and robot.holding != action.item:
-        robot.queue.popleft()  # nothing to drop: the item went another way
-        return None
-    if not robot.can_grip:
-        _incident(world, robot, head, IncidentKind.GRIPPER, t)
-        return None
-    if action.kind is ActionKind.PICK and (
-        robot.holding or state.holder or state.cell != robot.pose.cell
-    ):
-        return t + world.scale  # the item is not here (yet)
-    ticks = PICK_TICKS if action.kind is ActionKind.PICK else DROP_TICKS
-    _start_act(world, (robot,), head, t + ticks * world.scale)
-    return None
-
-
-def _handover(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> int | None:
-    action = head.action
-    state = world.items[action.item]
-    if state.delivered_at is not None or state.lost:
-        robot.queue.popleft()
-        return None
-    giver, taker = world.robots[action.robot], world.robots[action.taker]
-    if robot is taker and not taker.can_grip:
-        _incident(world, robot, head, IncidentKind.GRIPPER, t)
-        return None
-    other = taker if robot is giver else giver
-    ready = (
-        bool(other.queue)
-        and other.queue[0].action == action
-        and other.busy_until <= t
-        and other.pending is None
-        and giver.holding == action.item
-        and taker.can_grip
-        and not taker.holding
-    )
-    (gx, gy), (tx, ty) = giver.pose.cell, taker.pose.cell
-    if not ready or abs(gx - tx) + abs(gy - ty) != 1:
-        return t + 1
-    _start_act(world, (giver, taker), head, t + HANDOVER_TICKS * world.scale)
-    world.dirty.add(other.name)
-    return None
-
-
-def _start_act(world: TeamWorld, robots: tuple[RobotState, ...], head: Entry, end: int) -> None:
-    t = world.now
-    for robot in robots:
-        if robot.drive is not None:
-            robot.drive = None
-        robot.queue.popleft()
-        robot.busy_until, robot.footprint, robot.pending = end, (), head.action
-    world.acts.append(ActRecord(t, end, head.action, tuple(r.pose.cell for r in robots)))
-    world.last_progress = t
-
-
-def _finish(world: TeamWorld, robot: RobotState, t: int) -> None:
-    """Apply the effect of the act that ``robot`` just finished (once for a handover)."""
-    action = robot.pending
-    robot.pending = None
-    assert action is not None
-    state = world.items[action.item]
-    if action.kind is ActionKind.PICK:
-        robot.holding, state.holder, state.cell = action.item, robot.name, None
-        if robot.first_pick is None:
-            robot.first_pick = robot.busy_until
-    elif action.kind is ActionKind.DROP:
-        robot.holding, state.holder, state.cell = "", "", robot.pose.cell
-        if robot.pose.cell == world.scenario.task(action.item).dropoff:
-            state.delivered_at = robot.busy_until
-    elif state.holder == action.robot:
-        world.robots[action.robot].holding = ""
-        world.robots[action.taker].holding = action.item
-        state.holder = action.taker
-
-
-# --- incidents ------------------------------------------------------------------------------------
-
-
-def _incident(
-    world: TeamWorld, robot: RobotState, entry: Entry, kind: IncidentKind, t: int
-) -> None:
-    """Record the incident and let the team strategy repair it (timed)."""
-    if robot.deferred == (entry.action, kind.value):
-        robot.retry_at = t + 2 * world.scale
-        return
-    item = entry.action.item or item_task_of(robot)
-    load = Load.CARRYING if robot.load else Load.EMPTY
-    world.incidents.append(IncidentRecord(t, robot.name, entry.action, kind, load))
-    if kind is IncidentKind.STUCK:
-        robot.stuck = True
-        world.broadcast(robot.name)
-    if robot.drive is not None:
-        cancel_drive(world, robot, t)
-    repairer = get_team_strategy(world.options.strategy)(world)  # stateless: started per incident
-    collecting = gc.isenabled()
-    gc.disable()  # a collection's pause belongs to no repair: it runs after the timed part
-    try:
-        t0, c0 = time.perf_counter_ns(), time.thread_time_ns()
-        plans0, expansions0 = world.plans, world.expansions
-        decision = repairer.repair(Incident(robot.name, entry, kind, load, item, t))
-        for name in world.robots:  # scenario order: a frozenset's order depends on the hash seed
-            if name in decision.changed:
-                _prepare(world, world.robots[name], t)
-        latency, cpu = time.perf_counter_ns() - t0, time.thread_time_ns() - c0
-    finally:
-        if collecting:
-            gc.enable()
-    world.repairs.append(
-        TeamRepairRecord(
-            t,
-            robot.name,
-            entry.action,
-            kind,
-            decision.outcome,
-            decision.source,
-            decision.candidate,
-            decision.helper,
-            decision.preempted,
-            decision.preemption_ticks,
-            tuple(sorted(decision.changed - {robot.name})),
-            decision.messages,
-            world.plans - plans0,
-            world.expansions - expansions0,
-            latency,
-            decision.changes,
-            decision.lost,
-            cpu,
-        )
-    )
-    world.messages += decision.messages
-    world.dirty.update(decision.changed)
-
-
-def _prepare(world: TeamWorld, robot: RobotState, t: int) -> None:
-    """Place the next drive of a robot whose plan changed (part of the repair latency); a robot
-    in the middle of an action plans when the action ends."""
-    if robot.busy_until > t:
-        if robot.drive is not None:
-            robot.drive = None
-            world.reservations.release_from(robot.name, robot.busy_until)
-            world.reservations.park(robot.name, robot.pose.cell, robot.busy_until)
-        return
-    if robot.drive is not None:
-        cancel_drive(world, robot, t)
-    robot.retry_at = 0
-    if robot.queue and robot.queue[0].action.kind is ActionKind.DRIVE:
-        start = begin_drive(world, robot, robot.queue[0], t)
-        if start is not DriveStart.PLACED:
-            robot.drive = None

@@ -12,7 +12,7 @@ from typing import Any
 from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.faults import Detection, Persistence
 from selfrepair.execution.result import StepSource
-from selfrepair.execution.trace import TraceFields
+from selfrepair.execution.traceformat import TraceFields
 from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.robots.domain import Domain

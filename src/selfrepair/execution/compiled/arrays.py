@@ -1,0 +1,258 @@
+"""A domain, a fault schedule and a table's compiled look-ups as the integer arrays the compiled
+mission loop reads (:mod:`selfrepair.execution.compiled.kernel`, whose docstring gives the
+layouts).
+
+Everything here is derived from the values the Python loop uses, never defined a second time:
+the moves come from the simulator's :class:`~selfrepair.execution.moves.MoveTable` (itself
+derived from ``Domain.apply``/``footprint``/``duration``), availability and the faults that block
+an action from ``Domain.available``/``Domain.blocking`` per subset of the schedule's faults, and
+every look-up answer from the Python loop's compiled look-ups
+(:class:`~selfrepair.repair.lookups.GridLookups`, which run the reference search for a pattern met
+for the first time). :class:`CompiledLookups` copies those answers into a hash table of integer
+keys as the kernel asks for them.
+
+Caches: the move and availability arrays are the simulator's bookkeeping
+(:attr:`~selfrepair.caching.CacheKind.SIMULATION`, kept by cold runs, like the move tables they
+copy); the compiled look-ups hold repair answers (:attr:`~selfrepair.caching.CacheKind.REPAIR`,
+emptied by a cold run, like the look-ups they copy).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from selfrepair.caching import BoundedCache, CacheKind
+from selfrepair.execution.compiled import kernel as k
+from selfrepair.execution.moves import MoveTable
+from selfrepair.geometry import FreeGrid
+from selfrepair.repair.lookups import MISSING, GridLookups, action_index, occupancy_rows
+from selfrepair.repair.strategies import MissionContext, Repair
+from selfrepair.repair.strategies.replacement import strategy_lookups
+from selfrepair.robots.domain import Domain
+
+__all__ = [
+    "MAX_CODE_RADIUS",
+    "MAX_SCHEDULE_FAULTS",
+    "CompiledLookups",
+    "compiled_lookups",
+    "fault_arrays",
+    "move_arrays",
+]
+
+Int64s = npt.NDArray[np.int64]
+
+MAX_SCHEDULE_FAULTS = 10
+"""The most distinct faults a schedule may name for the compiled loop (it tabulates every subset:
+``2^n`` rows of availability)."""
+
+MAX_CODE_RADIUS = 3
+"""The largest occupancy window radius whose codes fit 63 bits (``(2r + 1)^2 = 49``); a look-up
+of a wider neighbourhood is keyed by cell instead (same answers, one per cell)."""
+
+
+def move_arrays(table: MoveTable) -> Int64s:
+    """``mv[a, h] = (dx, dy, heading, units, n_cells, cells...)`` of ``table`` (per action index
+    of its domain and heading; cells as offsets into the table's buffer stride)."""
+    return _MOVES.get(table, lambda: _moves(table))
+
+
+def _moves(table: MoveTable) -> Int64s:
+    per = list(table.moves.values())
+    width = max((len(m.cells) for moves in per for m in moves), default=0)
+    out = np.zeros((len(per), 4, 5 + width), dtype=np.int64)
+    for moves in per:
+        for h, m in enumerate(moves):
+            row = out[m.action_index, h]
+            row[:5] = (m.dx, m.dy, int(m.heading), m.units, len(m.cells))
+            row[5 : 5 + len(m.cells)] = m.cells
+    out.setflags(write=False)
+    return out
+
+
+_MOVES: BoundedCache[MoveTable, Int64s] = BoundedCache(
+    "compiled move arrays", 64, kind=CacheKind.SIMULATION
+)
+
+
+def fault_arrays(
+    domain: Domain[Any, Any], faults: tuple[Any, ...]
+) -> tuple[npt.NDArray[np.uint8], Int64s]:
+    """For every subset ``m`` (a bit mask over ``faults``): ``avail[m, a]``, whether action ``a``
+    is available under it, and ``block[m, a]``, the mask of the faults of ``m`` that block it
+    (``Domain.blocking``)."""
+    return _FAULTS.get((domain, faults), lambda: _faults(domain, faults))
+
+
+def _faults(
+    domain: Domain[Any, Any], faults: tuple[Any, ...]
+) -> tuple[npt.NDArray[np.uint8], Int64s]:
+    n = len(faults)
+    actions = domain.actions
+    avail = np.zeros((1 << n, len(actions)), dtype=np.uint8)
+    block = np.zeros((1 << n, len(actions)), dtype=np.int64)
+    bit = {f: 1 << i for i, f in enumerate(faults)}
+    for mask in range(1 << n):
+        subset = frozenset(f for i, f in enumerate(faults) if mask >> i & 1)
+        for a, action in enumerate(actions):
+            if domain.available(action, subset):
+                avail[mask, a] = 1
+            else:
+                block[mask, a] = sum(bit[f] for f in domain.blocking(action, subset))
+    avail.setflags(write=False)
+    block.setflags(write=False)
+    return avail, block
+
+
+_FAULTS: BoundedCache[tuple[Domain[Any, Any], tuple[Any, ...]], tuple[Any, Any]] = BoundedCache(
+    "compiled availability per fault subset", 256, kind=CacheKind.SIMULATION
+)
+
+
+class CompiledLookups:
+    """The compiled look-ups of one (table, recursion mode, depth bound, pattern budget) on one
+    grid, for every known fault set met so far, as the kernel's arrays (mutable: it grows as the
+    kernel asks). Answer ids index :attr:`answers`, the very :class:`Repair` values the Python
+    loop's look-ups return.
+    """
+
+    def __init__(self, context: MissionContext, n_actions: int) -> None:
+        self.context = context
+        self.grid: FreeGrid = context.grid
+        self.n_slots = 4 * n_actions
+        self.sets: dict[frozenset[Any], int] = {}
+        self._set_of: dict[tuple[Any, ...], npt.NDArray[np.int64]] = {}
+        self.on_grid: list[GridLookups[Repair]] = []
+        self.lk_mask = np.full((4, self.n_slots), k.UNLOADED, dtype=np.int64)
+        self.lk_r = np.zeros((4, self.n_slots), dtype=np.int64)
+        self.radii: list[int] = []
+        self.codes = np.zeros((0, self.grid.height, self.grid.width), dtype=np.int64)
+        self.hk1 = np.full(1 << 10, k.EMPTY, dtype=np.int64)
+        self.hk2 = np.zeros(1 << 10, dtype=np.int64)
+        self.hv = np.zeros(1 << 10, dtype=np.int64)
+        self.stored = 0
+        self.answers: list[Repair] = []
+        self._ids: dict[int, int] = {}
+        self.ans_off = np.zeros(64, dtype=np.int64)
+        self.ans_len = np.zeros(64, dtype=np.int64)
+        self.ans_act = np.zeros(256, dtype=np.int32)
+        self._n_act = 0
+
+    def set_of(self, faults: tuple[Any, ...]) -> npt.NDArray[np.int64]:
+        """Per bit mask over ``faults`` (a schedule's), the id of its look-ups (-1: not met
+        yet); one array per tuple of faults, kept, so a later mission over the same faults
+        starts with every set it needs known."""
+        found = self._set_of.get(faults)
+        if found is None:
+            found = self._set_of[faults] = np.full(1 << len(faults), -1, dtype=np.int64)
+        return found
+
+    def set_id(self, known: frozenset[Any]) -> int:
+        """The id of the look-ups under ``known`` (made on first use)."""
+        sid = self.sets.get(known)
+        if sid is None:
+            sid = self.sets[known] = len(self.on_grid)
+            self.on_grid.append(strategy_lookups(self.context, known, self.grid))
+            if sid >= self.lk_mask.shape[0]:
+                self.lk_mask = _grown(self.lk_mask, k.UNLOADED)
+                self.lk_r = _grown(self.lk_r, 0)
+        return sid
+
+    def load_slot(self, sid: int, slot: int) -> None:
+        """Load the masks of the action of ``slot`` (all four headings) and copy the answers its
+        look-ups hold already."""
+        on_grid = self.on_grid[sid]
+        first = slot & ~3
+        lookup = on_grid.lookups.action(first >> 2)
+        if on_grid.slots[first] is None:
+            on_grid.slot(first)
+        radius = lookup.radius
+        by_cell = radius > MAX_CODE_RADIUS
+        ridx = 0 if by_cell else self._radius_index(radius)
+        for h in range(4):
+            mask = int(lookup.masks[h])
+            self.lk_mask[sid, first + h] = k.BY_CELL if by_cell else mask
+            self.lk_r[sid, first + h] = ridx
+            if not by_cell:
+                for key, value in list(lookup.answers[h].items()):
+                    self._put(sid, first + h, key, value)
+
+    def fill(self, sid: int, slot: int, x: int, y: int, key: int) -> None:
+        """Answer the pattern of ``slot`` at cell ``(x, y)`` (masked code ``key``, or the cell for
+        a slot read by cell) with the Python loop's look-ups, and store it."""
+        on_grid = self.on_grid[sid]
+        mask, answers, rows = on_grid.slots[slot] or on_grid.slot(slot)
+        code = rows[y][x] & mask
+        value = answers.get(code, MISSING)
+        if value is MISSING:
+            value = on_grid.fill(slot, x, y, code)
+        self._put(sid, slot, key, value)
+
+    def _put(self, sid: int, slot: int, key: int, value: Repair | None) -> None:
+        if 2 * (self.stored + 1) > self.hk1.shape[0]:
+            self._rehash()
+        aid = k.NO_ANSWER if value is None else self._answer(value)
+        k.hash_put(self.hk1, self.hk2, self.hv, sid * self.n_slots + slot, key, aid)
+        self.stored += 1
+
+    def _answer(self, value: Repair) -> int:
+        aid = self._ids.get(id(value))
+        if aid is not None:
+            return aid
+        aid = self._ids[id(value)] = len(self.answers)
+        self.answers.append(value)  # keeps ``value`` alive, so its id stays its own
+        if aid >= self.ans_off.shape[0]:
+            self.ans_off = _grown(self.ans_off, 0)
+            self.ans_len = _grown(self.ans_len, 0)
+        of = action_index(self.context.domain).of  # by identity, else by equality
+        acts = [of(a) for a in value.actions]
+        while self._n_act + len(acts) > self.ans_act.shape[0]:
+            self.ans_act = _grown(self.ans_act, 0)
+        self.ans_off[aid], self.ans_len[aid] = self._n_act, len(acts)
+        self.ans_act[self._n_act : self._n_act + len(acts)] = acts
+        self._n_act += len(acts)
+        return aid
+
+    def _radius_index(self, radius: int) -> int:
+        if radius not in self.radii:
+            rows = np.array(occupancy_rows(self.grid, radius), dtype=np.int64)
+            self.codes = np.concatenate([self.codes, rows[None]], axis=0)
+            self.radii.append(radius)
+        return self.radii.index(radius)
+
+    def _rehash(self) -> None:
+        old = (self.hk1, self.hk2, self.hv)
+        cap = 2 * old[0].shape[0]
+        self.hk1 = np.full(cap, k.EMPTY, dtype=np.int64)
+        self.hk2 = np.zeros(cap, dtype=np.int64)
+        self.hv = np.zeros(cap, dtype=np.int64)
+        for i in np.flatnonzero(old[0] != k.EMPTY).tolist():
+            k.hash_put(self.hk1, self.hk2, self.hv, int(old[0][i]), int(old[1][i]), int(old[2][i]))
+
+
+def _grown(array: npt.NDArray[Any], fill: int) -> npt.NDArray[Any]:
+    """``array`` twice as long (first axis), the new rows ``fill``."""
+    out = np.full((2 * array.shape[0], *array.shape[1:]), fill, dtype=array.dtype)
+    out[: array.shape[0]] = array
+    return out
+
+
+def compiled_lookups(context: MissionContext, n_actions: int) -> CompiledLookups:
+    """The :class:`CompiledLookups` of the mission's table, recursion mode, depth bound and
+    pattern budget on its grid (kept per process, emptied by a cold run)."""
+    options = context.options
+    key = (
+        context.table,
+        options.recursion,
+        options.max_depth,
+        options.max_lookup_patterns,
+        context.grid,
+    )
+    return _LOOKUPS.get(key, lambda: CompiledLookups(context, n_actions))
+
+
+_LOOKUPS: BoundedCache[tuple[Any, ...], CompiledLookups] = BoundedCache(
+    "compiled look-ups as arrays", 64, kind=CacheKind.REPAIR
+)

@@ -1,0 +1,513 @@
+"""The compiled mission loop: one numba kernel that runs a whole mission over integer arrays.
+
+It is :func:`selfrepair.execution.executor.run_mission`'s loop (the executor's ``_loop``, the
+:class:`~selfrepair.execution.stepper.Stepper` and the :class:`~selfrepair.execution.simulator.
+Simulator`) for the ``replan`` strategy and the ``replacement`` strategy in a recursion mode that
+does not defer (with or without whole-plan rewriting), written over arrays so that no step and
+no warm repair runs Python. The Python loop is the reference: the property test of
+``tests/test_compiled_loop.py`` runs both and compares the traces step by step.
+
+**Resumable.** All state lives in arrays handed in (``st`` holds the scalars). The kernel runs
+until the mission ends or until it needs something only Python has, and then returns an *exit*
+code with its arguments in ``st``; the driver (:mod:`selfrepair.execution.compiled.driver`)
+supplies it and calls again, and the kernel resumes where it stopped. A repair interrupted by an
+exit is retried from its start on the next call (it changes nothing before it completes), with its
+clock still running: the latency of a repair covers whatever it needed. The exits:
+
+* ``NEED_SET``: the look-ups of a known fault set not loaded yet;
+* ``NEED_SLOT``: the neighbourhood mask of an (action, heading) not loaded yet;
+* ``NEED_FILL``: a pattern met for the first time (the reference search answers it, as in the
+  Python loop's compiled look-ups);
+* ``NEED_PLAN``: a replan (the driver calls the mission's planner);
+* ``GROW``: an output or queue array is full.
+
+A warm mission (every pattern it meets already answered) runs in one call except for its replans.
+
+Layouts (all ``int64`` unless said): ``mv[a, h]`` the move of action ``a`` from heading ``h``
+(``dx, dy, heading, units, n_cells, cells...`` as offsets into the free-cell buffer ``grid``,
+uint8); ``avail[m, a]`` whether action ``a`` is available under the fault set of bit mask ``m``
+(uint8) and ``block[m, a]`` the mask of the faults that make it fail; ``ev[e]`` a fault event
+``bit, clock (0 step, 1 time units), persistent (1) or transient (0), at, end``; the look-up
+hash (``hk1``, ``hk2`` keys, ``hv`` values) maps (known-set look-up id * slots + slot, masked
+occupancy code, or ``-1 - cell`` for a slot read by cell) to an answer id or ``NO_ANSWER``;
+answer ``i``'s actions are ``ans_act[ans_off[i] : ans_off[i] + ans_len[i]]``.
+
+Clock: repairs are timed with ``clock_gettime(CLOCK_MONOTONIC)``, the clock behind Python's
+``time.perf_counter_ns`` on Linux, called from the kernel (:func:`clock_ns`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any, cast
+
+import numpy as np
+
+from selfrepair.execution.compiled.jit import NUMBA, njit
+from selfrepair.execution.compiled.planner import plan_in_kernel
+
+__all__ = ["NUMBA", "clock_ns", "hash_get", "hash_put", "run_kernel", "warm_hits"]
+
+# --- exit codes ------------------------------------------------------------------------------
+DONE = 0
+NEED_SET = 1
+NEED_SLOT = 2
+NEED_FILL = 3
+NEED_PLAN = 4
+GROW = 5
+TOO_MANY = 6
+NEED_PLANNER = 7
+
+# --- mission ends (st[END]) ------------------------------------------------------------------
+REACHED = 0
+STEP_LIMIT = 1
+FAILED = 2
+COLLISION = 3
+
+# --- step sources ----------------------------------------------------------------------------
+SRC_PLAN = 0
+SRC_REPLACEMENT = 1
+SRC_REPLAN = 2
+SRC_FAILED = 3
+SRC_WAIT = 4
+
+# --- repair kinds (rp[i, RP_KIND]) -----------------------------------------------------------
+K_HIT = 0
+K_REWRITE = 1
+K_REPLAN = 2
+K_MISS = 3
+K_DEFENSIVE = 4
+
+# --- repair statuses -------------------------------------------------------------------------
+R_REPAIRED = 0
+R_STUCK = 1
+R_BUDGET = 2
+
+EMPTY = -1
+"""A free hash slot (and, for a look-up, a pattern not answered yet)."""
+NO_ANSWER = -2
+"""A pattern whose answer is "no valid candidate"."""
+UNLOADED = -1
+"""A mask not loaded yet."""
+BY_CELL = -2
+"""A slot whose codes do not fit 63 bits: answers are keyed by cell instead."""
+
+# --- st: the scalar state --------------------------------------------------------------------
+S_PHASE = 0  # 0: top of the loop; 1: inside a repair (retry it)
+S_STEP = 1
+S_UNITS = 2
+S_X = 3
+S_Y = 4
+S_H = 5
+S_KNOWN = 6
+S_QLEN = 7
+S_NSTEPS = 8
+S_NREP = 9
+S_WAITS = 10
+S_EXEC_UNITS = 11
+S_PENALTY = 12
+S_T0 = 13
+S_RACTION = 14  # the action being repaired (-1: the defensive replan)
+S_TRIES = 15  # repairs asked in this question (at most MAX_REPAIRS_PER_STEP)
+S_END = 16
+S_ARG0 = 17
+S_ARG1 = 18
+S_ARG2 = 19
+S_ARG3 = 20
+S_ARG4 = 21
+S_PLAN_READY = 22  # 1: the plan buffer holds the answer to the pending NEED_PLAN
+S_PLAN_STATUS = 23
+S_PLAN_LEN = 24
+S_PLAN_ID = 25
+S_NACT = 26  # used entries of rp_act
+S_MOVED = 27  # moving steps (for the metrics)
+S_FAIL_REP = 28  # the record of the repair that failed
+S_PL_MASK = 29  # the known mask the loaded planner serves (-1: none)
+S_PL_KERNEL = 30  # 1: the loaded planner runs in the kernel; 0: the driver plans
+S_PLAN_EXP = 31  # expansions of the plan just made in the kernel
+S_SIZE = 32
+
+# --- par: the mission's parameters -----------------------------------------------------------
+P_STRATEGY = 0  # 0 replan, 1 replacement
+P_REWRITE = 1
+P_WIDTH = 2
+P_HEIGHT = 3
+P_STRIDE = 4
+P_MARGIN = 5
+P_GX = 6
+P_GY = 7
+P_GH = 8  # -1: any heading
+P_LIMIT = 9
+P_SENSE_NOW = 10
+P_MAX_WAIT = 11
+P_FAILED_UNITS = 12
+P_NSLOTS = 13
+P_WEIGHT = 14
+P_MAX_TRIES = 15
+P_BUDGET = 16
+P_SIZE = 17
+
+# --- trace rows (tr[i]) ----------------------------------------------------------------------
+T_STEP, T_ACTION, T_X, T_Y, T_H, T_EX, T_EY, T_EH, T_UNITS, T_SOURCE, T_KNOWN = range(11)
+T_COLS = 11
+
+# --- repair rows (rp[i]) ---------------------------------------------------------------------
+(
+    RP_STEP, RP_X, RP_Y, RP_H, RP_ACTION, RP_KIND, RP_AID, RP_STATUS, RP_LATENCY, RP_CONSUMED,
+    RP_ACT_OFF, RP_ACT_LEN, RP_SUBST, RP_PLAN, RP_KNOWN, RP_QLEN, RP_EXPANSIONS,
+) = range(17)  # fmt: skip
+RP_COLS = 17
+
+_MUL1 = np.int64(-7046029254386353131)  # 0x9E3779B97F4A7C15 as a signed 64-bit integer
+_MUL2 = np.int64(-4658895280553007687)  # 0xBF58476D1CE4E5B9
+
+
+if NUMBA:
+    from llvmlite import ir
+    from numba import types
+    from numba.core import cgutils
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def _clock_intrinsic(typingctx: Any) -> Any:
+        """``clock_gettime(CLOCK_MONOTONIC)`` in nanoseconds (the clock of
+        ``time.perf_counter_ns`` on Linux), as a call to the C library from compiled code."""
+        sig = types.int64()
+
+        def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+            i64, i32 = ir.IntType(64), ir.IntType(32)
+            spec = cgutils.alloca_once(builder, ir.ArrayType(i64, 2))  # type: ignore[no-untyped-call]
+            fnty = ir.FunctionType(i32, [i32, spec.type])
+            fn = cgutils.get_or_insert_function(builder.module, fnty, "clock_gettime")  # type: ignore[no-untyped-call]
+            builder.call(fn, [ir.Constant(i32, 1), spec])
+            zero = ir.Constant(i32, 0)
+            sec = builder.load(builder.gep(spec, [zero, zero]))
+            nsec = builder.load(builder.gep(spec, [zero, ir.Constant(i32, 1)]))
+            return builder.add(builder.mul(sec, ir.Constant(i64, 1_000_000_000)), nsec)
+
+        return sig, codegen
+
+    _now = cast(Callable[[], int], _clock_intrinsic)
+else:  # pragma: no cover - without numba the kernel is never called
+    _now = time.perf_counter_ns
+
+
+@njit(cache=True)
+def clock_ns() -> int:
+    """The kernel's clock, callable from Python (for checks against ``perf_counter_ns``)."""
+    return _now()
+
+
+@njit(cache=True, inline="always")
+def _hash(k1: int, k2: int, cap: int) -> int:
+    return int(((k1 * _MUL1) ^ (k2 * _MUL2) ^ ((k2 >> 29) * _MUL1)) & (cap - 1))
+
+
+@njit(cache=True)
+def hash_get(hk1: Any, hk2: Any, hv: Any, k1: int, k2: int) -> int:
+    """The value under ``(k1, k2)``, or ``EMPTY``."""
+    cap = hk1.shape[0]
+    i = _hash(k1, k2, cap)
+    while True:
+        if hk1[i] == EMPTY:
+            return EMPTY
+        if hk1[i] == k1 and hk2[i] == k2:
+            return hv[i]  # type: ignore[no-any-return]
+        i = (i + 1) & (cap - 1)
+
+
+@njit(cache=True)
+def hash_put(hk1: Any, hk2: Any, hv: Any, k1: int, k2: int, value: int) -> None:
+    """Store ``value`` under ``(k1, k2)`` (the caller keeps the table at most half full)."""
+    cap = hk1.shape[0]
+    i = _hash(k1, k2, cap)
+    while hk1[i] != EMPTY and not (hk1[i] == k1 and hk2[i] == k2):
+        i = (i + 1) & (cap - 1)
+    hk1[i] = k1
+    hk2[i] = k2
+    hv[i] = value
+
+
+@njit(cache=True, inline="always")
+def _true_mask(ev: Any, step: int, units: int) -> int:
+    mask = 0
+    for e in range(ev.shape[0]):
+        now = step if ev[e, 1] == 0 else units
+        if now >= ev[e, 3] and (ev[e, 2] == 1 or now < ev[e, 4]):
+            mask |= 1 << ev[e, 0]
+    return mask
+
+
+@njit(cache=True, inline="always")
+def _lookup(
+    st: Any, par: Any, set_of: Any, lk_mask: Any, lk_r: Any, codes: Any,
+    hk1: Any, hk2: Any, hv: Any, known: int, a: int, x: int, y: int, h: int,
+) -> int:  # fmt: skip
+    """The answer id of action ``a`` from pose ``(x, y, h)`` under the known mask, ``NO_ANSWER``,
+    or ``EMPTY`` after setting an exit in ``st[S_END + 1 ...]`` (returned as ``-10 - code``)."""
+    sid = set_of[known]
+    if sid < 0:
+        st[S_ARG0] = known
+        return -10 - NEED_SET
+    slot = 4 * a + h
+    m = lk_mask[sid, slot]
+    if m == UNLOADED:
+        st[S_ARG0], st[S_ARG1] = sid, slot
+        return -10 - NEED_SLOT
+    k1 = sid * par[P_NSLOTS] + slot
+    k2 = -1 - (y * par[P_WIDTH] + x) if m == BY_CELL else codes[lk_r[sid, slot], y, x] & m
+    v = hash_get(hk1, hk2, hv, k1, k2)
+    if v == EMPTY:
+        st[S_ARG0], st[S_ARG1], st[S_ARG2], st[S_ARG3], st[S_ARG4] = sid, slot, x, y, k2
+        return -10 - NEED_FILL
+    return v
+
+
+@njit(cache=True)
+def warm_hits(
+    n: int, st: Any, par: Any, set_of: Any, lk_mask: Any, lk_r: Any, codes: Any,
+    hk1: Any, hk2: Any, hv: Any, known: int, a: int, xs: Any, ys: Any, hs: Any,
+) -> int:  # fmt: skip
+    """``n`` look-ups of action ``a`` at the poses ``(xs, ys, hs)`` in turn, as the mission
+    kernel makes them (for the benchmark of a warm hit); the sum of the answer ids."""
+    total = 0
+    k = xs.shape[0]
+    for i in range(n):
+        j = i % k
+        total += _lookup(st, par, set_of, lk_mask, lk_r, codes, hk1, hk2, hv, known, a,
+                         xs[j], ys[j], hs[j])  # fmt: skip
+    return total
+
+
+@njit(cache=True)
+def run_kernel(
+    par: Any, st: Any, mv: Any, grid: Any, avail: Any, block: Any, waits: Any, ev: Any,
+    set_of: Any, lk_mask: Any, lk_r: Any, codes: Any, hk1: Any, hk2: Any, hv: Any,
+    ans_off: Any, ans_len: Any, ans_act: Any, pen: Any, pb: Any,
+    qa: Any, qs: Any, tr: Any, rp: Any, rp_act: Any, planner: Any, search: Any,
+) -> int:  # fmt: skip
+    """Run (or resume) the mission; the exit code (see the module docstring). ``planner`` is
+    the loaded kernel planner's arrays and ``search`` its records, generation and heap
+    (:mod:`selfrepair.execution.compiled.planner`)."""
+    stride, margin = par[P_STRIDE], par[P_MARGIN]
+    gx, gy, gh = par[P_GX], par[P_GY], par[P_GH]
+    while True:
+        if st[S_PHASE] == 0:
+            x, y, h = st[S_X], st[S_Y], st[S_H]
+            if x == gx and y == gy and (gh < 0 or h == gh):
+                st[S_END] = REACHED
+                return DONE
+            if st[S_STEP] >= par[P_LIMIT]:
+                st[S_END] = STEP_LIMIT
+                return DONE
+            if par[P_SENSE_NOW]:
+                st[S_KNOWN] = _true_mask(ev, st[S_STEP], st[S_UNITS])
+            st[S_TRIES] = 0
+            if st[S_NSTEPS] >= tr.shape[0] or st[S_QLEN] + 2 > qa.shape[0]:
+                return GROW
+        # the question: repair until the queue's front is available under the known faults
+        while True:
+            known = st[S_KNOWN]
+            qlen = st[S_QLEN]
+            if st[S_PHASE] == 0:
+                if qlen > 0 and avail[known, qa[qlen - 1]]:
+                    break
+                if st[S_TRIES] >= par[P_MAX_TRIES]:
+                    return TOO_MANY
+                if st[S_NREP] >= rp.shape[0] or rp_act.shape[0] - st[S_NACT] < qlen + 64:
+                    return GROW  # before the clock starts: growing is no part of a repair
+                st[S_PHASE] = 1
+                st[S_T0] = _now()
+                st[S_RACTION] = qa[qlen - 1] if qlen > 0 else -1
+            if st[S_NREP] >= rp.shape[0]:
+                return GROW
+            code = _repair(par, st, mv, avail, ev, set_of, lk_mask, lk_r, codes, hk1, hk2, hv,
+                           ans_off, ans_len, ans_act, pb, qa, qs, rp, rp_act, planner,
+                           search)  # fmt: skip
+            if code != DONE:
+                return code
+            st[S_PHASE] = 0
+            st[S_TRIES] += 1
+            r = st[S_NREP] - 1
+            if rp[r, RP_STATUS] != R_REPAIRED:
+                w = -1
+                if rp[r, RP_STATUS] == R_STUCK and st[S_WAITS] < par[P_MAX_WAIT]:
+                    for i in range(waits.shape[0]):
+                        if avail[st[S_KNOWN], waits[i]]:
+                            w = waits[i]
+                            break
+                if w < 0:
+                    st[S_END] = FAILED
+                    st[S_FAIL_REP] = r
+                    return DONE
+                st[S_WAITS] += 1
+                qa[st[S_QLEN]] = w  # room for it was checked at the top of the loop
+                qs[st[S_QLEN]] = SRC_WAIT
+                st[S_QLEN] += 1
+                break
+        # the command
+        qlen = st[S_QLEN]
+        a, source = qa[qlen - 1], qs[qlen - 1]
+        x, y, h = st[S_X], st[S_Y], st[S_H]
+        known = st[S_KNOWN]
+        true = _true_mask(ev, st[S_STEP], st[S_UNITS])
+        n = st[S_NSTEPS]
+        row = tr[n]
+        row[T_STEP], row[T_ACTION], row[T_X], row[T_Y], row[T_H] = st[S_STEP], a, x, y, h
+        if avail[true, a]:
+            base = (y + margin) * stride + x + margin
+            for j in range(mv[a, h, 4]):
+                if grid[base + mv[a, h, 5 + j]] == 0:
+                    st[S_END] = COLLISION
+                    return DONE
+            if par[P_WEIGHT]:
+                for j in range(mv[a, h, 4]):
+                    st[S_PENALTY] += pen[base + mv[a, h, 5 + j]]
+            nx, ny, nh = x + mv[a, h, 0], y + mv[a, h, 1], mv[a, h, 2]
+            st[S_X], st[S_Y], st[S_H] = nx, ny, nh
+            st[S_UNITS] += mv[a, h, 3]
+            st[S_EXEC_UNITS] += mv[a, h, 3]
+            st[S_MOVED] += 1
+            st[S_QLEN] = qlen - 1
+            row[T_EX], row[T_EY], row[T_EH] = nx, ny, nh
+            row[T_UNITS], row[T_SOURCE], row[T_KNOWN] = mv[a, h, 3], source, known
+        else:
+            if source == SRC_WAIT:
+                st[S_QLEN] = qlen - 1  # a wait an unknown fault forbids: ask again
+            st[S_UNITS] += par[P_FAILED_UNITS]
+            row[T_EX], row[T_EY], row[T_EH] = x, y, h
+            row[T_UNITS], row[T_SOURCE], row[T_KNOWN] = par[P_FAILED_UNITS], SRC_FAILED, known
+            st[S_KNOWN] = known | block[true, a]
+        st[S_STEP] += 1
+        st[S_NSTEPS] = n + 1
+
+
+@njit(cache=True, inline="always")
+def _repair(
+    par: Any, st: Any, mv: Any, avail: Any, ev: Any, set_of: Any, lk_mask: Any, lk_r: Any,
+    codes: Any, hk1: Any, hk2: Any, hv: Any, ans_off: Any, ans_len: Any, ans_act: Any,
+    pb: Any, qa: Any, qs: Any, rp: Any, rp_act: Any, planner: Any, search: Any,
+) -> int:  # fmt: skip
+    """One repair of the queue (``st[S_RACTION]``: the faulty front action, -1 for the
+    defensive replan), recorded in ``rp``; an exit code when it needs Python first."""
+    x, y, h = st[S_X], st[S_Y], st[S_H]
+    known = st[S_KNOWN]
+    a = st[S_RACTION]
+    qlen = st[S_QLEN]
+    r = st[S_NREP]
+    rec = rp[r]
+    kind = K_REPLAN
+    aid = -1
+    if a < 0:
+        kind = K_DEFENSIVE
+    elif par[P_STRATEGY] == 1:
+        aid = _lookup(st, par, set_of, lk_mask, lk_r, codes, hk1, hk2, hv, known, a, x, y, h)
+        if aid <= -10:
+            return -10 - aid
+        kind = K_MISS if aid == NO_ANSWER else K_HIT
+    if kind != K_HIT:  # a replan
+        off = st[S_NACT]
+        consumed = qlen
+        st[S_ARG0] = known
+        if st[S_PLAN_READY] == 0 and st[S_PL_MASK] != known:
+            return NEED_PLANNER
+        if st[S_PLAN_READY] == 0 and st[S_PL_KERNEL] == 1:  # one call of the lattice kernel
+            mt, hdist, ppen, nbr, ppar, moves = planner
+            prec, gen, heap = search
+            found, n, expansions = plan_in_kernel(
+                mt, hdist, ppen, nbr, ppar, moves, prec, gen, heap, x, y, h, par[P_BUDGET],
+                rp_act, off,
+            )  # fmt: skip
+            if found == 3 or n + 2 > qa.shape[0]:
+                st[S_PLAN_LEN] = n
+                return GROW
+            status = R_REPAIRED if found == 0 else (R_STUCK if found == 1 else R_BUDGET)
+            rec[RP_PLAN] = -1
+        else:
+            if st[S_PLAN_READY] == 0:
+                return NEED_PLAN
+            status = st[S_PLAN_STATUS]
+            n = st[S_PLAN_LEN]
+            expansions = st[S_PLAN_EXP]
+            if status == R_REPAIRED and (n + 2 > qa.shape[0] or n > rp_act.shape[0] - off):
+                return GROW  # the plan stays ready for the retry
+            st[S_PLAN_READY] = 0
+            for i in range(n):
+                rp_act[off + i] = pb[i]
+            rec[RP_PLAN] = st[S_PLAN_ID]
+        if status == R_REPAIRED:
+            st[S_QLEN] = 0
+            _push(qa, qs, st, rp_act, off, n, SRC_REPLAN)
+        else:
+            n = 0
+        rec[RP_EXPANSIONS] = expansions
+        rec[RP_SUBST] = 0
+    else:
+        status = R_REPAIRED
+        off = st[S_NACT]
+        consumed = 1
+        substituted = 0
+        start, length = ans_off[aid], ans_len[aid]
+        if rp_act.shape[0] - off < length + qlen:
+            return GROW
+        for i in range(length):
+            rp_act[off + i] = ans_act[start + i]
+        n = length
+        if par[P_REWRITE]:
+            # the whole-plan rewrite: walk the rest of the queue along its predicted poses
+            width, height = par[P_WIDTH], par[P_HEIGHT]
+            px, py, ph = x + mv[a, h, 0], y + mv[a, h, 1], mv[a, h, 2]
+            done = 0
+            for k in range(qlen - 1):
+                b = qa[qlen - 2 - k]
+                if not avail[known, b]:
+                    if not (0 <= px < width and 0 <= py < height):
+                        break
+                    hit = _lookup(st, par, set_of, lk_mask, lk_r, codes, hk1, hk2, hv,
+                                  known, b, px, py, ph)  # fmt: skip
+                    if hit <= -10:
+                        return -10 - hit
+                    if hit == NO_ANSWER:
+                        break
+                    if rp_act.shape[0] - (off + n) < qlen + ans_len[hit]:
+                        return GROW
+                    for j in range(done, k):  # the plain actions between substitutions
+                        rp_act[off + n] = qa[qlen - 2 - j]
+                        n += 1
+                    for j in range(ans_len[hit]):
+                        rp_act[off + n] = ans_act[ans_off[hit] + j]
+                        n += 1
+                    done = k + 1
+                    substituted += 1
+                npx, npy = px + mv[b, ph, 0], py + mv[b, ph, 1]
+                ph = mv[b, ph, 2]
+                px, py = npx, npy
+            if substituted:
+                kind = K_REWRITE
+                consumed = 1 + done
+        if st[S_QLEN] - consumed + n + 2 > qa.shape[0]:
+            return GROW
+        st[S_QLEN] -= consumed
+        _push(qa, qs, st, rp_act, off, n, SRC_REPLACEMENT)
+        rec[RP_SUBST] = substituted
+        rec[RP_PLAN] = -1
+        rec[RP_EXPANSIONS] = 0
+    rec[RP_LATENCY] = _now() - st[S_T0]
+    rec[RP_STEP], rec[RP_X], rec[RP_Y], rec[RP_H] = st[S_STEP], x, y, h
+    rec[RP_ACTION], rec[RP_KIND], rec[RP_AID], rec[RP_STATUS] = a, kind, aid, status
+    rec[RP_CONSUMED], rec[RP_ACT_OFF], rec[RP_ACT_LEN] = consumed, off, n
+    rec[RP_KNOWN], rec[RP_QLEN] = known, qlen
+    st[S_NACT] = off + n
+    st[S_NREP] = r + 1
+    return DONE
+
+
+@njit(cache=True, inline="always")
+def _push(qa: Any, qs: Any, st: Any, acts: Any, off: int, n: int, source: int) -> None:
+    """Put ``acts[off : off + n]`` at the front of the queue (kept reversed: front last)."""
+    q = st[S_QLEN]
+    for i in range(n):
+        qa[q + i] = acts[off + n - 1 - i]
+        qs[q + i] = source
+    st[S_QLEN] = q + n

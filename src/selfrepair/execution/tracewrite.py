@@ -1,0 +1,122 @@
+"""Writing mission traces (format in :mod:`selfrepair.execution.traceformat`): one JSON object
+per line, the header first and the summary row last."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from selfrepair.execution.metrics import mission_row
+from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
+from selfrepair.execution.traceformat import TRACE_FORMAT, TRACE_VERSION
+from selfrepair.geometry import Pose
+from selfrepair.robots.domain import Domain
+from selfrepair.robots.registry import plugin_file
+from selfrepair.world.maze import format_maze
+
+__all__ = ["header_json", "repair_json", "step_json", "trace_lines", "write_trace"]
+
+
+def _pose_json(pose: Pose) -> list[Any]:
+    return [pose.x, pose.y, pose.heading.name]
+
+
+def header_json(spec: MissionSpec, initial_plan: Iterable[Any] = ()) -> dict[str, Any]:
+    """The header line's object for ``spec``."""
+    options = spec.options
+    domain = spec.domain
+    origin = plugin_file(domain.name)
+    plugin = {} if origin is None else {"plugin": {"path": origin.path, "sha256": origin.sha256}}
+    return {
+        "type": "header",
+        "format": TRACE_FORMAT,
+        "version": TRACE_VERSION,
+        "domain": domain.name,
+        **plugin,
+        "maze": {"name": spec.maze.name, "rows": format_maze(spec.maze).splitlines()},
+        "start": _pose_json(spec.start),
+        "goal": [spec.goal[0], spec.goal[1]],
+        "goal_heading": None if spec.goal_heading is None else spec.goal_heading.name,
+        "schedule": spec.schedule.to_json(domain),
+        **({"world": spec.world.to_json()} if spec.world else {}),
+        "strategy": str(spec.strategy),
+        "options": {
+            "table": options.table_label,
+            "recursion": options.recursion.value,
+            "max_depth": options.max_depth,
+            "window": options.window,
+            "lookahead_expansions": options.lookahead_expansions,
+            "lpg_time_limit_s": options.lpg_time_limit_s,
+            "lpg_seed": options.lpg_seed,
+            "max_wait": options.max_wait,
+        },
+        "planner": {
+            "heuristic": spec.heuristic,
+            "backend": spec.backend,
+            "clearance_weight": str(spec.clearance_weight),
+            "clearance_radius": spec.clearance_radius,
+            "max_expansions": spec.replan_max_expansions,
+        },
+        "seed": spec.seed,
+        "initial_faults_known": spec.initial_faults_known,
+        "max_steps": spec.max_steps,
+        "initial_plan": [domain.format_action(a) for a in initial_plan],
+    }
+
+
+def _fault_texts(domain: Domain[Any, Any], faults: Iterable[Any]) -> list[str]:
+    return sorted(domain.format_faults([f]) for f in faults)
+
+
+def step_json(domain: Domain[Any, Any], step: TraceStep) -> dict[str, Any]:
+    """One step line's object."""
+    return {
+        "type": "step",
+        "step": step.step,
+        "action": domain.format_action(step.action),
+        "from": _pose_json(step.start),
+        "to": _pose_json(step.end),
+        "duration": str(step.duration),
+        "source": step.source.value,
+        "known": _fault_texts(domain, step.known),
+    }
+
+
+def repair_json(domain: Domain[Any, Any], record: RepairRecord) -> dict[str, Any]:
+    """One repair line's object."""
+    repair = record.repair
+    return {
+        "type": "repair",
+        "step": record.step,
+        "pose": _pose_json(record.pose),
+        "action": None if record.action is None else domain.format_action(record.action),
+        "status": repair.status.value,
+        "source": repair.source.value,
+        "attempts": [str(a) for a in repair.attempts],
+        "actions": [domain.format_action(a) for a in repair.actions],
+        "consumed": repair.consumed,
+        "candidate_index": repair.candidate_index,
+        "depth": repair.depth,
+        "latency_ns": record.latency_ns,
+    }
+
+
+def trace_lines(result: MissionResult) -> list[str]:
+    """The trace of ``result``, one JSON text per line (no newlines inside)."""
+    domain = result.spec.domain
+    lines = [json.dumps(header_json(result.spec, result.initial_plan.actions))]
+    repairs = list(result.repairs)
+    for step in result.steps:
+        while repairs and repairs[0].step <= step.step:
+            lines.append(json.dumps(repair_json(domain, repairs.pop(0))))
+        lines.append(json.dumps(step_json(domain, step)))
+    lines.extend(json.dumps(repair_json(domain, r)) for r in repairs)
+    lines.append(json.dumps({"type": "summary", **mission_row(result)}))
+    return lines
+
+
+def write_trace(result: MissionResult, path: str | Path) -> None:
+    """Write the trace of ``result`` to ``path``."""
+    Path(path).write_text("\n".join(trace_lines(result)) + "\n", encoding="utf-8")

@@ -1,0 +1,269 @@
+"""The model fidelity report: every action run in MuJoCo against what the lattice says it does.
+
+For every action of the four-wheel robot, :func:`measure` puts the robot at rest at the origin
+facing north on an open floor, runs the action for its duration open loop and again tracked
+(:mod:`selfrepair.physics.tracker`), and compares each end pose with the lattice's end pose: the
+position error in cells and the heading error in degrees. Physics *confirms* an action when its
+tracked end is within :data:`CONFIRM_POSITION` cells (5% of a cell) and :data:`CONFIRM_HEADING`
+degrees of the lattice's. The tracked end also gives the action's identified motion (snapped to
+the lattice, or dropped when it does not snap; see :mod:`selfrepair.physics.identified`), written
+by :meth:`FidelityReport.identified`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import asdict, dataclass, replace
+from typing import Any
+
+from selfrepair.geometry import Cell, Heading, Pose
+from selfrepair.physics.identified import SNAP_HEADING, SNAP_POSITION
+from selfrepair.physics.model import DEFAULT_PARAMS, RobotParams
+from selfrepair.physics.simulator import lattice_motion, wheel_commands
+from selfrepair.physics.tracker import ContinuousPose, wrap
+from selfrepair.physics.world import PhysicsWorld, pose_error, snap
+from selfrepair.robots.domain import Domain
+from selfrepair.robots.four_wheel import FOUR_WHEEL
+
+__all__ = [
+    "CONFIRM_HEADING",
+    "CONFIRM_POSITION",
+    "FidelityReport",
+    "FidelityRow",
+    "faulty_rows",
+    "measure",
+]
+
+CONFIRM_POSITION = 0.05
+"""Physics confirms an action whose tracked end lies within this many cells of the lattice's."""
+CONFIRM_HEADING = 3.0
+"""... and whose tracked end heading lies within this many degrees of the lattice's."""
+
+_ORIGIN = Pose(0, 0, Heading.N)
+
+
+@dataclass(frozen=True, slots=True)
+class FidelityRow:
+    """One action's run (see the module docstring). ``faults`` and ``behaviour`` are empty for
+    the nominal robot; ``executed`` is the action physics ran (the commanded one unless a fault
+    behaviour says the actuators do otherwise). ``snapped`` is the tracked end as ``(forward,
+    lateral, rotation)`` from a north-facing start, ``None`` when it does not snap (``why``);
+    ``swept`` the ``(forward, lateral)`` cells the robot's centre passed."""
+
+    action: str
+    motion: str
+    faults: str
+    behaviour: str
+    executed: str
+    open_position: float
+    open_heading: float
+    tracked_position: float
+    tracked_heading: float
+    snapped: tuple[int, int, int] | None
+    swept: tuple[Cell, ...]
+    why: str
+
+    @property
+    def confirmed(self) -> bool:
+        """Whether the tracked end is within the confirmation tolerances."""
+        return self.tracked_position < CONFIRM_POSITION and self.tracked_heading < CONFIRM_HEADING
+
+    @property
+    def open_confirmed(self) -> bool:
+        """Whether the open-loop end is within the confirmation tolerances."""
+        return self.open_position < CONFIRM_POSITION and self.open_heading < CONFIRM_HEADING
+
+
+@dataclass(frozen=True, slots=True)
+class FidelityReport:
+    """Every row, the parameters they were measured with, and the summary figures."""
+
+    rows: tuple[FidelityRow, ...]
+    params: RobotParams
+
+    def nominal(self) -> tuple[FidelityRow, ...]:
+        """The rows of the fault-free robot."""
+        return tuple(r for r in self.rows if not r.faults)
+
+    def summary(self) -> dict[str, Any]:
+        """Counts and shares of confirmed actions, open loop and tracked, nominal and faulty."""
+        out: dict[str, Any] = {}
+        groups = [("nominal", self.nominal())]
+        for behaviour in dict.fromkeys(r.behaviour for r in self.rows if r.faults):
+            rows = tuple(r for r in self.rows if r.faults and r.behaviour == behaviour)
+            groups.append((f"faulty ({behaviour})", rows))
+        for label, rows in groups:
+            if not rows:
+                continue
+            n = len(rows)
+            tracked = sum(r.confirmed for r in rows)
+            opened = sum(r.open_confirmed for r in rows)
+            out[label] = {
+                "actions": n,
+                "tracked_confirmed": tracked,
+                "tracked_share": round(tracked / n, 4),
+                "open_loop_confirmed": opened,
+                "open_loop_share": round(opened / n, 4),
+                "snapped": sum(r.snapped is not None for r in rows),
+                "tracked_position_median": round(_median([r.tracked_position for r in rows]), 4),
+                "tracked_heading_median": round(_median([r.tracked_heading for r in rows]), 3),
+                "open_position_median": round(_median([r.open_position for r in rows]), 4),
+                "open_heading_median": round(_median([r.open_heading for r in rows]), 3),
+            }
+        return out
+
+    def identified(self, name: str = "four-wheel-physics") -> dict[str, Any]:
+        """The identified-domain file's content (:mod:`selfrepair.physics.identified`) from the
+        nominal rows: the actions that snap, then the dropped ones with why."""
+        kept, dropped = [], []
+        for row in self.nominal():
+            if row.snapped is None:
+                dropped.append({"action": row.action, "reason": row.why})
+                continue
+            forward, lateral, rotation = row.snapped
+            kept.append({
+                "action": row.action,
+                "forward": forward,
+                "lateral": lateral,
+                "rotation": rotation,
+                "swept": [list(c) for c in row.swept],
+                "position_error": round(row.tracked_position, 4),
+                "heading_error": round(row.tracked_heading, 3),
+                "confirmed": row.confirmed,
+            })  # fmt: skip
+        return {
+            "domain": name,
+            "made_by": "selfrepair physics fidelity --write-domain",
+            "snap": {"position_cells": SNAP_POSITION, "heading_degrees": SNAP_HEADING},
+            "params": asdict(self.params),
+            "actions": kept,
+            "dropped": dropped,
+        }
+
+
+def _median(values: list[float]) -> float:
+    ordered = sorted(values)
+    if not ordered:
+        return 0.0
+    mid = len(ordered) // 2
+    return ordered[mid] if len(ordered) % 2 else (ordered[mid - 1] + ordered[mid]) / 2
+
+
+def _snap(
+    end: ContinuousPose, cells: list[Cell], lattice: Pose
+) -> tuple[tuple[int, int, int] | None, tuple[Cell, ...], str]:
+    """The identified motion of an end pose from the origin facing north, the cells its centre
+    passed (robot frame, the start first, the lattice footprint added when the motion matches)
+    and, when it does not snap, why."""
+    near = snap(end)
+    off = math.hypot(end.x - near.x, end.y + near.y)
+    yaw_off = abs(math.degrees(wrap(end.yaw - (math.pi / 2 - int(near.heading) * math.pi / 2))))
+    if off > SNAP_POSITION:
+        return None, (), f"ends {off:.2f} cells from the nearest cell centre"
+    if yaw_off > SNAP_HEADING:
+        return None, (), f"ends {yaw_off:.1f} degrees off the nearest heading"
+    motion = (-near.y, near.x, (int(near.heading) + 2) % 4 - 2)
+    swept = list(dict.fromkeys([(0, 0), *cells, (motion[0], motion[1])]))
+    if near == lattice:
+        return motion, tuple(swept), ""
+    return motion, tuple(swept), f"snaps to {near}, not the lattice's {lattice}"
+
+
+def measure(
+    domain: Domain[Any, Any] = FOUR_WHEEL,
+    params: RobotParams = DEFAULT_PARAMS,
+    actions: Iterable[Any] | None = None,
+    *,
+    faulty: bool = True,
+) -> FidelityReport:
+    """Run every action of ``domain`` (or ``actions``) nominally, open loop and tracked, and
+    report each against the lattice (see the module docstring); with ``faulty``, also every
+    action under every single fault that forbids it, for each of the domain's fault-behaviour
+    models (:func:`faulty_rows`)."""
+    world = PhysicsWorld(None, _ORIGIN, params)
+    centre: list[Cell] = []
+
+    def visit(w: PhysicsWorld) -> None:
+        p = w.pose()
+        cell = (round(p.y), round(p.x))  # (forward, lateral) from the origin facing north
+        if not centre or centre[-1] != cell:
+            centre.append(cell)
+
+    rows = []
+    for action in domain.actions if actions is None else actions:
+        commands = wheel_commands(domain, action)
+        target = domain.apply(_ORIGIN, action)
+        ticks = domain.duration(action)
+        world.observer = None
+        world.place(_ORIGIN)
+        opened = pose_error(world.run(commands, ticks).end, target)
+        world.place(_ORIGIN)
+        centre.clear()
+        world.observer = visit
+        end = world.run(
+            commands, ticks, motion=lattice_motion(domain, action), reference_start=_ORIGIN
+        ).end
+        tracked = pose_error(end, target)
+        lattice_cells = [c for c in domain.footprint(_ORIGIN, action)]
+        snapped, swept, why = _snap(end, centre, target)
+        if snapped is not None and snap(end) == target:
+            lattice_rf = [(-y, x) for x, y in lattice_cells]
+            swept = tuple(dict.fromkeys([*lattice_rf, *swept]))
+        text = domain.format_action(action)
+        rows.append(
+            FidelityRow(
+                text,
+                domain.motion_class(action),
+                "",
+                "",
+                text,
+                opened[0],
+                opened[1],
+                tracked[0],
+                tracked[1],
+                snapped,
+                swept,
+                why,
+            )
+        )
+    world.observer = None
+    if faulty:
+        rows += faulty_rows(domain, rows)
+    return FidelityReport(tuple(rows), params)
+
+
+def faulty_rows(domain: Domain[Any, Any], nominal: list[FidelityRow]) -> list[FidelityRow]:
+    """The rows of every action under every single fault that forbids it, per fault-behaviour
+    model of ``domain`` (behaviour by behaviour, fault by fault, action by action).
+
+    A fault acts on the actuators: the wheels perform the action
+    :meth:`Domain.effective <selfrepair.robots.domain.Domain.effective>` says, and physics runs
+    exactly those wheel commands (the tracker, which knows only the wheels' signs, follows that
+    action's lattice motion), from the same rest pose. So a faulty row carries the measurement
+    of the performed action (when it was measured: rows of actions not in ``nominal`` are left
+    out), compared with the lattice's end pose of that action: whether physics confirms what the
+    fault model says the faulty robot does."""
+    by_action = {row.action: row for row in nominal}
+    out = []
+    for behaviour in domain.behaviours:
+        for fault in domain.faults:
+            faults = frozenset((fault,))
+            for action in domain.actions:
+                if domain.available(action, faults):
+                    continue
+                performed = domain.format_action(domain.effective(action, faults, behaviour.name))
+                row = by_action.get(performed)
+                if row is None:
+                    continue
+                out.append(
+                    replace(
+                        row,
+                        action=domain.format_action(action),
+                        motion=domain.motion_class(action),
+                        faults=domain.format_faults(faults),
+                        behaviour=behaviour.name,
+                        executed=performed,
+                    )
+                )
+    return out

@@ -1,0 +1,209 @@
+"""The compiled mission loop (:mod:`selfrepair.execution.compiled`) against the Python loop, its
+reference: the same trace step by step, the same repairs (every field but the latency) and the
+same row (every column but the timings and ``footing``), on random mazes, routes, fault
+schedules, strategies and recursion modes; and which missions each footing takes."""
+
+from __future__ import annotations
+
+import dataclasses
+from fractions import Fraction
+from typing import Any
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from extras import NUMBA
+from selfrepair.caching import clear_caches
+from selfrepair.errors import ProblemError
+from selfrepair.execution.executor import run_mission
+from selfrepair.execution.faults import Clock, Detection, FaultEvent, FaultSchedule, Persistence
+from selfrepair.execution.metrics import mission_row
+from selfrepair.execution.result import MissionResult, MissionSpec
+from selfrepair.experiment.timing import COLD_CLEARS
+from selfrepair.geometry import Heading, Pose
+from selfrepair.repair.strategies import StrategyOptions
+from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.world.bundled import bundled_routes, load_bundled
+from selfrepair.world.events import WorldEvent, WorldSchedule
+from selfrepair.world.mazegen import generate_maze
+from selfrepair.world.routes import random_routes
+
+PROPERTY = settings(
+    max_examples=60,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
+
+TIMING = ("_ns", "compute_per_action")
+
+
+def _same(python: MissionResult, compiled: MissionResult) -> None:
+    """Both loops did the same: steps, repairs (latency aside) and row (timings aside)."""
+    assert python.footing == "python" and compiled.footing == "compiled"
+    assert len(python.steps) == len(compiled.steps)
+    for i, (a, b) in enumerate(zip(python.steps, compiled.steps, strict=True)):
+        assert a == b, f"step {i}: {a} != {b}"
+    assert [r._replace(latency_ns=0) for r in python.repairs] == [
+        r._replace(latency_ns=0) for r in compiled.repairs
+    ]
+    assert (python.status, python.reason, python.final_pose, python.ticks, python.tally) == (
+        compiled.status, compiled.reason, compiled.final_pose, compiled.ticks, compiled.tally,
+    )  # fmt: skip
+    rows = mission_row(python), mission_row(compiled)
+    differ = {
+        c: (rows[0][c], rows[1][c])
+        for c in rows[0]
+        if c != "footing" and not any(t in c for t in TIMING) and rows[0][c] != rows[1][c]
+    }
+    assert not differ
+
+
+def _both(spec: MissionSpec, *, cold: bool = False) -> tuple[MissionResult, MissionResult]:
+    if cold:
+        clear_caches(COLD_CLEARS)
+    python = run_mission(dataclasses.replace(spec, footing="python"))
+    if cold:
+        clear_caches(COLD_CLEARS)
+    return python, run_mission(dataclasses.replace(spec, footing="compiled"))
+
+
+FAULTS = [f for f in FOUR_WHEEL.faults]
+
+
+@st.composite
+def schedules(draw: st.DrawFn) -> FaultSchedule:
+    """Permanent and transient faults, on either clock, detected now or on use."""
+    events = []
+    for _ in range(draw(st.integers(0, 3))):
+        persistence = draw(st.sampled_from([Persistence.PERMANENT, Persistence.TRANSIENT]))
+        events.append(
+            FaultEvent(
+                draw(st.sampled_from(FAULTS)),
+                at=draw(st.integers(0, 8)),
+                clock=draw(st.sampled_from(list(Clock))),
+                persistence=persistence,
+                duration=draw(st.integers(1, 12)) if persistence is Persistence.TRANSIENT else None,
+            )
+        )
+    return FaultSchedule(tuple(events), draw(st.sampled_from(["now", "on-use"])))
+
+
+STRATEGIES = st.sampled_from(
+    [("replan", "flat", False)]
+    + [("replacement", mode, rewrite) for mode in ("flat", "guarded", "layered")
+       for rewrite in (False, True)]
+)  # fmt: skip
+
+
+@NUMBA
+@PROPERTY
+@given(
+    st.integers(0, 2**16),
+    schedules(),
+    STRATEGIES,
+    st.sampled_from(["handwritten", "generated-agnostic", "generated-indexed"]),
+    st.sampled_from([Fraction(0), Fraction(1)]),
+    st.booleans(),
+    st.sampled_from([(None, "auto"), (None, "python"), (25, "auto")]),
+)
+def test_compiled_loop_gives_the_python_loops_trace(
+    seed: int,
+    schedule: FaultSchedule,
+    strategy: tuple[str, str, bool],
+    table: str,
+    weight: Fraction,
+    cold: bool,
+    planner: tuple[int | None, str],
+) -> None:
+    """Replans run in the kernel (backend auto), or in Python (backend python), with a node
+    budget that some run out of."""
+    name, mode, rewrite = strategy
+    maze = generate_maze(11, 9, braid=0.4, seed=seed)
+    route = random_routes(maze, 1, seed)[0]
+    spec = MissionSpec(
+        maze,
+        route.start,
+        route.goal,
+        schedule=schedule,
+        strategy=name,
+        options=StrategyOptions(table=table, recursion=mode, rewrite=rewrite, max_wait=3),
+        clearance_weight=weight,
+        seed=seed,
+        replan_max_expansions=planner[0],
+        backend=planner[1],
+    )
+    _same(*_both(spec, cold=cold))
+
+
+@NUMBA
+@pytest.mark.parametrize("maze_name", ["narrow-short", "wide-long"])
+@pytest.mark.parametrize("rewrite", [False, True])
+def test_compiled_loop_on_a_bundled_route_with_a_paper_fault_set(
+    maze_name: str, rewrite: bool
+) -> None:
+    maze = load_bundled(maze_name)
+    route = bundled_routes(maze_name)[1]
+    spec = MissionSpec(
+        maze,
+        route.start,
+        route.goal,
+        schedule=FaultSchedule.permanent(FOUR_WHEEL.parse_faults("FL:F,RR:B")),
+        strategy="replacement",
+        options=StrategyOptions(table="handwritten", recursion="guarded", rewrite=rewrite),
+    )
+    python, compiled = _both(spec, cold=True)
+    _same(python, compiled)
+    assert compiled.repairs and all(r.latency_ns > 0 for r in compiled.repairs)
+
+
+@NUMBA
+def test_waits_and_a_mission_that_gives_up_end_alike() -> None:
+    maze = load_bundled("narrow-short")
+    route = bundled_routes("narrow-short")[0]
+    every = FOUR_WHEEL.parse_faults("FL:F,FL:B,FR:F,FR:B,RL:F,RL:B,RR:F,RR:B")  # only waits
+    events = tuple(
+        FaultEvent(f, at=0, persistence=Persistence.TRANSIENT, duration=2, clock=Clock.STEP)
+        for f in sorted(every)
+    )
+    for schedule in (FaultSchedule(events), FaultSchedule.permanent(every)):
+        spec = MissionSpec(
+            maze, route.start, route.goal, schedule=schedule, strategy="replacement",
+            options=StrategyOptions(max_wait=4),
+        )  # fmt: skip
+        python, compiled = _both(spec)
+        _same(python, compiled)
+    assert compiled.status != "reached" and compiled.reason == python.reason
+
+
+def _spec(**changes: Any) -> MissionSpec:
+    maze = load_bundled("narrow-short")
+    route = bundled_routes("narrow-short")[0]
+    spec = MissionSpec(maze, route.start, route.goal)
+    return dataclasses.replace(spec, **changes)
+
+
+@NUMBA
+def test_footings_that_the_compiled_loop_cannot_take_run_in_python() -> None:
+    lookahead = _spec(strategy="lookahead")
+    assert run_mission(lookahead).footing == "python"
+    primitive = _spec(options=StrategyOptions(recursion="primitive"))
+    assert run_mission(primitive).footing == "python"
+    event = FaultEvent(FAULTS[0], persistence=Persistence.INTERMITTENT, probability=0.5)
+    intermittent = _spec(schedule=FaultSchedule((event,)))
+    assert run_mission(intermittent).footing == "python"
+    hidden = _spec(schedule=FaultSchedule.permanent(FAULTS[:1], detection=Detection.HIDDEN))
+    assert run_mission(hidden).footing == "python"
+    changing = _spec(world=WorldSchedule((WorldEvent((3, 3), at=2),)))
+    assert run_mission(changing).footing == "python"
+    assert run_mission(_spec()).footing == "compiled"
+    assert run_mission(_spec(footing="python")).footing == "python"
+    with pytest.raises(ProblemError, match="footing 'compiled' cannot run this mission: strategy"):
+        run_mission(dataclasses.replace(lookahead, footing="compiled"))
+    with pytest.raises(ProblemError, match="footing must be"):
+        _spec(footing="fast")
+
+
+def test_row_says_which_footing_ran() -> None:
+    row = mission_row(run_mission(_spec(footing="python", start=Pose(1, 1, Heading.E))))
+    assert row["footing"] == "python"

@@ -1,0 +1,296 @@
+"""selfrepair.physics: the MJCF model, the tracker, the fidelity report, the identified domain and
+missions in MuJoCo (the ``physics`` extra; under SELFREPAIR_REQUIRE_EXTRAS=1 a missing mujoco
+fails these tests instead of skipping them)."""
+
+from __future__ import annotations
+
+import os
+
+os.environ.setdefault("MUJOCO_GL", "osmesa")  # headless rendering, before mujoco is imported
+
+import itertools
+import json
+import math
+from fractions import Fraction
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from extras import needs_extra
+from selfrepair.cli import main
+from selfrepair.errors import ProblemError
+from selfrepair.execution.result import MissionSpec
+from selfrepair.execution.stepper import Stepper
+from selfrepair.geometry import Heading, Pose
+from selfrepair.physics.identified import load_identified
+from selfrepair.physics.model import ORIGIN, RobotParams, WallBox, heading_yaw, wall_boxes
+from selfrepair.physics.simulator import lattice_motion
+from selfrepair.physics.tracker import ContinuousPose, _side, reference
+from selfrepair.physics.world import lattice_pose, snap
+from selfrepair.robots.domain import check_domain
+from selfrepair.robots.four_wheel import ACTIONS, FOUR_WHEEL, parse_action
+from selfrepair.world.maze import Maze, parse_maze
+
+PHYSICS = needs_extra("mujoco", "imageio", extra="physics")
+
+OPEN = parse_maze("......\n......\n......\n......\n......\n......\n", name="open")
+
+
+# --- the model, without MuJoCo --------------------------------------------------------------
+
+
+def test_wall_boxes_merge_each_rows_runs_and_add_the_border() -> None:
+    maze = Maze(np.array([[True, True, False, True], [False, False, False, False]]))
+    boxes = wall_boxes(maze, 1.0)
+    assert boxes[:2] == (WallBox(0.5, 0.0, 1.0, 0.5), WallBox(3.0, 0.0, 0.5, 0.5))
+    assert len(boxes) == 2 + 4
+    north, south, west, east = boxes[2:]
+    assert (north.y, south.y, west.x, east.x) == (1.0, -2.0, -1.0, 4.0)
+    assert north.half_x == 3.0  # the border spans the grid and the corners
+
+
+def test_params_refuse_a_robot_that_does_not_fit_in_a_cell() -> None:
+    with pytest.raises(ProblemError, match="does not fit"):
+        RobotParams(cell=0.3)
+    with pytest.raises(ProblemError, match="friction"):
+        RobotParams(friction=0)
+
+
+def test_snap_inverts_lattice_pose_for_every_heading() -> None:
+    for heading in Heading:
+        pose = Pose(3, 5, heading)
+        assert snap(lattice_pose(pose)) == pose
+    assert heading_yaw(Heading.E) == 0.0
+    assert snap(ContinuousPose(2.4, -0.6, math.radians(80))) == Pose(2, 1, Heading.N)
+
+
+def test_reference_ends_at_the_lattice_end_pose_for_every_action() -> None:
+    for heading in Heading:
+        start = Pose(0, 0, heading)
+        for action in ACTIONS:
+            end, _, _ = reference(lattice_pose(start), lattice_motion(FOUR_WHEEL, action), 1.0)
+            want = lattice_pose(FOUR_WHEEL.apply(start, action))
+            assert math.hypot(end.x - want.x, end.y - want.y) < 1e-9, (heading, action)
+            assert abs(math.remainder(end.yaw - want.yaw, 2 * math.pi)) < 1e-9
+
+
+@given(
+    st.sampled_from((-1, 0, 1)),
+    st.sampled_from((-1, 0, 1)),
+    st.floats(-5, 5, allow_nan=False),
+)
+def test_the_tracker_keeps_every_wheel_within_its_commands_sign(
+    front: int, rear: int, speed: float
+) -> None:
+    a, b = _side(front, rear, speed, 3.0)
+    for command, wheel in ((front, a), (rear, b)):
+        assert wheel * command >= 0 and (command != 0 or wheel == 0)
+        assert abs(wheel) <= 3.0
+
+
+def test_bundled_identified_domain_keeps_what_snaps_and_drops_pivots_on_a_stopped_side() -> None:
+    domain = load_identified()
+    check_domain(domain)
+    kept = {a.code for a in domain.actions}
+    assert "FSSS" not in kept and "SSSF" not in kept  # pivots about a braked side
+    assert {"FFFF", "FBFB", "SFFF", "SSSS", "BBBB"} <= kept
+    for action in domain.actions[:10]:
+        if domain.motion_class(action) == FOUR_WHEEL.motion_class(action):
+            assert domain.apply(Pose(2, 2, Heading.E), action) == FOUR_WHEEL.apply(
+                Pose(2, 2, Heading.E), action
+            )
+    assert domain.waits[0] == parse_action("SSSS")
+
+
+def test_stepper_relocalise_drops_the_queue() -> None:
+    stepper = Stepper.__new__(Stepper)
+    from collections import deque
+
+    stepper.queue = deque([(parse_action("FFFF"), None)])
+    stepper.stopped, stepper.failure = True, None
+    stepper.relocalise()
+    assert not stepper.queue and not stepper.stopped
+
+
+# --- MuJoCo ---------------------------------------------------------------------------------
+
+
+@PHYSICS
+def test_straight_and_spin_are_confirmed_and_a_pivot_on_a_stopped_side_is_not() -> None:
+    from selfrepair.physics.fidelity import measure
+
+    report = measure(actions=[parse_action(c) for c in ("FFFF", "FBFB", "FSSS")])
+    rows = {r.action: r for r in report.rows}
+    assert rows["FFFF"].confirmed and rows["FBFB"].confirmed
+    assert rows["FFFF"].snapped == (1, 0, 0) and rows["FFFF"].swept == ((0, 0), (1, 0))
+    assert not rows["FSSS"].confirmed and rows["FSSS"].snapped is None
+    assert rows["FSSS"].tracked_position > 0.3  # its centre swings about the braked wheels
+    assert report.summary()["nominal"]["tracked_confirmed"] == 2
+
+
+@PHYSICS
+def test_open_loop_ffff_drives_about_one_cell_north() -> None:
+    from selfrepair.physics.world import PhysicsWorld
+
+    world = PhysicsWorld(None, ORIGIN)
+    end = world.run((1, 1, 1, 1), Fraction(1)).end
+    assert 0.7 < end.y < 1.0 and abs(end.x) < 0.01 and abs(end.yaw - math.pi / 2) < 0.01
+
+
+@PHYSICS
+def test_a_physics_mission_reaches_the_goal_without_touching_a_wall() -> None:
+    from selfrepair.execution.executor import run_mission
+    from selfrepair.physics.mission import run_physics_mission
+    from selfrepair.world.bundled import bundled_routes, load_bundled
+
+    maze = load_bundled("wide-short")
+    route = bundled_routes("wide-short")[0]
+    spec = MissionSpec(maze, route.start, route.goal, strategy="replacement")
+    done = run_physics_mission(spec)
+    lattice = run_mission(spec)
+    assert done.result.reached and done.outcome.wall_contacts == 0
+    assert done.outcome.final_error < 0.1
+    assert [s.action for s in done.result.steps] == [s.action for s in lattice.steps]
+    assert done.outcome.physics_steps == round(float(lattice.ticks) / 0.002)
+
+
+@PHYSICS
+def test_an_open_loop_mission_is_relocalised_and_replanned() -> None:
+    from selfrepair.physics.mission import run_physics_mission
+
+    spec = MissionSpec(OPEN, Pose(0, 5, Heading.N), (5, 0), strategy="replan")
+    done = run_physics_mission(spec, tracked=False)
+    assert done.outcome.deviations > 0  # open loop, the lattice's motions do not hold
+    executed = done.result.steps
+    for before, after in itertools.pairwise(executed):
+        assert after.start == before.end  # the loop continued from the localised pose
+    deviated = {s.step for s in done.steps if s.snapped != s.lattice_end}
+    replans = {r.step for r in done.result.repairs}
+    assert all(step + 1 in replans for step in deviated if step + 1 < len(executed))
+
+
+@PHYSICS
+def test_physics_run_cli_renders_a_gif_and_writes_json(tmp_path, capsys) -> None:
+    maze = tmp_path / "m.maze"
+    maze.write_text("....\n....\n", encoding="utf-8")
+    gif = tmp_path / "run.gif"
+    code = main(["physics", "run", str(maze), "--start", "0,1,E", "--goal", "2,1",
+                 "--video", str(gif), "--json", "--no-warm-up"])  # fmt: skip
+    out = json.loads(capsys.readouterr().out)
+    assert code == 0 and out["reached"] and out["wall_contacts"] == 0
+    import imageio.v2 as iio
+
+    frames = iio.mimread(gif)
+    assert len(frames) >= 10 and frames[0].shape[:2] == (360, 480)
+    assert np.ptp(np.asarray(frames[0])) > 0  # a picture, not a blank frame
+
+
+def test_physics_run_cli_refuses_a_bad_video_name(tmp_path, capsys) -> None:
+    maze = tmp_path / "m.maze"
+    maze.write_text("....\n", encoding="utf-8")
+    code = main(["physics", "run", str(maze), "--start", "0,0,E", "--goal", "2,0",
+                 "--video", str(tmp_path / "x.txt")])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and ".gif or .mp4" in err
+
+
+@PHYSICS
+@pytest.mark.slow
+def test_the_bundled_identified_domain_is_what_fidelity_measures_now() -> None:
+    from importlib import resources
+
+    from selfrepair.physics.fidelity import measure
+
+    bundled = json.loads(
+        resources.files("selfrepair")
+        .joinpath("data", "physics", "four-wheel-physics.json")
+        .read_text("utf-8")
+    )
+    assert json.loads(json.dumps(measure().identified())) == bundled
+
+
+@PHYSICS
+def test_faulty_rows_carry_the_performed_actions_measurement() -> None:
+    from selfrepair.physics.fidelity import faulty_rows, measure
+
+    report = measure(actions=[parse_action(c) for c in ("SFFF", "FFFF")], faulty=False)
+    sfff, ffff = report.rows
+    rows = {
+        (r.action, r.faults, r.behaviour): r for r in faulty_rows(FOUR_WHEEL, list(report.rows))
+    }
+    stalled = rows[("FFFF", "FL:F", "stall")]  # the front-left wheel stops: SFFF is performed
+    assert stalled.executed == "SFFF" and stalled.motion == "forward"
+    assert (stalled.tracked_position, stalled.snapped) == (sfff.tracked_position, sfff.snapped)
+    stuck_on = rows[("SFFF", "FL:S", "stall")]  # it cannot stop: it runs forward, FFFF
+    assert stuck_on.executed == "FFFF" and stuck_on.confirmed == ffff.confirmed
+    assert ("FFFF", "FL:F", "reverse") not in rows  # BFFF was not measured
+    assert all(r.executed in ("SFFF", "FFFF") and r.action != r.executed for r in rows.values())
+
+
+@PHYSICS
+def test_physics_experiment_compares_the_footings_per_strategy() -> None:
+    from selfrepair.experiment.physics import footing_summary, physics_experiment
+
+    rows = physics_experiment(("wide-short",), ("replacement",), ("FL:F",))
+    assert [(r.route, r.faults, r.strategy) for r in rows] == [
+        (f"r{i}", "FL:F", "replacement") for i in range(1, 5)
+    ]
+    summary = footing_summary(rows)["replacement"]
+    assert summary["missions"] == 4 and summary["lattice_reached"] == 4
+    assert summary["both_reached"] == sum(r.physics_reached for r in rows)
+
+
+def test_physics_experiment_refuses_an_unknown_strategy(capsys) -> None:
+    code = main(["physics", "experiment", "--strategy", "teleport"])
+    err = capsys.readouterr().err
+    assert code == 2 and "teleport" in err and err.count("\n") == 1
+
+
+@PHYSICS
+def test_a_robots_own_mjcf_runs_and_a_model_without_a_robot_is_refused() -> None:
+    from selfrepair.physics.model import mjcf
+    from selfrepair.physics.world import PhysicsWorld
+
+    slippery = mjcf(OPEN).replace('friction="0.8 0 0"', 'friction="0.2 0 0"')
+    assert slippery != mjcf(OPEN)
+    world = PhysicsWorld(OPEN, Pose(0, 5, Heading.N), xml=slippery)
+    end = world.run((1, -1, 1, -1), Fraction(1)).end  # FBFB spins less on a slippery floor
+    grippy = PhysicsWorld(OPEN, Pose(0, 5, Heading.N)).run((1, -1, 1, -1), Fraction(1)).end
+    assert abs(end.yaw - math.pi / 2) != abs(grippy.yaw - math.pi / 2)
+    with pytest.raises(ProblemError, match="robot"):
+        PhysicsWorld(OPEN, xml="<mujoco><worldbody/></mujoco>")
+
+
+@PHYSICS
+@needs_extra("gymnasium", extra="gym")
+def test_the_physics_gym_variant_steps_in_mujoco_with_a_continuous_pose() -> None:
+    import gymnasium as gym
+
+    from selfrepair.envs import PHYSICS_ENV_ID
+
+    env = gym.make(PHYSICS_ENV_ID, mazes="wide-short")
+    observation, _ = env.reset(seed=1, options={"start": "1,1,E", "goal": "3,1", "faults": ""})
+    assert env.observation_space.contains(observation)
+    assert np.allclose(observation["pose"], (1.0, 1.0, math.pi / 2))
+    forward = FOUR_WHEEL.actions.index(parse_action("FFFF"))
+    observation, reward, terminated, _, info = env.step(forward)
+    x, y, heading = observation["pose"]
+    assert info["pose"] == "2,1,E" and abs(x - 2) < 0.05 and abs(y - 1) < 0.05
+    assert abs(heading - math.pi / 2) < math.radians(3) and info["wall_contacts"] == 0
+    assert float(reward) == -1.0 and not terminated
+    env.close()
+
+
+def test_the_confirmed_only_domain_keeps_the_confirmed_actions_and_every_basic_motion() -> None:
+    from selfrepair.physics.identified import CONFIRMED_NAME
+
+    domain = load_identified(name=CONFIRMED_NAME, confirmed_only=True)
+    check_domain(domain)
+    kept = {a.code for a in domain.actions}
+    assert len(kept) == 49 and "FFFB" not in kept and "FSSB" in kept  # drifts / turns in place
+    assert kept < {a.code for a in load_identified().actions}
+    for fault in FOUR_WHEEL.faults:  # every single fault leaves a way to turn and drive
+        motions = {domain.motion_class(a) for a in domain.actions if domain.available(a, {fault})}
+        assert {"forward", "backward", "turn-left", "turn-right"} <= motions, fault
