@@ -222,6 +222,7 @@ def _mission(
         ("replicate", situation["replicate"]),
         ("strategy", variant["strategy"]),
         ("variant", variant_label(variant["strategy"], options)),
+        ("base_variant", variant_label(variant["strategy"], _without_objective(options))),
         ("table", short_table(options.get("table"))),
         ("recursion", options.get("recursion")),
         ("window", options.get("window")),
@@ -231,6 +232,12 @@ def _mission(
         ("objective", objective_label(options, weight)),
     )
     return Mission(key, config.name, seed, text, labels)
+
+
+def _without_objective(options: dict[str, Any]) -> dict[str, Any]:
+    """The variant's options but its planning objective: what a tolerant robot is compared on
+    (column ``base_variant``; the same as ``variant`` for a robot planned without one)."""
+    return {k: v for k, v in options.items() if k != "objective"}
 
 
 RANDOM = "random"
