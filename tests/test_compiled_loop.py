@@ -105,6 +105,7 @@ STRATEGIES = st.sampled_from(
     st.sampled_from(["handwritten", "generated-agnostic", "generated-indexed"]),
     st.sampled_from([Fraction(0), Fraction(1)]),
     st.booleans(),
+    st.sampled_from([(None, "auto"), (None, "python"), (25, "auto")]),
 )
 def test_compiled_loop_gives_the_python_loops_trace(
     seed: int,
@@ -113,7 +114,10 @@ def test_compiled_loop_gives_the_python_loops_trace(
     table: str,
     weight: Fraction,
     cold: bool,
+    planner: tuple[int | None, str],
 ) -> None:
+    """Replans run in the kernel (backend auto), or in Python (backend python), with a node
+    budget that some run out of."""
     name, mode, rewrite = strategy
     maze = generate_maze(11, 9, braid=0.4, seed=seed)
     route = random_routes(maze, 1, seed)[0]
@@ -126,6 +130,8 @@ def test_compiled_loop_gives_the_python_loops_trace(
         options=StrategyOptions(table=table, recursion=mode, rewrite=rewrite, max_wait=3),
         clearance_weight=weight,
         seed=seed,
+        replan_max_expansions=planner[0],
+        backend=planner[1],
     )
     _same(*_both(spec, cold=cold))
 

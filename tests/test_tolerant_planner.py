@@ -14,6 +14,7 @@ from selfrepair.errors import ProblemError
 from selfrepair.execution.executor import mission_context
 from selfrepair.execution.result import MissionSpec
 from selfrepair.geometry import Heading, Pose
+from selfrepair.repair import tolerance_book
 from selfrepair.repair.replacement import table_reach
 from selfrepair.repair.strategies import StrategyOptions
 from selfrepair.repair.tolerance import fault_model, needs_replan, plan_tolerance
@@ -62,6 +63,62 @@ def test_masks_are_the_strategys_local_test_at_every_pose() -> None:
                     assert masks.counts[y, x, heading, k] == len(expected)
                     set_bits += len(expected)
         assert set_bits > 0
+
+
+def _agrees_with_the_strategy(maze: Maze, table: str, recursion: str, k: int) -> int:
+    """Every bit of the masks of ``maze`` equals ``needs_replan``; returns the bits set."""
+    model = fault_model(FOUR_WHEEL, k)
+    spec = MissionSpec(maze, Pose(1, 1, Heading.E), (1, 1),
+                       options=StrategyOptions(table=table, recursion=recursion))  # fmt: skip
+    t = spec.options.resolved_table()
+    context = mission_context(spec, t)
+    masks = tolerance_masks(t, context.grid, ACTIONS, model, mode=recursion)
+    full = masks.masks
+    set_bits = 0
+    for x, y in maze.free_cells():
+        for heading in Heading:
+            pose = Pose(x, y, heading)
+            for k_, action in enumerate(ACTIONS):
+                expected = tuple(
+                    f for f in model.fault_sets if needs_replan(context, pose, action, f)
+                )
+                assert masks.fault_sets_at(pose, k_) == expected, (pose, action)
+                assert masks.counts[y, x, heading, k_] == len(expected)
+                bits = sum(int(w) << (64 * i) for i, w in enumerate(full[y, x, heading, k_]))
+                assert bits == sum(1 << model.fault_sets.index(f) for f in expected)
+                set_bits += len(expected)
+    assert not masks.counts[maze.walls].any()
+    return set_bits
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    st.integers(0, 10_000), st.integers(0, 10_000), st.sampled_from([1, 2]),
+    st.sampled_from(["handwritten", "generated-agnostic", "generated-indexed"]),
+    st.sampled_from(["flat", "guarded", "layered"]),
+)  # fmt: skip
+def test_a_pattern_answered_on_one_maze_is_right_on_another(
+    first: int, second: int, corridor: int, table: str, recursion: str
+) -> None:
+    """The pattern book is shared by every maze: masks made after another maze filled it
+    still equal the strategy's own answer at every pose (single faults)."""
+    _agrees_with_the_strategy(generate_maze(9, 9, corridor=corridor, braid=0.4, seed=first),
+                              table, recursion, 1)  # fmt: skip
+    _agrees_with_the_strategy(generate_maze(9, 9, corridor=corridor, braid=0.4, seed=second),
+                              table, recursion, 1)  # fmt: skip
+
+
+def test_double_fault_masks_and_a_book_that_starts_afresh(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Masks of the 78 single and double faults agree with the strategy; a book past its row
+    bound starts afresh, and masks made before keep their own rows."""
+    one = generate_maze(9, 9, corridor=1, braid=0.3, seed=5)
+    two = generate_maze(9, 9, corridor=2, braid=0.3, seed=6)
+    assert _agrees_with_the_strategy(one, "handwritten", "flat", 2) > 0
+    monkeypatch.setattr(tolerance_book, "MAX_BOOK_ROWS", 1)
+    before = tolerance_masks(resolve_table("handwritten"), one.free_grid(2), ACTIONS, DOUBLE)
+    saved = before.masks.copy()
+    assert _agrees_with_the_strategy(two, "handwritten", "flat", 2) > 0
+    assert np.array_equal(before.masks, saved)
 
 
 def test_hard_plan_is_tolerant_and_costs_at_least_the_optimum() -> None:

@@ -18,12 +18,14 @@ from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import FaultEvent, FaultSchedule
 from selfrepair.execution.result import MissionSpec
+from selfrepair.execution.tolerance import mission_tolerance
 from selfrepair.execution.trace import Trace, parse_trace, spec_from_header, trace_lines
 from selfrepair.experiment.report import pick_mission
 from selfrepair.experiment.store import ResultStore
 from selfrepair.experiment.viewer import mission_payload, render_html, wall_runs
 from selfrepair.geometry import Heading, Pose
 from selfrepair.repair.strategies import StrategyOptions
+from selfrepair.repair.tolerance import fault_model
 from selfrepair.robots import four_wheel
 from selfrepair.world.bundled import bundled_routes, load_bundled
 from selfrepair.world.maze import Maze
@@ -166,6 +168,28 @@ def test_lookahead_and_replan_repairs_say_so() -> None:
         assert repairs and all(word in r["how"] for r in repairs if r["source"] == strategy)
 
 
+def test_the_initial_plans_tolerance_is_in_the_payload_per_plan_step(
+    trace: Trace, payload: dict[str, Any]
+) -> None:
+    """The heat strip's data: the initial plan's tolerance, step by step, as the checker finds
+    it. On narrow-short r1 (hand-written table, flat) the optimum covers all 240 single-fault
+    pairs and 1,385 of the 1,560 pairs with double faults (docs/tolerance.md)."""
+    spec = spec_from_header(trace.header)
+    shown = payload["tolerance"]
+    _, expected = mission_tolerance(spec, fault_model(spec.domain, 1))
+    assert expected is not None and shown == expected.to_json(spec.domain)
+    assert [s["action"] for s in shown["steps"]] == [seg["action"] for seg in payload["plan"]]
+    assert [s["pose"][:2] for s in shown["steps"]] == [
+        [seg["from"]["x"], seg["from"]["y"]] for seg in payload["plan"]
+    ]
+    assert (shown["covered"], shown["pairs"], shown["tolerant"]) == (240, 240, True)
+    double = mission_payload(trace, tolerance=2)["tolerance"]
+    assert (double["model"], double["covered"], double["pairs"]) == ("k=2", 1385, 1560)
+    assert any(s["uncovered"] for s in double["steps"])
+    assert mission_payload(trace, tolerance=0)["tolerance"] is None
+    assert mission_payload(mission_trace("replan"))["tolerance"] is None
+
+
 def test_wall_runs_rebuild_the_maze() -> None:
     rng = np.random.default_rng(4)
     maze = Maze(rng.random((7, 11)) < 0.4)
@@ -246,6 +270,12 @@ def test_view_a_trace(tmp_path: Path, trace: Trace, capsys: pytest.CaptureFixtur
     data = _page_data(out.read_text(encoding="utf-8"))
     assert data["origin"] == {"kind": "trace", "source": str(path)}
     assert len(data["frames"]) == len(trace.steps) + 1
+    assert data["tolerance"]["model"] == "k=1"  # the heat strip's default
+    assert 'id="tolerance-strip"' in out.read_text(encoding="utf-8")
+    assert main(["view", str(path), "-o", str(out), "--tolerance", "2"]) == 0
+    assert _page_data(out.read_text(encoding="utf-8"))["tolerance"]["model"] == "k=2"
+    assert main(["view", str(path), "-o", str(out), "--tolerance", "0"]) == 0
+    assert _page_data(out.read_text(encoding="utf-8"))["tolerance"] is None
 
 
 def _one_error(capsys: pytest.CaptureFixture[str], *words: str) -> None:

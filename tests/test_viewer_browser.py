@@ -161,6 +161,36 @@ def test_the_page_loads_without_console_errors(driver: Any, page: tuple[Path, Tr
     assert plan == len(trace.header["initial_plan"])
 
 
+def test_the_heat_strip_shows_the_plans_tolerance_per_step(
+    driver: Any, page: tuple[Path, Trace]
+) -> None:
+    """One strip cell per initial-plan step, with the uncovered fault sets of the payload, and
+    the plan's cells tinted on the map."""
+    html, trace = page
+    log = _open(driver, html)
+    assert [e for e in log if e["level"] == "SEVERE"] == []
+    data = driver.execute_script(
+        "return JSON.parse(document.getElementById('mission-data').textContent).tolerance"
+    )
+    shown = driver.execute_script(
+        "return Array.from(document.querySelectorAll('#tolerance-strip rect[data-uncovered]'))"
+        ".map(r => Number(r.getAttribute('data-uncovered')))"
+    )
+    assert shown == [len(s["uncovered"]) for s in data["steps"]]
+    assert len(shown) == len(trace.header["initial_plan"])
+    visible, title, cells = driver.execute_script(
+        "const box = document.getElementById('tolerance');"
+        "return [!box.hidden, document.getElementById('tolerance-title').textContent,"
+        "document.getElementById('layer-tolerance').children.length]"
+    )
+    assert visible and title.startswith("Plan tolerance (k=1, 12 fault sets)")
+    assert cells > 0
+    marks = driver.execute_script(
+        "return document.querySelectorAll('#tolerance-strip rect[data-needs]').length"
+    )
+    assert marks == sum(bool(s["needs_replan"]) for s in data["steps"])
+
+
 def test_the_slider_moves_the_robot_to_the_pose_of_the_trace(
     driver: Any, page: tuple[Path, Trace]
 ) -> None:

@@ -113,30 +113,13 @@ def print_tolerance(domain: "Domain[Any, Any]", tolerance: "PlanTolerance", per_
 
 
 def tolerance_json(domain: "Domain[Any, Any]", tolerance: "PlanTolerance") -> dict[str, Any]:
-    """The tolerance as JSON: the summary and, per step, the uncovered fault sets (what the
-    viewer draws as a heat strip along the route)."""
-    return {
-        "model": tolerance.model.label,
-        "fault_sets": [domain.format_faults(f) for f in tolerance.model.fault_sets],
-        "pairs": tolerance.pairs,
-        "covered": tolerance.covered,
-        "met": tolerance.met,
-        "share": number_json(tolerance.share),
-        "share_exact": exact_json(tolerance.share),
-        "tolerant": tolerance.tolerant,
-        "replan_steps": tolerance.replan_steps,
-        "exact_local": tolerance.exact_local,
-        "steps": [
-            {
-                "step": s.step,
-                "pose": [s.pose.x, s.pose.y, s.pose.heading.name],
-                "action": domain.format_action(s.action),
-                "uncovered": [domain.format_faults(f) for f in s.uncovered],
-                "needs_replan": [domain.format_faults(f) for f in s.needs_replan],
-            }
-            for s in tolerance.steps
-        ],
-    }
+    """The tolerance as JSON (:meth:`~selfrepair.repair.tolerance.PlanTolerance.to_json`, the
+    share rounded as every JSON number of the CLI): the summary and, per step, the uncovered
+    fault sets (what the viewer draws as a heat strip along the route)."""
+    out = tolerance.to_json(domain)
+    out["share"] = number_json(tolerance.share)
+    out["share_exact"] = exact_json(tolerance.share)
+    return out
 
 
 @app.command("tolerance")

@@ -52,6 +52,17 @@ def view(
         typer.Option("--max-steps", metavar="N", min=1, help="Refuse missions with more steps."),
     ] = VIEW_STEPS_DEFAULT,
     max_trace_bytes: MaxTraceBytes = MAX_TRACE_BYTES,
+    tolerance: Annotated[
+        int,
+        typer.Option(
+            "--tolerance",
+            metavar="K",
+            min=0,
+            max=3,
+            help="Heat strip of the initial plan's tolerance of every set of 1 to K faults "
+            "(replacement missions; 0: none).",
+        ),
+    ] = 1,
 ) -> int:
     """Write a mission as a self-contained HTML page.
 
@@ -69,13 +80,16 @@ def view(
             )
         if not key:
             raise InputError("expected a non-empty mission key or key prefix", source="--key")
-        written = view_results(source, key, out, max_steps=max_steps)
+        written = view_results(source, key, out, max_steps=max_steps, tolerance=tolerance)
     else:
         if key is not None:
             raise InputError(
                 "--key chooses a mission in a results database, but this is not one",
                 source=str(source),
             )
-        written = view_trace(source, out, max_steps=max_steps, max_trace_bytes=max_trace_bytes)
+        written = view_trace(
+            source, out, max_steps=max_steps, max_trace_bytes=max_trace_bytes,
+            tolerance=tolerance,
+        )  # fmt: skip
     echo(f"wrote {written}")
     return 0

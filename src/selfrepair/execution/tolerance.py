@@ -4,6 +4,10 @@ given one."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from fractions import Fraction
+from typing import Any
+
 from selfrepair.errors import ProblemError
 from selfrepair.execution.executor import mission_context
 from selfrepair.execution.result import MissionSpec
@@ -11,7 +15,7 @@ from selfrepair.repair.strategies import StrategyName
 from selfrepair.repair.tolerance import FaultModel, PlanTolerance, plan_tolerance
 from selfrepair.search.astar import PlanResult, PlanStatus
 
-__all__ = ["mission_tolerance"]
+__all__ = ["actions_tolerance", "mission_tolerance"]
 
 
 def mission_tolerance(
@@ -37,3 +41,18 @@ def mission_tolerance(
     if initial.status is not PlanStatus.SOLVED:
         return initial, None
     return initial, plan_tolerance(context, initial.poses, initial.actions, model)
+
+
+def actions_tolerance(
+    spec: MissionSpec, model: FaultModel, actions: Sequence[Any]
+) -> PlanTolerance:
+    """The tolerance under ``model`` of the plan ``actions`` from ``spec.start`` (say, the
+    initial plan a trace records), for the mission's ``replacement`` strategy; raises as
+    :func:`mission_tolerance` does."""
+    poses = [spec.start]
+    for action in actions:
+        poses.append(spec.domain.apply(poses[-1], action))
+    found = PlanResult(PlanStatus.SOLVED, tuple(actions), tuple(poses), None, Fraction(0), 0, 0)
+    _, tolerance = mission_tolerance(spec, model, found)
+    assert tolerance is not None  # a solved plan always has one
+    return tolerance

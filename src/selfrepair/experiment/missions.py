@@ -18,8 +18,9 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any
 
+from selfrepair.diagnosis import ObservationModel
 from selfrepair.errors import ConfigError
-from selfrepair.execution.faults import FaultEvent, FaultSchedule, canonical_order
+from selfrepair.execution.faults import Detection, FaultEvent, FaultSchedule, canonical_order
 from selfrepair.execution.result import MissionSpec
 from selfrepair.experiment.axes import Axis, cross
 from selfrepair.experiment.faultsets import fault_profile
@@ -97,6 +98,7 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
         (len(fault_profile(faults.sets, get_domain(config.domain))), "fault sets"),
         (1 if faults.at_random else len(faults.at), "fault times"),
         (len(faults.detection), "detections"),
+        (len(faults.noise), "noise rates"),
         (config.repeats, "repeats"),
     ]
     if not filtered:
@@ -154,6 +156,7 @@ def expand(
         Axis("faults", fault_profile(config.faults.sets, domain), "fault sets"),
         Axis("fault_at", (RANDOM,) if config.faults.at_random else config.faults.at, "fault times"),
         Axis("detection", tuple(config.faults.detection), "detections"),
+        Axis("noise", tuple(config.faults.noise), "noise rates"),
         Axis("replicate", tuple(range(config.repeats)), "repeats"),
         Axis("variant", variants, "strategy variants and weights"),
     )
@@ -179,6 +182,10 @@ def expand(
             "detection": point["detection"],
             "replicate": point["replicate"],
         }
+        if point["detection"] == Detection.HIDDEN:  # absent otherwise, so older keys stay valid
+            situation["behaviour"] = config.faults.behaviour
+            situation["noise"] = point["noise"]
+            situation["bump_switch"] = config.faults.bump_switch
         if domain is not FOUR_WHEEL:  # absent for the four-wheel robot, so older keys stay valid
             situation["domain"] = domain.name
         if plugins:
@@ -299,7 +306,12 @@ def to_spec(mission: Mission) -> MissionSpec:
             lpg_time_limit_s=options.get("lpg_time_limit_s", 5.0),
             lpg_seed=options.get("lpg_seed", 0),
             rewrite=options.get("rewrite", False),
+            max_faults=options.get("max_faults", 2),
+            fault_prior=options.get("fault_prior", 0.05),
+            confidence=options.get("confidence", 0.01),
         ),
+        behaviour=s.get("behaviour"),
+        observation=ObservationModel(s.get("noise", 0.0), s.get("bump_switch", True)),
         objective=parse_objective(options.get("objective", OPTIMAL)),
         clearance_weight=Fraction(s["clearance_weight"]),
         clearance_radius=s["clearance_radius"],

@@ -127,6 +127,34 @@ class FaultsConfig(Frozen):
     at_random: bool = False
     """When true, each situation's faults appear at one step drawn (seeded by the situation)
     uniformly from the steps of the route's fault-free optimal plan, instead of at each ``at``."""
+    behaviour: str | None = None
+    """Detection ``hidden``: the robot's fault-behaviour model (its default when absent)."""
+    noise: Annotated[
+        tuple[Annotated[Float, Field(ge=0.0, lt=0.5)], ...], NonEmpty
+    ] = (0.0,)
+    """Detection ``hidden``: the odometry error rates, one axis of the sweep."""
+    bump_switch: bool = True
+    """Detection ``hidden``: whether the robot senses a motion stopped at a wall."""
+
+    @field_validator("behaviour")
+    @classmethod
+    def _behaviour(cls, value: str | None, info: ValidationInfo) -> str | None:
+        if value is None:
+            return value
+        domain = _domain(info)
+        if value not in domain.behaviour_names():
+            names = ", ".join(domain.behaviour_names()) or "none: the robot has no such model"
+            raise ValueError(
+                f"expected a fault behaviour of {domain.name} ({names}), got {value!r}"
+            )
+        return value
+
+    @model_validator(mode="after")
+    def _hidden_options(self) -> FaultsConfig:
+        hidden = Detection.HIDDEN in self.detection
+        if not hidden and (self.behaviour is not None or self.noise != (0.0,)):
+            raise ValueError('behaviour and noise need detection = ["hidden"] (or a list with it)')
+        return self
 
     @model_validator(mode="after")
     def _random_step(self) -> FaultsConfig:
@@ -301,12 +329,38 @@ class LpgAdaptStrategy(_StrategyEntry):
         return value
 
 
+class DiagnosisStrategy(_StrategyEntry):
+    """A strategy for faults the robot is not told (docs/diagnosis.md): the ``oracle``, told
+    them, and ``diagnose``, ``conformant``, ``active-diagnosis`` and ``trial-and-error``, with a
+    table (one variant per table and recursion mode) and the diagnosis options: hypotheses of up
+    to ``max_faults`` faults, the per-fault prior ``fault_prior``, the posterior mass ``1 -
+    confidence`` that isolates a class."""
+
+    name: Literal[
+        StrategyName.ORACLE,
+        StrategyName.DIAGNOSE,
+        StrategyName.CONFORMANT,
+        StrategyName.ACTIVE_DIAGNOSIS,
+        StrategyName.TRIAL_AND_ERROR,
+    ]
+    tables: Annotated[tuple[str, ...], NonEmpty] = ("handwritten",)
+    recursion: Annotated[tuple[RecursionMode, ...], NonEmpty] = (RecursionMode.FLAT,)
+    max_faults: Annotated[Int, Field(ge=0, le=4)] = 2
+    fault_prior: Annotated[Float, Field(gt=0.0, lt=1.0)] = 0.05
+    confidence: Annotated[Float, Field(ge=0.0, lt=1.0)] = 0.01
+
+
 STRATEGY_TAGS: tuple[StrategyName, ...] = StrategyName.of_kind(MissionKind.ROBOT)
 """The ``name`` values that select a strategy entry's model (the discriminator of
 :data:`StrategyConfig`)."""
 
 StrategyConfig = Annotated[
-    ReplanStrategy | ReplacementStrategy | LookaheadStrategy | DStarLiteStrategy | LpgAdaptStrategy,
+    ReplanStrategy
+    | ReplacementStrategy
+    | LookaheadStrategy
+    | DStarLiteStrategy
+    | LpgAdaptStrategy
+    | DiagnosisStrategy,
     Field(discriminator="name"),
 ]
 

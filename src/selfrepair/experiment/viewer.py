@@ -33,7 +33,7 @@ from selfrepair.experiment.figstyle import SOURCE_COLOURS
 from selfrepair.experiment.viewpage import pose_json, render_html, wall_runs, write_page
 from selfrepair.geometry import Cell, Pose
 from selfrepair.limits import MAX_TRACE_BYTES
-from selfrepair.repair.strategies import RepairSource, uses_table
+from selfrepair.repair.strategies import RepairSource, StrategyName, uses_table
 from selfrepair.robots.domain import Domain
 
 __all__ = [
@@ -42,6 +42,7 @@ __all__ = [
     "VIEWER_VERSION",
     "mission_payload",
     "render_html",
+    "tolerance_json",
     "trace_from_results",
     "view_results",
     "view_trace",
@@ -282,14 +283,32 @@ def _title(spec: MissionSpec, status: str) -> str:
     return f"{spec.maze.name or 'maze'}: {spec.start} to {goal}, {strategy}: {status}"
 
 
+def tolerance_json(spec: MissionSpec, actions: Sequence[Any], k: int) -> dict[str, Any] | None:
+    """The tolerance of the initial plan ``actions`` for every set of 1 to ``k`` faults
+    (:meth:`~selfrepair.repair.tolerance.PlanTolerance.to_json`: per step, the fault sets
+    uncovered from there), what the page draws as a heat strip along the route; ``None`` for
+    ``k`` 0, an empty plan or a strategy other than ``replacement`` (tolerance is a property of
+    a plan for the replacement strategy)."""
+    if k < 1 or not actions or spec.strategy != StrategyName.REPLACEMENT:
+        return None
+    from selfrepair.execution.tolerance import actions_tolerance
+    from selfrepair.repair.tolerance import fault_model
+
+    found = actions_tolerance(spec, fault_model(spec.domain, k), actions)
+    return found.to_json(spec.domain)
+
+
 def mission_payload(
     trace: Trace,
     *,
     origin: Mapping[str, Any] | None = None,
     max_steps: int = MAX_VIEW_STEPS,
+    tolerance: int = 1,
 ) -> dict[str, Any]:
     """The viewer's data for ``trace`` (see the module docstring). The trace must replay (the
-    page draws only what the robot model says happened); ``max_steps`` bounds its steps."""
+    page draws only what the robot model says happened); ``max_steps`` bounds its steps.
+    ``tolerance``: the ``k`` of the initial plan's tolerance shown (:func:`tolerance_json`; 0
+    for none)."""
     if len(trace.steps) > max_steps:
         raise TraceError(
             f"the trace has {len(trace.steps)} steps, more than the viewer's limit of "
@@ -307,12 +326,14 @@ def mission_payload(
     plan: list[dict[str, Any]] = []
     pose = spec.start
     domain = spec.domain
+    initial = []
     for code in trace.header.get("initial_plan", []):
         try:
             action = domain.parse_action(str(code))
         except InputError as exc:
             raise TraceError(f"initial plan: {exc.reason}", source=trace.source, line=1) from None
         plan.append(segment_json(domain, pose, action))
+        initial.append(action)
         pose = domain.apply(pose, action)
     summary = {k: _finite(v) for k, v in (trace.summary or {}).items()}
     status = str(summary.get("status", "unfinished"))
@@ -341,6 +362,7 @@ def mission_payload(
         "detection": spec.schedule.detection.value,
         "colours": {str(source): colour for source, colour in SOURCE_COLOURS.items()},
         "plan": plan,
+        "tolerance": tolerance_json(spec, initial, tolerance),
         "steps": [_step_json(domain, s, t) for s, t in zip(steps, ticks, strict=False)],
         "frames": [
             {
@@ -372,6 +394,7 @@ def view_trace(
     *,
     max_steps: int = MAX_VIEW_STEPS,
     max_trace_bytes: int | None = MAX_TRACE_BYTES,
+    tolerance: int = 1,
 ) -> Path:
     """Write the viewer page of the trace file ``trace`` to ``out``; returns ``out``: the mission
     page, or the team page (:mod:`selfrepair.experiment.teamview`) for a team trace. A trace file
@@ -383,7 +406,7 @@ def view_trace(
     if is_team_trace(trace):
         return view_team_trace(trace, out, max_steps=max_steps, max_trace_bytes=max_trace_bytes)
     parsed = read_trace(trace, max_trace_bytes=max_trace_bytes)
-    return write_page(mission_payload(parsed, max_steps=max_steps), out)
+    return write_page(mission_payload(parsed, max_steps=max_steps, tolerance=tolerance), out)
 
 
 def trace_from_results(db: str | Path, key_prefix: str) -> tuple[Trace, dict[str, Any]]:
@@ -416,7 +439,12 @@ def trace_from_results(db: str | Path, key_prefix: str) -> tuple[Trace, dict[str
 
 
 def view_results(
-    db: str | Path, key_prefix: str, out: str | Path, *, max_steps: int = MAX_VIEW_STEPS
+    db: str | Path,
+    key_prefix: str,
+    out: str | Path,
+    *,
+    max_steps: int = MAX_VIEW_STEPS,
+    tolerance: int = 1,
 ) -> Path:
     """Write the viewer page of the stored mission ``key_prefix`` of ``db`` to ``out``: the
     team page for a mission of a team experiment (run again from its stored configuration)."""
@@ -433,4 +461,5 @@ def view_results(
 
         return view_team_results(pick_mission(rows, key_prefix, str(db)), db, out, max_steps)
     trace, origin = trace_from_results(db, key_prefix)
-    return write_page(mission_payload(trace, origin=origin, max_steps=max_steps), out)
+    payload = mission_payload(trace, origin=origin, max_steps=max_steps, tolerance=tolerance)
+    return write_page(payload, out)

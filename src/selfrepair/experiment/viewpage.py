@@ -36,6 +36,8 @@ class Page:
     map_label: str
     timeline_title: str
     timeline_label: str
+    strip: str = ""
+    """A fragment shown above the timeline (the mission page's plan-tolerance strip), or none."""
 
 
 PAGES = {
@@ -46,6 +48,7 @@ PAGES = {
         "maze and robot",
         "Faults over the mission",
         "fault timeline",
+        "mission-strip.html",
     ),
     "team": Page(
         "team.js",
@@ -91,7 +94,7 @@ def wall_runs(maze: Maze) -> list[list[int]]:
 
 
 _PLACEHOLDER = re.compile(
-    r"\{\{(TITLE|STYLE|SCRIPT|DATA|PANEL|UNIT|MAP_LABEL|TIMELINE_TITLE|TIMELINE_LABEL)\}\}"
+    r"\{\{(TITLE|STYLE|SCRIPT|DATA|PANEL|UNIT|MAP_LABEL|TIMELINE_TITLE|TIMELINE_LABEL|STRIP)\}\}"
 )
 
 
@@ -119,6 +122,7 @@ def render_html(payload: Mapping[str, Any], *, page: str = "mission") -> str:
         "MAP_LABEL": chosen.map_label,
         "TIMELINE_TITLE": chosen.timeline_title,
         "TIMELINE_LABEL": chosen.timeline_label,
+        "STRIP": _asset(chosen.strip) if chosen.strip else "",
     }
     for name in ("STYLE", "SCRIPT"):
         if re.search(r"</(style|script)", parts[name], re.IGNORECASE):

@@ -207,6 +207,34 @@ class PlanTolerance:
         tolerant planner's soft mode counts."""
         return sum(len(s.needs_replan) for s in self.steps)
 
+    def to_json(self, domain: Domain[Any, Any]) -> dict[str, Any]:
+        """The tolerance as JSON (faults and actions in ``domain``'s text form): the summary and,
+        per step, the uncovered fault sets and those under which the step needs a replan (what
+        ``selfrepair tolerance --json`` prints and the viewer draws as a heat strip)."""
+        share = self.share
+        return {
+            "model": self.model.label,
+            "fault_sets": [domain.format_faults(f) for f in self.model.fault_sets],
+            "pairs": self.pairs,
+            "covered": self.covered,
+            "met": self.met,
+            "share": int(share) if share.denominator == 1 else float(share),
+            "share_exact": str(share),
+            "tolerant": self.tolerant,
+            "replan_steps": self.replan_steps,
+            "exact_local": self.exact_local,
+            "steps": [
+                {
+                    "step": s.step,
+                    "pose": [s.pose.x, s.pose.y, s.pose.heading.name],
+                    "action": domain.format_action(s.action),
+                    "uncovered": [domain.format_faults(f) for f in s.uncovered],
+                    "needs_replan": [domain.format_faults(f) for f in s.needs_replan],
+                }
+                for s in self.steps
+            ],
+        }
+
 
 def _no_plan(
     start: Pose, goal: Cell, heading: Heading | None, known: frozenset[Any], budget: int | None

@@ -29,11 +29,11 @@ options give the same result (the timings aside).
    repairer and splice, :mod:`selfrepair.team.driving`); when that fails, or a drive meets a
    blocked cell, or a gripper has failed, the robot has an *incident* and the team strategy
    decides (:mod:`selfrepair.team.strategies`; started once for the mission, as a robot's
-   repairer is, so it may keep state between incidents). The repair latency runs from the incident until
-   every robot whose plan changed and is not in the middle of an action has its next drive
-   placed in time (garbage collection is held off during it; each mission starts without kept
-   cost-to-go maps, so a repair's cost does not depend on the missions run before it in the
-   process).
+   repairer is, so it may keep state between incidents). The repair latency runs from the
+   incident until every robot whose plan changed and is not in the middle of an action has its
+   next drive placed in time (garbage collection is held off during it; each mission starts
+   without kept cost-to-go maps, so a repair's cost does not depend on the missions run before
+   it in the process).
 5. **End.** When every item is delivered; when nothing more can happen (``stalled``: no robot
    with work can act, no fault will clear, nothing moved for :data:`STALL_TICKS`); or at
    ``max_ticks``.

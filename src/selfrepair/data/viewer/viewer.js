@@ -31,7 +31,7 @@
   // Drawing order: the initial plan lies above the executed path and the repair sites, so it
   // is never hidden under them.
   const layers = viewer.drawMaze(data.maze,
-    ["highlight", "executed", "repairs", "plan", "ends", "robot"]);
+    ["tolerance", "highlight", "executed", "repairs", "plan", "ends", "robot"]);
 
   function segmentPath(seg) {
     const a = centre(seg.from.x) + " " + centre(seg.from.y);
@@ -73,6 +73,80 @@
   for (const seg of data.plan) {
     drawSegment(seg, "#ffffff", 0.26 * CELL, halo, false);
     drawSegment(seg, "#111111", 0.12 * CELL, dashes, true);
+  }
+
+  // Plan tolerance (when the payload has it): the share of the fault model's sets that,
+  // appearing before a step of the initial plan, force a replan, as a heat colour (white: every
+  // set covered; from a light tint for one set to vermillion for all, by the square root of the
+  // share so that a few uncovered sets show). On the map each plan cell shows its worst step;
+  // the strip under the map shows every step.
+  const tolerance = data.tolerance;
+
+  function heat(share) {
+    const t = share > 0 ? 0.25 + 0.75 * Math.sqrt(share) : 0;
+    const mix = (a, b) => Math.round(a + (b - a) * t);
+    return "rgb(" + mix(255, 213) + "," + mix(255, 94) + "," + mix(255, 0) + ")";
+  }
+
+  function toleranceText(s, n) {
+    const here = s.needs_replan.length ? "; needs a replan here under " + s.needs_replan.join("; ")
+      : "";
+    return "plan step " + s.step + " (" + s.pose.join(",") + ", " + s.action + "): " +
+      s.uncovered.length + " of " + n + " fault sets uncovered" + here;
+  }
+
+  function buildTolerance() {
+    if (!tolerance) return;
+    const n = tolerance.fault_sets.length;
+    const worst = new Map();
+    for (const s of tolerance.steps) {
+      const key = s.pose[0] + "," + s.pose[1];
+      if (!worst.has(key) || worst.get(key).uncovered.length < s.uncovered.length) worst.set(key, s);
+    }
+    for (const s of worst.values()) {
+      const cell = svg("rect", {
+        x: s.pose[0] * CELL, y: s.pose[1] * CELL, width: CELL, height: CELL,
+        fill: heat(s.uncovered.length / n), "data-step": s.step,
+      }, layers.tolerance);
+      svg("title", {}, cell).textContent = toleranceText(s, n);
+    }
+    // Where a step itself needs a replan under some fault set: a dark frame on its cell.
+    for (const s of tolerance.steps.filter((t) => t.needs_replan.length)) {
+      svg("rect", {
+        x: (s.pose[0] + 0.08) * CELL, y: (s.pose[1] + 0.08) * CELL, width: 0.84 * CELL,
+        height: 0.84 * CELL, fill: "none", stroke: "#7a2900", "stroke-width": 0.12 * CELL,
+        "data-needs": s.step,
+      }, layers.tolerance);
+    }
+    document.getElementById("tolerance").hidden = false;
+    const pct = (100 * tolerance.share).toFixed(1);
+    document.getElementById("tolerance-title").textContent = "Plan tolerance (" +
+      tolerance.model + ", " + n + " fault sets): " + tolerance.covered + " of " +
+      tolerance.pairs + " (step, fault set) pairs covered (" + pct + "%), tolerant: " +
+      (tolerance.tolerant ? "yes" : "no");
+    const strip = document.getElementById("tolerance-strip");
+    const count = Math.max(tolerance.steps.length, 1);
+    const w = (TL.right - TL.left) / count;
+    for (const s of tolerance.steps) {
+      const rect = svg("rect", {
+        x: TL.left + s.step * w, y: 4, width: Math.max(w, 0.5), height: 18,
+        fill: heat(s.uncovered.length / n), stroke: "#d8d8dc", "stroke-width": 0.3,
+        "data-step": s.step, "data-uncovered": s.uncovered.length,
+      }, strip);
+      svg("title", {}, rect).textContent = toleranceText(s, n);
+      if (s.needs_replan.length) {
+        svg("rect", {
+          x: TL.left + s.step * w, y: 24, width: Math.max(w, 0.5), height: 5, fill: "#7a2900",
+          "data-needs": s.needs_replan.length,
+        }, strip);
+      }
+    }
+    svg("text", { x: 4, y: 17, "font-size": 11, fill: "#6b6b70" }, strip).textContent =
+      "plan step";
+    svg("text", { x: 4, y: 30, "font-size": 9, fill: "#6b6b70" }, strip).textContent =
+      "replan here";
+    svg("text", { x: TL.right, y: 36, "font-size": 10, "text-anchor": "end", fill: "#6b6b70" },
+      strip).textContent = "step " + tolerance.steps.length;
   }
 
   // The executed steps, coloured by source, shown up to the current frame.
@@ -226,6 +300,11 @@
     toggle("executed path", layers.executed, exec);
     const ring = html("span", "R L P", null);
     toggle("repair sites", layers.repairs, ring);
+    if (tolerance) {
+      const sw = html("span", null, "swatch");
+      sw.style.background = "linear-gradient(90deg," + heat(0) + "," + heat(1) + ")";
+      toggle("plan tolerance", layers.tolerance, sw);
+    }
     for (const source of Object.keys(data.colours)) {
       const item = html("span", null, null, legend);
       const sw = html("span", null, "swatch", item);
@@ -413,6 +492,7 @@
   const nav = viewer.controls(last, setFrame, () => state.frame);
 
   describeOrigin();
+  buildTolerance();
   buildLegend();
   buildRepairList();
   buildEvents();

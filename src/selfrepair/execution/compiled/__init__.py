@@ -7,6 +7,12 @@ loop that stays the reference (see :mod:`selfrepair.execution.compiled.kernel` f
 
 from __future__ import annotations
 
-from selfrepair.execution.compiled.driver import FOOTINGS, LoopEnd, compiled_loop, refusal
+from selfrepair.execution.compiled.driver import (
+    FOOTINGS,
+    LoopEnd,
+    compiled_loop,
+    refusal,
+    runs_compiled,
+)
 
-__all__ = ["FOOTINGS", "LoopEnd", "compiled_loop", "refusal"]
+__all__ = ["FOOTINGS", "LoopEnd", "compiled_loop", "refusal", "runs_compiled"]

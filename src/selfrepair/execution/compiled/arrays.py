@@ -123,6 +123,7 @@ class CompiledLookups:
         self.grid: FreeGrid = context.grid
         self.n_slots = 4 * n_actions
         self.sets: dict[frozenset[Any], int] = {}
+        self._set_of: dict[tuple[Any, ...], npt.NDArray[np.int64]] = {}
         self.on_grid: list[GridLookups[Repair]] = []
         self.lk_mask = np.full((4, self.n_slots), k.UNLOADED, dtype=np.int64)
         self.lk_r = np.zeros((4, self.n_slots), dtype=np.int64)
@@ -138,6 +139,15 @@ class CompiledLookups:
         self.ans_len = np.zeros(64, dtype=np.int64)
         self.ans_act = np.zeros(256, dtype=np.int32)
         self._n_act = 0
+
+    def set_of(self, faults: tuple[Any, ...]) -> npt.NDArray[np.int64]:
+        """Per bit mask over ``faults`` (a schedule's), the id of its look-ups (-1: not met
+        yet); one array per tuple of faults, kept, so a later mission over the same faults
+        starts with every set it needs known."""
+        found = self._set_of.get(faults)
+        if found is None:
+            found = self._set_of[faults] = np.full(1 << len(faults), -1, dtype=np.int64)
+        return found
 
     def set_id(self, known: frozenset[Any]) -> int:
         """The id of the look-ups under ``known`` (made on first use)."""

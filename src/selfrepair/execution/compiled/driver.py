@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.execution.compiled import kernel as k
 from selfrepair.execution.compiled.arrays import (
@@ -26,6 +27,12 @@ from selfrepair.execution.compiled.arrays import (
     compiled_lookups,
     fault_arrays,
     move_arrays,
+)
+from selfrepair.execution.compiled.planner import (
+    KernelPlanner,
+    cached_planner,
+    kernel_planner,
+    new_records,
 )
 from selfrepair.execution.faults import Detection, Persistence, canonical_order
 from selfrepair.execution.result import MissionSpec, RepairRecord, StepSource, TraceStep
@@ -44,7 +51,7 @@ from selfrepair.repair.strategies import (
 from selfrepair.search.problem import make_pose
 from selfrepair.status import REPAIR_OF_PLAN, MissionStatus, mission_status
 
-__all__ = ["FOOTINGS", "LoopEnd", "compiled_loop", "refusal"]
+__all__ = ["FOOTINGS", "LoopEnd", "compiled_loop", "refusal", "runs_compiled"]
 
 FOOTINGS = ("auto", "compiled", "python")
 """What a mission's ``footing`` may ask for: the compiled loop where it can run (``auto``), the
@@ -65,6 +72,7 @@ _REPAIR_STATUS = {
     RepairStatus.STUCK: k.R_STUCK,
     RepairStatus.BUDGET_EXHAUSTED: k.R_BUDGET,
 }
+_STATUS_OF = {code: status for status, code in _REPAIR_STATUS.items()}
 
 
 def refusal(spec: MissionSpec, stepper: Stepper | None = None) -> str | None:
@@ -93,11 +101,14 @@ def refusal(spec: MissionSpec, stepper: Stepper | None = None) -> str | None:
     return None
 
 
-def _check_footing(spec: MissionSpec, stepper: Stepper) -> bool:
-    """Whether the compiled loop runs ``spec`` (``footing`` ``compiled`` refused: raises)."""
+def runs_compiled(spec: MissionSpec, sim: Simulator, stepper: Stepper) -> bool:
+    """Whether the compiled loop runs ``spec`` with ``sim`` and ``stepper`` (for footing
+    ``compiled`` a refusal raises :class:`ProblemError` with the reason)."""
     if spec.footing == "python":
         return False
     reason = refusal(spec, stepper)
+    if reason is None and type(sim) is not Simulator:  # another world holds the truth (physics)
+        reason = f"its simulator is a {type(sim).__name__}, not the lattice Simulator"
     if reason is not None and spec.footing == "compiled":
         raise ProblemError(f"footing 'compiled' cannot run this mission: {reason}")
     return reason is None
@@ -135,7 +146,11 @@ class _Mission:
         replacement = spec.strategy == StrategyName.REPLACEMENT
         n_actions = len(domain.actions)
         self.lookups = compiled_lookups(context, n_actions) if replacement else None
-        self.set_of = np.full(1 << len(self.faults), -1, dtype=np.int64)
+        self.set_of = (
+            self.lookups.set_of(self.faults)
+            if self.lookups is not None
+            else np.full(1 << len(self.faults), -1, dtype=np.int64)
+        )
         weight = bool(Fraction(spec.clearance_weight))
         self.pen = (
             np.frombuffer(penalty, dtype=np.uint8).astype(np.int64)
@@ -165,7 +180,7 @@ class _Mission:
         self.qa[:n] = plan[::-1]
         self.qs[:n] = k.SRC_PLAN
         self.tr = np.zeros((max(64, 2 * n), k.T_COLS), dtype=np.int64)
-        self.rp = np.zeros((16, k.RP_COLS), dtype=np.int64)
+        self.rp = np.zeros((64, k.RP_COLS), dtype=np.int64)
         self.rp_act = np.zeros(max(256, 4 * n), dtype=np.int64)
         self.pb = np.zeros(max(64, n), dtype=np.int64)
         st = np.zeros(k.S_SIZE, dtype=np.int64)
@@ -177,6 +192,15 @@ class _Mission:
         self.st = st
         self.plans: list[Any] = []
         self._known: dict[int, frozenset[Any]] = {}
+        st[k.S_PL_MASK] = -1
+        self.planner: tuple[Any, ...] = _NO_PLANNER
+        self.search: tuple[Any, ...] = _NO_SEARCH
+        budget = context.replan_budget
+        par[k.P_BUDGET] = (1 << 62) if budget is None else min(budget, 1 << 62)
+        full = (1 << len(self.faults)) - 1
+        ready = cached_planner(spec, self.known(full))  # made by an earlier run: load it now
+        if ready is not None:
+            self._load_planner(full, ready)
 
     def mask(self, faults: frozenset[Any]) -> int:
         """The bit mask of ``faults`` (each one of the schedule's)."""
@@ -192,6 +216,16 @@ class _Mission:
             self._known[mask] = found
         return found
 
+    def _load_planner(self, mask: int, planner: KernelPlanner | None) -> None:
+        """Hand the kernel the planner of the known mask ``mask`` (``None``: the driver plans)."""
+        st = self.st
+        st[k.S_PL_MASK] = mask
+        st[k.S_PL_KERNEL] = int(planner is not None)
+        if planner is not None:
+            self.planner = (planner.mt, planner.hdist, planner.pen, planner.nbr, planner.par,
+                            planner.moves)  # fmt: skip
+            self.search = _RECORDS.get(planner.states, lambda: new_records(planner.states))
+
     def run(self) -> int:
         """Call the kernel until the mission ends, serving its exits."""
         while True:
@@ -206,6 +240,7 @@ class _Mission:
                 self.par, self.st, self.mv, self.grid, self.avail, self.block, self.waits,
                 self.ev, self.set_of, lk_mask, lk_r, codes, hk1, hk2, hv, ans_off, ans_len,
                 ans_act, self.pen, self.pb, self.qa, self.qs, self.tr, self.rp, self.rp_act,
+                self.planner, self.search,
             )  # fmt: skip
             if code == k.DONE:
                 return int(self.st[k.S_END])
@@ -225,11 +260,14 @@ class _Mission:
             lk.fill(*args)
         elif code == k.NEED_PLAN:
             self._plan(args[0])
+        elif code == k.NEED_PLANNER:
+            self._load_planner(args[0], kernel_planner(self.spec, self.known(args[0])))
         elif code == k.GROW:
-            self.qa, self.qs = _grow(self.qa), _grow(self.qs)
-            self.tr, self.rp, self.rp_act = _grow(self.tr), _grow(self.rp), _grow(self.rp_act)
-            while self.pb.shape[0] < int(st[k.S_PLAN_LEN]):
-                self.pb = _grow(self.pb)
+            need = int(st[k.S_PLAN_LEN]) + int(st[k.S_QLEN]) + 2
+            self.qa, self.qs = _grow(self.qa, need), _grow(self.qs, need)
+            self.tr, self.rp = _grow(self.tr), _grow(self.rp)
+            self.rp_act = _grow(self.rp_act, int(st[k.S_NACT]) + need + 64)
+            self.pb = _grow(self.pb, need)
         elif code == k.TOO_MANY:
             pose = self.pose(int(st[k.S_X]), int(st[k.S_Y]), int(st[k.S_H]))
             raise ProblemError(
@@ -254,6 +292,7 @@ class _Mission:
         self.pb[: len(acts)] = acts
         st[k.S_PLAN_STATUS] = _REPAIR_STATUS[status]
         st[k.S_PLAN_LEN] = len(acts)
+        st[k.S_PLAN_EXP] = result.expansions
         st[k.S_PLAN_ID] = len(self.plans)
         st[k.S_PLAN_READY] = 1
         self.plans.append(result)
@@ -264,6 +303,21 @@ class _Mission:
 
 
 _HEADINGS = tuple(Heading)
+_NO_PLANNER = (
+    np.zeros((4, 1, 6), dtype=np.int64),
+    np.zeros(1, dtype=np.int32),
+    np.zeros(1, dtype=np.int64),
+    np.zeros(1, dtype=np.uint16),
+    np.zeros(7, dtype=np.int64),
+    np.zeros(1, dtype=np.int64),
+)
+for _array in _NO_PLANNER:
+    _array.setflags(write=False)
+_NO_SEARCH = (np.zeros((1, 3), dtype=np.int64), np.zeros(1, dtype=np.int64),
+              np.zeros((8, 2), dtype=np.int64))  # fmt: skip
+_RECORDS: BoundedCache[int, tuple[Any, Any, Any]] = BoundedCache(
+    "compiled-loop search records", 4, kind=CacheKind.PLAN
+)
 _NO_LOOKUPS = (
     np.zeros((1, 1), dtype=np.int64),
     np.zeros((1, 1), dtype=np.int64),
@@ -277,8 +331,10 @@ _NO_LOOKUPS = (
 )
 
 
-def _grow(array: npt.NDArray[Any]) -> npt.NDArray[Any]:
-    out = np.zeros((2 * array.shape[0], *array.shape[1:]), dtype=array.dtype)
+def _grow(array: npt.NDArray[Any], need: int = 0) -> npt.NDArray[Any]:
+    """``array`` at least twice as long (first axis) and at least ``need`` long."""
+    size = max(2 * array.shape[0], need)
+    out = np.zeros((size, *array.shape[1:]), dtype=array.dtype)
     out[: array.shape[0]] = array
     return out
 
@@ -300,13 +356,9 @@ def compiled_loop(
     executed steps; ``why(failure)`` is the reason of a mission that ends on a failed repair;
     ``penalty`` the clearance penalties in the simulator grid's layout (read when the clearance
     weight is not zero)."""
-    if type(sim) is not Simulator:  # another world holds the truth (physics)
-        if spec.footing == "compiled":
-            raise ProblemError("footing 'compiled' cannot run this mission: its simulator is "
-                               f"a {type(sim).__name__}, not the lattice Simulator")  # fmt: skip
+    if not runs_compiled(spec, sim, stepper):
         return None
-    if not _check_footing(spec, stepper):
-        return None
+    _warm()
     try:
         mission = _Mission(spec, sim, stepper, penalty)
     except _Refused as exc:
@@ -331,6 +383,20 @@ def compiled_loop(
     failure = stepper.repairs[int(st[k.S_FAIL_REP])].repair
     stepper.failure, stepper.stopped = failure, True
     return mission_status(failure.status), why(failure), units, summed
+
+
+_WARM: list[bool] = []
+
+
+def _warm() -> None:
+    """Load the kernels the driver calls from Python (from numba's cache, or compiled) once per
+    process, before any repair's clock runs: a cold run's first fill must not pay for it."""
+    if not _WARM:
+        keys, codes, values = (np.full(2, k.EMPTY, dtype=np.int64), np.zeros(2, dtype=np.int64),
+                               np.zeros(2, dtype=np.int64))  # fmt: skip
+        k.hash_put(keys, codes, values, 0, 0, 0)
+        k.hash_get(keys, codes, values, 0, 0)
+        _WARM.append(True)
 
 
 def _write_back(mission: _Mission, moved: list[int]) -> None:
@@ -378,7 +444,9 @@ def _write_back(mission: _Mission, moved: list[int]) -> None:
 def _record(mission: _Mission, row: list[int]) -> RepairRecord:
     """The :class:`RepairRecord` of one repair row (the same values the Python loop records)."""
     actions = mission.spec.domain.actions
-    step, x, y, h, a, kind, aid, _, latency, consumed, off, length, subst, plan, known, qlen = row
+    step, x, y, h, a, kind, aid, _, latency, consumed, off, length, subst, plan, known, qlen = row[
+        : k.RP_EXPANSIONS
+    ]
     pose = make_pose(x, y, _HEADINGS[h])
     action = None if a < 0 else actions[a]
     repair: Repair
@@ -396,14 +464,22 @@ def _record(mission: _Mission, row: list[int]) -> RepairRecord:
                 subst,
             )  # fmt: skip
     else:
-        result = mission.plans[plan]
+        if plan >= 0:
+            result = mission.plans[plan]
+            status, planned, expansions = (
+                REPAIR_OF_PLAN[result.status], result.actions, result.expansions,
+            )  # fmt: skip
+        else:  # planned in the kernel
+            status = _STATUS_OF[row[k.RP_STATUS]]
+            planned = tuple(actions[i] for i in mission.rp_act[off : off + length].tolist())
+            expansions = row[k.RP_EXPANSIONS]
         repair = Repair(
-            REPAIR_OF_PLAN[result.status],
+            status,
             RepairSource.REPLAN,
-            result.actions,
+            planned,
             qlen,
             replans=1,
-            expansions=result.expansions,
+            expansions=expansions,
             attempts=(StrategyName.REPLAN,),
         )
         if kind == k.K_MISS:

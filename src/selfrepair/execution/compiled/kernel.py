@@ -44,19 +44,8 @@ from typing import Any, cast
 
 import numpy as np
 
-try:
-    from numba import njit
-
-    NUMBA = True
-except ImportError:  # pragma: no cover - depends on the environment
-    NUMBA = False
-
-    def njit(*args: Any, **kwargs: Any) -> Any:  # type: ignore[no-redef]
-        """Stand-in so the module imports without numba (its kernels are then never called)."""
-        if args and callable(args[0]):
-            return args[0]
-        return lambda f: f
-
+from selfrepair.execution.compiled.jit import NUMBA, njit
+from selfrepair.execution.compiled.planner import plan_in_kernel
 
 __all__ = ["NUMBA", "clock_ns", "hash_get", "hash_put", "run_kernel", "warm_hits"]
 
@@ -68,6 +57,7 @@ NEED_FILL = 3
 NEED_PLAN = 4
 GROW = 5
 TOO_MANY = 6
+NEED_PLANNER = 7
 
 # --- mission ends (st[END]) ------------------------------------------------------------------
 REACHED = 0
@@ -133,6 +123,9 @@ S_PLAN_ID = 25
 S_NACT = 26  # used entries of rp_act
 S_MOVED = 27  # moving steps (for the metrics)
 S_FAIL_REP = 28  # the record of the repair that failed
+S_PL_MASK = 29  # the known mask the loaded planner serves (-1: none)
+S_PL_KERNEL = 30  # 1: the loaded planner runs in the kernel; 0: the driver plans
+S_PLAN_EXP = 31  # expansions of the plan just made in the kernel
 S_SIZE = 32
 
 # --- par: the mission's parameters -----------------------------------------------------------
@@ -152,7 +145,8 @@ P_FAILED_UNITS = 12
 P_NSLOTS = 13
 P_WEIGHT = 14
 P_MAX_TRIES = 15
-P_SIZE = 16
+P_BUDGET = 16
+P_SIZE = 17
 
 # --- trace rows (tr[i]) ----------------------------------------------------------------------
 T_STEP, T_ACTION, T_X, T_Y, T_H, T_EX, T_EY, T_EH, T_UNITS, T_SOURCE, T_KNOWN = range(11)
@@ -161,9 +155,9 @@ T_COLS = 11
 # --- repair rows (rp[i]) ---------------------------------------------------------------------
 (
     RP_STEP, RP_X, RP_Y, RP_H, RP_ACTION, RP_KIND, RP_AID, RP_STATUS, RP_LATENCY, RP_CONSUMED,
-    RP_ACT_OFF, RP_ACT_LEN, RP_SUBST, RP_PLAN, RP_KNOWN, RP_QLEN,
-) = range(16)  # fmt: skip
-RP_COLS = 16
+    RP_ACT_OFF, RP_ACT_LEN, RP_SUBST, RP_PLAN, RP_KNOWN, RP_QLEN, RP_EXPANSIONS,
+) = range(17)  # fmt: skip
+RP_COLS = 17
 
 _MUL1 = np.int64(-7046029254386353131)  # 0x9E3779B97F4A7C15 as a signed 64-bit integer
 _MUL2 = np.int64(-4658895280553007687)  # 0xBF58476D1CE4E5B9
@@ -291,9 +285,11 @@ def run_kernel(
     par: Any, st: Any, mv: Any, grid: Any, avail: Any, block: Any, waits: Any, ev: Any,
     set_of: Any, lk_mask: Any, lk_r: Any, codes: Any, hk1: Any, hk2: Any, hv: Any,
     ans_off: Any, ans_len: Any, ans_act: Any, pen: Any, pb: Any,
-    qa: Any, qs: Any, tr: Any, rp: Any, rp_act: Any,
+    qa: Any, qs: Any, tr: Any, rp: Any, rp_act: Any, planner: Any, search: Any,
 ) -> int:  # fmt: skip
-    """Run (or resume) the mission; the exit code (see the module docstring)."""
+    """Run (or resume) the mission; the exit code (see the module docstring). ``planner`` is
+    the loaded kernel planner's arrays and ``search`` its records, generation and heap
+    (:mod:`selfrepair.execution.compiled.planner`)."""
     stride, margin = par[P_STRIDE], par[P_MARGIN]
     gx, gy, gh = par[P_GX], par[P_GY], par[P_GH]
     while True:
@@ -319,13 +315,16 @@ def run_kernel(
                     break
                 if st[S_TRIES] >= par[P_MAX_TRIES]:
                     return TOO_MANY
+                if st[S_NREP] >= rp.shape[0] or rp_act.shape[0] - st[S_NACT] < qlen + 64:
+                    return GROW  # before the clock starts: growing is no part of a repair
                 st[S_PHASE] = 1
                 st[S_T0] = _now()
                 st[S_RACTION] = qa[qlen - 1] if qlen > 0 else -1
             if st[S_NREP] >= rp.shape[0]:
                 return GROW
             code = _repair(par, st, mv, avail, ev, set_of, lk_mask, lk_r, codes, hk1, hk2, hv,
-                           ans_off, ans_len, ans_act, pb, qa, qs, rp, rp_act)  # fmt: skip
+                           ans_off, ans_len, ans_act, pb, qa, qs, rp, rp_act, planner,
+                           search)  # fmt: skip
             if code != DONE:
                 return code
             st[S_PHASE] = 0
@@ -384,11 +383,11 @@ def run_kernel(
         st[S_NSTEPS] = n + 1
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _repair(
     par: Any, st: Any, mv: Any, avail: Any, ev: Any, set_of: Any, lk_mask: Any, lk_r: Any,
     codes: Any, hk1: Any, hk2: Any, hv: Any, ans_off: Any, ans_len: Any, ans_act: Any,
-    pb: Any, qa: Any, qs: Any, rp: Any, rp_act: Any,
+    pb: Any, qa: Any, qs: Any, rp: Any, rp_act: Any, planner: Any, search: Any,
 ) -> int:  # fmt: skip
     """One repair of the queue (``st[S_RACTION]``: the faulty front action, -1 for the
     defensive replan), recorded in ``rp``; an exit code when it needs Python first."""
@@ -408,23 +407,41 @@ def _repair(
             return -10 - aid
         kind = K_MISS if aid == NO_ANSWER else K_HIT
     if kind != K_HIT:  # a replan
-        if st[S_PLAN_READY] == 0:
-            st[S_ARG0] = known
-            return NEED_PLAN
-        st[S_PLAN_READY] = 0
-        status = st[S_PLAN_STATUS]
         off = st[S_NACT]
-        n = st[S_PLAN_LEN]
         consumed = qlen
-        if status == R_REPAIRED:
-            if n > qa.shape[0] or n > rp_act.shape[0] - off:
-                st[S_PLAN_READY] = 1  # keep the plan for the retry
+        st[S_ARG0] = known
+        if st[S_PLAN_READY] == 0 and st[S_PL_MASK] != known:
+            return NEED_PLANNER
+        if st[S_PLAN_READY] == 0 and st[S_PL_KERNEL] == 1:  # one call of the lattice kernel
+            mt, hdist, ppen, nbr, ppar, moves = planner
+            prec, gen, heap = search
+            found, n, expansions = plan_in_kernel(
+                mt, hdist, ppen, nbr, ppar, moves, prec, gen, heap, x, y, h, par[P_BUDGET],
+                rp_act, off,
+            )  # fmt: skip
+            if found == 3 or n + 2 > qa.shape[0]:
+                st[S_PLAN_LEN] = n
                 return GROW
+            status = R_REPAIRED if found == 0 else (R_STUCK if found == 1 else R_BUDGET)
+            rec[RP_PLAN] = -1
+        else:
+            if st[S_PLAN_READY] == 0:
+                return NEED_PLAN
+            status = st[S_PLAN_STATUS]
+            n = st[S_PLAN_LEN]
+            expansions = st[S_PLAN_EXP]
+            if status == R_REPAIRED and (n + 2 > qa.shape[0] or n > rp_act.shape[0] - off):
+                return GROW  # the plan stays ready for the retry
+            st[S_PLAN_READY] = 0
             for i in range(n):
                 rp_act[off + i] = pb[i]
+            rec[RP_PLAN] = st[S_PLAN_ID]
+        if status == R_REPAIRED:
             st[S_QLEN] = 0
             _push(qa, qs, st, rp_act, off, n, SRC_REPLAN)
-        rec[RP_PLAN] = st[S_PLAN_ID]
+        else:
+            n = 0
+        rec[RP_EXPANSIONS] = expansions
         rec[RP_SUBST] = 0
     else:
         status = R_REPAIRED
@@ -469,12 +486,13 @@ def _repair(
             if substituted:
                 kind = K_REWRITE
                 consumed = 1 + done
-        if st[S_QLEN] - consumed + n > qa.shape[0]:
+        if st[S_QLEN] - consumed + n + 2 > qa.shape[0]:
             return GROW
         st[S_QLEN] -= consumed
         _push(qa, qs, st, rp_act, off, n, SRC_REPLACEMENT)
         rec[RP_SUBST] = substituted
         rec[RP_PLAN] = -1
+        rec[RP_EXPANSIONS] = 0
     rec[RP_LATENCY] = _now() - st[S_T0]
     rec[RP_STEP], rec[RP_X], rec[RP_Y], rec[RP_H] = st[S_STEP], x, y, h
     rec[RP_ACTION], rec[RP_KIND], rec[RP_AID], rec[RP_STATUS] = a, kind, aid, status

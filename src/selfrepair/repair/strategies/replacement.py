@@ -18,6 +18,7 @@ from typing import Any
 
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import FreeGrid
+from selfrepair.repair.detours import DetourFinder
 from selfrepair.repair.lookups import (
     MISSING,
     FaultLookups,
@@ -49,6 +50,7 @@ __all__ = [
     "replacement",
     "start_replacement",
     "strategy_lookups",
+    "table_hit",
 ]
 
 
@@ -65,6 +67,25 @@ def _hit(found: Replacement) -> Repair:
         examined=found.examined,
         attempts=(StrategyName.REPLACEMENT,),
         candidate_index=found.position,
+    )
+
+
+DETOUR = RepairSource.DETOUR.value
+"""The name of a detour attempt in ``Repair.attempts``."""
+
+
+def _detour(position: int, actions: tuple[Any, ...], consumed: int) -> Repair:
+    """The repair of a detour (pose-independent, so the detour look-ups store it)."""
+    return Repair(
+        RepairStatus.REPAIRED,
+        RepairSource.DETOUR,
+        actions,
+        consumed,
+        candidate_length=len(actions),
+        depth=0,
+        examined=position + 1,
+        attempts=(DETOUR,),
+        candidate_index=position,
     )
 
 
@@ -98,6 +119,12 @@ def _miss(context: MissionContext, request: RepairRequest, action: Any) -> Repai
     """No valid candidate: :func:`replan`, with the candidates looked at counted."""
     examined = len(_table(context).candidates(action, request.known))
     return chained(replan(context, request), (StrategyName.REPLACEMENT,), examined=examined)
+
+
+def table_hit(context: MissionContext, request: RepairRequest) -> Repair | None:
+    """The repair of the first valid table candidate for the faulty action under the known
+    faults, or ``None`` (no fallback: a strategy that wants to do something else on a miss)."""
+    return _lookups(context, request.known).get(request.queue[0], request.pose, context.grid)
 
 
 def replacement(context: MissionContext, request: RepairRequest) -> Repair:
@@ -135,6 +162,7 @@ class ReplacementRepairer:
 
     __slots__ = (
         "_context",
+        "_detours",
         "_faulty",
         "_index",
         "_known",
@@ -167,6 +195,27 @@ class ReplacementRepairer:
         self._slots = self._on_grid.slots
         self._faulty = lookups.faulty_slots
         occupancy_rows(grid, lookups.radius)  # the grid's codes, before any timed repair
+        self._detours: DetourFinder[Repair] | None = None
+
+    def expect_blocked(self) -> None:
+        """The mission's world changes: make the detour table and the grid's codes now, before
+        any timed repair (else the first blocked action makes them)."""
+        if self._detours is None:
+            self._detours = DetourFinder(self._context.domain, self._context.grid, _detour)
+
+    def repair_blocked(self, request: RepairRequest) -> Repair:
+        """The first queued action sweeps a cell believed blocked: a local detour from the
+        detour table (:mod:`selfrepair.repair.detours`; with ``rewrite``, later queued actions
+        that sweep believed-blocked cells get theirs too), else a replan around the
+        believed-blocked cells."""
+        finder = self._detours
+        if finder is None:  # made on the first blocked action (the detour table is kept)
+            finder = self._detours = DetourFinder(self._context.domain, self._context.grid, _detour)
+        pose, queue, known, _ = request
+        found = finder.find(pose, queue, known, self._context.belief.blocked)
+        if found is None:
+            return chained(replan(self._context, request), (DETOUR,))
+        return found
 
     def _use(self, known: frozenset[Any]) -> None:
         """Switch to the look-ups of ``known`` (a new frozenset of the same faults keeps them)."""
