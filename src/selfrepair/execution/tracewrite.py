@@ -43,6 +43,7 @@ def header_json(spec: MissionSpec, initial_plan: Iterable[Any] = ()) -> dict[str
         "goal": [spec.goal[0], spec.goal[1]],
         "goal_heading": None if spec.goal_heading is None else spec.goal_heading.name,
         "schedule": spec.schedule.to_json(domain),
+        **({"world": spec.world.to_json()} if spec.world else {}),
         "strategy": str(spec.strategy),
         "options": {
             "table": options.table_label,

@@ -31,7 +31,7 @@ The file format is described in ``docs/experiments.md``; in short::
 
     [[strategies]]
     name = "replan"
-    backend = "python"           # the planner backend of its missions: auto | numba | python
+    backend = "python"           # (replan, dstar-lite) the planner backend: auto | numba | python
 
     [[strategies]]
     name = "lpg-adapt"           # needs the pddl extra

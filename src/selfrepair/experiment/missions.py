@@ -51,6 +51,7 @@ from selfrepair.experiment.variants import (
     variant_label,
     variants_of,
 )
+from selfrepair.experiment.worlds import mission_world
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, check_limit
 from selfrepair.repair.replacement import RecursionMode
@@ -59,6 +60,7 @@ from selfrepair.repair.tolerance import OPTIMAL, parse_objective
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.robots.registry import get_domain, load_plugin
+from selfrepair.world.events import WorldSchedule
 from selfrepair.world.routes import Route
 
 __all__ = ["count_missions", "expand", "to_spec"]
@@ -101,6 +103,8 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
         (len(faults.noise), "noise rates"),
         (config.repeats, "repeats"),
     ]
+    if config.world is not None:
+        factors.append((len(config.world.rates) * len(config.world.sensing), "world settings"))
     if not filtered:
         factors.append((variants, "strategy variants and weights"))
     total = 1
@@ -158,6 +162,7 @@ def expand(
         Axis("detection", tuple(config.faults.detection), "detections"),
         Axis("noise", tuple(config.faults.noise), "noise rates"),
         Axis("replicate", tuple(range(config.repeats)), "repeats"),
+        Axis("world", _worlds(config), "world settings"),
         Axis("variant", variants, "strategy variants and weights"),
     )
     missions: dict[str, Mission] = {}
@@ -182,6 +187,8 @@ def expand(
             "detection": point["detection"],
             "replicate": point["replicate"],
         }
+        if point["world"] is not None:  # absent without a [world] section: older keys stay valid
+            situation["world"] = point["world"]
         if point["detection"] == Detection.HIDDEN:  # absent otherwise, so older keys stay valid
             situation["behaviour"] = config.faults.behaviour
             situation["noise"] = point["noise"]
@@ -238,6 +245,9 @@ def _mission(
         ("clearance_weight", weight),
         ("objective", objective_label(options, weight)),
     )
+    world = situation.get("world")
+    if world is not None:
+        labels += (("world_rate", str(world["rate"])), ("sensing", world["sensing"]))
     return Mission(key, config.name, seed, text, labels)
 
 
@@ -245,6 +255,27 @@ def _without_objective(options: dict[str, Any]) -> dict[str, Any]:
     """The variant's options but its planning objective: what a tolerant robot is compared on
     (column ``base_variant``; the same as ``variant`` for a robot planned without one)."""
     return {k: v for k, v in options.items() if k != "objective"}
+
+
+def _worlds(config: ExperimentConfig) -> tuple[dict[str, Any] | None, ...]:
+    """The world settings of the ``world`` axis: one per rate and sensing mode, or ``None``
+    alone when the experiment's maze never changes."""
+    world = config.world
+    if world is None:
+        return (None,)
+    return tuple(
+        {
+            "rate": rate,
+            "duration": world.duration,
+            "distance": world.distance,
+            "horizon": world.horizon,
+            "sensing": str(sensing),
+            "range": world.range,
+            "max_wait": world.max_wait,
+        }
+        for rate in world.rates
+        for sensing in world.sensing
+    )
 
 
 RANDOM = "random"
@@ -292,11 +323,20 @@ def to_spec(mission: Mission) -> MissionSpec:
         for fault in canonical_order(domain.parse_faults(s["faults"]))
     )
     options = s["options"]
+    maze, start, goal = (
+        maze_of(canonical_json(s["maze"])),
+        parse_pose(s["start"]),
+        parse_cell(s["goal"]),
+    )
+    world = s.get("world")
     return MissionSpec(
-        maze=maze_of(canonical_json(s["maze"])),
-        start=parse_pose(s["start"]),
-        goal=parse_cell(s["goal"]),
+        maze=maze,
+        start=start,
+        goal=goal,
         schedule=FaultSchedule(events=events, detection=s["detection"]),
+        world=WorldSchedule()
+        if world is None
+        else mission_world(world, maze, start, goal, domain, mission.seed),
         strategy=s["strategy"],
         options=StrategyOptions(
             table=options.get("table", "handwritten"),
@@ -309,6 +349,7 @@ def to_spec(mission: Mission) -> MissionSpec:
             max_faults=options.get("max_faults", 2),
             fault_prior=options.get("fault_prior", 0.05),
             confidence=options.get("confidence", 0.01),
+            **({} if world is None else {"max_wait": world["max_wait"]}),
         ),
         behaviour=s.get("behaviour"),
         observation=ObservationModel(s.get("noise", 0.0), s.get("bump_switch", True)),

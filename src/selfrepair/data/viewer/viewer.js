@@ -31,7 +31,7 @@
   // Drawing order: the initial plan lies above the executed path and the repair sites, so it
   // is never hidden under them.
   const layers = viewer.drawMaze(data.maze,
-    ["tolerance", "highlight", "executed", "repairs", "plan", "ends", "robot"]);
+    ["blocked", "tolerance", "highlight", "executed", "repairs", "plan", "ends", "robot"]);
 
   function segmentPath(seg) {
     const a = centre(seg.from.x) + " " + centre(seg.from.y);
@@ -452,6 +452,18 @@
   const slider = document.getElementById("slider");
   const label = document.getElementById("step-label");
 
+  // Cells blocked by world events at the frame's tick: grey squares (a changing world).
+  function drawBlocked(cells) {
+    const layer = layers.blocked;
+    while (layer.firstChild) layer.removeChild(layer.firstChild);
+    for (const c of cells) {
+      svg("rect", {
+        x: c[0] * CELL, y: c[1] * CELL, width: CELL, height: CELL, fill: "#9a9a9a",
+        class: "blocked-cell", "data-cell": c[0] + "," + c[1],
+      }, layer);
+    }
+  }
+
   function setFrame(k) {
     k = Math.min(Math.max(Math.round(k), 0), last);
     if (k === state.frame) return;
@@ -466,6 +478,7 @@
     robot.setAttribute("data-y", pose.y);
     robot.setAttribute("data-heading", pose.heading);
     robot.setAttribute("data-frame", k);
+    drawBlocked(frames[k].blocked || []);
     slider.value = String(k);
     label.textContent = "step " + k + " / " + last + " \u00b7 " + poseText(pose);
     const x = tlX(k);
