@@ -55,6 +55,12 @@ NON_DEFAULT = {
     "max_table_candidates": ["--max-table-candidates", "1000"],
     "max_lookup_patterns": ["--max-lookup-patterns", "7"],
     "max_wait": ["--max-wait", "3"],
+    "fault_behaviour": [],  # needs --detect hidden and a robot with a model: test_diagnosis_cli
+    "noise": [],  # needs --detect hidden: test_diagnosis_cli
+    "bump_switch": ["--no-bump-switch"],
+    "max_faults": ["--max-faults", "1"],
+    "fault_prior": ["--fault-prior", "0.1"],
+    "confidence": ["--confidence", "0.05"],
 }
 """A value other than the default for every option of :class:`MissionOptions` (a new option
 must be added here, so that the forwarding test covers it)."""
@@ -128,6 +134,8 @@ def test_every_mission_option_reaches_the_spec_of_both_commands(
     assert compare.domain.name == "three-action" and compare.initial_faults_known
     assert compare.world.to_json()["events"][0] == {"cell": [3, 13], "blocked": True, "at": 2}
     assert (compare.world.sensing, compare.world.sensing_range) == ("bump", 4)
+    assert (got.max_faults, got.fault_prior, got.confidence) == (1, 0.1, 0.05)
+    assert not compare.observation.bumps
 
 
 def _compare_json(capsys: pytest.CaptureFixture[str], *args: str) -> dict[str, Any]:

@@ -45,7 +45,7 @@ def test_the_commands_are_the_documented_ones() -> None:
         "experiment", "report", "animate", "view", "gym-eval", "pddl", "maze show", "maze list",
         "maze generate", "maze routes", "table show", "table check", "table generate",
         "table coverage", "team run", "team compare", "team replay", "team table", "team frame",
-        "tolerance", "physics fidelity", "physics run",
+        "tolerance", "physics fidelity", "physics run", "physics experiment",
     }  # fmt: skip
 
 

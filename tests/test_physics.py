@@ -209,3 +209,94 @@ def test_the_bundled_identified_domain_is_what_fidelity_measures_now() -> None:
         .read_text("utf-8")
     )
     assert json.loads(json.dumps(measure().identified())) == bundled
+
+
+@PHYSICS
+def test_faulty_rows_carry_the_performed_actions_measurement() -> None:
+    from selfrepair.physics.fidelity import faulty_rows, measure
+
+    report = measure(actions=[parse_action(c) for c in ("SFFF", "FFFF")], faulty=False)
+    sfff, ffff = report.rows
+    rows = {
+        (r.action, r.faults, r.behaviour): r for r in faulty_rows(FOUR_WHEEL, list(report.rows))
+    }
+    stalled = rows[("FFFF", "FL:F", "stall")]  # the front-left wheel stops: SFFF is performed
+    assert stalled.executed == "SFFF" and stalled.motion == "forward"
+    assert (stalled.tracked_position, stalled.snapped) == (sfff.tracked_position, sfff.snapped)
+    stuck_on = rows[("SFFF", "FL:S", "stall")]  # it cannot stop: it runs forward, FFFF
+    assert stuck_on.executed == "FFFF" and stuck_on.confirmed == ffff.confirmed
+    assert ("FFFF", "FL:F", "reverse") not in rows  # BFFF was not measured
+    assert all(r.executed in ("SFFF", "FFFF") and r.action != r.executed for r in rows.values())
+
+
+@PHYSICS
+def test_physics_experiment_compares_the_footings_per_strategy() -> None:
+    from selfrepair.experiment.physics import footing_summary, physics_experiment
+
+    rows = physics_experiment(("wide-short",), ("replacement",), ("FL:F",))
+    assert [(r.route, r.faults, r.strategy) for r in rows] == [
+        (f"r{i}", "FL:F", "replacement") for i in range(1, 5)
+    ]
+    summary = footing_summary(rows)["replacement"]
+    assert summary["missions"] == 4 and summary["lattice_reached"] == 4
+    assert summary["both_reached"] == sum(r.physics_reached for r in rows)
+
+
+def test_physics_experiment_refuses_an_unknown_strategy(capsys) -> None:
+    code = main(["physics", "experiment", "--strategy", "teleport"])
+    err = capsys.readouterr().err
+    assert code == 2 and "teleport" in err and err.count("\n") == 1
+
+
+@PHYSICS
+def test_a_robots_own_mjcf_runs_and_a_model_without_a_robot_is_refused() -> None:
+    from selfrepair.physics.model import mjcf
+    from selfrepair.physics.world import PhysicsWorld
+
+    slippery = mjcf(OPEN).replace('friction="0.8 0 0"', 'friction="0.2 0 0"')
+    assert slippery != mjcf(OPEN)
+    world = PhysicsWorld(OPEN, Pose(0, 5, Heading.N), xml=slippery)
+    end = world.run((1, -1, 1, -1), Fraction(1)).end  # FBFB spins less on a slippery floor
+    grippy = PhysicsWorld(OPEN, Pose(0, 5, Heading.N)).run((1, -1, 1, -1), Fraction(1)).end
+    assert abs(end.yaw - math.pi / 2) != abs(grippy.yaw - math.pi / 2)
+    with pytest.raises(ProblemError, match="robot"):
+        PhysicsWorld(OPEN, xml="<mujoco><worldbody/></mujoco>")
+
+
+@PHYSICS
+@needs_extra("gymnasium", extra="gym")
+def test_the_physics_gym_variant_steps_in_mujoco_with_a_continuous_pose() -> None:
+    import gymnasium as gym
+
+    from selfrepair.envs import PHYSICS_ENV_ID
+
+    env = gym.make(PHYSICS_ENV_ID, mazes="wide-short")
+    observation, _ = env.reset(seed=1, options={"start": "1,1,E", "goal": "3,1", "faults": ""})
+    assert env.observation_space.contains(observation)
+    assert np.allclose(observation["pose"], (1.0, 1.0, math.pi / 2))
+    forward = FOUR_WHEEL.actions.index(parse_action("FFFF"))
+    observation, reward, terminated, _, info = env.step(forward)
+    x, y, heading = observation["pose"]
+    assert info["pose"] == "2,1,E" and abs(x - 2) < 0.05 and abs(y - 1) < 0.05
+    assert abs(heading - math.pi / 2) < math.radians(3) and info["wall_contacts"] == 0
+    assert float(reward) == -1.0 and not terminated
+    env.close()
+
+
+def test_the_confirmed_only_domain_keeps_the_confirmed_actions_and_every_basic_motion() -> None:
+    from selfrepair.physics.identified import CONFIRMED_NAME
+
+    domain = load_identified(name=CONFIRMED_NAME, confirmed_only=True)
+    check_domain(domain)
+    kept = {a.code for a in domain.actions}
+    assert len(kept) == 49 and "FFFB" not in kept and "FSSB" in kept  # drifts / turns in place
+    assert kept < {a.code for a in load_identified().actions}
+    for fault in FOUR_WHEEL.faults:  # every single fault leaves a way to turn and drive
+        motions = {domain.motion_class(a) for a in domain.actions if domain.available(a, {fault})}
+        assert {"forward", "backward", "turn-left", "turn-right"} <= motions, fault
+
+
+def test_physics_experiment_refuses_an_unknown_robot_model(capsys) -> None:
+    code = main(["physics", "experiment", "--robot", "hovercraft"])
+    err = capsys.readouterr().err
+    assert code == 2 and "four-wheel-confirmed" in err and err.count("\n") == 1

@@ -3,6 +3,7 @@ random step, the executor's first plan, and finding 2t."""
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 from fractions import Fraction
 from pathlib import Path
@@ -14,7 +15,7 @@ from selfrepair.errors import ConfigError, ProblemError
 from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.result import MissionSpec
-from selfrepair.experiment.config import load_config
+from selfrepair.experiment.config import load_config, parse_config
 from selfrepair.experiment.findings import Outcome, check_findings
 from selfrepair.experiment.missions import expand, to_spec
 from selfrepair.experiment.tolerance_findings import base_variant, tolerance_findings
@@ -147,9 +148,12 @@ def test_hard_objective_without_a_tolerant_plan_plans_the_optimum() -> None:
     assert run_mission(spec).initial_plan.actions == plain.actions
 
 
-def _row(variant: str, objective: str, weight: str, route: int, ok: bool) -> dict[str, Any]:
+def _row(
+    variant: str, objective: str, weight: str, route: int, ok: bool, base: str | None = None
+) -> dict[str, Any]:
     return {
         "key": f"{variant}-{weight}-{route}", "strategy": "replacement", "variant": variant,
+        "base_variant": base or variant,
         "objective": objective, "table": "handwritten", "recursion": "flat",
         "clearance_weight": weight, "maze": "m", "route": f"r{route}", "faults": "FL:F",
         "fault_at": 3, "detection": "now", "replicate": 0, "reached": 1,
@@ -165,7 +169,7 @@ def test_finding_2t_pairs_tolerance_with_the_highest_clearance_weight() -> None:
         *(_row(base, "optimal", "0", r, r < 5) for r in range(20)),
         *(_row(base, "clearance 1", "1", r, r < 8) for r in range(20)),
         *(_row(base, "clearance 2", "2", r, r < 10) for r in range(20)),
-        *(_row(tolerant, "tolerant k=1", "0", r, True) for r in range(20)),
+        *(_row(tolerant, "tolerant k=1", "0", r, True, base) for r in range(20)),
     ]
     assert base_variant(rows[-1]) == base
     (finding,) = tolerance_findings(rows)
@@ -175,3 +179,32 @@ def test_finding_2t_pairs_tolerance_with_the_highest_clearance_weight() -> None:
     assert tolerance_findings(rows[:60]) == []  # no tolerant rows, no finding
     # the other findings leave the tolerant rows out: finding 2 is the same with or without them
     assert check_findings(rows)[2] == check_findings(rows[:60])[2]
+
+
+def test_the_base_variant_is_a_column_never_the_labels_text() -> None:
+    """Issue 23 item 3: the variant without its objective is stored as a column when missions
+    are expanded; rows stored before it existed get it from their stored configuration."""
+    config = parse_config(
+        'name = "t"\n[[mazes]]\nbundled = "narrow-short"\n[faults]\nsets = ["FL:F"]\n'
+        '[[strategies]]\nname = "replacement"\ntables = ["handwritten"]\n'
+        'objectives = ["optimal", "tolerant k=1"]\n'
+    )
+    labels = [dict(m.labels) for m in expand(config)]
+    tolerant = [row for row in labels if row["objective"] == "tolerant k=1"]
+    assert tolerant
+    for row in tolerant:
+        mode = row["recursion"]
+        assert row["variant"] == f"replacement[handwritten,{mode},tolerant k=1]"
+        assert row["base_variant"] == f"replacement[handwritten,{mode}]"
+    assert all(r["base_variant"] == r["variant"] for r in labels if r["objective"] == "optimal")
+    # a label whose text would parse to something else: the column decides
+    assert base_variant({"variant": "replacement[x,flat,tolerant k=1]", "base_variant": "b"}) == "b"
+    old = {
+        "variant": "replacement[handwritten,guarded,tolerant k=2]",
+        "objective": "tolerant k=2",
+        "config": json.dumps(
+            {"strategy": "replacement", "options": {"table": "handwritten",
+             "recursion": "guarded", "objective": "tolerant k=2"}}
+        ),
+    }  # fmt: skip
+    assert base_variant(old) == "replacement[handwritten,guarded]"

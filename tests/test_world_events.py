@@ -4,7 +4,9 @@ blocked at that time (checked by an independent re-simulation)."""
 
 from __future__ import annotations
 
+import json
 from fractions import Fraction
+from pathlib import Path
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -13,8 +15,10 @@ from hypothesis import strategies as st
 import selfrepair as sr
 from selfrepair.cli import main
 from selfrepair.errors import InputError
+from selfrepair.execution.replay import replay
 from selfrepair.execution.result import MissionResult, StepSource
 from selfrepair.execution.simulator import Outcome, Simulator
+from selfrepair.execution.traceread import spec_from_header
 from selfrepair.geometry import Heading, Pose
 from selfrepair.world.events import Sensing, WorldEvent, WorldSchedule, parse_events, random_world
 from selfrepair.world.maze import parse_maze
@@ -201,3 +205,46 @@ def test_cli_events_are_checked(capsys: pytest.CaptureFixture[str]) -> None:
     assert main([*args, "--sensing", "sonar"]) == 2
     assert main([*args, "--events", "5,13@0..10", "--sensing-range", "3"]) == 0
     assert main([*args, "--events", "5,13@0..10", "--sensing", "bump"]) == 1  # never sees it free
+
+
+def test_traces_record_the_world_and_replay_it(tmp_path: Path) -> None:
+    wide = sr.load_bundled("wide-short")
+    route = sr.bundled_routes("wide-short")[0]
+    plan = sr.run_mission(sr.MissionSpec(wide, route.start, route.goal, strategy="replan"))
+    cells = [route.start.cell, *(s.end.cell for s in plan.steps)]
+    world = random_world(cells, wide.free_cells(), seed=4, rate=40.0, duration=10, distance=0,
+                         horizon=200, exclude=[route.start.cell, route.goal],
+                         sensing=Sensing.BUMP)  # fmt: skip
+    result = sr.run_mission(sr.MissionSpec(wide, route.start, route.goal, world=world))
+    assert sr.mission_row(result)["bumps"] >= 1
+    path = tmp_path / "t.jsonl"
+    sr.write_trace(result, path)
+    trace = sr.read_trace(path)
+    assert spec_from_header(trace.header).world == world
+    assert replay(trace).ok
+    first = next(s for s in result.steps if s.source is StepSource.PLAN and s.start != s.end)
+    lines = path.read_text().splitlines()
+    header = json.loads(lines[0])
+    swept = ROBOT.footprint(first.start, first.action)[1]
+    header["world"]["events"].insert(0, {"cell": list(swept), "blocked": True, "at": 0})
+    path.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
+    report = replay(path)
+    assert not report.ok and "blocked at tick 0 by world events" in report.reason
+
+
+def test_the_viewer_greys_out_each_blocked_cell_at_its_time() -> None:
+    from selfrepair.execution.traceread import parse_trace
+    from selfrepair.execution.tracewrite import trace_lines
+    from selfrepair.experiment.viewer import mission_payload, render_html
+
+    world = WorldSchedule(parse_events("4,1@0..3;6,2@2"))
+    spec = sr.MissionSpec(CORRIDOR, Pose(1, 1, Heading.E), (7, 1), strategy="replan", world=world)
+    result = sr.run_mission(spec)
+    payload = mission_payload(parse_trace("\n".join(trace_lines(result))))
+    ticks = [Fraction(f["tick"]) for f in payload["frames"]]
+    assert [f["blocked"] for f in payload["frames"]] == [
+        [list(c) for c in sorted(world.blocked_at(t))] for t in ticks
+    ]
+    assert [4, 1] in payload["frames"][0]["blocked"] and [6, 2] in payload["frames"][-1]["blocked"]
+    assert payload["world"] == "3 world events, sensing range 2"
+    assert "drawBlocked" in render_html(payload)

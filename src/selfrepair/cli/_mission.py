@@ -53,6 +53,7 @@ from selfrepair.limits import (
 if TYPE_CHECKING:
     from collections.abc import Callable, Mapping, Sequence
 
+    from selfrepair.diagnosis import ObservationModel
     from selfrepair.execution.faults import FaultSchedule
     from selfrepair.execution.result import MissionSpec
     from selfrepair.robots.domain import Domain
@@ -77,8 +78,57 @@ Detect = Annotated[
     str,
     typer.Option(
         "--detect",
-        metavar="now|on-use",
-        help="Faults are known when they start (now) or when a command fails (on-use).",
+        metavar="now|on-use|hidden",
+        help="Faults are known when they start (now), when a command fails (on-use), or never "
+        "(hidden: the robot moves as its faults make it and diagnoses them from what it observes; "
+        "see docs/diagnosis.md).",
+    ),
+]
+FaultBehaviourOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--fault-behaviour",
+        metavar="MODEL",
+        help="Faults hidden: what a forbidden command really does, a model of the robot (the "
+        "four-wheel robot: stall, runaway-backward, reverse). Default: the robot's first.",
+        show_default=False,
+    ),
+]
+Noise = Annotated[
+    float,
+    typer.Option(
+        "--noise",
+        metavar="P",
+        help="Faults hidden: odometry error rate, the chance that a pose reading names a wrong "
+        "cell or heading (0 to below 0.5).",
+    ),
+]
+BumpSwitch = Annotated[
+    bool,
+    typer.Option(
+        "--bump-switch/--no-bump-switch",
+        help="Faults hidden: the robot senses when a motion stops at a wall.",
+    ),
+]
+MaxFaults = Annotated[
+    int,
+    typer.Option(
+        "--max-faults", metavar="K", min=0, help="Diagnosis: hypotheses of up to K faults."
+    ),
+]
+FaultPrior = Annotated[
+    float,
+    typer.Option(
+        "--fault-prior", metavar="Q", help="Diagnosis: prior probability of each fault (0 to 1)."
+    ),
+]
+Confidence = Annotated[
+    float,
+    typer.Option(
+        "--confidence",
+        metavar="E",
+        help="Diagnosis: a class is isolated, and the classes assumed cover what is possible, "
+        "at posterior mass 1 - E.",
     ),
 ]
 Transient = Annotated[
@@ -198,6 +248,12 @@ class MissionOptions:
     at: At = 0
     clock: ClockOpt = "step"
     detect: Detect = "now"
+    fault_behaviour: FaultBehaviourOpt = None
+    noise: Noise = 0.0
+    bump_switch: BumpSwitch = True
+    max_faults: MaxFaults = 2
+    fault_prior: FaultPrior = 0.05
+    confidence: Confidence = 0.01
     transient: Transient = None
     intermittent: Intermittent = None
     events: Events = ""
@@ -363,6 +419,7 @@ def mission_spec(
     )
     check_choice(m.sensing, tuple(Sensing), "--sensing")
     world = WorldSchedule(parse_events(m.events), Sensing(m.sensing), m.sensing_range)
+    observation = observation_options(domain, m)
     return MissionSpec(
         maze=resolve_maze(find_input(m.maze), max_cells=m.max_cells),
         start=parse_pose(m.start, source="--start"),
@@ -379,7 +436,12 @@ def mission_spec(
             rewrite=m.rewrite,
             max_lookup_patterns=m.max_lookup_patterns,
             max_wait=m.max_wait,
+            max_faults=m.max_faults,
+            fault_prior=m.fault_prior,
+            confidence=m.confidence,
         ),
+        behaviour=m.fault_behaviour,
+        observation=observation,
         clearance_weight=parse_weight(m.clearance_weight),
         seed=m.seed,
         heuristic=m.heuristic,
@@ -387,6 +449,37 @@ def mission_spec(
         initial_faults_known=m.plan_with_faults,
         domain=domain,
     )
+
+
+def observation_options(
+    domain: "Domain[Any, Any]", m: MissionOptions
+) -> "ObservationModel":
+    """The observation model of the options, checked: ``--fault-behaviour`` names a model of the
+    robot, ``--noise`` is a rate, both only with ``--detect hidden``; the diagnosis options are
+    in range."""
+    from selfrepair.diagnosis import ObservationModel
+    from selfrepair.execution.faults import Detection
+
+    hidden = m.detect == Detection.HIDDEN
+    if m.fault_behaviour is not None:
+        if not domain.behaviours:
+            raise InputError(
+                f"the {domain.name} robot has no fault-behaviour model (a forbidden command "
+                "fails)",
+                source="--fault-behaviour",
+            )
+        check_choice(m.fault_behaviour, domain.behaviour_names(), "--fault-behaviour")
+    if (m.fault_behaviour is not None or m.noise) and not hidden:
+        option = "--noise" if m.noise else "--fault-behaviour"
+        raise InputError("expected --detect hidden (faults the robot is not told)", source=option)
+    for inside, option, wanted, value in (
+        (0.0 <= m.noise < 0.5, "--noise", "in [0, 0.5)", m.noise),
+        (0.0 < m.fault_prior < 1.0, "--fault-prior", "in (0, 1)", m.fault_prior),
+        (0.0 <= m.confidence < 1.0, "--confidence", "in [0, 1)", m.confidence),
+    ):
+        if not inside:
+            raise InputError(f"expected a number {wanted}, got {value}", source=option)
+    return ObservationModel(m.noise, m.bump_switch)
 
 
 def table_note(mission: MissionOptions, spec: "MissionSpec") -> str | None:

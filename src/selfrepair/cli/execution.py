@@ -46,7 +46,13 @@ __all__ = ["compare", "mission_picture", "replay", "run", "table_check", "table_
 
 PLANNED_CHAR = "+"
 EXECUTED_CHAR = "*"
-SITE_CHARS = {"replacement": "R", "lookahead": "L", "replan": "P", "plan-repair": "A"}
+SITE_CHARS = {
+    "replacement": "R",
+    "lookahead": "L",
+    "replan": "P",
+    "plan-repair": "A",
+    "probe": "D",
+}
 FAILED_CHAR = "x"
 
 _SHOWN = (
@@ -78,6 +84,17 @@ _SHOWN = (
     "compute_per_action_ns",
     "plan_distance",
 )
+_HIDDEN_SHOWN = (
+    "behaviour",
+    "observation_noise",
+    "bumps",
+    "surprise_step",
+    "isolation_actions",
+    "isolated_right",
+    "probes",
+    "classes_left",
+)
+"""Shown too when the faults are hidden (docs/diagnosis.md)."""
 
 
 def mission_picture(result: "MissionResult") -> str:
@@ -114,7 +131,11 @@ def _picture_legend() -> str:
         (GOAL_CHAR, "goal"),
         (PLANNED_CHAR, "planned path (initial plan), not executed"),
         (EXECUTED_CHAR, "executed path"),
-        ("R L P A", "repair site: table replacement, lookahead window, replan, plan repair (LPG)"),
+        (
+            "R L P A D",
+            "repair site: table replacement, lookahead window (or rejoin), replan, plan repair "
+            "(LPG), diagnosis probe",
+        ),
         (FAILED_CHAR, "failed attempt (fault learned on use)"),
     )
     width = max(len(char) for char, _ in legend)
@@ -184,7 +205,8 @@ def run(
     metrics.add_column("metric")
     metrics.add_column("value", justify="right")
     shown = row_json(row)
-    for key in _SHOWN:
+    hidden = row["detection"] == "hidden"
+    for key in (*_SHOWN, *(_HIDDEN_SHOWN if hidden else ())):
         value = row[key] if key in ("ticks", "plan_cost_before", "plan_cost_after") else shown[key]
         metrics.add_row(key, Text(_cell(value)))
     console().print(metrics)
@@ -232,7 +254,8 @@ def compare(
     from selfrepair.experiment.compare import compare_strategies, runnable_strategies
 
     given = tuple(s.strip() for s in strategies.split(",") if s.strip())
-    names = given or runnable_strategies(domain_named(mission.domain_name))[0]
+    hidden = mission.detect == "hidden"
+    names = given or runnable_strategies(domain_named(mission.domain_name), hidden=hidden)[0]
     spec = mission_spec(mission, names[0], names)
     load_ns = kernel_load_ns(mission.backend, domain=spec.domain)
     comparison = compare_strategies(spec, given or None, warm_up=mission.warm_up)

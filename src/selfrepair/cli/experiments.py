@@ -42,8 +42,8 @@ __all__ = [
 
 
 def resolve_experiment(spec: str) -> Path:
-    """A bundled experiment name (``paper``, ``scale``, ``baselines``, ``full``, ``team``) or a
-    path to a TOML file."""
+    """A bundled experiment name (``paper``, ``scale``, ``baselines``, ``full``, ``team``,
+    ``dynamic``, ...) or a path to a TOML file."""
     from importlib import resources
 
     folder = resources.files("selfrepair").joinpath("data", "experiments")
@@ -78,7 +78,8 @@ def experiment(
         str,
         typer.Argument(
             metavar="CONFIG",
-            help="Bundled experiment (paper, scale, baselines, full, team) or FILE.toml.",
+            help="Bundled experiment (paper, scale, baselines, full, team, dynamic, ...) or "
+            "FILE.toml.",
         ),
     ],
     db: Annotated[
@@ -143,6 +144,7 @@ def experiment(
     import joblib
 
     from selfrepair.experiment.backends import check_backend
+    from selfrepair.experiment.dynamic_findings import dynamic_findings
     from selfrepair.experiment.findings import check_findings, reference_note, summarize
     from selfrepair.experiment.missions import expand
     from selfrepair.experiment.runner import run_missions
@@ -206,7 +208,10 @@ def experiment(
             rows = [r for r in store.rows() if r["key"] in keys]
             print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
             print_fault_sets(fault_set_bite(rows))
-            print_findings([*check_findings(rows), *tolerance_findings(rows)], reference_note(rows))
+            print_findings(
+                [*check_findings(rows), *tolerance_findings(rows), *dynamic_findings(rows)],
+                reference_note(rows),
+            )
             print_baselines(rows)
             if cfg.crossover:
                 print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))

@@ -23,7 +23,13 @@ if TYPE_CHECKING:
     from selfrepair.physics.fidelity import FidelityReport
     from selfrepair.physics.mission import PhysicsMission
 
-__all__ = ["physics_fidelity", "physics_run"]
+__all__ = [
+    "fidelity_markdown",
+    "outcome_json",
+    "physics_experiment",
+    "physics_fidelity",
+    "physics_run",
+]
 
 physics_app = command_group(help="The four-wheel robot in MuJoCo: model fidelity and missions.")
 app.add_typer(physics_app, name="physics")
@@ -37,6 +43,9 @@ OpenLoop = Annotated[
 @physics_app.command("fidelity")
 def physics_fidelity(
     as_json: Annotated[bool, typer.Option("--json", help="Print every row as JSON.")] = False,
+    nominal: Annotated[
+        bool, typer.Option("--nominal", help="Only the fault-free robot's 81 rows.")
+    ] = False,
     write_domain: Annotated[
         Path | None,
         typer.Option("--write-domain", metavar="FILE", help="Write the identified domain here."),
@@ -45,11 +54,13 @@ def physics_fidelity(
     """Run every action in physics and compare its end pose with the lattice's.
 
     Per action: position error (cells) and heading error (degrees), open loop and tracked;
-    physics confirms an action whose tracked end is within 0.05 cells and 3 degrees.
+    physics confirms an action whose tracked end is within 0.05 cells and 3 degrees. Then every
+    action under every single fault that forbids it, per fault-behaviour model: the wheels
+    perform what the model says, compared with the lattice's motion of that action.
     """
     from selfrepair.physics.fidelity import measure
 
-    report = measure()
+    report = measure(faulty=not nominal)
     if write_domain is not None:
         import json
 
@@ -92,13 +103,14 @@ def fidelity_markdown(report: "FidelityReport") -> str:
         )
     lines += [
         "",
-        "| action | motion | open: cells | open: deg | tracked: cells | tracked: deg | "
-        "confirmed | note |",
-        "|---|---|---:|---:|---:|---:|---|---|",
+        "| action | motion | faults | behaviour | performed | open: cells | open: deg | "
+        "tracked: cells | tracked: deg | confirmed | note |",
+        "|---|---|---|---|---|---:|---:|---:|---:|---|---|",
     ]
     for r in report.rows:
         lines.append(
-            f"| {r.action} | {r.motion} | {r.open_position:.3f} | {r.open_heading:.1f} | "
+            f"| {r.action} | {r.motion} | {r.faults or '-'} | {r.behaviour or '-'} | "
+            f"{r.executed} | {r.open_position:.3f} | {r.open_heading:.1f} | "
             f"{r.tracked_position:.3f} | {r.tracked_heading:.1f} | "
             f"{'yes' if r.confirmed else 'no'} | {r.why} |"
         )
@@ -169,3 +181,76 @@ def outcome_json(done: "PhysicsMission") -> dict[str, Any]:
         "max_position_error_cells": number_json(o.max_position_error),
         "max_heading_error_degrees": number_json(o.max_heading_error),
     }
+
+
+@physics_app.command("experiment")
+def physics_experiment(
+    mazes: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--maze", metavar="NAME", help="A bundled maze (repeat it; default: the short two)."
+        ),
+    ] = None,
+    strategies: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--strategy",
+            metavar="NAME",
+            help="replan, replacement, rewriting or lookahead (repeat it; default: all four).",
+        ),
+    ] = None,
+    open_loop: OpenLoop = False,
+    robot: Annotated[
+        str,
+        typer.Option(
+            "--robot",
+            metavar="MODEL",
+            help="four-wheel (the lattice's 81 actions, hand-written table) or "
+            "four-wheel-confirmed (only the actions physics confirms, a generated table).",
+        ),
+    ] = "four-wheel",
+    workers: Annotated[
+        int, typer.Option("--workers", metavar="N", min=1, help="Processes to run missions in.")
+    ] = 1,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the summary and rows.")] = False,
+) -> int:
+    """The paper's missions (bundled mazes, routes, 12 fault sets) on the lattice and in MuJoCo.
+
+    Per strategy: the missions the lattice simulator completes, and how many of those physics
+    completes, with and without wall contact.
+    """
+    from dataclasses import asdict
+
+    from selfrepair.experiment.physics import (
+        DEFAULT_MAZES,
+        STRATEGIES,
+        footing_summary,
+        physics_experiment,
+    )
+
+    rows = physics_experiment(
+        tuple(mazes or DEFAULT_MAZES),
+        tuple(strategies or STRATEGIES),
+        tracked=not open_loop,
+        workers=workers,
+        robot=robot,
+    )
+    summary = footing_summary(rows)
+    if as_json:
+        echo_json({"summary": summary, "rows": [asdict(r) for r in rows]})
+        return 0
+    echo("| strategy | missions | lattice reached | physics reached of those | "
+         "of those without wall contact |")  # fmt: skip
+    echo("|---|---:|---:|---:|---:|")
+    for label, s in summary.items():
+        share = s["physics_share_of_lattice"]
+        clean = s["no_contact_share_of_lattice"]
+        echo(
+            f"| {label} | {s['missions']} | {s['lattice_reached']} | {s['both_reached']} "
+            f"({_percent(share)}) | {s['both_reached_no_contact']} ({_percent(clean)}) |"
+        )
+    return 0
+
+
+def _percent(share: float | None) -> str:
+    return "-" if share is None else f"{100 * share:.1f}%"

@@ -62,15 +62,21 @@ from selfrepair.envs.scenarios import (
     Scenario,
     draw_scenario,
     maze_sources,
-    random_route,
+    with_options,
+)
+from selfrepair.envs.settings import (
+    MAX_VIEW_RADIUS,
+    check_behaviour,
+    check_settings,
+    observation_space,
 )
 from selfrepair.errors import ProblemError, choice
 from selfrepair.execution.executor import mission_context
-from selfrepair.execution.faults import Detection, FaultSchedule
+from selfrepair.execution.faults import Detection
 from selfrepair.execution.result import MissionSpec
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS, Outcome, Simulator, StepOutcome
 from selfrepair.execution.stepper import Entry, Stepper
-from selfrepair.geometry import Cell, Heading, Pose, parse_cell, parse_pose
+from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import (
     RepairSource,
@@ -84,17 +90,11 @@ from selfrepair.robots.registry import get_domain
 from selfrepair.search.astar import PlanStatus
 from selfrepair.tables.fileformat import default_table, resolve_table
 from selfrepair.tables.model import ReplacementTable
-from selfrepair.world.bundled import resolve_maze
-from selfrepair.world.maze import Maze
 
 __all__ = ["MAX_VIEW_RADIUS", "FaultyMazeEnv", "Rewards", "ask", "default_table"]
 
-MAX_VIEW_RADIUS = 32
-"""The largest ``view_radius`` accepted (the window has ``(2r+1)**2`` cells)."""
-
 Observation = dict[str, Any]
 
-_RESET_OPTIONS = frozenset({"maze", "start", "goal", "faults"})
 _HEADING_LETTERS = "".join(h.name for h in Heading)
 _FAILED_TICKS = float(FAILED_ATTEMPT_TICKS)
 
@@ -133,6 +133,12 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         for every step off the guide's plan).
     ``render_mode``, ``cell_pixels``
         ``"ansi"`` or ``"rgb_array"``; pixels per cell of an RGB frame (default 8).
+    ``behaviour``
+        With hidden faults (``faults=FaultSpec(detection=("hidden",))``, the partially observable
+        variant ``selfrepair/FaultyMazeHidden-v0``): the domain's fault-behaviour model
+        (:meth:`Domain.effective <selfrepair.robots.domain.Domain.effective>`; default its
+        first). The observation then has no ``faults`` key, a forbidden command does what the
+        model says, and a motion into a wall is a bump (one tick, the blocked penalty).
     """
 
     metadata = {"render_modes": ["ansi", "rgb_array"], "render_fps": 8}  # noqa: RUF012 (Gymnasium's)
@@ -152,30 +158,23 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         guide: bool = False,
         render_mode: str | None = None,
         cell_pixels: int = 8,
+        behaviour: str | None = None,
     ) -> None:
         self.domain = get_domain(domain) if isinstance(domain, str) else domain
         self.sources: tuple[MazeSource, ...] = maze_sources(mazes)
         self.routes = choice(RouteChoice, routes, "route choice")
         self.faults = faults or FaultSpec()
+        self.hidden = self.faults.hidden
+        self.behaviour = check_behaviour(self.domain, self.hidden, behaviour)
         self._fault_sets = self.faults.fault_sets(self.domain)
         self.table = self._table(table)
         self.recursion = choice(RecursionMode, recursion, "recursion mode")
         self.rewards = rewards or Rewards()
-        if max_steps is not None and max_steps < 1:
-            raise ProblemError(f"max_steps must be at least 1, got {max_steps}")
+        check_settings(max_steps, view_radius, render_mode, self.metadata["render_modes"])
         self.max_steps = max_steps
-        if not 0 <= view_radius <= MAX_VIEW_RADIUS:
-            raise ProblemError(
-                f"view_radius must be from 0 to {MAX_VIEW_RADIUS}, got {view_radius}"
-            )
         self.view_radius = view_radius
         self._side = 2 * view_radius + 1
         self.guide = guide
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ProblemError(
-                f"render_mode must be one of {', '.join(self.metadata['render_modes'])} or None, "
-                f"got {render_mode!r}"
-            )
         self.render_mode = render_mode
         self.cell_pixels = check_cell_pixels(cell_pixels)
         self._setup_spaces()
@@ -211,16 +210,9 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         self._index = {action: i for i, action in enumerate(self.actions)}
         self._durations = tuple(float(domain.duration(a)) for a in self.actions)
         self._fault_index = {fault: i for i, fault in enumerate(domain.faults)}
-        side = 2 * self.view_radius + 1
-        reach = max(source.largest_side for source in self.sources) - 1
-        observation: dict[str, spaces.Space[Any]] = {
-            "window": spaces.MultiBinary((side, side)),
-            "heading": spaces.Discrete(4),
-            "goal": spaces.Box(-reach, reach, shape=(2,), dtype=np.int32),
-        }
-        if domain.faults:
-            observation["faults"] = spaces.MultiBinary(len(domain.faults))
-        self.observation_space = spaces.Dict(observation)
+        self.observation_space = observation_space(
+            domain, self.sources, self.view_radius, self.hidden
+        )
         self.action_space = spaces.Discrete(len(self.actions))
 
     # --- episode state, read by policies ------------------------------------------------------
@@ -307,7 +299,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
             self.sources, self.routes, self.domain, self.faults, self.np_random, self._fault_sets
         )
         if options:
-            scenario = self._with_options(scenario, options)
+            scenario = with_options(scenario, options, self.domain, self.np_random, self.hidden)
         self._begin(scenario)
         pose = self._simulator().pose
         info = self._info(pose, None)
@@ -328,14 +320,17 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         self._steps += 1
         status = outcome.status
         rewards = self.rewards
-        if status is Outcome.MOVED:
-            duration = self._durations[index]
+        if status is Outcome.MOVED:  # hidden faults: the action the wheels performed
+            duration = self._durations[self._index[sim.last_action] if self.hidden else index]
             reward = -duration
         elif status is Outcome.FAILED_ATTEMPT:
             duration = _FAILED_TICKS
             reward = -duration - rewards.fault_penalty
             if not self._senses:
                 self._known = self._known | outcome.blocking
+        elif status is Outcome.BUMPED:  # hidden faults: stopped at a wall, one tick
+            duration = _FAILED_TICKS
+            reward = -duration - rewards.blocked_penalty
         else:
             duration = 0.0
             reward = -rewards.blocked_penalty
@@ -368,38 +363,16 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
 
     # --- internals -------------------------------------------------------------------------
 
-    def _with_options(self, scenario: Scenario, options: dict[str, Any]) -> Scenario:
-        unknown = set(options) - _RESET_OPTIONS
-        if unknown:
-            raise ProblemError(
-                f"unknown reset option(s) {', '.join(sorted(unknown))}; expected "
-                f"{', '.join(sorted(_RESET_OPTIONS))}"
-            )
-        maze, label, route = scenario.maze, scenario.maze_label, scenario.route
-        if "maze" in options:
-            given = options["maze"]
-            maze = given if isinstance(given, Maze) else resolve_maze(str(given))
-            label = maze.name or str(given)
-            route = random_route(maze, self.np_random)
-        start = _pose(options.get("start", route.start))
-        goal = _cell(options.get("goal", route.goal))
-        for what, cell in (("start", start.cell), ("goal", goal)):
-            if not maze.is_free(*cell):
-                raise ProblemError(f"reset option {what}: {cell} is not a free cell of the maze")
-        schedule = scenario.schedule
-        if "faults" in options:
-            given = options["faults"]
-            schedule = given if isinstance(given, FaultSchedule) else FaultSchedule.permanent(
-                self.domain.parse_faults(str(given))
-            )  # fmt: skip
-        route = type(route)(route.name, start, goal)
-        return Scenario(maze, label, route, schedule, scenario.fault_seed)
-
     def _begin(self, scenario: Scenario) -> None:
         self._scenario = scenario
         maze = scenario.maze
         self._sim = Simulator(
-            self.domain, maze, scenario.start, scenario.schedule, scenario.fault_seed
+            self.domain,
+            maze,
+            scenario.start,
+            scenario.schedule,
+            scenario.fault_seed,
+            behaviour=self.behaviour,
         )
         self._senses = scenario.schedule.detection is Detection.NOW
         self._known = self._sim.sense()
@@ -425,7 +398,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
             "heading": int(pose.heading),
             "goal": np.array((goal[0] - x, goal[1] - y), dtype=np.int32),
         }
-        if self._fault_index:
+        if self._fault_index and not self.hidden:
             observation["faults"] = self._fault_view(self._known)[0].copy()
         return observation
 
@@ -480,13 +453,3 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
             "np_random_seed": self.np_random_seed,
             "max_steps": self._limit,
         }
-
-
-def _pose(value: Pose | str) -> Pose:
-    return value if isinstance(value, Pose) else parse_pose(str(value), source="reset option start")
-
-
-def _cell(value: Cell | str) -> Cell:
-    if isinstance(value, tuple):
-        return (int(value[0]), int(value[1]))
-    return parse_cell(str(value), source="reset option goal")

@@ -36,7 +36,7 @@ from selfrepair.execution.faults import (
     Persistence,
     canonical_order,
 )
-from selfrepair.geometry import Cell, Heading, Pose
+from selfrepair.geometry import Cell, Heading, Pose, parse_cell, parse_pose
 from selfrepair.robots.domain import Domain
 from selfrepair.search.lattice import bfs_distances
 from selfrepair.world.bundled import bundled_routes, maze_names, resolve_maze
@@ -56,6 +56,7 @@ __all__ = [
     "draw_schedule",
     "maze_sources",
     "random_route",
+    "with_options",
 ]
 
 BUNDLED = "bundled"
@@ -63,6 +64,9 @@ BUNDLED = "bundled"
 
 MAX_GENERATED_SIDE = 1024
 """The largest generated maze side (as for experiment configs); a larger one is refused."""
+
+RESET_OPTIONS = ("faults", "goal", "maze", "start")
+"""The keys of ``reset(options=...)`` that fix part of an episode (:func:`with_options`)."""
 
 SEED_BOUND = 2**31
 """Per-episode seeds (maze generator, intermittent faults) are drawn from ``[0, SEED_BOUND)``."""
@@ -207,11 +211,22 @@ class FaultSpec:
             object.__setattr__(self, "sets", tuple(self.sets))
         if self.sets == () or not self.persistence or not self.detection:
             raise ProblemError("expected at least one fault set, persistence and detection")
+        if Detection.HIDDEN in self.detection and len(self.detection) > 1:
+            raise ProblemError(
+                "detection 'hidden' cannot be drawn with other modes: the agent's observation "
+                "(no fault flags) must be the same in every episode"
+            )
         _check_range(self.at, "at", 0)
         _check_range(self.duration, "duration", 1)
         low, high = self.probability
         if not 0.0 <= low <= high <= 1.0:
             raise ProblemError(f"expected 0 <= probability range <= 1, got {self.probability}")
+
+    @property
+    def hidden(self) -> bool:
+        """Whether the faults are hidden from the robot (detection ``hidden``): the Gymnasium
+        environments' partially observable variant."""
+        return self.detection == (Detection.HIDDEN,)
 
     def fault_sets(self, domain: Domain[Any, Any]) -> tuple[frozenset[Any], ...]:
         """The fault sets to draw from, parsed for ``domain``."""
@@ -295,3 +310,58 @@ def draw_scenario(
         route = random_route(maze, rng)
     schedule = draw_schedule(domain, faults, rng, fault_sets)
     return Scenario(maze, label, route, schedule, int(rng.integers(SEED_BOUND)))
+
+
+def with_options(
+    scenario: Scenario,
+    options: dict[str, Any],
+    domain: Domain[Any, Any],
+    rng: np.random.Generator,
+    hidden: bool = False,
+) -> Scenario:
+    """``scenario`` with the parts ``options`` fixes (``reset(options=...)`` of the Gymnasium
+    environments): ``maze`` (a bundled name, file or ``Maze``; a route is then drawn on it from
+    ``rng`` unless given), ``start`` (a pose ``"x,y,H"`` or a ``Pose``), ``goal`` (a cell
+    ``"x,y"``) and ``faults`` (a fault-set text, permanent from the first step and detected at
+    once, or hidden when ``hidden``; or a ``FaultSchedule``, hidden exactly when ``hidden``)."""
+    unknown = sorted(set(options) - set(RESET_OPTIONS))
+    if unknown:
+        raise ProblemError(
+            f"unknown reset option(s) {', '.join(unknown)}; expected {', '.join(RESET_OPTIONS)}"
+        )
+    maze, label, route = scenario.maze, scenario.maze_label, scenario.route
+    if "maze" in options:
+        given = options["maze"]
+        maze = given if isinstance(given, Maze) else resolve_maze(str(given))
+        label = maze.name or str(given)
+        route = random_route(maze, rng)
+    start = _pose(options.get("start", route.start))
+    goal = _cell(options.get("goal", route.goal))
+    for what, cell in (("start", start.cell), ("goal", goal)):
+        if not maze.is_free(*cell):
+            raise ProblemError(f"reset option {what}: {cell} is not a free cell of the maze")
+    schedule = scenario.schedule
+    if "faults" in options:
+        given = options["faults"]
+        detection = Detection.HIDDEN if hidden else Detection.NOW
+        schedule = given if isinstance(given, FaultSchedule) else FaultSchedule.permanent(
+            domain.parse_faults(str(given)), detection=detection
+        )  # fmt: skip
+        if (schedule.detection is Detection.HIDDEN) != hidden:
+            raise ProblemError(
+                "reset option faults: this environment "
+                + ("hides faults; expected detection 'hidden'" if hidden else "tells the robot "
+                   "its faults; expected detection 'now' or 'on-use'")
+            )  # fmt: skip
+    route = type(route)(route.name, start, goal)
+    return Scenario(maze, label, route, schedule, scenario.fault_seed)
+
+
+def _pose(value: Pose | str) -> Pose:
+    return value if isinstance(value, Pose) else parse_pose(str(value), source="reset option start")
+
+
+def _cell(value: Cell | str) -> Cell:
+    if isinstance(value, tuple):
+        return (int(value[0]), int(value[1]))
+    return parse_cell(str(value), source="reset option goal")

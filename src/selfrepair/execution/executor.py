@@ -21,7 +21,10 @@ it, and records the steps and repairs. :func:`run_mission` runs it to the end; p
    ``budget_exhausted``).
 4. Send the command to the simulator and tell the stepper what it did. A failed attempt (a fault
    the robot did not know yet) is recorded as a step with source ``failed-attempt`` and reveals
-   its blocking faults.
+   its blocking faults. With detection ``hidden`` the stepper is also given what the robot
+   observed (:meth:`Simulator.observe`) and whether the command took it elsewhere than it should
+   have (see :mod:`selfrepair.execution.stepper`). An oracle strategy (registered ``told``) is
+   told the true faults before every command, whatever the detection.
 
 The initial plan is made, by default, before any fault is known (``initial_faults_known=False``),
 as in the original experiment. In a changing world it avoids the cells the robot sees blocked at
@@ -59,11 +62,14 @@ from selfrepair.execution.stepper import Stepper
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.repair.replacement import FreeTest, table_reach
 from selfrepair.repair.strategies import (
+    ROBOT,
     Belief,
     MissionContext,
     Repair,
     RepairStatus,
+    diagnosis_report,
     get_strategy,
+    strategy_entry,
     uses_table,
 )
 from selfrepair.repair.tolerance import PlanObjective, fault_model
@@ -131,6 +137,7 @@ def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> Missio
         clearance_radius=radius,
         backend=backend,
         belief=belief,
+        behaviour=spec.behaviour,
     )
 
 
@@ -216,6 +223,7 @@ def run_mission(
             spec.seed,
             world=spec.world,
             behaviour=spec.behaviour,
+            observation=spec.observation,
         )
     initial_known = sim.sense() if spec.initial_faults_known else frozenset()
     table = spec.options.resolved_table() if uses_table(spec.strategy) else None
@@ -307,7 +315,10 @@ def _loop(
     """
     limit = spec.step_limit()
     goal, goal_heading = spec.goal, spec.goal_heading
-    sense_now = spec.schedule.detection is Detection.NOW
+    told = strategy_entry(spec.strategy, ROBOT).told  # an oracle: told the true faults
+    sense_now = spec.schedule.detection is Detection.NOW or told
+    hidden = spec.schedule.detection is Detection.HIDDEN
+    expect = sim.table.moves
     weight = bool(Fraction(spec.clearance_weight))
     margin, stride = sim.grid.margin, sim.grid.stride
     penalty = penalty_buffer(sim.grid, spec.maze, spec.clearance_radius) if weight else b""
@@ -317,6 +328,8 @@ def _loop(
     next_action, moved_, record, learn, advance, sense = (
         stepper.next_action, stepper.moved, stepper.record, stepper.learn, sim.advance, sim.sense
     )  # fmt: skip
+    if told:
+        sense = sim.true_faults
     while True:
         pose = sim.pose
         if pose.cell == goal and (goal_heading is None or pose.heading == goal_heading):
@@ -354,6 +367,14 @@ def _loop(
         else:
             record(step, action, source, outcome, pose, sim.pose, sim.last_duration,
                    sim.last_blocking, sim.last_bumped)  # fmt: skip
+        if hidden:  # what the robot observes of its command, and whether it went astray
+            end, want = sim.pose, expect[action][pose.heading]
+            deviated = outcome is Outcome.MOVED and (
+                (end.x - pose.x, end.y - pose.y, end.heading) != (want.dx, want.dy, want.heading)
+            )
+            stepper.perceive(
+                sim.observe(step, action, pose, outcome), deviated, outcome is Outcome.MOVED
+            )
 
 
 def penalty_buffer(grid: FreeGrid, maze: Maze, radius: int) -> Sequence[int]:
@@ -419,6 +440,7 @@ def _result(
         sim.ticks,
         sums,
         footing,
+        diagnosis_report(stepper.repairer),
     )
 
 

@@ -28,7 +28,7 @@ from fractions import Fraction
 from typing import Any, NamedTuple
 
 from selfrepair.caching import BoundedCache, CacheKind
-from selfrepair.execution.faults import FaultSchedule
+from selfrepair.execution.faults import Detection, FaultSchedule
 from selfrepair.execution.result import (
     MissionResult,
     MissionSpec,
@@ -353,6 +353,7 @@ def mission_row(result: MissionResult, *, optimum: Fraction | None = None) -> Ro
         "world_events": len(spec.world.events),
         "detours": totals.detours,
         "bumps": sum(1 for s in result.steps if s.source is StepSource.BUMPED),
+        **_diagnosis_columns(result),
     }
     return row
 
@@ -428,5 +429,37 @@ ROW_COLUMNS: tuple[str, ...] = (
     "world_events",
     "detours",
     "bumps",
+    "behaviour",
+    "observation_noise",
+    "surprise_step",
+    "isolation_actions",
+    "isolated_right",
+    "probes",
+    "classes_left",
 )
 """The row's columns, in order. Stable: the experiments' SQLite schema is built from it."""
+
+
+def _diagnosis_columns(result: MissionResult) -> Row:
+    """The diagnosis columns (faults hidden, docs/diagnosis.md): the behaviour model and
+    odometry noise of the mission, and what a diagnosing strategy recorded (``None`` for any
+    other): the step of the first surprise, commands after it until one class was isolated,
+    whether that class holds the true fault set (1/0), probes run, classes still possible."""
+    spec = result.spec
+    hidden = spec.schedule.detection is Detection.HIDDEN
+    row: Row = {
+        "behaviour": (spec.behaviour or spec.domain.behaviour().name)
+        if hidden and spec.domain.behaviours
+        else None,
+        "observation_noise": spec.observation.noise if hidden else None,
+    }
+    report = result.diagnosis or {}
+    isolated = report.get("isolated", ())
+    row["surprise_step"] = report.get("surprise_step")
+    row["isolation_actions"] = report.get("isolation_actions")
+    row["isolated_right"] = (
+        int(spec.schedule.all_faults() in isolated) if isolated else None
+    )
+    row["probes"] = report.get("probes")
+    row["classes_left"] = report.get("classes_left")
+    return row

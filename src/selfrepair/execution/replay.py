@@ -45,9 +45,12 @@ def replay(trace: Trace | str | Path) -> ReplayReport:
     faults it recorded as known; with detection ``now`` those must be the faults the sensors
     report at that step (the true ones). A moving step must also be allowed by the true faults
     of the schedule at that step, sweep only free cells, and end at the pose and after the
-    duration that the domain's ``step`` gives. A failed attempt must use an action the true
-    faults forbid, stay put and last one tick. The summary, when present, must agree on the
-    number of steps, the final pose, the ticks and whether the goal was reached.
+    duration that the domain's ``step`` gives, and sweep no cell (but its start cell) that the
+    world events (``MissionSpec.world``) block at the tick it starts. A failed attempt must use
+    an action the true faults forbid, stay put and last one tick; a bump must stay put, last one
+    tick and touch a cell blocked then (with detection ``hidden``, a bump may also come from a
+    wall: :mod:`selfrepair.execution.simulator` explains it). The summary, when present, must
+    agree on the number of steps, the final pose, the ticks and whether the goal was reached.
     """
     if not isinstance(trace, Trace):
         trace = read_trace(trace)
@@ -86,11 +89,21 @@ def _check_step(
         if step.end != step.start or step.duration != FAILED_ATTEMPT_TICKS:
             return "a failed attempt must stay put and last one tick"
         return None
+    blocked = spec.world.blocked_at(ticks) if spec.world else frozenset()
+    if step.source is StepSource.BUMPED:
+        if step.end != step.start or step.duration != FAILED_ATTEMPT_TICKS:
+            return "a bump must stay put and last one tick"
+        touched = blocked.intersection(domain.footprint(pose, step.action)[1:])
+        if not touched and spec.schedule.detection is not Detection.HIDDEN:
+            return f"a bump of {name} at {pose}, but it sweeps no cell blocked at tick {ticks}"
+        return None
     if not domain.available(step.action, true):
         return f"{name} is forbidden by the true faults {domain.format_faults(true)}"
     end, swept, duration = domain.step(pose, step.action)
     if not spec.maze.all_free(swept):
         return f"{name} at {pose} sweeps a wall or leaves the grid"
+    if hit := sorted(blocked.intersection(swept[1:])):
+        return f"{name} at {pose} sweeps {hit}, blocked at tick {ticks} by world events"
     if end != step.end:
         return f"{name} from {pose} ends at {end}, trace says {step.end}"
     if duration != step.duration:

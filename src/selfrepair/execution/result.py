@@ -14,6 +14,7 @@ from enum import StrEnum
 from fractions import Fraction
 from typing import Any, NamedTuple
 
+from selfrepair.diagnosis.observation import ObservationModel
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.geometry import Cell, Heading, Pose
@@ -52,6 +53,7 @@ class StepSource(StrEnum):
     REPLAN = RepairSource.REPLAN.value
     PLAN_REPAIR = RepairSource.PLAN_REPAIR.value
     DETOUR = RepairSource.DETOUR.value
+    PROBE = RepairSource.PROBE.value
     FAILED_ATTEMPT = "failed-attempt"
     WAIT = "wait"
     BUMPED = "bumped"
@@ -63,6 +65,7 @@ STEP_OF_REPAIR: Mapping[RepairSource, StepSource] = {
         RepairSource.REPLAN: StepSource.REPLAN,
         RepairSource.PLAN_REPAIR: StepSource.PLAN_REPAIR,
         RepairSource.DETOUR: StepSource.DETOUR,
+        RepairSource.PROBE: StepSource.PROBE,
 }
 """The step source of the actions a repair spliced in, by the repair's source: an explicit
 mapping, never a conversion by value (a plain dictionary, typed read-only: one look-up inside the
@@ -103,6 +106,9 @@ class MissionSpec:
     """The domain's fault-behaviour model the simulator uses when the faults are hidden from the
     robot (detection ``hidden``; ``None``: the domain's default; see
     :meth:`Domain.effective <selfrepair.robots.domain.Domain.effective>`)."""
+    observation: ObservationModel = field(default_factory=ObservationModel)
+    """What the robot observes after each command when the faults are hidden (odometry noise,
+    bump switch; see :mod:`selfrepair.diagnosis.observation`)."""
     world: WorldSchedule = field(default_factory=WorldSchedule)
     """Cells that become blocked or free during the mission, and how the robot senses them (see
     :mod:`selfrepair.world.events`; empty: the maze never changes)."""
@@ -211,6 +217,10 @@ class MissionResult:
     ticks: Fraction
     tally: MissionTally | None = None
     footing: str = "python"
+    diagnosis: Mapping[str, Any] | None = None
+    """What a diagnosing strategy recorded (faults hidden; ``None`` for any other): the step of
+    the first surprise, the commands to isolation, the class isolated (its fault sets), probes
+    (see :mod:`selfrepair.repair.strategies.diagnosing`)."""
 
     @property
     def reached(self) -> bool:

@@ -36,6 +36,9 @@ from enum import StrEnum
 from fractions import Fraction
 from typing import Any, NamedTuple, Protocol
 
+import numpy as np
+
+from selfrepair.diagnosis.observation import Observation, ObservationModel
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import Detection, FaultClock, FaultSchedule
 from selfrepair.execution.moves import Move, MoveTable, available_moves, move_table
@@ -45,7 +48,18 @@ from selfrepair.search.problem import make_pose, pose_table
 from selfrepair.world.events import Sensing, WorldSchedule
 from selfrepair.world.maze import Maze
 
-__all__ = ["FAILED_ATTEMPT_TICKS", "FaultSource", "Outcome", "Simulator", "StepOutcome"]
+__all__ = [
+    "FAILED_ATTEMPT_TICKS",
+    "OBSERVATION_STREAM",
+    "FaultSource",
+    "Outcome",
+    "Simulator",
+    "StepOutcome",
+]
+
+OBSERVATION_STREAM = 24
+"""The second word of the seed of the observation noise generator, ``[seed, 24]``: a stream of
+its own, so observation draws never share a generator with anything else."""
 
 FAILED_ATTEMPT_TICKS = Fraction(1)
 """What a failed attempt costs."""
@@ -117,6 +131,7 @@ class Simulator:
         clock: FaultSource | None = None,
         world: WorldSchedule | None = None,
         behaviour: str | None = None,
+        observation: ObservationModel | None = None,
     ) -> None:
         self.domain = domain
         self.maze = maze
@@ -162,6 +177,9 @@ class Simulator:
         effective action; otherwise the command)."""
         self.bumps = 0
         """Motions stopped at a wall so far (hidden faults only)."""
+        self.observation = observation or ObservationModel()
+        """What the robot's sensors report after each command (faults hidden)."""
+        self._rng = np.random.default_rng([seed, OBSERVATION_STREAM]) if self._hidden else None
 
     @property
     def ticks(self) -> Fraction:
@@ -253,6 +271,21 @@ class Simulator:
             self.units += move.units
         self.steps += 1
         return Outcome.MOVED if moves is not None else Outcome.FAILED_ATTEMPT
+
+    def observe(self, step: int, action: Any, start: Pose, outcome: Outcome) -> Observation:
+        """What the robot observes of its last command, ``action`` (number ``step``) from
+        ``start`` with ``outcome``: a reading of its pose after it by :attr:`observation`, with
+        the bump switch and the failed signal (seeded: one draw per command from the
+        generator of ``[seed, OBSERVATION_STREAM]``)."""
+        return self.observation.read(
+            step,
+            action,
+            start,
+            self.pose,
+            outcome is Outcome.BUMPED,
+            outcome is Outcome.FAILED_ATTEMPT,
+            self._rng,
+        )
 
     def _advance_hidden(self, action: Any) -> Outcome:
         """:meth:`advance` with the faults hidden from the robot (see the module docstring):

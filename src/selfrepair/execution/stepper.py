@@ -17,7 +17,8 @@ command (:meth:`Stepper.next_action`), sends the command to its world, and tells
 Before each command, :meth:`Stepper.next_action`:
 
 1. if the queue is empty (away from the goal: the caller checks the goal), replans (the
-   defensive replan, recorded with ``action=None``);
+   defensive replan, recorded with ``action=None``; with the faults hidden an observing
+   repairer is asked instead: it may assume other faults than the stepper checks);
 2. if the queue's first action is unavailable under the known faults, asks the strategy for a
    repair and splices it into the queue (:func:`splice`, the one splice of the code base);
 3. if the strategy has a ``horizon`` (lookahead with a window before the faulty action), asks it
@@ -56,6 +57,15 @@ believed-blocked cells (the replacement strategy's local detours), one that decl
 ``sees_cells`` (true) is asked through its ``repair`` (D* Lite, whose kept search takes the
 cells as updates); any other is answered by a plain replan around them (the mission's planner
 plans around ``MissionContext.belief``).
+
+Faults hidden (detection ``hidden``, docs/diagnosis.md): after each command the caller gives the
+stepper what the robot observed (:meth:`Stepper.perceive`). A repairer that observes (one with
+``observe`` and ``assumption``, see :class:`~selfrepair.repair.strategies.Repairer`) gets it and
+says whether the queue no longer starts where the robot is (its command went elsewhere); the
+stepper then asks it for a repair before the next command (``rejoin``), even with an empty queue
+or an available front. After each observation and each repair the stepper takes the repairer's
+:class:`~selfrepair.repair.strategies.Assumption`: the faults the queue is checked against, and
+actions that are unusable whatever the faults. Any other repairer is not told anything.
 """
 
 from __future__ import annotations
@@ -143,10 +153,14 @@ class Stepper:
     """
 
     __slots__ = (
+        "_assume",
         "_available",
         "_blocked_repair",
         "_early_at",
+        "_observe",
+        "_perceived",
         "_table",
+        "_unusable",
         "blocked",
         "context",
         "failure",
@@ -154,6 +168,7 @@ class Stepper:
         "known",
         "max_wait",
         "queue",
+        "rejoin",
         "repairer",
         "repairs",
         "steps",
@@ -185,6 +200,12 @@ class Stepper:
         )
         if self._blocked_repair is None and getattr(repairer, "sees_cells", False):
             self._blocked_repair = repairer.repair  # its one repair also sees the cells
+        self._observe = getattr(repairer, "observe", None)
+        self._assume = getattr(repairer, "assumption", None)
+        self._unusable: frozenset[Any] = frozenset()
+        self._perceived = False  # observations came (faults hidden): take the assumption
+        self.rejoin = False
+        """Whether the observing repairer asked to be asked before the next command."""
         self.blocked: frozenset[Cell] = context.belief.blocked
         """The cells the robot believes blocked by world events (see the module docstring)."""
         self._early_at = -1  # the step of the last early repair: at most one per step
@@ -202,6 +223,29 @@ class Stepper:
         if known is not self.known:
             self.known = known
             self._available = available_moves(self._table, known)
+
+    def perceive(self, observation: Any, deviated: bool, moved: bool) -> None:
+        """Faults hidden: give an observing repairer ``observation`` of the last command (a
+        :class:`~selfrepair.diagnosis.Observation`), with whether the robot truly ``deviated``
+        from the pose its command should have reached and whether it ``moved``; then take its
+        assumption (see the module docstring). Nothing for any other repairer."""
+        observe = self._observe
+        if observe is None:
+            return
+        self._perceived = True
+        if observe(observation, deviated, moved):
+            self.rejoin = True
+        self._sync()
+
+    def _sync(self) -> None:
+        """Take the observing repairer's :class:`~selfrepair.repair.strategies.Assumption`."""
+        known, unusable = self._assume()  # type: ignore[misc]  # set with _observe
+        if known != self.known or unusable != self._unusable:
+            self.known, self._unusable = known, unusable
+            available = available_moves(self._table, known)
+            if unusable:
+                available = {a: m for a, m in available.items() if a not in unusable}
+            self._available = available
 
     def see(self, blocked: frozenset[Cell]) -> None:
         """The robot now believes exactly ``blocked`` blocked (its sensors, or a bump)."""
@@ -227,13 +271,16 @@ class Stepper:
         stepper is stopped."""
         queue = self.queue
         if queue and queue[0][0] in self._available and not (
-            self.horizon or self.stopped or self.blocked
+            self.horizon or self.stopped or self.blocked or self.rejoin
         ):
             return queue[0]  # the hot path: nothing to repair
         if self.stopped:
             return None
         for _ in range(MAX_REPAIRS_PER_STEP):
-            if not queue or queue[0][0] not in self._available:
+            if self.rejoin:  # the observing repairer asked: the queue starts elsewhere
+                self.rejoin = False
+                repair = self._repair(pose, step, queue[0][0] if queue else None, asked=True)
+            elif not queue or queue[0][0] not in self._available:
                 repair = self._repair(pose, step, queue[0][0] if queue else None)
             elif self.blocked and self.sweeps_blocked(pose, queue[0][0]):
                 repair = self._repair(pose, step, queue[0][0], blocked=True)
@@ -279,7 +326,9 @@ class Stepper:
                 return action
         return None
 
-    def _repair(self, pose: Pose, step: int, action: Any | None, blocked: bool = False) -> Repair:
+    def _repair(
+        self, pose: Pose, step: int, action: Any | None, blocked: bool = False, asked: bool = False
+    ) -> Repair:
         """Ask the strategy (or, with an empty queue or for a blocked action the strategy does not
         see, a plain replan) for a repair of ``action`` and splice it into the queue; the
         latency covers both."""
@@ -287,7 +336,9 @@ class Stepper:
         queue = self.queue
         request = RepairRequest(pose, _ActionView(queue), self.known, step)
         blocked_repair = self._blocked_repair
-        if action is None or (blocked and blocked_repair is None):
+        if (action is None and not (asked or self._perceived)) or (
+            blocked and blocked_repair is None
+        ):
             repair = replan(self.context, request)  # no queue, or a strategy blind to cells
         elif blocked_repair is not None and blocked:
             repair = blocked_repair(request)
@@ -296,6 +347,8 @@ class Stepper:
         if repair.status is RepairStatus.REPAIRED:
             source = STEP_OF_REPAIR[repair.source]
             splice(queue, repair.consumed, repair.actions, source)
+        if self._perceived:  # an observing repairer may change what it assumes
+            self._sync()
         latency = time.perf_counter_ns() - t0
         self.repairs.append(RepairRecord(step, pose, action, repair, latency))
         return repair

@@ -32,6 +32,7 @@ from selfrepair.repair.strategies import RepairSource, RepairStatus, StrategyNam
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import PluginFile, get_domain, load_recorded_plugin
 from selfrepair.textio import read_text
+from selfrepair.world.events import WorldSchedule
 from selfrepair.world.maze import parse_maze
 
 __all__ = ["parse_trace", "read_trace", "spec_from_header"]
@@ -226,6 +227,7 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
             goal=(int(gx), int(gy)),
             goal_heading=None if heading is None else Heading[heading],
             schedule=FaultSchedule.from_json(header.get("schedule", {}), domain, source),
+            world=WorldSchedule.from_json(header.get("world", {}), source),
             strategy=str(header.get("strategy", StrategyName.REPLACEMENT)),
             options=StrategyOptions(
                 table=str(options.get("table", "handwritten")),

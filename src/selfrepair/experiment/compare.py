@@ -21,13 +21,14 @@ from typing import Any
 
 from selfrepair.errors import ProblemError
 from selfrepair.execution.executor import run_mission
+from selfrepair.execution.faults import Detection
 from selfrepair.execution.metrics import latency_stats, motion_distance, plan_distance
 from selfrepair.execution.result import MissionResult, MissionSpec
 from selfrepair.repair.strategies import (
     RepairSource,
     RepairStatus,
     StrategyName,
-    strategy_names,
+    strategy_entries,
     uses_table,
 )
 from selfrepair.robots.domain import Domain
@@ -140,13 +141,16 @@ def strategy_refusal(name: str, domain: Domain[Any, Any]) -> str | None:
 
 
 def runnable_strategies(
-    domain: Domain[Any, Any], names: Sequence[str] | None = None
+    domain: Domain[Any, Any], names: Sequence[str] | None = None, *, hidden: bool = False
 ) -> tuple[tuple[str, ...], tuple[tuple[str, str], ...]]:
-    """The strategies of ``names`` (default: every registered one, in registry order) that can
-    run for ``domain`` here, and the others as ``(name, reason)`` pairs, in the same order."""
+    """The strategies of ``names`` (default: every registered one, in registry order, that is
+    for faults the robot is not told when ``hidden``, else every other one) that can run for
+    ``domain`` here, and the others as ``(name, reason)`` pairs, in the same order."""
     runnable: list[str] = []
     skipped: list[tuple[str, str]] = []
-    for name in strategy_names() if names is None else names:
+    if names is None:
+        names = tuple(e.name for e in strategy_entries() if e.hidden == hidden)
+    for name in names:
         reason = strategy_refusal(name, domain)
         if reason is None:
             runnable.append(name)
@@ -180,7 +184,8 @@ def compare_strategies(
     (one that cannot raises :class:`ProblemError` with the reason)."""
     skipped: tuple[tuple[str, str], ...] = ()
     if strategies is None:
-        names, skipped = runnable_strategies(spec.domain)
+        hidden = spec.schedule.detection is Detection.HIDDEN
+        names, skipped = runnable_strategies(spec.domain, hidden=hidden)
     else:
         names = tuple(strategies)
         for name in names:

@@ -33,6 +33,8 @@ SOURCE_COLOURS: Mapping[StepSource, str] = MappingProxyType(
         StepSource.FAILED_ATTEMPT: "#D55E00",
         StepSource.WAIT: "#F0E442",
         StepSource.BUMPED: "#000000",
+        StepSource.PROBE: "#999999",
+        StepSource.DETOUR: "#8C564B",
     }
 )
 """Step colours by source, in every figure, animation and the HTML viewer. A repair's source

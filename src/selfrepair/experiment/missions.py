@@ -18,8 +18,9 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any
 
+from selfrepair.diagnosis import ObservationModel
 from selfrepair.errors import ConfigError
-from selfrepair.execution.faults import FaultEvent, FaultSchedule, canonical_order
+from selfrepair.execution.faults import Detection, FaultEvent, FaultSchedule, canonical_order
 from selfrepair.execution.result import MissionSpec
 from selfrepair.experiment.axes import Axis, cross
 from selfrepair.experiment.faultsets import fault_profile
@@ -50,6 +51,7 @@ from selfrepair.experiment.variants import (
     variant_label,
     variants_of,
 )
+from selfrepair.experiment.worlds import mission_world
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, check_limit
 from selfrepair.repair.replacement import RecursionMode
@@ -58,6 +60,7 @@ from selfrepair.repair.tolerance import OPTIMAL, parse_objective
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.robots.registry import get_domain, load_plugin
+from selfrepair.world.events import WorldSchedule
 from selfrepair.world.routes import Route
 
 __all__ = ["count_missions", "expand", "to_spec"]
@@ -97,8 +100,11 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
         (len(fault_profile(faults.sets, get_domain(config.domain))), "fault sets"),
         (1 if faults.at_random else len(faults.at), "fault times"),
         (len(faults.detection), "detections"),
+        (len(faults.noise), "noise rates"),
         (config.repeats, "repeats"),
     ]
+    if config.world is not None:
+        factors.append((len(config.world.rates) * len(config.world.sensing), "world settings"))
     if not filtered:
         factors.append((variants, "strategy variants and weights"))
     total = 1
@@ -154,7 +160,9 @@ def expand(
         Axis("faults", fault_profile(config.faults.sets, domain), "fault sets"),
         Axis("fault_at", (RANDOM,) if config.faults.at_random else config.faults.at, "fault times"),
         Axis("detection", tuple(config.faults.detection), "detections"),
+        Axis("noise", tuple(config.faults.noise), "noise rates"),
         Axis("replicate", tuple(range(config.repeats)), "repeats"),
+        Axis("world", _worlds(config), "world settings"),
         Axis("variant", variants, "strategy variants and weights"),
     )
     missions: dict[str, Mission] = {}
@@ -179,6 +187,12 @@ def expand(
             "detection": point["detection"],
             "replicate": point["replicate"],
         }
+        if point["world"] is not None:  # absent without a [world] section: older keys stay valid
+            situation["world"] = point["world"]
+        if point["detection"] == Detection.HIDDEN:  # absent otherwise, so older keys stay valid
+            situation["behaviour"] = config.faults.behaviour
+            situation["noise"] = point["noise"]
+            situation["bump_switch"] = config.faults.bump_switch
         if domain is not FOUR_WHEEL:  # absent for the four-wheel robot, so older keys stay valid
             situation["domain"] = domain.name
         if plugins:
@@ -222,6 +236,7 @@ def _mission(
         ("replicate", situation["replicate"]),
         ("strategy", variant["strategy"]),
         ("variant", variant_label(variant["strategy"], options)),
+        ("base_variant", variant_label(variant["strategy"], _without_objective(options))),
         ("table", short_table(options.get("table"))),
         ("recursion", options.get("recursion")),
         ("window", options.get("window")),
@@ -230,7 +245,37 @@ def _mission(
         ("clearance_weight", weight),
         ("objective", objective_label(options, weight)),
     )
+    world = situation.get("world")
+    if world is not None:
+        labels += (("world_rate", str(world["rate"])), ("sensing", world["sensing"]))
     return Mission(key, config.name, seed, text, labels)
+
+
+def _without_objective(options: dict[str, Any]) -> dict[str, Any]:
+    """The variant's options but its planning objective: what a tolerant robot is compared on
+    (column ``base_variant``; the same as ``variant`` for a robot planned without one)."""
+    return {k: v for k, v in options.items() if k != "objective"}
+
+
+def _worlds(config: ExperimentConfig) -> tuple[dict[str, Any] | None, ...]:
+    """The world settings of the ``world`` axis: one per rate and sensing mode, or ``None``
+    alone when the experiment's maze never changes."""
+    world = config.world
+    if world is None:
+        return (None,)
+    return tuple(
+        {
+            "rate": rate,
+            "duration": world.duration,
+            "distance": world.distance,
+            "horizon": world.horizon,
+            "sensing": str(sensing),
+            "range": world.range,
+            "max_wait": world.max_wait,
+        }
+        for rate in world.rates
+        for sensing in world.sensing
+    )
 
 
 RANDOM = "random"
@@ -278,11 +323,20 @@ def to_spec(mission: Mission) -> MissionSpec:
         for fault in canonical_order(domain.parse_faults(s["faults"]))
     )
     options = s["options"]
+    maze, start, goal = (
+        maze_of(canonical_json(s["maze"])),
+        parse_pose(s["start"]),
+        parse_cell(s["goal"]),
+    )
+    world = s.get("world")
     return MissionSpec(
-        maze=maze_of(canonical_json(s["maze"])),
-        start=parse_pose(s["start"]),
-        goal=parse_cell(s["goal"]),
+        maze=maze,
+        start=start,
+        goal=goal,
         schedule=FaultSchedule(events=events, detection=s["detection"]),
+        world=WorldSchedule()
+        if world is None
+        else mission_world(world, maze, start, goal, domain, mission.seed),
         strategy=s["strategy"],
         options=StrategyOptions(
             table=options.get("table", "handwritten"),
@@ -292,7 +346,13 @@ def to_spec(mission: Mission) -> MissionSpec:
             lpg_time_limit_s=options.get("lpg_time_limit_s", 5.0),
             lpg_seed=options.get("lpg_seed", 0),
             rewrite=options.get("rewrite", False),
+            max_faults=options.get("max_faults", 2),
+            fault_prior=options.get("fault_prior", 0.05),
+            confidence=options.get("confidence", 0.01),
+            **({} if world is None else {"max_wait": world["max_wait"]}),
         ),
+        behaviour=s.get("behaviour"),
+        observation=ObservationModel(s.get("noise", 0.0), s.get("bump_switch", True)),
         objective=parse_objective(options.get("objective", OPTIMAL)),
         clearance_weight=Fraction(s["clearance_weight"]),
         clearance_radius=s["clearance_radius"],

@@ -17,7 +17,7 @@ from pydantic import Field, ValidationInfo, field_validator, model_validator
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.execution.faults import Clock, Detection, Persistence
 from selfrepair.geometry import parse_cell, parse_pose
-from selfrepair.limits import MAX_CLEARANCE_WEIGHT
+from selfrepair.limits import DEFAULT_SENSING_RANGE, MAX_CLEARANCE_WEIGHT
 from selfrepair.repair.replacement import DEFERRING, RecursionMode
 from selfrepair.repair.strategies import MissionKind, StrategyName
 from selfrepair.repair.tolerance import OPTIMAL, parse_objective
@@ -25,6 +25,7 @@ from selfrepair.robots.domain import Domain
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN
 from selfrepair.robots.registry import get_domain
 from selfrepair.tomlfile import Float, Frozen, Int, NonEmpty
+from selfrepair.world.events import Sensing
 from selfrepair.world.routes import MAX_ROUTES
 
 __all__ = [
@@ -42,6 +43,7 @@ __all__ = [
     "ReplanStrategy",
     "RouteConfig",
     "StrategyConfig",
+    "WorldConfig",
 ]
 
 FAULT_PROFILES = ("paper", "singles", "doubles", "all")
@@ -49,7 +51,6 @@ FAULT_PROFILES = ("paper", "singles", "doubles", "all")
 
 PAPER_ONLY = frozenset({"paper"})
 """Profiles defined for the four-wheel robot only."""
-
 
 
 class GeneratedMaze(Frozen):
@@ -127,6 +128,34 @@ class FaultsConfig(Frozen):
     at_random: bool = False
     """When true, each situation's faults appear at one step drawn (seeded by the situation)
     uniformly from the steps of the route's fault-free optimal plan, instead of at each ``at``."""
+    behaviour: str | None = None
+    """Detection ``hidden``: the robot's fault-behaviour model (its default when absent)."""
+    noise: Annotated[
+        tuple[Annotated[Float, Field(ge=0.0, lt=0.5)], ...], NonEmpty
+    ] = (0.0,)
+    """Detection ``hidden``: the odometry error rates, one axis of the sweep."""
+    bump_switch: bool = True
+    """Detection ``hidden``: whether the robot senses a motion stopped at a wall."""
+
+    @field_validator("behaviour")
+    @classmethod
+    def _behaviour(cls, value: str | None, info: ValidationInfo) -> str | None:
+        if value is None:
+            return value
+        domain = _domain(info)
+        if value not in domain.behaviour_names():
+            names = ", ".join(domain.behaviour_names()) or "none: the robot has no such model"
+            raise ValueError(
+                f"expected a fault behaviour of {domain.name} ({names}), got {value!r}"
+            )
+        return value
+
+    @model_validator(mode="after")
+    def _hidden_options(self) -> FaultsConfig:
+        hidden = Detection.HIDDEN in self.detection
+        if not hidden and (self.behaviour is not None or self.noise != (0.0,)):
+            raise ValueError('behaviour and noise need detection = ["hidden"] (or a list with it)')
+        return self
 
     @model_validator(mode="after")
     def _random_step(self) -> FaultsConfig:
@@ -156,6 +185,26 @@ class FaultsConfig(Frozen):
         if not value:
             raise ValueError("expected at least one fault set")
         return tuple(domain.format_faults(_reraise(domain.parse_faults, text)) for text in value)
+
+
+class WorldConfig(Frozen):
+    """A changing world (:mod:`selfrepair.world.events`): per situation, obstacles drawn by
+    :func:`~selfrepair.world.events.random_world` near the route's fault-free optimal plan, at
+    each of ``rates`` (obstacles per 100 ticks), each staying ``duration`` ticks (absent: for
+    good), on cells within ``distance`` (Chebyshev) of the plan, over ``horizon`` times the
+    plan's duration; sensed per each of ``sensing`` with range ``range``; a robot waits at most
+    ``max_wait`` steps in all for a way to open. A rate of 0 is the maze that never changes."""
+
+    rates: Annotated[tuple[Annotated[Float, Field(ge=0.0, le=1000.0)], ...], NonEmpty]
+    duration: Annotated[Int, Field(ge=1)] | None = 30
+    distance: Annotated[Int, Field(ge=0, le=64)] = 1
+    horizon: Annotated[Int, Field(ge=1, le=100)] = 4
+    sensing: Annotated[tuple[Sensing, ...], NonEmpty] = (Sensing.RANGE,)
+    range: Annotated[Int, Field(ge=0, le=64)] = DEFAULT_SENSING_RANGE
+    max_wait: Annotated[Int, Field(ge=0, le=100_000)] = 200
+    """Steps a robot may wait in place, in all, while no plan exists round what it believes
+    blocked (``StrategyOptions.max_wait``; obstacles that stay ``duration`` ticks need more than
+    the default of a maze that never changes)."""
 
 
 MazeNames = Annotated[tuple[str, ...], Field(min_length=1)] | None
@@ -274,9 +323,12 @@ class LookaheadStrategy(ReplacementStrategy):
 
 
 class DStarLiteStrategy(_StrategyEntry):
-    """D* Lite, incremental replanning (pure Python), keeping its search between repairs."""
+    """D* Lite, incremental replanning, keeping its search between repairs, with the planner
+    ``backend`` (``auto``: the compiled kernels when numba is installed; ``python``: the
+    pure-Python reference, the same plans)."""
 
     name: Literal[StrategyName.DSTAR_LITE]
+    backend: Literal["auto", "numba", "python"] = "auto"
 
 
 class LpgAdaptStrategy(_StrategyEntry):
@@ -301,12 +353,38 @@ class LpgAdaptStrategy(_StrategyEntry):
         return value
 
 
+class DiagnosisStrategy(_StrategyEntry):
+    """A strategy for faults the robot is not told (docs/diagnosis.md): the ``oracle``, told
+    them, and ``diagnose``, ``conformant``, ``active-diagnosis`` and ``trial-and-error``, with a
+    table (one variant per table and recursion mode) and the diagnosis options: hypotheses of up
+    to ``max_faults`` faults, the per-fault prior ``fault_prior``, the posterior mass ``1 -
+    confidence`` that isolates a class."""
+
+    name: Literal[
+        StrategyName.ORACLE,
+        StrategyName.DIAGNOSE,
+        StrategyName.CONFORMANT,
+        StrategyName.ACTIVE_DIAGNOSIS,
+        StrategyName.TRIAL_AND_ERROR,
+    ]
+    tables: Annotated[tuple[str, ...], NonEmpty] = ("handwritten",)
+    recursion: Annotated[tuple[RecursionMode, ...], NonEmpty] = (RecursionMode.FLAT,)
+    max_faults: Annotated[Int, Field(ge=0, le=4)] = 2
+    fault_prior: Annotated[Float, Field(gt=0.0, lt=1.0)] = 0.05
+    confidence: Annotated[Float, Field(ge=0.0, lt=1.0)] = 0.01
+
+
 STRATEGY_TAGS: tuple[StrategyName, ...] = StrategyName.of_kind(MissionKind.ROBOT)
 """The ``name`` values that select a strategy entry's model (the discriminator of
 :data:`StrategyConfig`)."""
 
 StrategyConfig = Annotated[
-    ReplanStrategy | ReplacementStrategy | LookaheadStrategy | DStarLiteStrategy | LpgAdaptStrategy,
+    ReplanStrategy
+    | ReplacementStrategy
+    | LookaheadStrategy
+    | DStarLiteStrategy
+    | LpgAdaptStrategy
+    | DiagnosisStrategy,
     Field(discriminator="name"),
 ]
 
@@ -330,6 +408,7 @@ class ExperimentConfig(Frozen):
     timing_repeats: Annotated[Int, Field(ge=1, le=1000)] = 1
     mazes: Annotated[tuple[MazeConfig, ...], Field(min_length=1)]
     faults: FaultsConfig = FaultsConfig()
+    world: WorldConfig | None = None
     planner: PlannerConfig = PlannerConfig()
     strategies: Annotated[tuple[StrategyConfig, ...], Field(min_length=1)]
     source: str = "<string>"

@@ -18,6 +18,8 @@ from typing import Any
 
 from selfrepair.errors import ConfigError, LimitError
 from selfrepair.experiment.schema import (
+    DiagnosisStrategy,
+    DStarLiteStrategy,
     ExperimentConfig,
     LookaheadStrategy,
     LpgAdaptStrategy,
@@ -82,14 +84,28 @@ def variants_of(
                             if objective != OPTIMAL:  # absent when optimal, likewise
                                 options["objective"] = objective
                             yield {"strategy": strategy.name, "options": options}, weights
+    elif isinstance(strategy, DiagnosisStrategy):
+        for table in strategy.tables:
+            for recursion in strategy.recursion:
+                options = {**_table_identity(table, config), "recursion": recursion}
+                for key, default in _DIAGNOSIS_DEFAULTS:
+                    if getattr(strategy, key) != default:  # defaults left out (stable keys)
+                        options[key] = getattr(strategy, key)
+                yield {"strategy": strategy.name, "options": options}, weights
     else:
         yield {"strategy": strategy.name, "options": _plain_options(strategy)}, weights
+
+
+_DIAGNOSIS_DEFAULTS = (("max_faults", 2), ("fault_prior", 0.05), ("confidence", 0.01))
+"""The diagnosis options of a strategy entry and their defaults (as ``StrategyOptions``)."""
 
 
 def variant_count(strategy: StrategyConfig, config: ExperimentConfig) -> int:
     """How many (variant, clearance weight) pairs :func:`variants_of` gives, by arithmetic
     (without reading any table file)."""
     weights = len(strategy.clearance_weights or config.planner.clearance_weights)
+    if isinstance(strategy, DiagnosisStrategy):
+        return len(strategy.tables) * len(strategy.recursion) * weights
     if not isinstance(strategy, ReplacementStrategy):
         return weights
     windows = (
@@ -127,7 +143,7 @@ def maze_filter(
 def _plain_options(strategy: StrategyConfig) -> dict[str, Any]:
     """The options of a strategy without a table, as its missions record them (defaults left
     out, so that the keys of missions made before an option existed stay valid)."""
-    if isinstance(strategy, ReplanStrategy) and strategy.backend != "auto":
+    if isinstance(strategy, ReplanStrategy | DStarLiteStrategy) and strategy.backend != "auto":
         return {"backend": strategy.backend}
     if isinstance(strategy, LpgAdaptStrategy):
         return {"lpg_time_limit_s": strategy.time_limit, "lpg_seed": strategy.seed}

@@ -156,8 +156,18 @@ CLAIMS = {
 
 # --- pairing ------------------------------------------------------------------------------------
 
-SITUATION = ("maze", "route", "faults", "fault_at", "detection", "replicate")
-"""What makes two missions of different strategies comparable."""
+SITUATION = (
+    "maze",
+    "route",
+    "faults",
+    "fault_at",
+    "detection",
+    "replicate",
+    "world_rate",
+    "sensing",
+)
+"""What makes two missions of different strategies comparable (the world columns are absent,
+so equal, for an experiment whose maze never changes)."""
 
 
 def situation(row: Row) -> tuple[Value, ...]:

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 from selfrepair.geometry import Cell, Heading, Pose
@@ -26,7 +26,14 @@ from selfrepair.physics.world import PhysicsWorld, pose_error, snap
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 
-__all__ = ["CONFIRM_HEADING", "CONFIRM_POSITION", "FidelityReport", "FidelityRow", "measure"]
+__all__ = [
+    "CONFIRM_HEADING",
+    "CONFIRM_POSITION",
+    "FidelityReport",
+    "FidelityRow",
+    "faulty_rows",
+    "measure",
+]
 
 CONFIRM_POSITION = 0.05
 """Physics confirms an action whose tracked end lies within this many cells of the lattice's."""
@@ -82,8 +89,11 @@ class FidelityReport:
     def summary(self) -> dict[str, Any]:
         """Counts and shares of confirmed actions, open loop and tracked, nominal and faulty."""
         out: dict[str, Any] = {}
-        for label, rows in (("nominal", self.nominal()),
-                            ("faulty", tuple(r for r in self.rows if r.faults))):  # fmt: skip
+        groups = [("nominal", self.nominal())]
+        for behaviour in dict.fromkeys(r.behaviour for r in self.rows if r.faults):
+            rows = tuple(r for r in self.rows if r.faults and r.behaviour == behaviour)
+            groups.append((f"faulty ({behaviour})", rows))
+        for label, rows in groups:
             if not rows:
                 continue
             n = len(rows)
@@ -120,6 +130,7 @@ class FidelityReport:
                 "swept": [list(c) for c in row.swept],
                 "position_error": round(row.tracked_position, 4),
                 "heading_error": round(row.tracked_heading, 3),
+                "confirmed": row.confirmed,
             })  # fmt: skip
         return {
             "domain": name,
@@ -163,9 +174,13 @@ def measure(
     domain: Domain[Any, Any] = FOUR_WHEEL,
     params: RobotParams = DEFAULT_PARAMS,
     actions: Iterable[Any] | None = None,
+    *,
+    faulty: bool = True,
 ) -> FidelityReport:
     """Run every action of ``domain`` (or ``actions``) nominally, open loop and tracked, and
-    report each against the lattice (see the module docstring)."""
+    report each against the lattice (see the module docstring); with ``faulty``, also every
+    action under every single fault that forbids it, for each of the domain's fault-behaviour
+    models (:func:`faulty_rows`)."""
     world = PhysicsWorld(None, _ORIGIN, params)
     centre: list[Cell] = []
 
@@ -213,4 +228,42 @@ def measure(
             )
         )
     world.observer = None
+    if faulty:
+        rows += faulty_rows(domain, rows)
     return FidelityReport(tuple(rows), params)
+
+
+def faulty_rows(domain: Domain[Any, Any], nominal: list[FidelityRow]) -> list[FidelityRow]:
+    """The rows of every action under every single fault that forbids it, per fault-behaviour
+    model of ``domain`` (behaviour by behaviour, fault by fault, action by action).
+
+    A fault acts on the actuators: the wheels perform the action
+    :meth:`Domain.effective <selfrepair.robots.domain.Domain.effective>` says, and physics runs
+    exactly those wheel commands (the tracker, which knows only the wheels' signs, follows that
+    action's lattice motion), from the same rest pose. So a faulty row carries the measurement
+    of the performed action (when it was measured: rows of actions not in ``nominal`` are left
+    out), compared with the lattice's end pose of that action: whether physics confirms what the
+    fault model says the faulty robot does."""
+    by_action = {row.action: row for row in nominal}
+    out = []
+    for behaviour in domain.behaviours:
+        for fault in domain.faults:
+            faults = frozenset((fault,))
+            for action in domain.actions:
+                if domain.available(action, faults):
+                    continue
+                performed = domain.format_action(domain.effective(action, faults, behaviour.name))
+                row = by_action.get(performed)
+                if row is None:
+                    continue
+                out.append(
+                    replace(
+                        row,
+                        action=domain.format_action(action),
+                        motion=domain.motion_class(action),
+                        faults=domain.format_faults(faults),
+                        behaviour=behaviour.name,
+                        executed=performed,
+                    )
+                )
+    return out

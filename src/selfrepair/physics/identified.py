@@ -29,6 +29,7 @@ from selfrepair.robots.four_wheel import Action, Fault
 
 __all__ = [
     "BUNDLED",
+    "CONFIRMED_NAME",
     "SNAP_HEADING",
     "SNAP_POSITION",
     "IdentifiedMotion",
@@ -40,6 +41,8 @@ SNAP_POSITION = 0.25
 """An end position within this many cells of a cell centre snaps to that cell."""
 SNAP_HEADING = 15.0
 """An end heading within this many degrees of one of the four headings snaps to it."""
+CONFIRMED_NAME = "four-wheel-confirmed"
+"""The name of the bundled identified domain's confirmed-only variant."""
 BUNDLED = "four-wheel-physics.json"
 """The bundled identified domain (package data under ``selfrepair/data/physics``)."""
 
@@ -77,12 +80,23 @@ def _motion_of(entry: Mapping[str, Any], source: str) -> tuple[Action, Identifie
 
 
 def identified_domain(
-    data: Mapping[str, Any], *, name: str | None = None, source: str = "<identified>"
+    data: Mapping[str, Any],
+    *,
+    name: str | None = None,
+    source: str = "<identified>",
+    confirmed_only: bool = False,
 ) -> Domain[Action, Fault]:
-    """The domain of an identified-motion file's content (see the module docstring)."""
+    """The domain of an identified-motion file's content (see the module docstring). With
+    ``confirmed_only``, only the actions physics confirms (entries marked ``confirmed``: tracked
+    within 5% of a cell and 3 degrees of the lattice), the robot that avoids what physics does
+    not do as the lattice says."""
     entries = data.get("actions")
     if not isinstance(entries, list) or not entries:
         raise InputError("expected a non-empty list 'actions'", source=source)
+    if confirmed_only:
+        entries = [e for e in entries if isinstance(e, Mapping) and e.get("confirmed") is True]
+        if not entries:
+            raise InputError("expected at least one action marked confirmed", source=source)
     motions: dict[Action, IdentifiedMotion] = {}
     for entry in entries:
         action, motion = _motion_of(entry, source)
@@ -140,6 +154,11 @@ def identified_domain(
         "description": "four-wheel robot as MuJoCo drives it: "
         f"{len(actions)} of 81 actions (identified from physics)",
     }
+    if confirmed_only:
+        kwargs["description"] = (
+            f"four-wheel robot, only the {len(actions)} actions MuJoCo confirms (identified from "
+            "physics)"
+        )
     domain: Domain[Action, Fault] = Domain(footprint_connected=True, **kwargs)
     try:
         check_domain(domain)
@@ -149,9 +168,10 @@ def identified_domain(
 
 
 def load_identified(
-    path: str | Path | None = None, *, name: str | None = None
+    path: str | Path | None = None, *, name: str | None = None, confirmed_only: bool = False
 ) -> Domain[Action, Fault]:
-    """The identified domain of the JSON file ``path`` (``None``: the bundled one)."""
+    """The identified domain of the JSON file ``path`` (``None``: the bundled one); see
+    :func:`identified_domain` for ``confirmed_only``."""
     if path is None:
         text = resources.files("selfrepair").joinpath("data", "physics", BUNDLED).read_text("utf-8")
         source = f"<bundled {BUNDLED}>"
@@ -169,4 +189,4 @@ def load_identified(
         raise InputError(f"expected JSON: {exc.msg}", source=source, line=exc.lineno) from None
     if not isinstance(data, dict):
         raise InputError("expected a JSON object", source=source)
-    return identified_domain(data, name=name, source=source)
+    return identified_domain(data, name=name, source=source, confirmed_only=confirmed_only)

@@ -93,9 +93,11 @@ def run_physics_mission(
     params: RobotParams = DEFAULT_PARAMS,
     tracked: bool = True,
     video: VideoSpec | None = None,
+    xml: str | None = None,
 ) -> PhysicsMission:
-    """Run ``spec`` in physics (see the module docstring)."""
-    world = PhysicsWorld(spec.maze, spec.start, params)
+    """Run ``spec`` in physics (see the module docstring); ``xml`` is a robot's own MJCF model
+    in place of the generated one (see :class:`~selfrepair.physics.world.PhysicsWorld`)."""
+    world = PhysicsWorld(spec.maze, spec.start, params, xml=xml)
     recorder = None
     if video is not None:
         updates_per_second = 1.0 / (params.timestep * params.control_every)

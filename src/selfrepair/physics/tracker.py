@@ -49,9 +49,9 @@ K_Y = 12.0
 """Cross-track gain (1/cell^2, scaled by the reference speed)."""
 K_YAW = 8.0
 """Heading gain (1/s)."""
-EFFECTIVE_TRACK = 1.7
-"""The effective track width of the skid-steer robot in cells (its two sides' speed difference
-per yaw rate): 0.85 m, 3.4 times the geometric track of 0.25 m, measured open loop (spinning with
+EFFECTIVE_TRACK = 0.85
+"""The effective track width of the skid-steer robot in metres (its two sides' speed difference
+per yaw rate): 3.4 times the geometric track of 0.25 m, measured open loop (spinning with
 ``FBFB``, the robot turns about 66 degrees per second at the wheel speed and 200 at three times
 it, where wheels that rolled without slipping would turn it 229 and 688)."""
 
@@ -132,10 +132,11 @@ class Tracker:
 
     ``commands`` are the four wheel commands (FL, FR, RL, RR; +1, 0, -1), ``start`` the pose
     the reference starts from (the lattice start pose), ``duration`` the action's duration in
-    seconds and ``cell_speed`` the wheel speed in cells per second.
+    seconds, ``cell_speed`` the wheel speed in cells per second and ``cell`` the cell size in
+    metres.
     """
 
-    __slots__ = ("_limit", "commands", "duration", "motion", "speed", "start")
+    __slots__ = ("_half", "_limit", "commands", "duration", "motion", "speed", "start")
 
     def __init__(
         self,
@@ -145,7 +146,9 @@ class Tracker:
         duration: float,
         cell_speed: float,
         max_speed_factor: float,
+        cell: float,
     ) -> None:
+        self._half = EFFECTIVE_TRACK / cell / 2
         self.commands = commands
         self.motion = motion
         self.start = start
@@ -170,7 +173,7 @@ class Tracker:
         eyaw = wrap(ref.yaw - pose.yaw)
         v = v_ref * math.cos(eyaw) + K_X * ex
         w = w_ref + K_Y * v_ref * ey + K_YAW * math.sin(eyaw)
-        half = EFFECTIVE_TRACK / 2
+        half = self._half
         left, right = (v - w * half) / self.speed, (v + w * half) / self.speed
         fl, fr, rl, rr = self.commands
         a, c_ = _side(fl, rl, left, self._limit)

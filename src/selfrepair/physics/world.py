@@ -147,7 +147,7 @@ class PhysicsWorld:
         if motion is not None:
             start = lattice_pose(reference_start or snap(self.pose()))
             tracker = Tracker(commands, motion, start, seconds, p.wheel_speed / p.cell,
-                              p.max_speed_factor)  # fmt: skip
+                              p.max_speed_factor, p.cell)  # fmt: skip
         ctrl = self.data.ctrl
         omega = p.wheel_omega
         if tracker is None:

@@ -24,7 +24,9 @@ end pose) the answer is stored per masked occupancy code. The codes are the grid
 believed-blocked cells' bits cleared: :class:`BeliefCodes` keeps them, copying a row on its first
 change and updating the ``(2r + 1)^2`` codes around a cell when the belief about it changes (in
 the repair that first sees the change, so inside its latency). A warm detour is then a few
-integer operations per window and one dictionary look-up.
+integer operations per window and one dictionary look-up. The stored answers are shared by the
+missions of a process (per detour table and fault set, in the ``detour answers per fault set``
+cache), as a table's compiled look-ups are.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any, Generic, TypeVar
 
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.repair.core import walk
 from selfrepair.repair.lookups import MISSING, Missing
@@ -149,12 +152,9 @@ def candidate_masks(table: DetourTable, key: tuple[int, int, int, int]) -> tuple
     a candidate is valid on a pattern exactly when the pattern has all its bits (for a robot
     whose motions end inside their footprint, as every bundled one; the property test checks
     it against :func:`find_detour`)."""
-    found = _MASKS.get((table, key))
-    if found is None:
-        found = _MASKS[(table, key)] = tuple(
-            _mask(table, key, candidate) for candidate in table.candidates(key)
-        )
-    return found
+    return _MASKS.get(
+        (table, key), lambda: tuple(_mask(table, key, c) for c in table.candidates(key))
+    )
 
 
 def _mask(table: DetourTable, key: tuple[int, int, int, int], candidate: tuple[int, ...]) -> int:
@@ -168,7 +168,9 @@ def _mask(table: DetourTable, key: tuple[int, int, int, int], candidate: tuple[i
     return bits
 
 
-_MASKS: dict[tuple[DetourTable, tuple[int, int, int, int]], tuple[int, ...]] = {}
+_MASKS: BoundedCache[tuple[DetourTable, tuple[int, int, int, int]], tuple[int, ...]] = BoundedCache(
+    "detour candidate masks", 1 << 14, kind=CacheKind.PREFILLED
+)
 """Candidate masks per (table, key): a few per key, for the few tables a process makes."""
 
 
@@ -212,6 +214,12 @@ class _Slot(Generic[T]):
                 break
         self.answers[code] = value
         return value
+
+
+_SHARED: BoundedCache[tuple[DetourTable, Any, frozenset[Any]], dict[int, Any]] = BoundedCache(
+    "detour answers per fault set", 512, kind=CacheKind.REPAIR
+)
+"""The slots and stored answers of each (detour table, answer maker, fault set)."""
 
 
 class DetourFinder(Generic[T]):
@@ -280,10 +288,13 @@ class DetourFinder(Generic[T]):
         return found
 
     def _rebind(self, known: frozenset[Any]) -> None:
-        """Switch to the answers of ``known`` (kept per fault set: they depend on it)."""
+        """Switch to the answers of ``known`` (kept per fault set: they depend on it; shared by
+        every finder of the same table and answer, since an answer depends only on the slot,
+        the masked code and the faults)."""
         slots = self._by_known.get(known)
         if slots is None:
-            slots = self._by_known[known] = {}
+            key = (self.table, self.answer, known)
+            slots = self._by_known[known] = _SHARED.get(key, dict)
         self._slots, self._bound_known, self._bound = slots, known, self.bound(known)
 
     def find(

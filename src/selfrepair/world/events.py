@@ -38,6 +38,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
+from fractions import Fraction
 from typing import Any
 
 import numpy as np
@@ -127,7 +128,7 @@ class WorldSchedule:
         """Every cell an event names, first mention first (the cells that can change)."""
         return tuple(dict.fromkeys(e.cell for e in self.events))
 
-    def blocked_at(self, tick: float) -> frozenset[Cell]:
+    def blocked_at(self, tick: float | Fraction) -> frozenset[Cell]:
         """The cells blocked at time ``tick`` (events at ``at <= tick`` applied in order): the
         reference the simulator's incremental world is tested against."""
         blocked: dict[Cell, None] = {}

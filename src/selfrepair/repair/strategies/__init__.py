@@ -36,10 +36,15 @@ context as values and functions, so the same strategies run any robot on any map
 
 from __future__ import annotations
 
+from selfrepair.repair.strategies.diagnosing import (  # registers
+    DiagnosingRepairer,
+    diagnosis_report,
+)
 from selfrepair.repair.strategies.lookahead import lookahead, start_lookahead
 from selfrepair.repair.strategies.names import MissionKind, RepairSource, StrategyName
 from selfrepair.repair.strategies.options import StrategyOptions
 from selfrepair.repair.strategies.protocol import (
+    Assumption,
     Belief,
     FunctionRepairer,
     MissionContext,
@@ -71,12 +76,15 @@ from selfrepair.repair.strategies.replacement import (
     start_replacement,
 )
 from selfrepair.repair.strategies.replan import replan
+from selfrepair.repair.strategies.trial import TrialRepairer  # registers
 from selfrepair.status import RepairStatus
 
 __all__ = [
     "ROBOT",
+    "Assumption",
     "Belief",
     "DeferringRepairer",
+    "DiagnosingRepairer",
     "FunctionRepairer",
     "Kind",
     "MissionContext",
@@ -92,7 +100,9 @@ __all__ = [
     "StrategyFactory",
     "StrategyName",
     "StrategyOptions",
+    "TrialRepairer",
     "chained",
+    "diagnosis_report",
     "get_strategy",
     "lookahead",
     "register",

@@ -28,7 +28,9 @@ class StrategyName(StrEnum):
 
     For one robot: ``replan``, ``replacement`` and ``lookahead``
     (:mod:`selfrepair.repair.strategies`), ``dstar-lite`` (:mod:`selfrepair.repair.dstar_lite`) and
-    ``lpg-adapt`` (:mod:`selfrepair.baselines.adapt`). For a team
+    ``lpg-adapt`` (:mod:`selfrepair.baselines.adapt`); for faults the robot is not told
+    (:mod:`selfrepair.repair.strategies.diagnosing` and ``.trial``): ``oracle``, ``diagnose``,
+    ``conformant``, ``active-diagnosis`` and ``trial-and-error``. For a team
     (:mod:`selfrepair.team.strategies`): ``team-replacement``, ``reallocation`` and ``alone``.
     """
 
@@ -37,6 +39,11 @@ class StrategyName(StrEnum):
     LOOKAHEAD = "lookahead"
     DSTAR_LITE = "dstar-lite"
     LPG_ADAPT = "lpg-adapt"
+    ORACLE = "oracle"
+    DIAGNOSE = "diagnose"
+    CONFORMANT = "conformant"
+    ACTIVE_DIAGNOSIS = "active-diagnosis"
+    TRIAL_AND_ERROR = "trial-and-error"
     TEAM_REPLACEMENT = "team-replacement"
     REALLOCATION = "reallocation"
     ALONE = "alone"
@@ -68,11 +75,14 @@ _TEAM = frozenset({StrategyName.TEAM_REPLACEMENT, StrategyName.REALLOCATION, Str
 
 class RepairSource(StrEnum):
     """Where the actions of a robot's repair came from (named after the strategy that made
-    them, but for ``plan-repair``: a plan repaired by LPG-adapt, and ``detour``: a local detour
-    round cells believed blocked, from the replacement strategy's detour table)."""
+    them, but for ``plan-repair``: a plan repaired by LPG-adapt, ``detour``: a local detour
+    round cells believed blocked, from the replacement strategy's detour table, and ``probe``:
+    commands that active diagnosis runs to tell fault hypotheses apart)."""
 
     REPLACEMENT = StrategyName.REPLACEMENT.value
     LOOKAHEAD = StrategyName.LOOKAHEAD.value
     REPLAN = StrategyName.REPLAN.value
     PLAN_REPAIR = "plan-repair"
     DETOUR = "detour"
+    PROBE = "probe"
+    """A command chosen to tell fault hypotheses apart (active diagnosis)."""

@@ -34,7 +34,10 @@ class StrategyOptions:
     strategy. ``max_wait`` bounds the steps the robot spends waiting in place, in all, when a
     repair finds that no plan exists under the known faults (faults that may clear: transient or
     intermittent, sensed with detection ``now``); 0 gives up at once (see
-    :mod:`selfrepair.execution.stepper`).
+    :mod:`selfrepair.execution.stepper`). The diagnosing strategies (faults hidden; see
+    docs/diagnosis.md) take hypotheses of up to ``max_faults`` faults, each fault present a
+    priori with probability ``fault_prior``, and need posterior mass ``1 - confidence`` to take a
+    class as isolated or a set of classes as all that is possible.
     """
 
     table: str | ReplacementTable = "handwritten"
@@ -48,6 +51,9 @@ class StrategyOptions:
     rewrite: bool = False
     max_lookup_patterns: int = MAX_LOOKUP_PATTERNS
     max_wait: int = DEFAULT_MAX_WAIT
+    max_faults: int = 2
+    fault_prior: float = 0.05
+    confidence: float = 0.05
 
     def __post_init__(self) -> None:
         object.__setattr__(
@@ -65,6 +71,12 @@ class StrategyOptions:
             )
         if self.max_wait < 0:
             raise ProblemError(f"max_wait must be at least 0, got {self.max_wait}")
+        if not isinstance(self.max_faults, int) or self.max_faults < 0:
+            raise ProblemError(f"max_faults must be an integer >= 0, got {self.max_faults!r}")
+        if not 0.0 < self.fault_prior < 1.0:
+            raise ProblemError(f"fault_prior must be in (0, 1), got {self.fault_prior!r}")
+        if not 0.0 <= self.confidence < 1.0:
+            raise ProblemError(f"confidence must be in [0, 1), got {self.confidence!r}")
         if not isinstance(self.rewrite, bool):
             raise ProblemError(f"rewrite must be True or False, got {self.rewrite!r}")
         if self.rewrite and self.recursion in DEFERRING:

@@ -43,6 +43,7 @@ from selfrepair.status import RepairStatus
 from selfrepair.tables.model import ReplacementTable
 
 __all__ = [
+    "Assumption",
     "Belief",
     "FunctionRepairer",
     "MissionContext",
@@ -107,6 +108,9 @@ class MissionContext:
     clearance_radius: int = 2
     backend: str = "auto"
     belief: Belief = field(default_factory=Belief)
+    behaviour: str | None = None
+    """The fault-behaviour model the robot assumes for its hidden faults (the domain's default
+    when ``None``; the simulator uses the same one: the model is taken to be right)."""
 
     def at_goal(self, pose: Pose) -> bool:
         """Whether ``pose`` satisfies the mission's goal."""
@@ -168,6 +172,16 @@ Request = TypeVar("Request", default=RepairRequest)
 Answer = TypeVar("Answer", default=Repair)
 
 
+class Assumption(NamedTuple):
+    """What an observing repairer (one with ``observe``, faults hidden) wants the stepper to take
+    as given: the faults it assumes (``known``: the queue's actions are checked against them)
+    and the actions it takes to be unusable whatever the faults (``unusable``: a strategy
+    without a fault model that saw them misbehave)."""
+
+    known: frozenset[Any]
+    unusable: frozenset[Any] = frozenset()
+
+
 class Repairer(Protocol[RequestT, AnswerT]):
     """A strategy started for one mission: answers requests, possibly keeping state.
 
@@ -188,6 +202,15 @@ class Repairer(Protocol[RequestT, AnswerT]):
     may have
     ``expect_blocked()`` too, called once before the mission's clock runs when the world
     changes (to prepare what ``repair_blocked`` needs outside the timed repairs).
+
+    With the faults hidden (detection ``hidden``), a robot's repairer may also *observe*: a
+    method ``observe(observation, deviated, moved) -> bool`` is given every
+    :class:`~selfrepair.diagnosis.Observation` after each command, with whether the robot truly
+    left the pose its command should have reached (``deviated``) and whether it moved; it answers
+    whether it must be asked for a repair before the next command even if the front is available
+    (the queue was planned from a pose the robot is not at). Such a repairer also has
+    ``assumption() -> Assumption``, which the stepper reads after each observation and each
+    repair (see :mod:`selfrepair.execution.stepper`).
     """
 
     def repair(self, request: RequestT) -> AnswerT:

@@ -74,6 +74,13 @@ class StrategyEntry(Generic[Context, Request, Answer]):
     kind: Kind[Context, Request, Answer]
     start: Callable[[Context], Repairer[Request, Answer]]
     uses_table: bool = False
+    told: bool = False
+    """Whether the strategy is an oracle: the robot is told its true faults before every
+    command whatever the detection (the upper bound of diagnosis; see docs/diagnosis.md)."""
+    hidden: bool = False
+    """Whether the strategy is one for faults the robot is not told (detection ``hidden``): the
+    diagnosing strategies and their oracle. A comparison runs these by default when the faults
+    are hidden, and the others when they are not."""
 
 
 _REGISTRY: dict[str, StrategyEntry[Any, Any, Any]] = {}
@@ -90,12 +97,19 @@ def register(entry: StrategyEntry[Context, Request, Answer], *, replace: bool = 
 
 
 def register_strategy(
-    name: str, factory: StrategyFactory, *, replace: bool = False, uses_table: bool = False
+    name: str,
+    factory: StrategyFactory,
+    *,
+    replace: bool = False,
+    uses_table: bool = False,
+    told: bool = False,
+    hidden: bool = False,
 ) -> None:
     """Make ``factory`` available as the robot strategy ``name`` (``uses_table``: the executor
-    loads the mission's table for it). A name in use raises :class:`ProblemError` unless
-    ``replace``."""
-    register(StrategyEntry(name, ROBOT, factory, uses_table), replace=replace)
+    loads the mission's table for it; ``told``: an oracle, told its true faults; ``hidden``: a
+    strategy for faults the robot is not told). A name in use raises :class:`ProblemError`
+    unless ``replace``."""
+    register(StrategyEntry(name, ROBOT, factory, uses_table, told, hidden), replace=replace)
 
 
 def strategy_entry(

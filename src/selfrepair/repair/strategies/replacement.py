@@ -50,6 +50,7 @@ __all__ = [
     "replacement",
     "start_replacement",
     "strategy_lookups",
+    "table_hit",
 ]
 
 
@@ -118,6 +119,12 @@ def _miss(context: MissionContext, request: RepairRequest, action: Any) -> Repai
     """No valid candidate: :func:`replan`, with the candidates looked at counted."""
     examined = len(_table(context).candidates(action, request.known))
     return chained(replan(context, request), (StrategyName.REPLACEMENT,), examined=examined)
+
+
+def table_hit(context: MissionContext, request: RepairRequest) -> Repair | None:
+    """The repair of the first valid table candidate for the faulty action under the known
+    faults, or ``None`` (no fallback: a strategy that wants to do something else on a miss)."""
+    return _lookups(context, request.known).get(request.queue[0], request.pose, context.grid)
 
 
 def replacement(context: MissionContext, request: RepairRequest) -> Repair:
