@@ -11,7 +11,7 @@ PY := $(VENV)/bin/python
 #   selenium), gym (the environment's tests need Gymnasium), pddl (unified-planning and LPG
 #   for the baselines' tests), physics (MuJoCo and imageio for the physics tests; rendering
 #   needs an OpenGL library such as Debian's libosmesa6) and team (SciPy for the team engine);  bench: also bench (the
-#   peers: networkx, nano-astar).
+#   peers: networkx, nano-astar, pathplanning).
 # The dask, ray and parquet extras are not installed: the tests that need them skip with the
 # reason (CI installs dask and parquet and requires them, see .ci/run).
 STAMP := $(VENV)/.installed-stamp
@@ -59,6 +59,7 @@ test-slow: $(STAMP)
 
 bench: $(BENCH_STAMP)
 	$(PY) benchmarks/planner.py
+	$(PY) benchmarks/dstar_lite.py
 	$(PY) benchmarks/repair_latency.py
 	$(PY) benchmarks/tablegen.py
 	$(PY) benchmarks/gym_env.py

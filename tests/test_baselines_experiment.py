@@ -162,7 +162,7 @@ def test_bundled_baselines_experiment_expands_as_documented() -> None:
     config = load_config(resolve_experiment("baselines"))
     missions = expand(config)
     labels = [dict(m.labels) for m in missions]
-    assert len(missions) == count_missions(config) == 7 * 96 + 72
+    assert len(missions) == count_missions(config) == 8 * 96 + 72
     for text in (
         resolve_experiment("baselines").read_text(encoding="utf-8"),
         (DOCS / "baselines.md").read_text(encoding="utf-8"),

@@ -70,26 +70,30 @@ def scenarios(draw: st.DrawFn) -> tuple[dict[str, Any], list[Event]]:
 def _run(
     setup: dict[str, Any], events: list[Event], backend: str
 ) -> list[tuple[Any, ...]]:  # fmt: skip
-    """Apply ``events`` to a search; after each, the plan and what A* from scratch says."""
+    """Apply ``events`` to a search; after each, the plan, its expansions and the number of
+    vertex updates the change made."""
     search = DStarLite.from_walls(
         FOUR_WHEEL, setup["walls"], setup["start"], setup["goal"],
         goal_heading=setup["goal_heading"], clearance_weight=setup["weight"], backend=backend,
     )  # fmt: skip
     pose = setup["start"]
     found = search.plan()
-    out = [(found.status, found.actions, found.scaled_cost, found.expansions, pose)]
+    out = [(found.status, found.actions, found.scaled_cost, found.expansions, pose, 0)]
     for kind, value in events:
+        updates = 0
         if kind == "faults":
-            search.update_faults(FOUR_WHEEL.parse_faults(value))
+            updates = search.update_faults(FOUR_WHEEL.parse_faults(value))
         elif kind == "cells":
             blocked, freed = value
-            search.update_cells(blocked=blocked, freed=[c for c in freed if c not in blocked])
+            free = [c for c in freed if c not in blocked]
+            updates = search.update_cells(blocked=blocked, freed=free)
         else:
             for action in found.actions[:value]:
                 pose = FOUR_WHEEL.apply(pose, action)
             search.move_start(pose)
         found = search.plan()
-        out.append((found.status, found.actions, found.scaled_cost, found.expansions, pose))
+        row = (found.status, found.actions, found.scaled_cost, found.expansions, pose, updates)
+        out.append(row)
     return out
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 import re
 from collections.abc import Iterator
+from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
@@ -261,3 +262,37 @@ def test_play_advances_and_pause_stops(driver: Any, page: tuple[Path, Trace]) ->
     assert button.text == "Play"
     pose, frame = _robot(driver)
     assert 3 <= frame <= len(trace.steps) and pose == _expected(trace, frame)
+
+
+def test_blocked_cells_grey_out_at_their_time(driver: Any, tmp_path: Path) -> None:
+    cli = main
+    trace_path, html = tmp_path / "w.jsonl", tmp_path / "w.html"
+    args = ["run", "narrow-short", "--start", "7,13,W", "--goal", "1,8", "--strategy", "replan"]
+    assert (
+        cli(
+            [
+                *args,
+                "--events",
+                "5,13@0..10;1,12@4..30",
+                "--max-wait",
+                "100",
+                "--trace",
+                str(trace_path),
+            ]
+        )
+        == 0
+    )
+    assert cli(["view", str(trace_path), "-o", str(html)]) == 0
+    _open(driver, html)
+    world = spec_from_header(read_trace(trace_path).header).world
+    ticks, total = [], Fraction(0)
+    for step in read_trace(trace_path).steps:
+        ticks.append(total)
+        total += step.duration
+    for frame in (0, len(ticks) // 2, len(ticks) - 1):
+        _drag_slider_to(driver, frame)
+        drawn = driver.execute_script(
+            "return [...document.querySelectorAll('#layer-blocked .blocked-cell')]"
+            ".map(r => r.getAttribute('data-cell')).sort();"
+        )
+        assert drawn == sorted(f"{x},{y}" for x, y in world.blocked_at(ticks[frame]))

@@ -230,3 +230,21 @@ def test_traces_record_the_world_and_replay_it(tmp_path: Path) -> None:
     path.write_text("\n".join([json.dumps(header), *lines[1:]]) + "\n")
     report = replay(path)
     assert not report.ok and "blocked at tick 0 by world events" in report.reason
+
+
+def test_the_viewer_greys_out_each_blocked_cell_at_its_time() -> None:
+    from selfrepair.execution.traceread import parse_trace
+    from selfrepair.execution.tracewrite import trace_lines
+    from selfrepair.experiment.viewer import mission_payload, render_html
+
+    world = WorldSchedule(parse_events("4,1@0..3;6,2@2"))
+    spec = sr.MissionSpec(CORRIDOR, Pose(1, 1, Heading.E), (7, 1), strategy="replan", world=world)
+    result = sr.run_mission(spec)
+    payload = mission_payload(parse_trace("\n".join(trace_lines(result))))
+    ticks = [Fraction(f["tick"]) for f in payload["frames"]]
+    assert [f["blocked"] for f in payload["frames"]] == [
+        [list(c) for c in sorted(world.blocked_at(t))] for t in ticks
+    ]
+    assert [4, 1] in payload["frames"][0]["blocked"] and [6, 2] in payload["frames"][-1]["blocked"]
+    assert payload["world"] == "3 world events, sensing range 2"
+    assert "drawBlocked" in render_html(payload)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from collections.abc import Iterable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from selfrepair.execution.faults import Detection
 from selfrepair.execution.metrics import mission_row
@@ -18,6 +18,9 @@ from selfrepair.robots.registry import plugin_file
 from selfrepair.world.maze import format_maze
 
 __all__ = ["header_json", "repair_json", "step_json", "trace_lines", "write_trace"]
+
+A = TypeVar("A")
+F = TypeVar("F")
 
 
 def _pose_json(pose: Pose) -> list[Any]:
@@ -86,7 +89,7 @@ def _hidden_json(spec: MissionSpec) -> dict[str, Any]:
     }
 
 
-def _fault_texts(domain: Domain[Any, Any], faults: Iterable[Any]) -> list[str]:
+def _fault_texts(domain: Domain[A, F], faults: Iterable[F]) -> list[str]:
     return sorted(domain.format_faults([f]) for f in faults)
 
 

@@ -323,9 +323,12 @@ class LookaheadStrategy(ReplacementStrategy):
 
 
 class DStarLiteStrategy(_StrategyEntry):
-    """D* Lite, incremental replanning (pure Python), keeping its search between repairs."""
+    """D* Lite, incremental replanning, keeping its search between repairs, with the planner
+    ``backend`` (``auto``: the compiled kernels when numba is installed; ``python``: the
+    pure-Python reference, the same plans)."""
 
     name: Literal[StrategyName.DSTAR_LITE]
+    backend: Literal["auto", "numba", "python"] = "auto"
 
 
 class LpgAdaptStrategy(_StrategyEntry):

@@ -19,6 +19,7 @@ from typing import Any
 from selfrepair.errors import ConfigError, LimitError
 from selfrepair.experiment.schema import (
     DiagnosisStrategy,
+    DStarLiteStrategy,
     ExperimentConfig,
     LookaheadStrategy,
     LpgAdaptStrategy,
@@ -142,7 +143,7 @@ def maze_filter(
 def _plain_options(strategy: StrategyConfig) -> dict[str, Any]:
     """The options of a strategy without a table, as its missions record them (defaults left
     out, so that the keys of missions made before an option existed stay valid)."""
-    if isinstance(strategy, ReplanStrategy) and strategy.backend != "auto":
+    if isinstance(strategy, ReplanStrategy | DStarLiteStrategy) and strategy.backend != "auto":
         return {"backend": strategy.backend}
     if isinstance(strategy, LpgAdaptStrategy):
         return {"lpg_time_limit_s": strategy.time_limit, "lpg_seed": strategy.seed}

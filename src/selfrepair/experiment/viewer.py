@@ -359,6 +359,7 @@ def mission_payload(
             "window": spec.options.window,
         },
         "schedule": spec.schedule.describe(),
+        "world": spec.world.describe(),
         "detection": spec.schedule.detection.value,
         "colours": {str(source): colour for source, colour in SOURCE_COLOURS.items()},
         "plan": plan,
@@ -370,6 +371,7 @@ def mission_payload(
                 "tick": str(ticks[k]),
                 "true": _faults(domain, true[k]),
                 "known": _faults(domain, known[k]),
+                "blocked": [list(c) for c in sorted(spec.world.blocked_at(ticks[k]))],
             }
             for k in range(len(steps) + 1)
         ],

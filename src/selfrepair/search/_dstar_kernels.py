@@ -1,4 +1,4 @@
-"""Numba kernels of D* Lite: the search of :mod:`selfrepair.search.dstar`'s reference, compiled.
+"""Numba kernels of D* Lite: :class:`~selfrepair.search._dstar_reference.PythonCore`, compiled.
 
 Optional: without numba, :data:`NUMBA` is false and :mod:`selfrepair.search.dstar` runs the
 pure-Python reference. Everything that defines the graph (the lattice's integer offsets, the
@@ -29,10 +29,13 @@ times the cost scale), :data:`PW` (padded row length) and :data:`NODES` (``N``).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
 
 import numpy as np
+import numpy.typing as npt
+
+from selfrepair.search._dstar_reference import INF, Graph
 
 try:
     from numba import njit
@@ -48,10 +51,7 @@ except ImportError:  # pragma: no cover - depends on the environment
         return lambda f: f
 
 
-__all__ = ["INF", "NUMBA", "compute", "faults_sweep", "update_nodes", "walk"]
-
-INF = 1 << 60
-"""Infinity of ``g``, ``rhs`` and edge costs (finite sums stay far below ``2**63``)."""
+__all__ = ["NUMBA", "CompiledCore", "compute", "faults_sweep", "update_nodes", "walk"]
 
 SIZE, KM, START, EXPANSIONS = 0, 1, 2, 3
 GOAL_CELL, GOAL_HEAD, RNUM, RDEN, WMUL, PW, NODES = 4, 5, 6, 7, 8, 9, 10
@@ -240,26 +240,33 @@ def update_nodes(
 def faults_sweep(
     free: Any, pen: Any, dur: Any, step: Any, nsw: Any, sw: Any,
     backk: Any, backo: Any, nback: Any,
-    g: Any, rhs: Any, hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any,
+    g: Any, rhs: Any, hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, mark: Any,
 ) -> int:  # fmt: skip
     """After the chosen actions changed (``dur``): update every node the search has touched and
     every predecessor of a node with a finite ``g`` (an edge that was impassable may have become
-    usable). Returns the number of updates."""
+    usable), each once (``mark``: scratch of ``N`` bytes). Returns the number of updates (an
+    update reads only ``g``, which none changes, so their order does not matter)."""
     goal = sc[NODES]
     wmul = sc[WMUL]
-    count = 0
     for u in range(goal):
-        if g[u] < INF or rhs[u] < INF:
-            _update(free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, u)
-            count += 1
+        mark[u] = 1 if g[u] < INF or rhs[u] < INF else 0
     for u in range(goal):
         if g[u] < INF:
             he = u & 3
             for i in range(nback[he]):
                 p = u - backo[he, i]
-                if 0 <= p < goal and _cost(free, pen, dur, nsw, sw, wmul, p, backk[he, i]) < INF:
-                    _update(free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, p)
-                    count += 1
+                k = backk[he, i]
+                if (
+                    0 <= p < goal
+                    and mark[p] == 0
+                    and _cost(free, pen, dur, nsw, sw, wmul, p, k) < INF
+                ):
+                    mark[p] = 1
+    count = 0
+    for u in range(goal):
+        if mark[u]:
+            _update(free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, u)
+            count += 1
     return count
 
 
@@ -373,3 +380,101 @@ def walk(
         u += step[bk, h]
     out[n] = total
     return out[: n + 1].copy()
+
+
+class CompiledCore:
+    """The search of :class:`selfrepair.search._dstar_reference.PythonCore` in the kernels above;
+    its state is in arrays (mutable)."""
+
+    def __init__(self, dstar: Graph) -> None:
+        self.d = dstar
+        geo = dstar.geometry
+        n = geo.nodes + 1
+        k = len(geo.classes)
+        self.g = np.full(n, INF, dtype=np.int64)
+        self.rhs = np.full(n, INF, dtype=np.int64)
+        self.hk1 = np.zeros(n, dtype=np.int64)
+        self.hk2 = np.zeros(n, dtype=np.int64)
+        self.hn = np.zeros(n, dtype=np.int64)
+        self.pos = np.full(n, -1, dtype=np.int64)
+        self.mark: npt.NDArray[np.uint8] | None = None  # scratch of the fault sweep, made on use
+        self.step = np.array(geo.step, dtype=np.int64).reshape(k, 4)
+        width = max([len(c) for per in geo.sweep for c in per] or [1])
+        self.nsw = np.zeros((k, 4), dtype=np.int64)
+        self.sw = np.zeros((k, 4, width), dtype=np.int64)
+        for i, per in enumerate(geo.sweep):
+            for h, cells in enumerate(per):
+                self.nsw[i, h] = len(cells)
+                self.sw[i, h, : len(cells)] = cells
+        nb = max(len(b) for b in geo.back) if geo.back else 0
+        self.nback = np.array([len(b) for b in geo.back], dtype=np.int64)
+        self.backk = np.zeros((4, max(nb, 1)), dtype=np.int64)
+        self.backo = np.zeros((4, max(nb, 1)), dtype=np.int64)
+        for h, entries in enumerate(geo.back):
+            for i, (cls, offset) in enumerate(entries):
+                self.backk[h, i], self.backo[h, i] = cls, offset
+        sc = np.zeros(N_SCALARS, dtype=np.int64)
+        sc[GOAL_CELL], sc[GOAL_HEAD] = dstar.goal_cell, dstar.goal_head
+        sc[RNUM], sc[RDEN], sc[WMUL] = dstar.rnum, dstar.rden, dstar.wmul
+        sc[PW], sc[NODES] = geo.pw, geo.nodes
+        self.sc = sc
+        self.rhs[geo.nodes] = 0
+
+    @property
+    def start(self) -> int:
+        return int(self.sc[START])
+
+    @start.setter
+    def start(self, node: int) -> None:
+        self.sc[START] = node
+
+    @property
+    def km(self) -> int:
+        return int(self.sc[KM])
+
+    @km.setter
+    def km(self, value: int) -> None:
+        self.sc[KM] = value
+
+    @property
+    def expansions(self) -> int:
+        return int(self.sc[EXPANSIONS])
+
+    @expansions.setter
+    def expansions(self, value: int) -> None:
+        self.sc[EXPANSIONS] = value
+
+    def set_dur(self, dur: npt.NDArray[np.int64]) -> None:
+        pass  # the kernels read the owner's array
+
+    def set_cells(self, cells: Sequence[int]) -> None:
+        pass  # the kernels read the owner's arrays
+
+    def _graph(self) -> tuple[Any, Any, Any, Any, Any, Any]:
+        d = self.d  # arrays changed in place, never replaced
+        return (d.free, d.pen, d.dur, self.step, self.nsw, self.sw)
+
+    def _back(self) -> tuple[Any, Any, Any]:
+        return (self.backk, self.backo, self.nback)
+
+    def _state(self) -> tuple[Any, Any, Any, Any, Any, Any, Any]:
+        return (self.g, self.rhs, self.hk1, self.hk2, self.hn, self.pos, self.sc)
+
+    def update_nodes(self, nodes: Sequence[int]) -> None:
+        array = np.asarray(nodes, dtype=np.int64)
+        update_nodes(*self._graph(), *self._state(), array)
+
+    def faults_sweep(self) -> int:
+        if self.mark is None:
+            self.mark = np.zeros(self.d.geometry.nodes, dtype=np.uint8)
+        return int(faults_sweep(*self._graph(), *self._back(), *self._state(), self.mark))
+
+    def compute(self, budget: int) -> bool:
+        return bool(compute(*self._graph(), *self._back(), *self._state(), budget))
+
+    def walk(self) -> tuple[list[int], int] | None:
+        d = self.d
+        out = walk(d.free, d.pen, d.dur, self.step, self.nsw, self.sw, self.g, self.sc)
+        if out.shape[0] == 0:
+            return None
+        return out[:-1].tolist(), int(out[-1])

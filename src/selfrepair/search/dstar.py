@@ -48,15 +48,15 @@ plans of different backends are therefore the same action for action, with the s
 the same number of expansions; against A* from scratch only the cost is the same (A* breaks
 ties differently).
 
-**Backends.** ``"python"`` is the reference (:class:`_PythonCore`); ``"numba"`` runs the kernels of
+**Backends.** ``"python"`` is the reference
+(:class:`~selfrepair.search._dstar_reference.PythonCore`); ``"numba"`` runs the kernels of
 :mod:`selfrepair.search._dstar_kernels` (optional, the ``fast`` extra); ``"auto"`` uses numba when
 it is importable, as for the planner (:func:`selfrepair.search.backend.use_numba`). A blocked
-goal cell or start cell means no plan (``UNSOLVABLE``).
+goal cell or start cell means no plan (``UNSOLVABLE``, at once: the search is not run then).
 """
 
 from __future__ import annotations
 
-import heapq
 import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -69,25 +69,33 @@ import numpy.typing as npt
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain, primitive_by_motion, progress_rate
-from selfrepair.search import _dstar_kernels as kernels
+from selfrepair.search._dstar_reference import INF, Core, PythonCore, geometry, reach
 from selfrepair.search.astar import BACKENDS, PlanStatus
 
 __all__ = ["INF", "DStarLite", "DStarPlan", "WallMap"]
-
-INF = kernels.INF
-"""Infinity of costs, ``g`` and ``rhs`` (an integer, as in the kernels)."""
 
 
 def _use_numba(backend: str) -> bool:
     """Whether ``backend`` means the kernels: the planner's switch
     (:func:`selfrepair.search.backend.use_numba` without a domain: the kernels take any robot,
     their margin is its reach), asked of this module's kernels, so that the repair layer, which
-    may not depend on the planner's kernels (they know mazes), can use this one."""
+    may not depend on the planner's kernels (they know mazes), can use this one. Imports numba
+    (only) when the backend may use it."""
     if backend not in BACKENDS:
         raise ProblemError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
-    if backend == "numba" and not kernels.NUMBA:
+    if backend == "python":
+        return False
+    from selfrepair.search import _dstar_kernels
+
+    if backend == "numba" and not _dstar_kernels.NUMBA:
         raise ProblemError("backend 'numba' requested but numba is not installed")
-    return backend != "python" and kernels.NUMBA
+    return _dstar_kernels.NUMBA
+
+
+def _compiled(graph: DStarLite) -> Core:
+    from selfrepair.search._dstar_kernels import CompiledCore
+
+    return CompiledCore(graph)
 
 
 class WallMap(Protocol):
@@ -114,56 +122,6 @@ class DStarPlan:
     wall_time_ns: int
 
 
-@dataclass(frozen=True, slots=True)
-class _Geometry:
-    """The lattice of one robot on one padded grid (see the module docstring)."""
-
-    classes: tuple[str, ...]
-    pw: int
-    margin: int
-    nodes: int
-    step: tuple[tuple[int, ...], ...]
-    sweep: tuple[tuple[tuple[int, ...], ...], ...]
-    back: tuple[tuple[tuple[int, int], ...], ...]
-    """Per end heading: ``(class, node offset)`` of every move that arrives facing it."""
-
-
-def _reach(domain: Domain[Any, Any]) -> int:
-    reach = 0
-    for action in domain.actions:
-        for heading in Heading:
-            start = Pose(0, 0, heading)
-            end = domain.apply(start, action)
-            cells = (end.cell, *domain.footprint(start, action))
-            reach = max(reach, *(max(abs(x), abs(y)) for x, y in cells))
-    return reach
-
-
-def _geometry(domain: Domain[Any, Any], pw: int, margin: int, rows: int) -> _Geometry:
-    members: dict[str, Any] = {}
-    for action in domain.actions:
-        if any(domain.apply(Pose(0, 0, h), action) != Pose(0, 0, h) for h in Heading):
-            members.setdefault(domain.motion_class(action), action)
-    classes = tuple(members)
-    step, sweep = [], []
-    back: list[list[tuple[int, int]]] = [[] for _ in Heading]
-    for k, motion in enumerate(classes):
-        per_step, per_sweep = [], []
-        for heading in Heading:
-            start = Pose(0, 0, heading)
-            end = domain.apply(start, members[motion])
-            offset = 4 * (end.y * pw + end.x) + (end.heading - heading)
-            per_step.append(offset)
-            footprint = domain.footprint(start, members[motion])
-            per_sweep.append(tuple(y * pw + x for x, y in footprint))
-            back[end.heading].append((k, offset))
-        step.append(tuple(per_step))
-        sweep.append(tuple(per_sweep))
-    return _Geometry(
-        classes, pw, margin, 4 * pw * rows, tuple(step), tuple(sweep), tuple(map(tuple, back))
-    )
-
-
 def _penalties(free: npt.NDArray[np.uint8], radius: int) -> npt.NDArray[np.int64]:
     """``max(0, radius - clearance)`` per cell of the 2-D array ``free`` (clearance: Chebyshev
     distance to the nearest blocked cell; beyond the array counts as blocked), as
@@ -176,287 +134,6 @@ def _penalties(free: npt.NDArray[np.uint8], radius: int) -> npt.NDArray[np.int64
         near = rows[:, :-2] | rows[:, 1:-1] | rows[:, 2:]
         pen[(pen == 0) & near] = radius - d
     return pen
-
-
-class _PythonCore:
-    """The reference D* Lite over Python lists (mutable: the search state)."""
-
-    def __init__(self, dstar: DStarLite) -> None:
-        self.d = dstar
-        geo = dstar.geometry
-        self.goal = geo.nodes
-        self.g = [INF] * (geo.nodes + 1)
-        self.rhs = [INF] * (geo.nodes + 1)
-        self.heap: list[tuple[int, int, int]] = []
-        self.keys: dict[int, tuple[int, int]] = {}
-        self.km = 0
-        self.start = 0
-        self.expansions = 0
-        self.free = bytearray(dstar.free.tobytes())
-        self.pen = dstar.pen.tolist()
-        self.dur: list[int] = []
-        self.rhs[self.goal] = 0
-        self.set_dur(dstar.dur)
-
-    def set_dur(self, dur: npt.NDArray[np.int64]) -> None:
-        self.dur = dur.tolist()
-
-    def set_cells(self, cells: Sequence[int]) -> None:
-        for c in cells:
-            self.free[c] = int(self.d.free[c])
-            if self.d.wmul:
-                self.pen[c] = int(self.d.pen[c])
-
-    # --- the graph -----------------------------------------------------------------------------
-
-    def cost(self, u: int, k: int) -> int:
-        d = self.dur[k]
-        if d < 0:
-            return INF
-        cells = self.d.geometry.sweep[k][u & 3]
-        cell = u >> 2
-        free = self.free
-        for o in cells:
-            if not free[cell + o]:
-                return INF
-        wmul = self.d.wmul
-        if wmul:
-            pen = self.pen
-            d += wmul * sum(pen[cell + o] for o in cells)
-        return d
-
-    def at_goal(self, u: int) -> bool:
-        d = self.d
-        gh = d.goal_head
-        return (u >> 2) == d.goal_cell and (gh < 0 or u & 3 == gh) and self.free[d.goal_cell] != 0
-
-    def predecessors(self, u: int) -> list[tuple[int, int]]:
-        d = self.d
-        if u == self.goal:
-            if not self.free[d.goal_cell]:
-                return []
-            heads = range(4) if d.goal_head < 0 else (d.goal_head,)
-            return [(4 * d.goal_cell + h, 0) for h in heads]
-        out = []
-        for k, offset in d.geometry.back[u & 3]:
-            p = u - offset
-            if 0 <= p < self.goal:
-                c = self.cost(p, k)
-                if c < INF:
-                    out.append((p, c))
-        return out
-
-    def h(self, u: int) -> int:
-        if u == self.goal:
-            return 0
-        pw = self.d.geometry.pw
-        a, b = u >> 2, self.start >> 2
-        dist = abs(a % pw - b % pw) + abs(a // pw - b // pw)
-        return dist * self.d.rnum // self.d.rden
-
-    def key(self, u: int) -> tuple[int, int]:
-        m = min(self.g[u], self.rhs[u])
-        if m >= INF:
-            return (INF, INF)
-        return (m + self.h(u) + self.km, m)
-
-    # --- D* Lite ------------------------------------------------------------------------------
-
-    def requeue(self, u: int) -> None:
-        self.keys.pop(u, None)
-        if self.g[u] != self.rhs[u]:
-            key = self.key(u)
-            self.keys[u] = key
-            heapq.heappush(self.heap, (key[0], key[1], u))
-
-    def update(self, u: int) -> None:
-        if u != self.goal:
-            g, step = self.g, self.d.geometry.step
-            h = u & 3
-            best = INF
-            for k in range(len(step)):
-                c = self.cost(u, k)
-                if c < INF:
-                    gv = g[u + step[k][h]]
-                    if gv < INF and c + gv < best:
-                        best = c + gv
-            if self.at_goal(u) and g[self.goal] < best:
-                best = g[self.goal]
-            self.rhs[u] = best
-        self.requeue(u)
-
-    def update_nodes(self, nodes: Sequence[int]) -> None:
-        for u in nodes:
-            self.update(u)
-
-    def faults_sweep(self) -> int:
-        g, rhs = self.g, self.rhs
-        touched = [u for u in range(self.goal) if g[u] < INF or rhs[u] < INF]
-        for u in touched:
-            self.update(u)
-        count = len(touched)
-        for u in range(self.goal):
-            if g[u] < INF:
-                for p, _ in self.predecessors(u):
-                    self.update(p)
-                    count += 1
-        return count
-
-    def top(self) -> tuple[int, int, int] | None:
-        heap, keys = self.heap, self.keys
-        while heap:
-            k1, k2, u = heap[0]
-            if keys.get(u) == (k1, k2):
-                return heap[0]
-            heapq.heappop(heap)
-        return None
-
-    def compute(self, budget: int) -> bool:
-        g, rhs = self.g, self.rhs
-        while True:
-            entry = self.top()
-            start = self.start
-            if entry is None or (entry[:2] >= self.key(start) and g[start] == rhs[start]):
-                return True
-            if self.expansions >= budget:
-                return False
-            heapq.heappop(self.heap)
-            u = entry[2]
-            del self.keys[u]
-            self.expansions += 1
-            gu, ru = g[u], rhs[u]
-            if entry[:2] < self.key(u):
-                self.requeue(u)
-            elif gu > ru:
-                g[u] = ru
-                for p, c in self.predecessors(u):
-                    if c + ru < rhs[p]:
-                        rhs[p] = c + ru
-                        self.requeue(p)
-            else:
-                g[u] = INF
-                self.update(u)
-                for p, c in self.predecessors(u):
-                    if rhs[p] == c + gu:
-                        self.update(p)
-
-    def walk(self) -> tuple[list[int], int] | None:
-        g, step = self.g, self.d.geometry.step
-        u = self.start
-        if g[u] >= INF:
-            return None
-        classes: list[int] = []
-        total = 0
-        while not self.at_goal(u):
-            h = u & 3
-            best, bk, bc = INF, -1, 0
-            for k in range(len(step)):
-                c = self.cost(u, k)
-                if c < INF:
-                    gv = g[u + step[k][h]]
-                    if gv < INF and c + gv < best:
-                        best, bk, bc = c + gv, k, c
-            if bk < 0 or len(classes) > self.goal:
-                return None
-            classes.append(bk)
-            total += bc
-            u += step[bk][h]
-        return classes, total
-
-
-class _CompiledCore:
-    """The same search in the kernels of :mod:`selfrepair.search._dstar_kernels`; its state is
-    in arrays (mutable)."""
-
-    def __init__(self, dstar: DStarLite) -> None:
-        self.d = dstar
-        geo = dstar.geometry
-        n = geo.nodes + 1
-        k = len(geo.classes)
-        self.g = np.full(n, INF, dtype=np.int64)
-        self.rhs = np.full(n, INF, dtype=np.int64)
-        self.hk1 = np.zeros(n, dtype=np.int64)
-        self.hk2 = np.zeros(n, dtype=np.int64)
-        self.hn = np.zeros(n, dtype=np.int64)
-        self.pos = np.full(n, -1, dtype=np.int64)
-        self.step = np.array(geo.step, dtype=np.int64).reshape(k, 4)
-        width = max([len(c) for per in geo.sweep for c in per] or [1])
-        self.nsw = np.zeros((k, 4), dtype=np.int64)
-        self.sw = np.zeros((k, 4, width), dtype=np.int64)
-        for i, per in enumerate(geo.sweep):
-            for h, cells in enumerate(per):
-                self.nsw[i, h] = len(cells)
-                self.sw[i, h, : len(cells)] = cells
-        nb = max(len(b) for b in geo.back) if geo.back else 0
-        self.nback = np.array([len(b) for b in geo.back], dtype=np.int64)
-        self.backk = np.zeros((4, max(nb, 1)), dtype=np.int64)
-        self.backo = np.zeros((4, max(nb, 1)), dtype=np.int64)
-        for h, entries in enumerate(geo.back):
-            for i, (cls, offset) in enumerate(entries):
-                self.backk[h, i], self.backo[h, i] = cls, offset
-        sc = np.zeros(kernels.N_SCALARS, dtype=np.int64)
-        sc[kernels.GOAL_CELL], sc[kernels.GOAL_HEAD] = dstar.goal_cell, dstar.goal_head
-        sc[kernels.RNUM], sc[kernels.RDEN], sc[kernels.WMUL] = dstar.rnum, dstar.rden, dstar.wmul
-        sc[kernels.PW], sc[kernels.NODES] = geo.pw, geo.nodes
-        self.sc = sc
-        self.rhs[geo.nodes] = 0
-
-    @property
-    def start(self) -> int:
-        return int(self.sc[kernels.START])
-
-    @start.setter
-    def start(self, node: int) -> None:
-        self.sc[kernels.START] = node
-
-    @property
-    def km(self) -> int:
-        return int(self.sc[kernels.KM])
-
-    @km.setter
-    def km(self, value: int) -> None:
-        self.sc[kernels.KM] = value
-
-    @property
-    def expansions(self) -> int:
-        return int(self.sc[kernels.EXPANSIONS])
-
-    @expansions.setter
-    def expansions(self, value: int) -> None:
-        self.sc[kernels.EXPANSIONS] = value
-
-    def set_dur(self, dur: npt.NDArray[np.int64]) -> None:
-        pass  # the kernels read the owner's array
-
-    def set_cells(self, cells: Sequence[int]) -> None:
-        pass  # the kernels read the owner's arrays
-
-    def _graph(self) -> tuple[Any, Any, Any, Any, Any, Any]:
-        d = self.d  # arrays changed in place, never replaced
-        return (d.free, d.pen, d.dur, self.step, self.nsw, self.sw)
-
-    def _back(self) -> tuple[Any, Any, Any]:
-        return (self.backk, self.backo, self.nback)
-
-    def _state(self) -> tuple[Any, Any, Any, Any, Any, Any, Any]:
-        return (self.g, self.rhs, self.hk1, self.hk2, self.hn, self.pos, self.sc)
-
-    def update_nodes(self, nodes: Sequence[int]) -> None:
-        array = np.asarray(nodes, dtype=np.int64)
-        kernels.update_nodes(*self._graph(), *self._state(), array)
-
-    def faults_sweep(self) -> int:
-        return int(kernels.faults_sweep(*self._graph(), *self._back(), *self._state()))
-
-    def compute(self, budget: int) -> bool:
-        return bool(kernels.compute(*self._graph(), *self._back(), *self._state(), budget))
-
-    def walk(self) -> tuple[list[int], int] | None:
-        d = self.d
-        out = kernels.walk(d.free, d.pen, d.dur, self.step, self.nsw, self.sw, self.g, self.sc)
-        if out.shape[0] == 0:
-            return None
-        return out[:-1].tolist(), int(out[-1])
 
 
 class DStarLite:
@@ -492,9 +169,9 @@ class DStarLite:
         self.scale = domain.time_unit * weight.denominator  # as search.lattice.cost_scale
         self.wmul = weight.numerator * (self.scale // weight.denominator)
         self.radius = clearance_radius
-        margin = max(1, _reach(domain), clearance_radius - 1 if self.wmul else 0)
+        margin = max(1, reach(domain), clearance_radius - 1 if self.wmul else 0)
         pw = width + 2 * margin
-        self.geometry = _geometry(domain, pw, margin, height + 2 * margin)
+        self.geometry = geometry(domain, pw, margin, height + 2 * margin)
         padded = np.zeros((height + 2 * margin, pw), dtype=np.uint8)
         padded[margin:-margin, margin:-margin] = ~np.asarray(walls, dtype=bool)
         self._free2d = padded
@@ -512,9 +189,7 @@ class DStarLite:
         self.dur = np.full(len(self.geometry.classes), -1, dtype=np.int64)
         self._choose(frozenset(faults))
         self.backend = "numba" if numba else "python"
-        self.core: _PythonCore | _CompiledCore = (
-            _CompiledCore(self) if self.backend == "numba" else _PythonCore(self)
-        )
+        self.core: Core = _compiled(self) if self.backend == "numba" else PythonCore(self)
         self.start = start
         self.core.start = self._node(start)
         self.core.update_nodes([self.geometry.nodes])  # queue the goal
@@ -685,6 +360,10 @@ class DStarLite:
         t0 = time.perf_counter_ns()
         core = self.core
         core.expansions = 0
+        if not (self.free[core.start >> 2] and self.free[self.goal_cell]):
+            # no plan; the search would find that out by settling every node it can reach, so
+            # the queue is left as it is for a later plan (when the cell is free again)
+            return DStarPlan(PlanStatus.UNSOLVABLE, (), None, 0, 0, time.perf_counter_ns() - t0)
         budget = (1 << 62) if max_expansions is None else max_expansions
         done = core.compute(budget)
         expansions = core.expansions
