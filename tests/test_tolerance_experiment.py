@@ -116,6 +116,30 @@ def test_hard_tolerant_plan_needs_no_replan_for_any_single_fault_at_any_step() -
     assert replanned_optimum > 0
 
 
+@pytest.mark.parametrize("table", ["handwritten", "generated-agnostic", "generated-indexed"])
+def test_every_bundled_route_has_a_single_fault_tolerant_plan(table: str) -> None:
+    """What issue 26 must show, on all 16 bundled routes and for each bundled table: the hard
+    tolerant plan for single faults exists, costs at least the optimum, and covers every (step,
+    single fault) pair, so (by the re-simulation property of test_tolerance.py) no mission
+    needs a replan for any single fault appearing at any step."""
+    from selfrepair.execution.tolerance import mission_tolerance
+    from selfrepair.repair.strategies import StrategyOptions
+    from selfrepair.world.bundled import maze_names
+
+    singles = fault_model(FOUR_WHEEL, 1)
+    for name in maze_names():
+        maze = load_bundled(name)
+        for route in bundled_routes(name):
+            options = StrategyOptions(table=table)
+            spec = MissionSpec(maze, route.start, route.goal, options=options,
+                               objective=PlanObjective(1))  # fmt: skip
+            first, tolerance = mission_tolerance(spec, singles)
+            optimum, _ = mission_tolerance(replace(spec, objective=None), singles)
+            assert tolerance is not None and tolerance.tolerant, (name, route.name)
+            assert tolerance.covered == len(first.actions) * 12
+            assert first.duration >= optimum.duration
+
+
 def test_hard_objective_without_a_tolerant_plan_plans_the_optimum() -> None:
     maze = load_bundled("narrow-short")
     route = bundled_routes("narrow-short")[0]
