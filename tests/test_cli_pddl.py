@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from selfrepair.baselines.pddl import parse_pddl_plan
+from selfrepair.baselines.pddltext import parse_pddl_plan
 from selfrepair.cli import main
 from selfrepair.geometry import Heading, Pose
 from selfrepair.search.lattice import plan

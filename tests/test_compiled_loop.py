@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import dataclasses
 from fractions import Fraction
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -14,6 +15,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from extras import NUMBA
+from golden import rows_of
 from selfrepair.caching import clear_caches
 from selfrepair.errors import ProblemError
 from selfrepair.execution.executor import run_mission
@@ -207,3 +209,59 @@ def test_footings_that_the_compiled_loop_cannot_take_run_in_python() -> None:
 def test_row_says_which_footing_ran() -> None:
     row = mission_row(run_mission(_spec(footing="python", start=Pose(1, 1, Heading.E))))
     assert row["footing"] == "python"
+
+
+SMALL = """\
+name = "footings"
+seed = 1
+[[mazes]]
+bundled = "narrow-short"
+[faults]
+sets = ["FL:F,RR:B"]
+[[strategies]]
+name = "replan"
+[[strategies]]
+name = "replacement"
+tables = ["generated-indexed"]
+recursion = ["guarded"]
+"""
+
+
+@NUMBA
+def test_experiment_footing_option_chooses_the_loop_and_rows_say_which(tmp_path: Path) -> None:
+    from selfrepair.cli import main
+
+    config = tmp_path / "footings.toml"
+    config.write_text(SMALL, encoding="utf-8")
+    rows = {}
+    for footing in ("python", "auto"):
+        db = tmp_path / f"{footing}.sqlite"
+        assert main(["experiment", str(config), "--jobs", "1", "--db", str(db),
+                     "--footing", footing]) == 0  # fmt: skip
+        rows[footing] = rows_of(db)
+    assert {r["footing"] for r in rows["python"].values()} == {"python"}
+    assert {r["footing"] for r in rows["auto"].values()} == {"compiled"}
+    assert len(rows["python"]) == 8 and rows["python"].keys() == rows["auto"].keys()
+    for key, row in rows["python"].items():
+        assert {c: v for c, v in row.items() if c != "footing"} == {
+            c: v for c, v in rows["auto"][key].items() if c != "footing"
+        }
+    assert main(["experiment", str(config), "--footing", "fast", "--db", str(db)]) == 2
+
+
+@NUMBA
+def test_a_replan_whose_heap_must_grow_gives_the_same_plan(monkeypatch: pytest.MonkeyPatch) -> None:
+    from selfrepair.search import _kernels
+
+    monkeypatch.setattr(_kernels, "_FIRST_HEAP", 8)  # the kernel planner's first heap: 8 records
+    clear_caches()
+    maze = load_bundled("wide-long")
+    route = bundled_routes("wide-long")[2]
+    spec = MissionSpec(
+        maze, route.start, route.goal, strategy="replan",
+        schedule=FaultSchedule.permanent(FOUR_WHEEL.parse_faults("FL:F,RR:B")),
+    )  # fmt: skip
+    python, compiled = _both(spec)
+    _same(python, compiled)
+    assert compiled.repairs[0].repair.expansions > 8
+    clear_caches()

@@ -94,7 +94,8 @@ BARE_MODULE = re.compile(r"(?<![\w./-])([A-Za-z_]\w*\.py)\b")
 DOTTED = re.compile(r"\bselfrepair(?:\.\w+)+")
 SHORT_DOTTED = re.compile(r"^([a-z_]\w*(?:\.[A-Za-z_]\w*)+)(?:\(.*\))?$")
 FILE_SUFFIXES = (
-    *("py", "md", "toml", "json", "png", "gif", "html", "jsonl", "sqlite", "map", "scen", "txt"),
+    *("py", "md", "toml", "json", "png", "gif", "html", "js", "css", "jsonl", "sqlite", "map"),
+    *("scen", "txt"),
 )
 TEST_NAME = re.compile(r"^(test_\w+)$")
 TEST_REF = re.compile(r"^((?:tests|benchmarks)/[\w/]+\.py)::(\w+)$")

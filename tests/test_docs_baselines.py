@@ -5,7 +5,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from selfrepair.baselines.pddl import domain_text, export_pddl
+from selfrepair.baselines.pddl import export_pddl
+from selfrepair.baselines.pddltext import domain_text
 from selfrepair.geometry import Heading, Pose
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.world import bundled

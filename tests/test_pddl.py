@@ -12,10 +12,10 @@ from hypothesis import strategies as st
 
 from selfrepair.baselines import pddl
 from selfrepair.baselines.lpg import lpg_actions, lpg_input_plan
-from selfrepair.baselines.pddl import (
-    PddlTask,
+from selfrepair.baselines.pddl import export_pddl
+from selfrepair.baselines.pddlschema import PddlTask
+from selfrepair.baselines.pddltext import (
     domain_text,
-    export_pddl,
     parse_pddl_plan,
     plan_to_pddl,
     problem_text,

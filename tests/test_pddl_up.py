@@ -24,11 +24,8 @@ from unified_planning.engines import FailedValidationReason, ValidationResultSta
 from unified_planning.io import PDDLReader
 from unified_planning.shortcuts import PlanValidator
 
-from selfrepair.baselines.pddl import (
-    export_pddl,
-    plan_to_pddl,
-    write_pddl,
-)
+from selfrepair.baselines.pddl import export_pddl
+from selfrepair.baselines.pddltext import plan_to_pddl, write_pddl
 from selfrepair.baselines.unified import (
     environment,
     from_up_plan,

@@ -294,3 +294,9 @@ def test_the_confirmed_only_domain_keeps_the_confirmed_actions_and_every_basic_m
     for fault in FOUR_WHEEL.faults:  # every single fault leaves a way to turn and drive
         motions = {domain.motion_class(a) for a in domain.actions if domain.available(a, {fault})}
         assert {"forward", "backward", "turn-left", "turn-right"} <= motions, fault
+
+
+def test_physics_experiment_refuses_an_unknown_robot_model(capsys) -> None:
+    code = main(["physics", "experiment", "--robot", "hovercraft"])
+    err = capsys.readouterr().err
+    assert code == 2 and "four-wheel-confirmed" in err and err.count("\n") == 1

@@ -7,6 +7,7 @@ import itertools
 import json
 from collections import deque
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -361,3 +362,33 @@ def test_queue_helpers_keep_drives_consistent(three: TeamScenario) -> None:
     assert all(a.item != item for a in after) and len(after) == len(before) - 4
     assert after[0].source == r1.pose.cell
     r1.queue = deque(Entry(a) for a in after)
+
+
+def test_the_team_strategy_is_started_once_per_mission(three: TeamScenario) -> None:
+    """Issue 23 item 3: a team strategy lives for the mission, as a robot's repairer does (the
+    strategy lifecycle); it used to be started again for every incident."""
+    from dataclasses import replace as with_field
+
+    from selfrepair.repair.strategies import StrategyName, register, strategy_entry
+    from selfrepair.team.strategies import TEAM
+
+    entry = strategy_entry(StrategyName.TEAM_REPLACEMENT, TEAM)
+    started: list[object] = []
+    asked: list[object] = []
+
+    class Counting:
+        def __init__(self, world: Any) -> None:
+            started.append(world)
+            self.inner = entry.start(world)
+
+        def repair(self, incident: Any) -> Any:
+            asked.append(incident)
+            return self.inner.repair(incident)
+
+    register(with_field(entry, start=Counting), replace=True)
+    try:
+        result = engine.run_team(three, TeamOptions(strategy=StrategyName.TEAM_REPLACEMENT))
+    finally:
+        register(entry, replace=True)
+    assert len(result.repairs) >= 2
+    assert len(started) == 1 and len(asked) == len(result.repairs)

@@ -3,6 +3,7 @@ random step, the executor's first plan, and finding 2t."""
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 from fractions import Fraction
 from pathlib import Path
@@ -14,7 +15,7 @@ from selfrepair.errors import ConfigError, ProblemError
 from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.result import MissionSpec
-from selfrepair.experiment.config import load_config
+from selfrepair.experiment.config import load_config, parse_config
 from selfrepair.experiment.findings import Outcome, check_findings
 from selfrepair.experiment.missions import expand, to_spec
 from selfrepair.experiment.tolerance_findings import base_variant, tolerance_findings
@@ -115,6 +116,30 @@ def test_hard_tolerant_plan_needs_no_replan_for_any_single_fault_at_any_step() -
     assert replanned_optimum > 0
 
 
+@pytest.mark.parametrize("table", ["handwritten", "generated-agnostic", "generated-indexed"])
+def test_every_bundled_route_has_a_single_fault_tolerant_plan(table: str) -> None:
+    """What issue 26 must show, on all 16 bundled routes and for each bundled table: the hard
+    tolerant plan for single faults exists, costs at least the optimum, and covers every (step,
+    single fault) pair, so (by the re-simulation property of test_tolerance.py) no mission
+    needs a replan for any single fault appearing at any step."""
+    from selfrepair.execution.tolerance import mission_tolerance
+    from selfrepair.repair.strategies import StrategyOptions
+    from selfrepair.world.bundled import maze_names
+
+    singles = fault_model(FOUR_WHEEL, 1)
+    for name in maze_names():
+        maze = load_bundled(name)
+        for route in bundled_routes(name):
+            options = StrategyOptions(table=table)
+            spec = MissionSpec(maze, route.start, route.goal, options=options,
+                               objective=PlanObjective(1))  # fmt: skip
+            first, tolerance = mission_tolerance(spec, singles)
+            optimum, _ = mission_tolerance(replace(spec, objective=None), singles)
+            assert tolerance is not None and tolerance.tolerant, (name, route.name)
+            assert tolerance.covered == len(first.actions) * 12
+            assert first.duration >= optimum.duration
+
+
 def test_hard_objective_without_a_tolerant_plan_plans_the_optimum() -> None:
     maze = load_bundled("narrow-short")
     route = bundled_routes("narrow-short")[0]
@@ -123,9 +148,12 @@ def test_hard_objective_without_a_tolerant_plan_plans_the_optimum() -> None:
     assert run_mission(spec).initial_plan.actions == plain.actions
 
 
-def _row(variant: str, objective: str, weight: str, route: int, ok: bool) -> dict[str, Any]:
+def _row(
+    variant: str, objective: str, weight: str, route: int, ok: bool, base: str | None = None
+) -> dict[str, Any]:
     return {
         "key": f"{variant}-{weight}-{route}", "strategy": "replacement", "variant": variant,
+        "base_variant": base or variant,
         "objective": objective, "table": "handwritten", "recursion": "flat",
         "clearance_weight": weight, "maze": "m", "route": f"r{route}", "faults": "FL:F",
         "fault_at": 3, "detection": "now", "replicate": 0, "reached": 1,
@@ -141,7 +169,7 @@ def test_finding_2t_pairs_tolerance_with_the_highest_clearance_weight() -> None:
         *(_row(base, "optimal", "0", r, r < 5) for r in range(20)),
         *(_row(base, "clearance 1", "1", r, r < 8) for r in range(20)),
         *(_row(base, "clearance 2", "2", r, r < 10) for r in range(20)),
-        *(_row(tolerant, "tolerant k=1", "0", r, True) for r in range(20)),
+        *(_row(tolerant, "tolerant k=1", "0", r, True, base) for r in range(20)),
     ]
     assert base_variant(rows[-1]) == base
     (finding,) = tolerance_findings(rows)
@@ -151,3 +179,32 @@ def test_finding_2t_pairs_tolerance_with_the_highest_clearance_weight() -> None:
     assert tolerance_findings(rows[:60]) == []  # no tolerant rows, no finding
     # the other findings leave the tolerant rows out: finding 2 is the same with or without them
     assert check_findings(rows)[2] == check_findings(rows[:60])[2]
+
+
+def test_the_base_variant_is_a_column_never_the_labels_text() -> None:
+    """Issue 23 item 3: the variant without its objective is stored as a column when missions
+    are expanded; rows stored before it existed get it from their stored configuration."""
+    config = parse_config(
+        'name = "t"\n[[mazes]]\nbundled = "narrow-short"\n[faults]\nsets = ["FL:F"]\n'
+        '[[strategies]]\nname = "replacement"\ntables = ["handwritten"]\n'
+        'objectives = ["optimal", "tolerant k=1"]\n'
+    )
+    labels = [dict(m.labels) for m in expand(config)]
+    tolerant = [row for row in labels if row["objective"] == "tolerant k=1"]
+    assert tolerant
+    for row in tolerant:
+        mode = row["recursion"]
+        assert row["variant"] == f"replacement[handwritten,{mode},tolerant k=1]"
+        assert row["base_variant"] == f"replacement[handwritten,{mode}]"
+    assert all(r["base_variant"] == r["variant"] for r in labels if r["objective"] == "optimal")
+    # a label whose text would parse to something else: the column decides
+    assert base_variant({"variant": "replacement[x,flat,tolerant k=1]", "base_variant": "b"}) == "b"
+    old = {
+        "variant": "replacement[handwritten,guarded,tolerant k=2]",
+        "objective": "tolerant k=2",
+        "config": json.dumps(
+            {"strategy": "replacement", "options": {"table": "handwritten",
+             "recursion": "guarded", "objective": "tolerant k=2"}}
+        ),
+    }  # fmt: skip
+    assert base_variant(old) == "replacement[handwritten,guarded]"

@@ -142,6 +142,37 @@ def test_the_team_page_shows_every_robot_on_one_timeline(
     assert errors == [], errors
 
 
+def test_the_team_page_has_the_shared_controls(
+    driver: Any,  # noqa: F811
+    team_page: tuple[Path, TeamTrace],
+) -> None:
+    """Play, pause and the arrow keys come from the script both pages share (common.js)."""
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.common.keys import Keys
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    html, trace = team_page
+    driver.get(html.as_uri())
+    name = trace.scenario.robots[0].name
+    times = _instants(trace)
+    body = driver.find_element(By.TAG_NAME, "body")
+    for frame in (1, 2):
+        body.send_keys(Keys.ARROW_RIGHT)
+        assert _drawn(driver, name) == (_pose_at(trace, name, times[frame]), frame)
+    body.send_keys(Keys.ARROW_LEFT)
+    assert _drawn(driver, name)[1] == 1
+    button = driver.find_element(By.ID, "play")
+    button.click()
+    assert button.text == "Pause"
+    WebDriverWait(driver, 20).until(lambda d: _drawn(d, name)[1] >= 4)
+    button.click()
+    assert button.text == "Play"
+    pose, frame = _drawn(driver, name)
+    assert pose == _pose_at(trace, name, times[frame])
+    errors = [e for e in driver.get_log("browser") if e["level"] == "SEVERE"]
+    assert errors == [], errors
+
+
 def test_a_stored_team_mission_is_viewed_from_its_database(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -37,7 +37,7 @@ from selfrepair.baselines.lpg import (
     lpg_adapt_repair,
     lpg_available,
 )
-from selfrepair.baselines.pddl import HEADING_NAMES, MODE_NAMES, WHEEL_NAMES
+from selfrepair.baselines.pddlschema import HEADING_NAMES, MODE_NAMES, WHEEL_NAMES
 from selfrepair.errors import ProblemError
 from selfrepair.repair.strategies import (
     MissionContext,

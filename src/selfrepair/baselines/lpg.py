@@ -42,14 +42,8 @@ from fractions import Fraction
 from types import ModuleType
 from typing import Any
 
-from selfrepair.baselines.pddl import (
-    HEADING_NAMES,
-    MAX_PDDL_CELLS,
-    MODE_NAMES,
-    WHEEL_NAMES,
-    PddlTask,
-    export_pddl,
-)
+from selfrepair.baselines.pddl import MAX_PDDL_CELLS, export_pddl
+from selfrepair.baselines.pddlschema import HEADING_NAMES, MODE_NAMES, WHEEL_NAMES, PddlTask
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.robots import four_wheel
 from selfrepair.robots.four_wheel import Action, FaultSet, MotionKind

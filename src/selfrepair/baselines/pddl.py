@@ -77,31 +77,18 @@ import re
 from collections.abc import Iterable
 
 from selfrepair.baselines.pddlschema import (
-    DOMAIN_NAME,
     HEADING_NAMES,
     MODE_NAMES,
-    PREDICATES,
     PROBE_POSES,
     REPRESENTATIVE,
     VARIABLE_TYPES,
     WHEEL_NAMES,
     Atom,
     PddlTask,
-    Schema,
-    Shape,
     cell_name,
     parameter_bindings,
     schema,
     static_predicates,
-    step_parameters,
-)
-from selfrepair.baselines.pddltext import (
-    domain_text,
-    parse_pddl_plan,
-    plan_to_pddl,
-    problem_text,
-    step_pddl,
-    write_pddl,
 )
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Heading, Pose
@@ -109,28 +96,7 @@ from selfrepair.robots import four_wheel
 from selfrepair.robots.four_wheel import ACTIONS, Action, Fault, Motion, Wheel
 from selfrepair.search.problem import PlanningProblem, check_search_inputs
 
-__all__ = [
-    "DOMAIN_NAME",
-    "HEADING_NAMES",
-    "MAX_PDDL_CELLS",
-    "MODE_NAMES",
-    "PREDICATES",
-    "WHEEL_NAMES",
-    "Atom",
-    "PddlTask",
-    "Schema",
-    "Shape",
-    "cell_name",
-    "domain_text",
-    "export_pddl",
-    "parse_pddl_plan",
-    "plan_to_pddl",
-    "problem_text",
-    "schema",
-    "step_parameters",
-    "step_pddl",
-    "write_pddl",
-]
+__all__ = ["MAX_PDDL_CELLS", "export_pddl"]
 
 MAX_PDDL_CELLS = 4096
 """Largest maze (width times height, here 64 x 64) that :func:`export_pddl` accepts by default.

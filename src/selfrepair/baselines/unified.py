@@ -34,15 +34,14 @@ from unified_planning.environment import Environment, get_environment
 from unified_planning.plans import ActionInstance, PlanKind, SequentialPlan
 from up_lpg.lpg_planner import LPGPlanRepairer
 
-from selfrepair.baselines.pddl import (
+from selfrepair.baselines.pddlschema import (
     HEADING_NAMES,
     MODE_NAMES,
     PREDICATES,
     WHEEL_NAMES,
     PddlTask,
-    parse_pddl_plan,
-    step_pddl,
 )
+from selfrepair.baselines.pddltext import parse_pddl_plan, step_pddl
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Pose
 from selfrepair.robots.four_wheel import Action

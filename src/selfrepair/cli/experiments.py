@@ -133,6 +133,15 @@ def experiment(
             max=1000,
         ),
     ] = None,
+    footing: Annotated[
+        str,
+        typer.Option(
+            "--footing",
+            metavar="NAME",
+            help="Mission loop: auto (compiled where it can run, else Python), compiled or "
+            "python (the reference); rows record the footing that ran.",
+        ),
+    ] = "auto",
 ) -> int:
     """Run an experiment; print its summary and findings.
 
@@ -158,6 +167,10 @@ def experiment(
     db_path: Path | None = None
     try:
         _check_options(backend, jobs, scheduler)
+        if footing not in ("auto", "compiled", "python"):
+            raise InputError(
+                f"expected --footing auto, compiled or python, got {footing!r}", source="--footing"
+            )
         check_backend(backend, jobs=jobs, scheduler=scheduler)
         if export_parquet is not None:
             _require_pyarrow()  # before the sweep, not after it
@@ -196,7 +209,9 @@ def experiment(
                     backend=backend,
                     scheduler=scheduler,
                     address=address,
-                    execute=partial(execute_mission, repeats=repeats or cfg.timing_repeats),
+                    execute=partial(
+                        execute_mission, repeats=repeats or cfg.timing_repeats, footing=footing
+                    ),
                     on_progress=on_progress,
                 )
             elsewhere = f", {summary.elsewhere} by another writer" if summary.elsewhere else ""

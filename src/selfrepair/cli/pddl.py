@@ -67,7 +67,8 @@ def pddl_command(
             f"faults), not {domain_name!r}",
             source="--domain",
         )
-    from selfrepair.baselines.pddl import export_pddl, plan_to_pddl, write_pddl
+    from selfrepair.baselines.pddl import export_pddl
+    from selfrepair.baselines.pddltext import plan_to_pddl, write_pddl
     from selfrepair.cli.planning import parse_goal
     from selfrepair.geometry import parse_pose
     from selfrepair.robots import four_wheel

@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from collections.abc import Iterable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
@@ -17,6 +17,9 @@ from selfrepair.robots.registry import plugin_file
 from selfrepair.world.maze import format_maze
 
 __all__ = ["header_json", "repair_json", "step_json", "trace_lines", "write_trace"]
+
+A = TypeVar("A")
+F = TypeVar("F")
 
 
 def _pose_json(pose: Pose) -> list[Any]:
@@ -66,7 +69,7 @@ def header_json(spec: MissionSpec, initial_plan: Iterable[Any] = ()) -> dict[str
     }
 
 
-def _fault_texts(domain: Domain[Any, Any], faults: Iterable[Any]) -> list[str]:
+def _fault_texts(domain: Domain[A, F], faults: Iterable[F]) -> list[str]:
     return sorted(domain.format_faults([f]) for f in faults)
 
 

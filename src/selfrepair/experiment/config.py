@@ -57,41 +57,13 @@ from pathlib import Path
 from pydantic import ValidationError
 
 from selfrepair.errors import ConfigError
-from selfrepair.experiment.schema import (
-    FAULT_PROFILES,
-    STRATEGY_TAGS,
-    DStarLiteStrategy,
-    ExperimentConfig,
-    FaultsConfig,
-    GeneratedMaze,
-    LookaheadStrategy,
-    LpgAdaptStrategy,
-    MazeConfig,
-    PlannerConfig,
-    ReplacementStrategy,
-    ReplanStrategy,
-    RouteConfig,
-    StrategyConfig,
-)
+from selfrepair.experiment.schema import STRATEGY_TAGS, ExperimentConfig
 from selfrepair.limits import MAX_FILE_BYTES
 from selfrepair.robots.fromfile import file_domain, load_plugins
 from selfrepair.textio import read_text, strip_bom
 from selfrepair.tomlfile import find_line, read_toml, validate, validation_error
 
 __all__ = [
-    "FAULT_PROFILES",
-    "DStarLiteStrategy",
-    "ExperimentConfig",
-    "FaultsConfig",
-    "GeneratedMaze",
-    "LookaheadStrategy",
-    "LpgAdaptStrategy",
-    "MazeConfig",
-    "PlannerConfig",
-    "ReplacementStrategy",
-    "ReplanStrategy",
-    "RouteConfig",
-    "StrategyConfig",
     "config_error",
     "find_line",
     "load_config",

@@ -236,6 +236,7 @@ def _mission(
         ("replicate", situation["replicate"]),
         ("strategy", variant["strategy"]),
         ("variant", variant_label(variant["strategy"], options)),
+        ("base_variant", variant_label(variant["strategy"], _without_objective(options))),
         ("table", short_table(options.get("table"))),
         ("recursion", options.get("recursion")),
         ("window", options.get("window")),
@@ -248,6 +249,12 @@ def _mission(
     if world is not None:
         labels += (("world_rate", str(world["rate"])), ("sensing", world["sensing"]))
     return Mission(key, config.name, seed, text, labels)
+
+
+def _without_objective(options: dict[str, Any]) -> dict[str, Any]:
+    """The variant's options but its planning objective: what a tolerant robot is compared on
+    (column ``base_variant``; the same as ``variant`` for a robot planned without one)."""
+    return {k: v for k, v in options.items() if k != "objective"}
 
 
 def _worlds(config: ExperimentConfig) -> tuple[dict[str, Any] | None, ...]:

@@ -396,7 +396,8 @@ def _choose(
         candidates = str(row.get("candidates") or "")
         return (
             row.get("all_delivered") == 1,
-            str(row.get("variant")) == "team-replacement[handwritten]",
+            row.get("strategy") == StrategyName.TEAM_REPLACEMENT
+            and row.get("team_table") == "handwritten",  # the columns, never the label's text
             "handover" in candidates,
             row.get("team_size") in (3, 4),
             str(row.get("persistence")) == "permanent",

@@ -48,7 +48,9 @@ reads; and what every mission prefills before its clocks start (a table's reach,
 geometry). Clearing those would only slow the sweep down."""
 
 
-def execute_mission(mission: Mission, *, repeats: int = 1) -> Mapping[str, Value]:
+def execute_mission(
+    mission: Mission, *, repeats: int = 1, footing: str = "auto"
+) -> Mapping[str, Value]:
     """The real mission function: run the executor on ``missions.to_spec(mission)``.
 
     The row is :meth:`MissionResult.to_row` (columns in docs/replacement.md) without the
@@ -69,7 +71,9 @@ def execute_mission(mission: Mission, *, repeats: int = 1) -> Mapping[str, Value
     ``cold_repair_compute_ns``, ``cold_initial_planning_ns``. Then it runs ``repeats`` more times
     **warm** (caches as the runs before left them); every other
     timing column is the median over those warm runs, repair by repair (results are
-    deterministic, so the repairs line up). ``timing_repeats`` records ``repeats``.
+    deterministic, so the repairs line up). ``timing_repeats`` records ``repeats``. ``footing``
+    chooses the mission loop (:attr:`~selfrepair.execution.result.MissionSpec.footing`; the row's
+    ``footing`` column says which ran).
     """
     from selfrepair.execution.executor import run_mission
     from selfrepair.execution.metrics import optimum_ticks
@@ -78,6 +82,8 @@ def execute_mission(mission: Mission, *, repeats: int = 1) -> Mapping[str, Value
     if repeats < 1:
         raise ProblemError(f"repeats must be at least 1, got {repeats}")
     spec = to_spec(mission)
+    if footing != spec.footing:  # the mission loop (not part of the mission's key)
+        spec = replace(spec, footing=footing)
     clear_caches(COLD_CLEARS)
     cold = run_mission(spec)
     warm = [run_mission(spec) for _ in range(repeats)]

@@ -14,11 +14,13 @@ with the lower weights (as evidence, not counted).
 
 from __future__ import annotations
 
+import json
 from collections import defaultdict
 from collections.abc import Sequence
 from fractions import Fraction
 
 from selfrepair.experiment.summary import Row
+from selfrepair.experiment.variants import variant_label
 from selfrepair.experiment.verdicts import (
     PAIRED,
     Comparison,
@@ -38,12 +40,18 @@ __all__ = ["base_variant", "tolerance_findings"]
 
 def base_variant(row: Row) -> str:
     """The row's variant without its tolerant objective: ``replacement[handwritten,flat,tolerant
-    k=1]`` becomes ``replacement[handwritten,flat]``."""
-    variant = str(row.get("variant") or "")
-    objective = str(row.get("objective") or "").split(", clearance")[0]
-    if is_tolerant(row) and variant.endswith(f",{objective}]"):
-        return variant[: -len(objective) - 2] + "]"
-    return variant
+    k=1]`` becomes ``replacement[handwritten,flat]``. Read from the ``base_variant`` column (rows
+    stored before that column existed: made from the strategy and options of the mission's
+    stored configuration), never from the variant label's text."""
+    column = row.get("base_variant")
+    if column is not None:
+        return str(column)
+    settings = json.loads(str(row.get("config") or "{}"))
+    options = settings.get("options")
+    if "strategy" not in settings or not isinstance(options, dict):
+        return str(row.get("variant") or "")
+    plain = {k: v for k, v in options.items() if k != "objective"}
+    return variant_label(str(settings["strategy"]), plain)
 
 
 def tolerance_findings(rows: Sequence[Row]) -> list[Finding]:

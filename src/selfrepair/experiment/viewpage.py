@@ -1,8 +1,9 @@
 """The viewer's page machinery, shared by the mission page and the team page: the drawing
 helpers every payload uses (poses, wall runs) and :func:`render_html`, which puts a payload, the
-page template, its CSS and its script (package data in ``selfrepair/data/viewer/``) into one HTML
-file that needs no server and no network: everything is inline, and the page's content security
-policy forbids loading anything.
+page template (``page.html``, with the page's own panel), its CSS and its script (the shared
+``common.js``, then the page's own) into one HTML file that needs no server and no network:
+everything is inline, and the page's content security policy forbids loading anything. The
+files are package data in ``selfrepair/data/viewer/``.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ import html
 import json
 import re
 from collections.abc import Mapping
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -19,10 +21,45 @@ from selfrepair.errors import InputError, ProblemError
 from selfrepair.geometry import Pose
 from selfrepair.world.maze import Maze
 
-__all__ = ["PAGES", "pose_json", "render_html", "wall_runs", "write_page"]
+__all__ = ["PAGES", "Page", "pose_json", "render_html", "wall_runs", "write_page"]
 
-PAGES = {"mission": ("viewer.html", "viewer.js"), "team": ("team.html", "team.js")}
-"""Each page's template and script (the CSS, ``viewer.css``, is shared)."""
+
+@dataclass(frozen=True, slots=True)
+class Page:
+    """What one kind of page puts into the shared template (``page.html``; the CSS,
+    ``viewer.css``, and the script ``common.js`` are shared too): its script, its side panel,
+    what one frame is called, and the labels of its map and timeline."""
+
+    script: str
+    panel: str
+    unit: str
+    map_label: str
+    timeline_title: str
+    timeline_label: str
+    strip: str = ""
+    """A fragment shown above the timeline (the mission page's plan-tolerance strip), or none."""
+
+
+PAGES = {
+    "mission": Page(
+        "viewer.js",
+        "mission-panel.html",
+        "step",
+        "maze and robot",
+        "Faults over the mission",
+        "fault timeline",
+        "mission-strip.html",
+    ),
+    "team": Page(
+        "team.js",
+        "team-panel.html",
+        "instant",
+        "maze, robots and items",
+        "Timeline: robots, acts, incidents, repairs and team faults",
+        "team timeline",
+    ),
+}
+"""The pages, by the name :func:`render_html` takes."""
 
 
 def pose_json(pose: Pose) -> dict[str, Any]:
@@ -56,8 +93,9 @@ def wall_runs(maze: Maze) -> list[list[int]]:
     return runs
 
 
-
-_PLACEHOLDER = re.compile(r"\{\{(TITLE|STYLE|SCRIPT|DATA)\}\}")
+_PLACEHOLDER = re.compile(
+    r"\{\{(TITLE|STYLE|SCRIPT|DATA|PANEL|UNIT|MAP_LABEL|TIMELINE_TITLE|TIMELINE_LABEL|STRIP)\}\}"
+)
 
 
 def _asset(name: str) -> str:
@@ -73,18 +111,24 @@ def _script_safe_json(payload: Mapping[str, Any]) -> str:
 def render_html(payload: Mapping[str, Any], *, page: str = "mission") -> str:
     """The self-contained ``page`` (a key of :data:`PAGES`) for ``payload``: template, CSS,
     script and data, all inline."""
-    template, script = PAGES[page]
+    chosen = PAGES[page]
     parts = {
         "TITLE": html.escape(str(payload.get("title", "mission"))),
         "STYLE": _asset("viewer.css"),
-        "SCRIPT": _asset(script),
+        "SCRIPT": _asset("common.js") + "\n" + _asset(chosen.script),
         "DATA": _script_safe_json(payload),
+        "PANEL": _asset(chosen.panel),
+        "UNIT": chosen.unit,
+        "MAP_LABEL": chosen.map_label,
+        "TIMELINE_TITLE": chosen.timeline_title,
+        "TIMELINE_LABEL": chosen.timeline_label,
+        "STRIP": _asset(chosen.strip) if chosen.strip else "",
     }
     for name in ("STYLE", "SCRIPT"):
         if re.search(r"</(style|script)", parts[name], re.IGNORECASE):
             raise ProblemError(f"viewer {name.lower()} asset must not close its element")
     # one pass: text put in is never scanned for placeholders again
-    return _PLACEHOLDER.sub(lambda m: parts[m.group(1)], _asset(template))
+    return _PLACEHOLDER.sub(lambda m: parts[m.group(1)], _asset("page.html"))
 
 
 def write_page(payload: Mapping[str, Any], out: str | Path, *, page: str = "mission") -> Path:

@@ -59,7 +59,7 @@ import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Generic, TypeVar
+from typing import Generic, TypeVar
 
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
@@ -82,7 +82,7 @@ CANONICAL = Pose(0, 0, Heading.N)
 """The state candidates of a replacement table are stored relative to (origin, facing north)."""
 
 
-def _no_level(action: Any) -> int:
+def _no_level(action: object) -> int:
     return 0
 
 
@@ -204,7 +204,7 @@ class Domain(Generic[A, F]):
         return frozenset(f for f in faults if not self.available(action, frozenset((f,))))
 
 
-def _waits(domain: Domain[A, Any]) -> tuple[A, ...]:
+def _waits(domain: Domain[A, F]) -> tuple[A, ...]:
     """The actions of ``domain`` that stay in place from every heading (:attr:`Domain.waits`)."""
     probes = tuple(Pose(0, 0, heading) for heading in Heading)
     stay = [
@@ -229,7 +229,7 @@ def singles_and_doubles(faults: Iterable[F]) -> tuple[frozenset[F], ...]:
     )
 
 
-def run_open(domain: Domain[Any, Any], state: Pose, actions: Iterable[Any]) -> Pose:
+def run_open(domain: Domain[A, F], state: Pose, actions: Iterable[A]) -> Pose:
     """The state reached by applying ``actions`` in turn from ``state`` on an open plane."""
     for action in actions:
         state = domain.apply(state, action)
@@ -254,7 +254,7 @@ def primitive_by_motion(domain: Domain[A, F], faults: frozenset[F]) -> dict[str,
     return best
 
 
-def progress_rate(domain: Domain[Any, Any], actions: Iterable[Any]) -> Fraction:
+def progress_rate(domain: Domain[A, F], actions: Iterable[A]) -> Fraction:
     """The least ticks per cell of Manhattan displacement over ``actions``, from any heading (0 if
     none moves): ``rate * manhattan(a, b)`` never exceeds the duration of getting from ``a`` to
     ``b`` with those actions, which is what makes the planners' heuristics admissible."""
@@ -271,7 +271,7 @@ def progress_rate(domain: Domain[Any, Any], actions: Iterable[Any]) -> Fraction:
 _PROBES = tuple(Pose(0, 0, heading) for heading in Heading)
 
 
-def check_domain(domain: Domain[Any, Any]) -> None:
+def check_domain(domain: Domain[A, F]) -> None:
     """Raise :class:`ProblemError` naming the first way ``domain`` breaks the contract of the
     module docstring (checked on every action from every heading and one shifted cell)."""
 
@@ -310,7 +310,7 @@ def check_domain(domain: Domain[Any, Any]) -> None:
     _check_behaviours(domain, fail)
 
 
-def _check_behaviours(domain: Domain[Any, Any], fail: Callable[[str], ProblemError]) -> None:
+def _check_behaviours(domain: Domain[A, F], fail: Callable[[str], ProblemError]) -> None:
     """Fail unless every fault-behaviour model has a distinct, non-empty name and maps every
     action, under every fault set in scope (and none), to an action of the domain: the action
     itself when it is available."""
@@ -333,8 +333,8 @@ def _check_behaviours(domain: Domain[Any, Any], fail: Callable[[str], ProblemErr
 
 
 def _check_translation(
-    domain: Domain[Any, Any],
-    action: Any,
+    domain: Domain[A, F],
+    action: A,
     text: str,
     probe: Pose,
     fail: Callable[[str], ProblemError],
@@ -351,8 +351,8 @@ def _check_translation(
 
 
 def _check_connected(
-    domain: Domain[Any, Any],
-    action: Any,
+    domain: Domain[A, F],
+    action: A,
     text: str,
     probe: Pose,
     fail: Callable[[str], ProblemError],

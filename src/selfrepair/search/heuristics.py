@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any, Protocol
 
@@ -85,41 +86,6 @@ def _manhattan_distances(maze: Maze, goal: Cell, backend: str) -> npt.NDArray[np
 _DistanceFn = Callable[[Maze, Cell, str], npt.NDArray[np.int32]]
 
 
-def _zero_bound(
-    maze: Maze,
-    goal: Cell,
-    domain: Domain[Any, Any],
-    actions: Sequence[Any],
-    *,
-    backend: str = "auto",
-) -> CellBound:
-    return CellBound(_goal_distances(_zero_distances, maze, (0, 0), backend)[0], Fraction(0))
-
-
-def _manhattan_bound(
-    maze: Maze,
-    goal: Cell,
-    domain: Domain[Any, Any],
-    actions: Sequence[Any],
-    *,
-    backend: str = "auto",
-) -> CellBound:
-    distance, _ = _goal_distances(_manhattan_distances, maze, goal, backend)
-    return CellBound(distance, progress_rate(domain, actions))
-
-
-def _grid_distance_bound(
-    maze: Maze,
-    goal: Cell,
-    domain: Domain[Any, Any],
-    actions: Sequence[Any],
-    *,
-    backend: str = "auto",
-) -> CellBound:
-    distance, _ = _goal_distances(_bfs_padded, maze, goal, backend)
-    return CellBound(distance, progress_rate(domain, actions))
-
-
 def _goal_distances(
     make: _DistanceFn, maze: Maze, goal: Cell, backend: str
 ) -> tuple[npt.NDArray[np.int32], int]:
@@ -147,15 +113,6 @@ _DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], _Distances] = BoundedCa
 _LARGE_DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], _Distances] = BoundedCache(
     "goal distances (larger mazes)", 4, kind=CacheKind.PLAN
 )
-
-
-HEURISTICS: dict[str, HeuristicFn] = {
-    "zero": _zero_bound,
-    "manhattan": _manhattan_bound,
-    "grid-distance": _grid_distance_bound,
-}
-"""Heuristic registry: name -> function ``(maze, goal, domain, actions, *, backend) ->
-CellBound``."""
 
 
 NEEDS_CONNECTED_FOOTPRINTS = frozenset({"grid-distance"})
@@ -188,14 +145,40 @@ def _bfs_padded(maze: Maze, goal: Cell, backend: str) -> npt.NDArray[np.int32]:
     return with_border(np.array(dist, dtype=np.int32))
 
 
-_BUILT_IN: dict[HeuristicFn, tuple[_DistanceFn, bool]] = {
-    _zero_bound: (_zero_distances, False),
-    _manhattan_bound: (_manhattan_distances, True),
-    _grid_distance_bound: (_bfs_padded, True),
+@dataclass(frozen=True, slots=True)
+class _BuiltIn:
+    """A built-in heuristic: the cached distances ``make`` gives to the goal (to a fixed cell
+    for ``zero``: they are the same for every goal), times the progress rate of the actions when
+    ``scaled``. :func:`heuristic_bound` builds its bound from these parts without calling it (the
+    same bound, with the rate the planner has already computed for the fault set)."""
+
+    make: _DistanceFn
+    scaled: bool
+
+    def target(self, goal: Cell) -> Cell:
+        """The cell the distances are measured to."""
+        return goal if self.make is not _zero_distances else (0, 0)
+
+    def __call__(
+        self,
+        maze: Maze,
+        goal: Cell,
+        domain: Domain[Any, Any],
+        actions: Sequence[Any],
+        *,
+        backend: str = "auto",
+    ) -> CellBound:
+        distance, _ = _goal_distances(self.make, maze, self.target(goal), backend)
+        return CellBound(distance, progress_rate(domain, actions) if self.scaled else Fraction(0))
+
+
+HEURISTICS: dict[str, HeuristicFn] = {
+    "zero": _BuiltIn(_zero_distances, scaled=False),
+    "manhattan": _BuiltIn(_manhattan_distances, scaled=True),
+    "grid-distance": _BuiltIn(_bfs_padded, scaled=True),
 }
-"""The built-in heuristics as (cached distances, whether scaled by the progress rate): what
-:func:`plan` builds their bound from without calling them (the same bound, with the rate taken
-from the per-fault-set setup)."""
+"""Heuristic registry: name -> function ``(maze, goal, domain, actions, *, backend) ->
+CellBound``."""
 
 
 def heuristic_bound(
@@ -206,13 +189,10 @@ def heuristic_bound(
     backend: str,
 ) -> tuple[CellBound, int | None]:
     """The heuristic bound of ``problem`` for the planning ``actions`` and their progress
-    ``rate`` (see :data:`_BUILT_IN`), and its largest distance when known without a scan."""
+    ``rate`` (see :class:`_BuiltIn`), and its largest distance when known without a scan."""
     fn = HEURISTICS[heuristic]
-    built_in = _BUILT_IN.get(fn)
-    if built_in is None:
+    if not isinstance(fn, _BuiltIn):
         bound = fn(problem.maze, problem.goal, problem.domain, actions, backend=backend)
         return bound, None
-    make, scaled = built_in
-    goal = problem.goal if make is not _zero_distances else (0, 0)
-    distance, largest = _goal_distances(make, problem.maze, goal, backend)
-    return CellBound(distance, rate if scaled else Fraction(0)), largest
+    distance, largest = _goal_distances(fn.make, problem.maze, fn.target(problem.goal), backend)
+    return CellBound(distance, rate if fn.scaled else Fraction(0)), largest

@@ -7,11 +7,14 @@ from selfrepair.team.incidents import incident
 from selfrepair.team.model import DROP_TICKS, HANDOVER_TICKS, PICK_TICKS, ActionKind, IncidentKind
 from selfrepair.team.result import ActRecord
 from selfrepair.team.state import Entry, RobotState, TeamWorld
+from selfrepair.team.strategies import TeamRepairer
 
 __all__ = ["finish", "handover", "pick_or_drop", "start_act"]
 
 
-def pick_or_drop(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> int | None:
+def pick_or_drop(
+    world: TeamWorld, repairer: TeamRepairer, robot: RobotState, head: Entry, t: int
+) -> int | None:
     action = head.action
     state = world.items[action.item]
     if state.delivered_at is not None or state.lost:
@@ -21,7 +24,7 @@ def pick_or_drop(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> in
         robot.queue.popleft()  # nothing to drop: the item went another way
         return None
     if not robot.can_grip:
-        incident(world, robot, head, IncidentKind.GRIPPER, t)
+        incident(world, repairer, robot, head, IncidentKind.GRIPPER, t)
         return None
     if action.kind is ActionKind.PICK and (
         robot.holding or state.holder or state.cell != robot.pose.cell
@@ -32,7 +35,9 @@ def pick_or_drop(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> in
     return None
 
 
-def handover(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> int | None:
+def handover(
+    world: TeamWorld, repairer: TeamRepairer, robot: RobotState, head: Entry, t: int
+) -> int | None:
     action = head.action
     state = world.items[action.item]
     if state.delivered_at is not None or state.lost:
@@ -40,7 +45,7 @@ def handover(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> int | 
         return None
     giver, taker = world.robots[action.robot], world.robots[action.taker]
     if robot is taker and not taker.can_grip:
-        incident(world, robot, head, IncidentKind.GRIPPER, t)
+        incident(world, repairer, robot, head, IncidentKind.GRIPPER, t)
         return None
     other = taker if robot is giver else giver
     ready = (

@@ -28,11 +28,12 @@ options give the same result (the timings aside).
    faults goes to the robot's own :class:`~selfrepair.execution.stepper.Stepper` first (its
    repairer and splice, :mod:`selfrepair.team.driving`); when that fails, or a drive meets a
    blocked cell, or a gripper has failed, the robot has an *incident* and the team strategy
-   decides (:mod:`selfrepair.team.strategies`). The repair latency runs from the incident until
-   every robot whose plan changed and is not in the middle of an action has its next drive
-   placed in time (garbage collection is held off during it; each mission starts without kept
-   cost-to-go maps, so a repair's cost does not depend on the missions run before it in the
-   process).
+   decides (:mod:`selfrepair.team.strategies`; started once for the mission, as a robot's
+   repairer is, so it may keep state between incidents). The repair latency runs from the
+   incident until every robot whose plan changed and is not in the middle of an action has its
+   next drive placed in time (garbage collection is held off during it; each mission starts
+   without kept cost-to-go maps, so a repair's cost does not depend on the missions run before
+   it in the process).
 5. **End.** When every item is delivered; when nothing more can happen (``stalled``: no robot
    with work can act, no fault will clear, nothing moved for :data:`STALL_TICKS`); or at
    ``max_ticks``.
@@ -68,7 +69,7 @@ from selfrepair.team.state import (
     RobotState,
     TeamWorld,
 )
-from selfrepair.team.strategies import get_team_strategy
+from selfrepair.team.strategies import TeamRepairer, get_team_strategy
 from selfrepair.team.table import get_team_table
 
 __all__ = ["STALL_TICKS", "default_max_ticks", "run_team"]
@@ -109,7 +110,8 @@ def run_team(scenario: TeamScenario, options: TeamOptions | None = None) -> Team
     _allocate(world)
     allocation_ns = time.perf_counter_ns() - t0
     initial = tuple((n, tuple(e.action for e in r.queue)) for n, r in world.robots.items())
-    status, reason = _loop(world)
+    repairer = get_team_strategy(options.strategy)(world)  # once per mission, as for a robot
+    status, reason = _loop(world, repairer)
     return TeamResult(
         scenario,
         options,
@@ -179,7 +181,7 @@ def _no_meet(job: Job, here: Cell) -> Cell:
 # --- the loop -------------------------------------------------------------------------------------
 
 
-def _loop(world: TeamWorld) -> tuple[TeamStatus, str]:
+def _loop(world: TeamWorld, repairer: TeamRepairer) -> tuple[TeamStatus, str]:
     scenario, scale = world.scenario, world.scale
     limit = (world.options.max_ticks or default_max_ticks(scenario)) * scale
     clocks = world.faults
@@ -192,7 +194,7 @@ def _loop(world: TeamWorld) -> tuple[TeamStatus, str]:
         for _ in range(_ROUNDS):
             world.dirty.clear()
             for name in pending:
-                wake[name] = _advance(world, world.robots[name], t)
+                wake[name] = _advance(world, repairer, world.robots[name], t)
             pending = [n for n in world.robots if n in world.dirty]
             if not pending:
                 break
@@ -222,8 +224,9 @@ def _stall_reason(world: TeamWorld) -> str:
     )
 
 
-def _advance(world: TeamWorld, robot: RobotState, t: int) -> int:
-    """Let ``robot`` do what it can at ``t``; returns when it wants to act next."""
+def _advance(world: TeamWorld, repairer: TeamRepairer, robot: RobotState, t: int) -> int:
+    """Let ``robot`` do what it can at ``t`` (``repairer``: the team strategy); returns when it
+    wants to act next."""
     for _ in range(_STEPS):
         if robot.busy_until > t:
             return robot.busy_until
@@ -238,11 +241,11 @@ def _advance(world: TeamWorld, robot: RobotState, t: int) -> int:
         head = robot.queue[0]
         kind = head.action.kind
         if kind is ActionKind.DRIVE:
-            wait = drive_once(world, robot, head, t)
+            wait = drive_once(world, repairer, robot, head, t)
         elif kind is ActionKind.HANDOVER:
-            wait = handover(world, robot, head, t)
+            wait = handover(world, repairer, robot, head, t)
         else:
-            wait = pick_or_drop(world, robot, head, t)
+            wait = pick_or_drop(world, repairer, robot, head, t)
         if wait is not None:
             return wait
     return t + 1

@@ -12,13 +12,21 @@ from selfrepair.team.driving import DriveStart, begin_drive, cancel_drive
 from selfrepair.team.model import ActionKind, IncidentKind, Load
 from selfrepair.team.result import IncidentRecord, TeamRepairRecord
 from selfrepair.team.state import Entry, RobotState, TeamWorld, item_task_of
-from selfrepair.team.strategies import get_team_strategy
+from selfrepair.team.strategies import TeamRepairer
 
 __all__ = ["incident", "prepare"]
 
 
-def incident(world: TeamWorld, robot: RobotState, entry: Entry, kind: IncidentKind, t: int) -> None:
-    """Record the incident and let the team strategy repair it (timed)."""
+def incident(
+    world: TeamWorld,
+    repairer: TeamRepairer,
+    robot: RobotState,
+    entry: Entry,
+    kind: IncidentKind,
+    t: int,
+) -> None:
+    """Record the incident and let the team strategy, ``repairer`` (started once for the
+    mission), repair it (timed)."""
     if robot.deferred == (entry.action, kind.value):
         robot.retry_at = t + 2 * world.scale
         return
@@ -30,7 +38,6 @@ def incident(world: TeamWorld, robot: RobotState, entry: Entry, kind: IncidentKi
         world.broadcast(robot.name)
     if robot.drive is not None:
         cancel_drive(world, robot, t)
-    repairer = get_team_strategy(world.options.strategy)(world)  # stateless: started per incident
     collecting = gc.isenabled()
     gc.disable()  # a collection's pause belongs to no repair: it runs after the timed part
     try:

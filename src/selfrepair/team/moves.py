@@ -24,11 +24,14 @@ from selfrepair.team.model import IncidentKind, TeamFaultKind
 from selfrepair.team.reservations import TimedStep
 from selfrepair.team.result import MoveRecord
 from selfrepair.team.state import Entry, RobotState, TeamWorld
+from selfrepair.team.strategies import TeamRepairer
 
 __all__ = ["command", "drive_once", "hold", "learn_blocked", "safe"]
 
 
-def drive_once(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> int | None:
+def drive_once(
+    world: TeamWorld, repairer: TeamRepairer, robot: RobotState, head: Entry, t: int
+) -> int | None:
     """One go at the head drive; ``None`` to look at the robot again at once."""
     drive = robot.drive
     if drive is not None and drive.target != head.action.target:
@@ -40,7 +43,7 @@ def drive_once(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> int 
             robot.queue.popleft()
             return None
         if start in (DriveStart.STUCK, DriveStart.BLOCKED):
-            incident(world, robot, head, INCIDENT_OF_START[start], t)
+            incident(world, repairer, robot, head, INCIDENT_OF_START[start], t)
             return None
         if start is DriveStart.WAITING:
             return robot.retry_at
@@ -67,11 +70,11 @@ def drive_once(world: TeamWorld, robot: RobotState, head: Entry, t: int) -> int 
             know(world, robot, sensed, t)
     if not stepper.available(step.action):
         if not own_repair(world, robot, t):
-            incident(world, robot, head, IncidentKind.STUCK, t)
+            incident(world, repairer, robot, head, IncidentKind.STUCK, t)
         return None
     if any(c in world.blocked for c in step.cells[1:]):
         learn_blocked(world, robot, step.cells)
-        incident(world, robot, head, IncidentKind.BLOCKED, t)
+        incident(world, repairer, robot, head, IncidentKind.BLOCKED, t)
         return None
     if not safe(world, robot, step.cells, t):
         hold(world, robot, t)

@@ -65,7 +65,7 @@ from selfrepair.team.state import Entry, RobotState, TeamWorld, resource
 from selfrepair.team.steps import Incident, Maps, mobile
 from selfrepair.team.table import get_team_table
 
-__all__ = ["TEAM", "Decision", "TeamStrategy", "get_team_strategy"]
+__all__ = ["TEAM", "Decision", "TeamRepairer", "TeamStrategy", "get_team_strategy"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -217,7 +217,11 @@ TEAM: Kind[TeamWorld, Incident, Decision] = Kind(MissionKind.TEAM)
 """A team's mission: its strategies start with the running :class:`TeamWorld`, are asked about
 an :class:`Incident` and answer a :class:`Decision`."""
 
-TeamStrategy = Callable[[TeamWorld], Repairer[Incident, Decision]]
+TeamRepairer = Repairer[Incident, Decision]
+"""A team strategy started for one mission: asked about each incident, it may keep state between
+them (the strategy lifecycle, as a robot's repairer)."""
+
+TeamStrategy = Callable[[TeamWorld], TeamRepairer]
 """A team strategy's factory: started with the team's world, it answers incidents (changing the
 world's queues) with decisions."""
 

@@ -3,52 +3,16 @@
 (function () {
   "use strict";
 
-  const data = JSON.parse(document.getElementById("mission-data").textContent);
-  const NS = "http://www.w3.org/2000/svg";
-  const CELL = 10;
+  const { CELL, data, svg, html, centre } = viewer;
   const frames = data.frames;
   const last = frames.length - 1;
   const colourOf = {};
   for (const r of data.robots) colourOf[r.name] = r.colour;
-  const state = { frame: -1, timer: null };
-
-  function svg(tag, attrs, parent) {
-    const node = document.createElementNS(NS, tag);
-    for (const name in attrs) node.setAttribute(name, String(attrs[name]));
-    if (parent) parent.appendChild(node);
-    return node;
-  }
-
-  function html(tag, text, cls, parent) {
-    const node = document.createElement(tag);
-    if (text !== undefined && text !== null) node.textContent = text;
-    if (cls) node.className = cls;
-    if (parent) parent.appendChild(node);
-    return node;
-  }
-
-  function centre(value) {
-    return (value + 0.5) * CELL;
-  }
+  const state = { frame: -1 };
 
   // --- the map ----------------------------------------------------------------------------------
 
-  const map = document.getElementById("map");
-  const width = data.maze.width * CELL;
-  const height = data.maze.height * CELL;
-  map.setAttribute("viewBox", "0 0 " + width + " " + height);
-  svg("rect", { x: 0, y: 0, width: width, height: height, fill: "#ffffff" }, map);
-  svg("path", {
-    d: data.maze.walls
-      .map((r) => "M" + r[0] * CELL + " " + r[1] * CELL + "h" + r[2] * CELL + "v" + CELL +
-        "h" + -r[2] * CELL + "z")
-      .join(""),
-    fill: "#3b3b3b",
-  }, map);
-  const layers = {};
-  for (const name of ["held", "tasks", "items", "robots"]) {
-    layers[name] = svg("g", { id: "layer-" + name }, map);
-  }
+  const layers = viewer.drawMaze(data.maze, ["held", "tasks", "items", "robots"]);
 
   // Drop-off cells: an outlined square per task, labelled with its item.
   for (const t of data.tasks) {
@@ -106,8 +70,7 @@
   }
 
   function jumpTo(frame) {
-    stop();
-    setFrame(frame);
+    nav.jump(frame);
   }
 
   data.lanes.forEach((lane, i) => {
@@ -214,13 +177,7 @@
     "; disturbed " + (e.disturbed.join(", ") || "none") + "; " + e.latency +
     (e.lost.length ? "; lost " + e.lost.join(", ") : ""));
 
-  const summary = document.getElementById("summary");
-  for (const key of Object.keys(data.summary)) {
-    if (key === "type") continue;
-    const row = html("tr", null, null, summary);
-    html("td", key, null, row);
-    html("td", data.summary[key] === null ? "" : String(data.summary[key]), null, row);
-  }
+  viewer.buildSummary(data.summary);
 
   // --- one frame --------------------------------------------------------------------------------
 
@@ -297,32 +254,6 @@
 
   // --- controls ---------------------------------------------------------------------------------
 
-  const slider = document.getElementById("slider");
-  slider.max = last;
-  slider.addEventListener("input", () => { stop(); setFrame(Number(slider.value)); });
-  function stop() {
-    if (state.timer !== null) clearInterval(state.timer);
-    state.timer = null;
-    document.getElementById("play").textContent = "Play";
-  }
-  function play() {
-    if (state.timer !== null) { stop(); return; }
-    if (state.frame >= last) setFrame(0);
-    const speed = Number(document.getElementById("speed").value);
-    document.getElementById("play").textContent = "Pause";
-    state.timer = setInterval(() => {
-      if (state.frame >= last) { stop(); return; }
-      setFrame(state.frame + 1);
-    }, 1000 / speed);
-  }
-  document.getElementById("play").addEventListener("click", play);
-  document.getElementById("prev").addEventListener("click", () => { stop(); setFrame(state.frame - 1); });
-  document.getElementById("next").addEventListener("click", () => { stop(); setFrame(state.frame + 1); });
-  document.addEventListener("keydown", (event) => {
-    if (event.target === slider) return;
-    if (event.key === " ") { event.preventDefault(); play(); }
-    if (event.key === "ArrowLeft") { stop(); setFrame(state.frame - 1); }
-    if (event.key === "ArrowRight") { stop(); setFrame(state.frame + 1); }
-  });
+  const nav = viewer.controls(last, setFrame, () => state.frame);
   setFrame(0);
 })();

@@ -3,37 +3,16 @@
 (function () {
   "use strict";
 
-  const data = JSON.parse(document.getElementById("mission-data").textContent);
-  const NS = "http://www.w3.org/2000/svg";
-  const CELL = 10;
+  const { CELL, data, svg, html, centre } = viewer;
   const frames = data.frames;
   const steps = data.steps;
   const repairs = data.repairs;
   const last = frames.length - 1;
   const LETTERS = { replacement: "R", lookahead: "L", replan: "P", "plan-repair": "A" };
 
-  const state = { frame: -1, shown: 0, timer: null, picked: null };
+  const state = { frame: -1, shown: 0, picked: null };
 
-  // --- small DOM helpers ------------------------------------------------------------------------
-
-  function svg(tag, attrs, parent) {
-    const node = document.createElementNS(NS, tag);
-    for (const name in attrs) node.setAttribute(name, String(attrs[name]));
-    if (parent) parent.appendChild(node);
-    return node;
-  }
-
-  function html(tag, text, cls, parent) {
-    const node = document.createElement(tag);
-    if (text !== undefined && text !== null) node.textContent = text;
-    if (cls) node.className = cls;
-    if (parent) parent.appendChild(node);
-    return node;
-  }
-
-  function centre(value) {
-    return (value + 0.5) * CELL;
-  }
+  // --- small helpers ----------------------------------------------------------------------------
 
   function poseText(pose) {
     return pose.x + "," + pose.y + "," + pose.heading;
@@ -49,26 +28,10 @@
 
   // --- the map ----------------------------------------------------------------------------------
 
-  const map = document.getElementById("map");
-  const width = data.maze.width * CELL;
-  const height = data.maze.height * CELL;
-  map.setAttribute("viewBox", "0 0 " + width + " " + height);
-  svg("rect", { x: 0, y: 0, width: width, height: height, fill: "#ffffff" }, map);
-  svg("path", {
-    d: data.maze.walls
-      .map((r) => "M" + r[0] * CELL + " " + r[1] * CELL + "h" + r[2] * CELL + "v" + CELL +
-        "h" + -r[2] * CELL + "z")
-      .join(""),
-    fill: "#3b3b3b",
-  }, map);
-
-  const layers = {};
   // Drawing order: the initial plan lies above the executed path and the repair sites, so it
   // is never hidden under them.
-  for (const name of ["blocked", "tolerance", "highlight", "executed", "repairs", "plan", "ends",
-    "robot"]) {
-    layers[name] = svg("g", { id: "layer-" + name }, map);
-  }
+  const layers = viewer.drawMaze(data.maze,
+    ["blocked", "tolerance", "highlight", "executed", "repairs", "plan", "ends", "robot"]);
 
   function segmentPath(seg) {
     const a = centre(seg.from.x) + " " + centre(seg.from.y);
@@ -286,8 +249,7 @@
     const box = timeline.getBoundingClientRect();
     const x = ((event.clientX - box.left) / box.width) * 1000;
     const share = (x - TL.left) / (TL.right - TL.left);
-    stop();
-    setFrame(Math.round(Math.min(Math.max(share, 0), 1) * last));
+    nav.jump(Math.min(Math.max(share, 0), 1) * last);
   });
 
   // --- the side panel ---------------------------------------------------------------------------
@@ -400,17 +362,6 @@
     if (!data.fault_events.length) html("li", "no fault events", "none", list);
   }
 
-  function buildSummary() {
-    const table = document.getElementById("summary");
-    for (const key of Object.keys(data.summary)) {
-      if (key === "type") continue;
-      const row = html("tr", null, null, table);
-      html("td", key, null, row);
-      const value = data.summary[key];
-      html("td", value === null ? "" : String(value), null, row);
-    }
-  }
-
   function updateNow(k) {
     const frame = frames[k];
     const now = document.getElementById("now");
@@ -500,8 +451,6 @@
 
   const slider = document.getElementById("slider");
   const label = document.getElementById("step-label");
-  const playButton = document.getElementById("play");
-  slider.max = String(last);
 
   // Cells blocked by world events at the frame's tick: grey squares (a changing world).
   function drawBlocked(cells) {
@@ -547,67 +496,19 @@
   }
 
   function pickRepair(index) {
-    stop();
+    nav.stop();
     state.picked = index;
     state.frame = -1; // redraw even when already at that step
     setFrame(repairs[index].step);
   }
 
-  function stop() {
-    if (state.timer !== null) clearInterval(state.timer);
-    state.timer = null;
-    playButton.textContent = "Play";
-  }
-
-  function play() {
-    if (state.frame >= last) setFrame(0);
-    const speed = Number(document.getElementById("speed").value);
-    state.timer = setInterval(() => {
-      if (state.frame >= last) {
-        stop();
-        return;
-      }
-      setFrame(state.frame + 1);
-    }, 1000 / speed);
-    playButton.textContent = "Pause";
-  }
-
-  playButton.addEventListener("click", () => (state.timer === null ? play() : stop()));
-  document.getElementById("prev").addEventListener("click", () => {
-    stop();
-    setFrame(state.frame - 1);
-  });
-  document.getElementById("next").addEventListener("click", () => {
-    stop();
-    setFrame(state.frame + 1);
-  });
-  slider.addEventListener("input", () => {
-    stop();
-    setFrame(Number(slider.value));
-  });
-  document.getElementById("speed").addEventListener("change", () => {
-    if (state.timer !== null) {
-      stop();
-      play();
-    }
-  });
-  document.addEventListener("keydown", (event) => {
-    const tag = event.target.tagName;
-    if (event.target === slider || tag === "SELECT" || tag === "BUTTON" || tag === "INPUT") return;
-    if (event.key === "ArrowRight") setFrame(state.frame + 1);
-    else if (event.key === "ArrowLeft") setFrame(state.frame - 1);
-    else if (event.key === " ") {
-      event.preventDefault();
-      if (state.timer === null) play();
-      else stop();
-    }
-  });
+  const nav = viewer.controls(last, setFrame, () => state.frame);
 
   describeOrigin();
   buildTolerance();
   buildLegend();
   buildRepairList();
   buildEvents();
-  buildSummary();
+  viewer.buildSummary(data.summary);
   setFrame(0);
 })();

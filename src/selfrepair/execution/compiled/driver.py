@@ -195,6 +195,7 @@ class _Mission:
         st[k.S_PL_MASK] = -1
         self.planner: tuple[Any, ...] = _NO_PLANNER
         self.search: tuple[Any, ...] = _NO_SEARCH
+        self._holder: list[tuple[Any, ...]] = [_NO_SEARCH]
         budget = context.replan_budget
         par[k.P_BUDGET] = (1 << 62) if budget is None else min(budget, 1 << 62)
         full = (1 << len(self.faults)) - 1
@@ -224,7 +225,9 @@ class _Mission:
         if planner is not None:
             self.planner = (planner.mt, planner.hdist, planner.pen, planner.nbr, planner.par,
                             planner.moves)  # fmt: skip
-            self.search = _RECORDS.get(planner.states, lambda: new_records(planner.states))
+            states = planner.states
+            self._holder = _RECORDS.get(states, lambda: [new_records(states)])
+            self.search = self._holder[0]
 
     def run(self) -> int:
         """Call the kernel until the mission ends, serving its exits."""
@@ -268,6 +271,11 @@ class _Mission:
             self.tr, self.rp = _grow(self.tr), _grow(self.rp)
             self.rp_act = _grow(self.rp_act, int(st[k.S_NACT]) + need + 64)
             self.pb = _grow(self.pb, need)
+        elif code == k.GROW_HEAP:
+            rec, gen, heap, *scratch = self.search
+            bigger = np.empty((2 * heap.shape[0], 2), dtype=np.int64)
+            bigger[: heap.shape[0]] = heap
+            self.search = self._holder[0] = (rec, gen, bigger, *scratch)  # kept grown
         elif code == k.TOO_MANY:
             pose = self.pose(int(st[k.S_X]), int(st[k.S_Y]), int(st[k.S_H]))
             raise ProblemError(
@@ -314,8 +322,9 @@ _NO_PLANNER = (
 for _array in _NO_PLANNER:
     _array.setflags(write=False)
 _NO_SEARCH = (np.zeros((1, 3), dtype=np.int64), np.zeros(1, dtype=np.int64),
-              np.zeros((8, 2), dtype=np.int64))  # fmt: skip
-_RECORDS: BoundedCache[int, tuple[Any, Any, Any]] = BoundedCache(
+              np.zeros((8, 2), dtype=np.int64), np.zeros(4, dtype=np.int64),
+              np.zeros(9, dtype=np.int64), np.zeros(1, dtype=np.int64))  # fmt: skip
+_RECORDS: BoundedCache[int, list[tuple[Any, ...]]] = BoundedCache(
     "compiled-loop search records", 4, kind=CacheKind.PLAN
 )
 _NO_LOOKUPS = (

@@ -19,7 +19,7 @@ clock still running: the latency of a repair covers whatever it needed. The exit
 * ``NEED_FILL``: a pattern met for the first time (the reference search answers it, as in the
   Python loop's compiled look-ups);
 * ``NEED_PLAN``: a replan (the driver calls the mission's planner);
-* ``GROW``: an output or queue array is full.
+* ``GROW``: an output or queue array is full (``GROW_HEAP``: the planner's heap).
 
 A warm mission (every pattern it meets already answered) runs in one call except for its replans.
 
@@ -44,7 +44,7 @@ from typing import Any, cast
 
 import numpy as np
 
-from selfrepair.execution.compiled.jit import NUMBA, njit
+from selfrepair.execution.compiled.jit import NUMBA, njit, no_refcount
 from selfrepair.execution.compiled.planner import plan_in_kernel
 
 __all__ = ["NUMBA", "clock_ns", "hash_get", "hash_put", "run_kernel", "warm_hits"]
@@ -58,6 +58,7 @@ NEED_PLAN = 4
 GROW = 5
 TOO_MANY = 6
 NEED_PLANNER = 7
+GROW_HEAP = 8
 
 # --- mission ends (st[END]) ------------------------------------------------------------------
 REACHED = 0
@@ -207,6 +208,12 @@ def _hash(k1: int, k2: int, cap: int) -> int:
 @njit(cache=True)
 def hash_get(hk1: Any, hk2: Any, hv: Any, k1: int, k2: int) -> int:
     """The value under ``(k1, k2)``, or ``EMPTY``."""
+    return _hash_get(hk1, hk2, hv, k1, k2)
+
+
+@njit(cache=True, inline="always")
+def _hash_get(hk1: Any, hk2: Any, hv: Any, k1: int, k2: int) -> int:
+    """:func:`hash_get`, inlined into the kernels (no call, no reference counting)."""
     cap = hk1.shape[0]
     i = _hash(k1, k2, cap)
     while True:
@@ -257,14 +264,14 @@ def _lookup(
         return -10 - NEED_SLOT
     k1 = sid * par[P_NSLOTS] + slot
     k2 = -1 - (y * par[P_WIDTH] + x) if m == BY_CELL else codes[lk_r[sid, slot], y, x] & m
-    v = hash_get(hk1, hk2, hv, k1, k2)
+    v = _hash_get(hk1, hk2, hv, k1, k2)
     if v == EMPTY:
         st[S_ARG0], st[S_ARG1], st[S_ARG2], st[S_ARG3], st[S_ARG4] = sid, slot, x, y, k2
         return -10 - NEED_FILL
     return v
 
 
-@njit(cache=True)
+@no_refcount
 def warm_hits(
     n: int, st: Any, par: Any, set_of: Any, lk_mask: Any, lk_r: Any, codes: Any,
     hk1: Any, hk2: Any, hv: Any, known: int, a: int, xs: Any, ys: Any, hs: Any,
@@ -280,7 +287,7 @@ def warm_hits(
     return total
 
 
-@njit(cache=True)
+@no_refcount
 def run_kernel(
     par: Any, st: Any, mv: Any, grid: Any, avail: Any, block: Any, waits: Any, ev: Any,
     set_of: Any, lk_mask: Any, lk_r: Any, codes: Any, hk1: Any, hk2: Any, hv: Any,
@@ -414,11 +421,13 @@ def _repair(
             return NEED_PLANNER
         if st[S_PLAN_READY] == 0 and st[S_PL_KERNEL] == 1:  # one call of the lattice kernel
             mt, hdist, ppen, nbr, ppar, moves = planner
-            prec, gen, heap = search
+            prec, gen, heap, pscal, ppar2, pextra = search
             found, n, expansions = plan_in_kernel(
-                mt, hdist, ppen, nbr, ppar, moves, prec, gen, heap, x, y, h, par[P_BUDGET],
-                rp_act, off,
+                mt, hdist, ppen, nbr, ppar, moves, prec, gen, heap, pscal, ppar2, pextra,
+                x, y, h, par[P_BUDGET], rp_act, off,
             )  # fmt: skip
+            if found == 4:
+                return GROW_HEAP
             if found == 3 or n + 2 > qa.shape[0]:
                 st[S_PLAN_LEN] = n
                 return GROW

@@ -25,7 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from selfrepair.caching import BoundedCache, CacheKind
-from selfrepair.execution.compiled.jit import njit
+from selfrepair.execution.compiled.jit import no_refcount
 from selfrepair.execution.result import MissionSpec
 from selfrepair.repair.lookups import action_index
 from selfrepair.search import _kernels as kn
@@ -127,19 +127,20 @@ _PLANNERS: BoundedCache[tuple[Any, ...], KernelPlanner | None] = BoundedCache(
     "compiled-loop planners", 64, kind=CacheKind.PLAN
 )
 
-_NO_EXTRA = np.zeros(1, dtype=np.int64)
 
-
-@njit(cache=True)
+@no_refcount
 def plan_in_kernel(
     mt: Any, hdist: Any, pen: Any, nbr: Any, ppar: Any, moves: Any, rec: Any, gen: Any,
-    heap: Any, x: int, y: int, h: int, budget: int, out: Any, off: int,
+    heap: Any, scal: Any, par: Any, extra: Any, x: int, y: int, h: int, budget: int, out: Any,
+    off: int,
 ) -> Any:  # fmt: skip
     """Plan from ``(x, y, h)`` (see the module docstring); the actions' indices go to
     ``out[off:]`` when they fit. Returns ``(status, length, expansions)``: status 0 solved, 1
-    unsolvable, 2 budget spent, 3 solved but ``out`` too short for its ``length`` actions.
-    ``rec`` and ``gen`` are the search records and their generation (reused from plan to plan,
-    as the planner's own scratch is)."""
+    unsolvable, 2 budget spent, 3 solved but ``out`` too short for its ``length`` actions, 4 the
+    heap is full (the caller grows it and plans again). ``rec`` and ``gen`` are the search
+    records and their generation (reused from plan to plan, as the planner's own scratch is);
+    ``scal``, ``par`` and ``extra`` scratch of 4, 9 and 1 words. Allocates nothing (compiled
+    without reference counting, like the search kernels)."""
     rnum, rden, wmul, goal_cell, goal_head, shift, pw = (
         ppar[0], ppar[1], ppar[2], ppar[3], ppar[4], ppar[5], ppar[6],
     )  # fmt: skip
@@ -163,33 +164,42 @@ def plan_in_kernel(
     heap[kn._BASE, 1] = start
     for i in range(1, 4):
         heap[kn._BASE + i, 0] = kn._NO_KEY
-    scal = np.array([1, 0, 0, -1], dtype=np.int64)
-    par = np.array([rnum, rden, wmul, goal_cell, goal_head, budget, opened, shift, 0],
-                   dtype=np.int64)  # fmt: skip
-    extra = np.zeros(1, dtype=np.int64)
-    while True:
-        code = kn._lattice(nbr, pen, hdist, mt, par, rec, heap, scal, extra)
-        if code != kn._GROW:
-            break
-        bigger = np.empty((2 * heap.shape[0], 2), dtype=np.int64)
-        bigger[: heap.shape[0]] = heap
-        heap = bigger
+    scal[0], scal[1], scal[2], scal[3] = 1, 0, 0, -1
+    par[0], par[1], par[2], par[3], par[4] = rnum, rden, wmul, goal_cell, goal_head
+    par[5], par[6], par[7], par[8] = budget, opened, shift, 0
+    code = kn._lattice(nbr, pen, hdist, mt, par, rec, heap, scal, extra)
     expansions = scal[kn._EXPANSIONS]
+    if code == kn._GROW:
+        return 4, 0, expansions
     if code == kn._UNSOLVABLE:
         return 1, 0, expansions
     if code != kn._SOLVED:
         return 2, 0, expansions
-    walk = kn._walk_lattice(rec, mt, start, scal[kn._FOUND])
-    n = walk.shape[1] - 1
+    goal = scal[kn._FOUND]
+    n = 0
+    s = goal
+    while s != start:  # the length first (as _walk_lattice walks), then the moves from the end
+        pm = rec[s, kn._WORD] & kn._MOVE_MASK
+        head = pm >> 8
+        s = 4 * ((s >> 2) - mt[head, pm & 255, kn._DCELL]) + head
+        n += 1
     if off + n > out.shape[0]:
         return 3, n, expansions
-    for i in range(n):
-        out[off + i] = moves[walk[1, i + 1]]
+    s = goal
+    for i in range(n - 1, -1, -1):
+        pm = rec[s, kn._WORD] & kn._MOVE_MASK
+        head = pm >> 8
+        k = pm & 255
+        out[off + i] = moves[k]
+        s = 4 * ((s >> 2) - mt[head, k, kn._DCELL]) + head
     return 0, n, expansions
 
 
-def new_records(states: int) -> tuple[Int64s, Int64s, Int64s]:
-    """Search records for ``states`` lattice states, their generation, and a first heap."""
+def new_records(states: int) -> tuple[Int64s, Int64s, Int64s, Int64s, Int64s, Int64s]:
+    """Search records for ``states`` lattice states, their generation, a first heap, and the
+    kernel's scratch words (see :func:`plan_in_kernel`)."""
     rec = np.zeros((states, 3), dtype=np.int64)
     heap = np.empty((kn._FIRST_HEAP, 2), dtype=np.int64)
-    return rec, np.zeros(1, dtype=np.int64), heap
+    scratch = (np.zeros(4, dtype=np.int64), np.zeros(9, dtype=np.int64),
+               np.zeros(1, dtype=np.int64))  # fmt: skip
+    return rec, np.zeros(1, dtype=np.int64), heap, *scratch
