@@ -31,7 +31,7 @@ from selfrepair.execution.result import MissionSpec, StepSource, TraceStep
 from selfrepair.execution.trace import Trace, TraceRepair, parse_trace, replay, spec_from_header
 from selfrepair.experiment.figstyle import SOURCE_COLOURS
 from selfrepair.experiment.viewpage import pose_json, render_html, wall_runs, write_page
-from selfrepair.geometry import Cell, Pose
+from selfrepair.geometry import Cell, Pose, turn_corner
 from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.strategies import RepairSource, StrategyName, uses_table
 from selfrepair.robots.domain import Domain
@@ -85,19 +85,14 @@ def segment_json(domain: Domain[Any, Any], start: Pose, action: Any) -> dict[str
 
 def _shape(start: Pose, end: Pose, swept: Sequence[Cell]) -> tuple[str, Cell | None]:
     """How a move looks: in place (``wait``/``turn``), without turning (``straight``), or moving
-    and turning (``arc``, drawn through the footprint cell next to the start along its heading
-    that also touches the end cell)."""
+    and turning (``arc``, drawn through its corner, :func:`~selfrepair.geometry.turn_corner`,
+    the one definition ``mission.png`` uses too, when the move sweeps it)."""
     if end.cell == start.cell:
         return ("wait" if end.heading == start.heading else "turn"), None
     if end.heading == start.heading:
         return "straight", None
-    dx, dy = start.heading.vector
-    for sign in (1, -1):
-        corner = (start.x + sign * dx, start.y + sign * dy)
-        touches_end = abs(corner[0] - end.x) + abs(corner[1] - end.y) == 1
-        if corner in swept and touches_end:
-            return "arc", corner
-    return "arc", None
+    corner = turn_corner(start, end)
+    return "arc", corner if corner is not None and corner in swept else None
 
 
 def _faults(domain: Domain[Any, Any], faults: Iterable[Any]) -> list[str]:

@@ -1,0 +1,215 @@
+"""Cooperative diagnosis (issue 24 item 5): actions to isolate a single wheel fault's class at 1%
+odometry noise, the robot alone against the robot watched by two teammates.
+
+Target (issue 24): with two observing teammates, at least 30% fewer actions to isolate than
+alone; wrong isolations at most 1%.
+
+Setting, per mission (the four bundled mazes and their routes, every single wheel fault of the
+four-wheel robot, the default ``stall`` behaviour, seeds ``0 .. --seeds - 1``):
+
+- the robot's own reading: odometry noise 1% (``ObservationModel(0.01)``, bump switch on),
+  stream ``[seed, 24]`` as in the simulator;
+- the team: two observers (``Observer``, odometry noise ``--observer-noise``, default 1%, streams
+  ``[seed, 24, 1]`` and ``[seed, 24, 2]``, Chebyshev range ``--range`` cells, default 3) that
+  follow the robot: observer ``i`` stands where the robot truly was ``i`` commands earlier (the
+  start pose before that). A command is observed only when both its start and true end cells are
+  in range;
+- *passive*: the robot commands the fault-free plan of the route (A*, no faults known), open loop
+  (no replanning: this isolates what the readings tell, not how the repair goes); *active*: after
+  the first surprise, while no class is isolated, the probes of ``best_probe`` over the credible
+  hypotheses (the plan's next action when no probe splits them);
+- the true outcome: ``Domain.effective`` of the command under the fault; a motion whose footprint
+  meets a wall stops at the start (a bump), as in the simulator;
+- a *surprise*: the robot's own reading differs from the commanded motion's end, or it bumped;
+  *actions to isolate*: commands after the surprise command until ``FaultBelief.isolated(0.01)``
+  names a class (the definition of the mission rows' ``isolation_actions``), infinite when the
+  commands run out first (60 commands at most).
+
+Reported per mode: missions with a surprise, the share isolated, median actions to isolate with
+its bootstrap interval (non-isolated missions count as infinite), the reduction ``1 -
+median(team) / median(alone)`` with a paired bootstrap interval, and the wrong-isolation rate.
+
+Usage: ``python benchmarks/cooperative_diagnosis.py [--seeds N] [--range R] [--observer-noise P]``.
+Results go to ``benchmarks/results/cooperative_diagnosis.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from selfrepair.diagnosis import FaultBelief, ObservationModel, best_probe, fault_model
+from selfrepair.diagnosis.cooperative import (
+    Observer,
+    SensingRange,
+    observer_streams,
+    team_observations,
+)
+from selfrepair.geometry import Pose
+from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.search.lattice import plan
+from selfrepair.search.problem import PlanningProblem
+from selfrepair.stats import bootstrap_interval
+from selfrepair.world.bundled import bundled_routes, load_bundled, maze_names
+
+RESULTS = Path(__file__).resolve().parent / "results"
+NOISE = 0.01
+CONFIDENCE = 0.01
+MAX_COMMANDS = 60
+
+
+def _mission(
+    maze: Any, start: Pose, actions: tuple[Any, ...], faults: frozenset[Any], seed: int,
+    observers: tuple[Observer, ...], active: bool, noise: float,
+) -> tuple[float, bool | None] | None:  # fmt: skip
+    """Actions to isolate (``inf``: never) and whether the isolated class holds the truth;
+    ``None`` when no command surprised the robot."""
+    model = fault_model(FOUR_WHEEL)
+    truth = model.class_of[model.sets.index(faults)]
+    grid = maze.free_grid(2)
+    belief = FaultBelief(model, grid)
+    own = ObservationModel(noise, bumps=True)
+    rng = np.random.default_rng([seed, 24])
+    streams = observer_streams(seed, observers)
+    pose, history = start, [start]
+    surprise: int | None = None
+    after = 0
+    queue = list(actions)
+    probing: list[Any] = []
+    for step in range(MAX_COMMANDS):
+        if active and surprise is not None and not probing:
+            probe = best_probe(belief, pose, belief.credible(CONFIDENCE))
+            probing = list(probe.actions) if probe is not None else []
+        if probing:
+            action = probing.pop(0)
+        elif queue:
+            action = queue.pop(0)
+        else:
+            break
+        performed = FOUR_WHEEL.effective(action, faults)
+        end = FOUR_WHEEL.apply(pose, performed)
+        bumped = not grid.all_free(FOUR_WHEEL.footprint(pose, performed))
+        if bumped:
+            end = pose
+        mine = own.read(step, action, pose, end, bumped, False, rng)
+        belief.update(mine)
+        behind = tuple(history[max(0, len(history) - 1 - i)] for i in range(1, len(observers) + 1))
+        for seen in team_observations(step, action, pose, end, False, observers, behind, streams):
+            belief.update(seen)
+        history.append(end)
+        pose = end
+        if surprise is None:
+            if mine.end == FOUR_WHEEL.apply(mine.start, action) and not bumped:
+                continue
+            surprise = step
+        else:
+            after += 1
+        found = belief.isolated(CONFIDENCE)
+        if found is not None:
+            return float(after), found == truth
+    return None if surprise is None else (math.inf, None)
+
+
+def run(seeds: int, sensing: int, noise: float, observer_noise: float) -> dict[str, Any]:
+    """Every mission of the module docstring, alone and with two observers, per mode."""
+    team = tuple(Observer(f"t{i}", observer_noise, SensingRange(sensing)) for i in (1, 2))
+    singles = [s for s in FOUR_WHEEL.fault_sets if len(s) == 1]
+    out: dict[str, Any] = {"noise": noise, "observer_noise": observer_noise, "range": sensing,
+                           "metric": "chebyshev", "seeds": seeds}  # fmt: skip
+    for mode in ("passive", "active"):
+        alone: list[float] = []
+        together: list[float] = []
+        wrong = {"alone": [0, 0], "team": [0, 0]}
+        missions = 0
+        for name in maze_names():
+            maze = load_bundled(name)
+            for route in bundled_routes(name):
+                result = plan(PlanningProblem(maze, route.start, route.goal))
+                for faults in singles:
+                    for seed in range(seeds):
+                        missions += 1
+                        pair = []
+                        for label, observers in (("alone", ()), ("team", team)):
+                            got = _mission(maze, route.start, result.actions, faults, seed,
+                                           observers, mode == "active", noise)  # fmt: skip
+                            if got is None:  # no surprise (the same own readings in both arms)
+                                break
+                            n, right = got
+                            pair.append(n)
+                            if right is not None:
+                                wrong[label][0] += int(not right)
+                                wrong[label][1] += 1
+                        if len(pair) == 2:
+                            alone.append(pair[0])
+                            together.append(pair[1])
+        out[mode] = _summary(missions, alone, together, wrong)
+    return out
+
+
+def _summary(
+    missions: int, alone: list[float], together: list[float], wrong: dict[str, list[int]]
+) -> dict[str, Any]:
+    a, t = np.array(alone), np.array(together)
+    med_a, med_t = float(np.median(a)), float(np.median(t))
+    rng = np.random.default_rng(2024)
+    draws = rng.integers(0, len(a), size=(2000, len(a)))
+    ma, mt = np.median(a[draws], axis=1), np.median(t[draws], axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        reductions = 1.0 - mt / ma
+    reductions = reductions[np.isfinite(reductions)]
+    low, high = np.quantile(reductions, [0.025, 0.975]) if len(reductions) else (math.nan,) * 2
+    reduction = 1.0 - med_t / med_a if med_a > 0 and math.isfinite(med_a) else math.nan
+
+    def interval(values: np.ndarray) -> list[float] | None:
+        finite = [float(v) for v in values if math.isfinite(v)]
+        if len(finite) < len(values) / 2:
+            return None
+        capped = [float(v) if math.isfinite(v) else float(MAX_COMMANDS) for v in values]
+        iv = bootstrap_interval(capped)
+        return None if iv is None else [iv.low, iv.high]
+
+    return {
+        "missions": missions,
+        "surprised": len(a),
+        "isolated_alone": float(np.isfinite(a).mean()),
+        "isolated_team": float(np.isfinite(t).mean()),
+        "median_alone": med_a, "median_alone_interval": interval(a),
+        "median_team": med_t, "median_team_interval": interval(t),
+        "mean_isolated_alone": float(a[np.isfinite(a)].mean()),
+        "mean_isolated_team": float(t[np.isfinite(t)].mean()),
+        "reduction": reduction, "reduction_interval": [float(low), float(high)],
+        "target_30pct": "met" if reduction >= 0.30 else "not met",
+        "wrong_alone": wrong["alone"][0] / max(1, wrong["alone"][1]),
+        "wrong_team": wrong["team"][0] / max(1, wrong["team"][1]),
+        "wrong_target_1pct": "met"
+        if max(wrong["alone"][0] / max(1, wrong["alone"][1]),
+               wrong["team"][0] / max(1, wrong["team"][1])) <= 0.01
+        else "not met",
+    }  # fmt: skip
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=5)
+    parser.add_argument("--range", type=int, default=3, dest="sensing")
+    parser.add_argument("--noise", type=float, default=NOISE, help="the robot's own odometry")
+    parser.add_argument("--observer-noise", type=float, default=None, help="default: --noise")
+    args = parser.parse_args(argv)
+    observer = args.noise if args.observer_noise is None else args.observer_noise
+    report = run(args.seeds, args.sensing, args.noise, observer)
+    print(json.dumps(report, indent=1))
+    RESULTS.mkdir(exist_ok=True)
+    suffix = "" if args.noise == NOISE and observer == NOISE else f"-{args.noise:g}-{observer:g}"
+    (RESULTS / f"cooperative_diagnosis{suffix}.json").write_text(
+        json.dumps(report, indent=1) + "\n"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
