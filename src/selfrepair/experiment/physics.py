@@ -23,6 +23,7 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
 from typing import Any
 
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import InputError
 from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import FaultSchedule
@@ -85,18 +86,21 @@ ROBOTS = ("four-wheel", CONFIRMED_NAME)
 the one that commands only the 49 actions physics confirms (its generated fault-agnostic table,
 made once per process)."""
 
-_ROBOTS: dict[str, tuple[Domain[Any, Any], ReplacementTable | None]] = {}
+_ROBOTS: BoundedCache[str, tuple[Domain[Any, Any], ReplacementTable | None]] = BoundedCache(
+    "physics experiment robot models", 2, kind=CacheKind.INPUT
+)
+
+
+def _make_robot(name: str) -> tuple[Domain[Any, Any], ReplacementTable | None]:
+    if name == CONFIRMED_NAME:
+        domain = load_identified(name=CONFIRMED_NAME, confirmed_only=True)
+        return domain, generate_table(domain)
+    return FOUR_WHEEL, None
 
 
 def _robot(name: str) -> tuple[Domain[Any, Any], ReplacementTable | None]:
-    """The domain and table of robot model ``name`` (made once per process)."""
-    if name not in _ROBOTS:
-        if name == CONFIRMED_NAME:
-            domain = load_identified(name=CONFIRMED_NAME, confirmed_only=True)
-            _ROBOTS[name] = (domain, generate_table(domain))
-        else:
-            _ROBOTS[name] = (FOUR_WHEEL, None)
-    return _ROBOTS[name]
+    """The domain and table of robot model ``name`` (made once per process and kept)."""
+    return _ROBOTS.get(name, lambda: _make_robot(name))
 
 
 def _spec(maze: str, route: int, faults: str, label: str, robot: str) -> MissionSpec:

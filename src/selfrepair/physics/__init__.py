@@ -14,3 +14,7 @@ driven through it (the ``physics`` extra: ``mujoco`` and ``imageio``). See docs/
 The package sits above :mod:`selfrepair.execution` (its simulator is one) and beside
 :mod:`selfrepair.team`; nothing below imports it.
 """
+
+from selfrepair.physics.model import DEFAULT_PARAMS, RobotParams, mjcf, wall_boxes
+
+__all__ = ["DEFAULT_PARAMS", "RobotParams", "mjcf", "wall_boxes"]
