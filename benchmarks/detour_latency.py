@@ -102,6 +102,8 @@ def measure(maze: Maze, routes: list[Route], args: argparse.Namespace) -> dict[s
         dstar = get_strategy("dstar-lite")(dstar_context)
         dstar_context.belief.blocked = blocked
         blocked_repair = getattr(dstar, "repair_blocked", None)
+        if blocked_repair is None and getattr(dstar, "sees_cells", False):
+            blocked_repair = dstar.repair  # as the stepper asks it
         if blocked_repair is not None:
             t0 = time.perf_counter_ns()
             blocked_repair(request)

@@ -32,6 +32,9 @@ from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.strategies import RepairSource, RepairStatus, StrategyName, StrategyOptions
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import PluginFile, get_domain, load_recorded_plugin
+from selfrepair.tables.fileformat import default_table
+from selfrepair.tables.generate import GENERATOR_SOURCE
+from selfrepair.tables.model import ReplacementTable
 from selfrepair.textio import read_text
 from selfrepair.world.events import WorldSchedule
 from selfrepair.world.maze import parse_maze
@@ -232,7 +235,7 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
             world=WorldSchedule.from_json(header.get("world", {}), source),
             strategy=str(header.get("strategy", StrategyName.REPLACEMENT)),
             options=StrategyOptions(
-                table=str(options.get("table", "handwritten")),
+                table=_table(str(options.get("table", "handwritten")), domain),
                 recursion=str(options.get("recursion", "flat")),  # type: ignore[arg-type]
                 max_depth=int(options.get("max_depth", 2)),
                 window=int(options.get("window", 3)),
@@ -263,3 +266,13 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
         if isinstance(exc, InputError):
             raise TraceError(exc.reason, source=source, line=1) from None
         raise TraceError(f"expected a complete header: {exc!r}", source=source, line=1) from None
+
+
+def _table(label: str, domain: Domain[Any, Any]) -> str | ReplacementTable:
+    """The table a trace names: a bundled name or a file path as written, and a generated table
+    (recorded by its source, ``<generator>``) as the robot's default generated table, the only
+    generated table the command line runs with (:func:`~selfrepair.tables.fileformat.default_table`;
+    a table file made by ``table generate`` is recorded by its path)."""
+    if label == GENERATOR_SOURCE:
+        return default_table(domain)
+    return label

@@ -75,7 +75,12 @@ from selfrepair.tables.model import (
     TableShape,
 )
 
+GENERATOR_SOURCE = "<generator>"
+"""The source of a generated table (its :attr:`~selfrepair.tables.model.ReplacementTable.source`
+and its label in traces and rows)."""
+
 __all__ = [
+    "GENERATOR_SOURCE",
     "FaultScope",
     "GenerateOptions",
     "MotionClass",
@@ -136,5 +141,5 @@ def generate_table(
         made_by=MadeBy.GENERATOR,
         entries=tuple(entries),
         parameters=options.parameters(),
-        source="<generator>",
+        source=GENERATOR_SOURCE,
     )
