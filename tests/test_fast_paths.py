@@ -289,11 +289,11 @@ def test_cold_runs_keep_the_candidate_geometry_every_mission_computes_before_tim
     missions = expand(load_config(resolve_experiment("paper")))
     mission = next(m for m in missions if dict(m.labels).get("strategy") == "replacement")
     execute_mission(mission)
-    before = stats()
+    # the prefilled caches a replacement mission fills (diagnosis and detour caches stay empty)
+    before = {name: value for name, value in stats().items() if value[0]}
     assert set(before) == {"table reach", "candidate geometry"}
-    assert all(size for size, _ in before.values())
     execute_mission(mission)  # its cold run empties the other caches, not these
-    after = stats()
+    after = {name: value for name, value in stats().items() if name in before}
     # kept: the same entries (the geometry is only computed with the reach, so an emptied
     # geometry cache would stay empty), and the reach's hit count goes on (emptying resets it)
     assert {name: size for name, (size, _) in after.items()} == {
