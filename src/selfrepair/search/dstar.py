@@ -210,9 +210,9 @@ class DStarLite:
     ) -> DStarLite:
         """A search for ``domain`` on ``maze`` from ``start`` to ``goal`` (any heading unless
         ``goal_heading``) under the known ``faults``; nothing is searched until :meth:`plan`."""
-        return cls(
-            domain, maze.walls, start, goal, faults, goal_heading, Fraction(clearance_weight),
-            clearance_radius, backend,
+        return cls.from_walls(
+            domain, maze.walls, start, goal, faults, goal_heading=goal_heading,
+            clearance_weight=clearance_weight, clearance_radius=clearance_radius, backend=backend,
         )  # fmt: skip
 
     @classmethod
