@@ -35,7 +35,7 @@ from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import StrategyOptions
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
-from selfrepair.tables.generate import generate_table
+from selfrepair.tables.fileformat import default_table
 from selfrepair.tables.model import ReplacementTable
 from selfrepair.world.bundled import bundled_routes, load_bundled, maze_names
 
@@ -94,7 +94,7 @@ _ROBOTS: BoundedCache[str, tuple[Domain[Any, Any], ReplacementTable | None]] = B
 def _make_robot(name: str) -> tuple[Domain[Any, Any], ReplacementTable | None]:
     if name == CONFIRMED_NAME:
         domain = load_identified(name=CONFIRMED_NAME, confirmed_only=True)
-        return domain, generate_table(domain)
+        return domain, default_table(domain)  # generated: the identified robot ships none
     return FOUR_WHEEL, None
 
 
