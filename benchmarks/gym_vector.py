@@ -33,21 +33,18 @@ Usage: ``python benchmarks/gym_vector.py [--robots N] [--rounds R] [--steps S] [
 from __future__ import annotations
 
 import argparse
-import json
-import platform
 import statistics
 import time
 from collections.abc import Callable
-from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 
+from _common import write_report
 from gym_env import Clock, Rate, pin, steps_per_second
 from selfrepair.envs import FaultSpec, FaultyMazeEnv, FaultyMazeVectorEnv
 from selfrepair.execution.faults import Detection, Persistence
 
-ROOT = Path(__file__).resolve().parents[1]
 TARGET_RATE = 1_000_000
 TARGET_RATIO = 100.0
 ALL_KINDS = FaultSpec(
@@ -133,34 +130,24 @@ def main() -> None:
         f"{'met' if ratio >= TARGET_RATIO else 'NOT met'} ({ratio:.1f}x per CPU second)"
     )
     print(f"elapsed {elapsed:.1f}s")
-    out = ROOT / "benchmarks/results/gym_vector.json"
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(
-        json.dumps(
-            {
-                "benchmark": "gym_vector",
-                "python": platform.python_version(),
-                "machine": platform.machine(),
-                "gymnasium": gym.__version__,
-                "pinned": pinned,
-                "robots": robots,
-                "rounds": rounds,
-                "single_steps": steps,
-                "repeats": args.repeats,
-                "steps_per_cpu_second": {name: cpu for name, (cpu, _) in median.items()},
-                "steps_per_wall_second": {name: wall for name, (_, wall) in median.items()},
-                "ratio_to_single_cpu": {name: r for name, (r, _) in ratios.items()},
-                "ratio_to_single_wall": {name: r for name, (_, r) in ratios.items()},
-                "target_rate": TARGET_RATE,
-                "target_ratio": TARGET_RATIO,
-                "elapsed_s": elapsed,
-            },
-            indent=2,
-        )
-        + "\n",
-        encoding="utf-8",
+    write_report(
+        "gym_vector",
+        {
+            "gymnasium": gym.__version__,
+            "pinned": pinned,
+            "robots": robots,
+            "rounds": rounds,
+            "single_steps": steps,
+            "repeats": args.repeats,
+            "steps_per_cpu_second": {name: cpu for name, (cpu, _) in median.items()},
+            "steps_per_wall_second": {name: wall for name, (_, wall) in median.items()},
+            "ratio_to_single_cpu": {name: r for name, (r, _) in ratios.items()},
+            "ratio_to_single_wall": {name: r for name, (_, r) in ratios.items()},
+            "target_rate": TARGET_RATE,
+            "target_ratio": TARGET_RATIO,
+            "elapsed_s": elapsed,
+        },
     )
-
 
 if __name__ == "__main__":
     main()
