@@ -39,19 +39,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-try:
-    from numba import njit
-
-    NUMBA = True
-except ImportError:  # pragma: no cover - depends on the environment
-    NUMBA = False
-
-    def njit(*args: Any, **kwargs: Any) -> Any:  # type: ignore[no-redef]
-        """Stand-in so the module imports without numba (the compiled kernels are then None)."""
-        if args and callable(args[0]):
-            return args[0]
-        return lambda f: f
-
+from selfrepair.jit import NUMBA, njit
 
 __all__ = [
     "NUMBA",

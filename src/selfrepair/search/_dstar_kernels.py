@@ -35,21 +35,8 @@ from typing import Any, TypeVar
 import numpy as np
 import numpy.typing as npt
 
+from selfrepair.jit import NUMBA, njit
 from selfrepair.search._dstar_reference import INF, Graph
-
-try:
-    from numba import njit
-
-    NUMBA = True
-except ImportError:  # pragma: no cover - depends on the environment
-    NUMBA = False
-
-    def njit(*args: Any, **kwargs: Any) -> Any:  # type: ignore[no-redef]
-        """Stand-in so the module imports without numba (its kernels are then never called)."""
-        if args and callable(args[0]):
-            return args[0]
-        return lambda f: f
-
 
 __all__ = ["NUMBA", "CompiledCore", "compute", "faults_sweep", "update_nodes", "walk"]
 

@@ -54,24 +54,11 @@ import numpy.typing as npt
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.geometry import Cell, Heading, Pose
+from selfrepair.jit import NUMBA, njit
 from selfrepair.robots.domain import Domain
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.problem import CellBound, PlanningProblem, make_pose, pose_table
 from selfrepair.world.maze import Maze
-
-try:
-    from numba import njit
-
-    NUMBA = True
-except ImportError:  # pragma: no cover - depends on the environment
-    NUMBA = False
-
-    def njit(*args: Any, **kwargs: Any) -> Any:  # type: ignore[no-redef]
-        """Stand-in so the module imports without numba (its kernels are then never called)."""
-        if args and callable(args[0]):
-            return args[0]
-        return lambda f: f
-
 
 _Fn = TypeVar("_Fn", bound=Callable[..., Any])
 

@@ -44,8 +44,8 @@ from typing import Any, cast
 
 import numpy as np
 
-from selfrepair.execution.compiled.jit import NUMBA, njit, no_refcount
 from selfrepair.execution.compiled.planner import plan_in_kernel
+from selfrepair.jit import NUMBA, njit, no_refcount
 
 __all__ = ["NUMBA", "clock_ns", "hash_get", "hash_put", "run_kernel", "warm_hits"]
 

@@ -25,8 +25,8 @@ import numpy as np
 import numpy.typing as npt
 
 from selfrepair.caching import BoundedCache, CacheKind
-from selfrepair.execution.compiled.jit import no_refcount
 from selfrepair.execution.result import MissionSpec
+from selfrepair.jit import no_refcount
 from selfrepair.repair.lookups import action_index
 from selfrepair.search import _kernels as kn
 from selfrepair.search.backend import use_numba

@@ -1,6 +1,8 @@
-"""numba's ``njit`` for the compiled mission loop, or a stand-in without numba (the ``fast``
-extra): then :data:`NUMBA` is false, the kernels are never called and every mission runs the
-Python loop."""
+"""numba's ``njit``, or a stand-in without numba (the ``fast`` extra): the one optional import of
+numba for every kernel module (the planner's, D* Lite's, the mission loop's and the vector
+environment's). Without numba :data:`NUMBA` is false, ``njit`` returns the function itself and
+the callers run their pure-Python references instead of the kernels. Imported only by kernel
+modules, so that numba's import cost is paid only where a kernel may run."""
 
 from __future__ import annotations
 
@@ -19,7 +21,8 @@ except ImportError:  # pragma: no cover - depends on the environment
     NUMBA = False
 
     def njit(*args: Any, **kwargs: Any) -> Any:  # type: ignore[no-redef]
-        """Stand-in so the modules import without numba (their kernels are then never called)."""
+        """Stand-in so the kernel modules import without numba (their kernels are then never
+        called, or run as plain Python where a module says so)."""
         if args and callable(args[0]):
             return args[0]
         return lambda f: f
