@@ -29,11 +29,11 @@ MAX_KERNEL_CLASSES = 255
 
 
 def numba_available() -> bool:
-    """Whether the compiled kernels of :mod:`selfrepair.search._kernels` can be used (numba is
-    importable)."""
-    from selfrepair.search import _kernels
+    """Whether the compiled kernels can be used (numba is importable; imported on the first
+    call, see :mod:`selfrepair.jit`)."""
+    from selfrepair import jit
 
-    return _kernels.NUMBA
+    return jit.NUMBA
 
 
 _REFUSALS: BoundedCache[Domain[Any, Any], str | None] = BoundedCache(

@@ -71,25 +71,18 @@ from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import Domain, primitive_by_motion, progress_rate
 from selfrepair.search._dstar_reference import INF, Core, PythonCore, geometry, reach
 from selfrepair.search.astar import BACKENDS, PlanStatus
+from selfrepair.search.backend import use_numba
 
 __all__ = ["INF", "DStarLite", "DStarPlan", "WallMap"]
 
 
 def _use_numba(backend: str) -> bool:
-    """Whether ``backend`` means the kernels: the planner's switch
-    (:func:`selfrepair.search.backend.use_numba` without a domain: the kernels take any robot,
-    their margin is its reach), asked of this module's kernels, so that the repair layer, which
-    may not depend on the planner's kernels (they know mazes), can use this one. Imports numba
-    (only) when the backend may use it."""
+    """Whether ``backend`` means the kernels: the planner's switch without a domain
+    (:func:`selfrepair.search.backend.use_numba`; the kernels take any robot, their margin is
+    its reach), after checking that ``backend`` is one."""
     if backend not in BACKENDS:
         raise ProblemError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
-    if backend == "python":
-        return False
-    from selfrepair.search import _dstar_kernels
-
-    if backend == "numba" and not _dstar_kernels.NUMBA:
-        raise ProblemError("backend 'numba' requested but numba is not installed")
-    return _dstar_kernels.NUMBA
+    return use_numba(backend)
 
 
 def _compiled(graph: DStarLite) -> Core:
