@@ -42,7 +42,7 @@ from selfrepair.limits import MAX_LOOKUP_PATTERNS
 from selfrepair.repair.replacement import DEFAULT_MAX_DEPTH, DEFERRING, RecursionMode
 from selfrepair.repair.tolerance import FaultModel
 from selfrepair.repair.tolerance_book import MaskBook, ToleranceMasks
-from selfrepair.search.term import StepTerm
+from selfrepair.search.term import PatternSource, PatternTable, StepTerm
 from selfrepair.tables.model import ReplacementTable
 
 __all__ = ["ToleranceMasks", "tolerance_masks", "tolerance_term"]
@@ -60,11 +60,25 @@ def tolerance_masks(
 ) -> ToleranceMasks:
     """The masks of ``actions`` on ``grid`` under ``model`` (see the module docstring; kept in a
     bounded cache). ``grid`` needs a margin of at least the table's reach, as a mission's has."""
-    recursion = RecursionMode(mode)
+    book = _book(table, actions, model, RecursionMode(mode), max_depth, max_patterns)
+    return _masks(book, grid)
+
+
+def _book(
+    table: ReplacementTable,
+    actions: tuple[Any, ...],
+    model: FaultModel,
+    recursion: RecursionMode,
+    max_depth: int,
+    max_patterns: int,
+) -> MaskBook:
     key = (table, actions, model, recursion, max_depth, max_patterns)
-    book = _BOOKS.get(
+    return _BOOKS.get(
         key, lambda: MaskBook(table, actions, model, recursion, max_depth, max_patterns)
     )
+
+
+def _masks(book: MaskBook, grid: FreeGrid) -> ToleranceMasks:
     return _MASKS.get((book, grid), lambda: book.masks(grid))
 
 
@@ -97,16 +111,33 @@ def tolerance_term(
             f"tolerant planning needs a non-deferring recursion mode, not {recursion} (a "
             "step's replacement there depends on the replacement it came from)"
         )
-    found = tolerance_masks(
-        table, grid, actions, model, mode=recursion, max_depth=max_depth,
-        max_patterns=max_patterns,
-    )  # fmt: skip
+    book = _book(table, actions, model, recursion, max_depth, max_patterns)
     label = (
         f"tolerant {model.label}" if penalty is None else f"tolerant soft {penalty} {model.label}"
     )
-    return _TERMS.get((found, penalty), lambda: StepTerm(actions, found.counts, penalty, label))
+    return _TERMS.get((book, grid, penalty), lambda: _term(book, grid, penalty, label))
 
 
-_TERMS: BoundedCache[tuple[ToleranceMasks, Fraction | None], StepTerm] = BoundedCache(
+def _term(book: MaskBook, grid: FreeGrid, penalty: Fraction | None, label: str) -> StepTerm:
+    """The term of ``book`` on ``grid``: by pattern when the compiled search can read the
+    book's patterns (the masks of a cell found when the search first expands it), else dense."""
+    if book.pattern_table is None:
+        return StepTerm(book.actions, _masks(book, grid).counts, penalty, label)
+
+    def table() -> PatternTable:
+        current = book.pattern_table
+        assert current is not None  # a book's union, hence its table's use, never changes
+        return current
+
+    def fill(x: int, y: int) -> None:
+        book.fill(grid, x, y)
+
+    source = PatternSource(
+        grid, table, fill, lambda: _masks(book, grid).counts, len(book.model.fault_sets)
+    )
+    return StepTerm(book.actions, None, penalty, label, source)
+
+
+_TERMS: BoundedCache[tuple[MaskBook, FreeGrid, Fraction | None], StepTerm] = BoundedCache(
     "tolerance terms", 16, kind=CacheKind.REPAIR
 )
