@@ -24,10 +24,14 @@ fate depends on the replacement it came from: the masks are then the per-encount
 approximate even the hard mode. :func:`tolerance_term` refuses that mode.
 
 Computation (:mod:`selfrepair.repair.tolerance_book`): a :class:`MaskBook` per (table, actions,
-model, mode) answers each neighbourhood pattern once per process, through the compiled look-ups;
-the masks of a grid gather each free cell's pattern (numpy) and its row. Masks are kept per (book,
-grid) in a bounded cache: a second plan on the same map pays nothing, a plan on a new map pays
-the gather (and the search only for patterns never met before).
+model, mode) answers each neighbourhood pattern once per process, through the compiled look-ups.
+The term :func:`tolerance_term` gives the planner holds the counts **by pattern**
+(:class:`~selfrepair.search.term.PatternSource`): the compiled search reads a cell's pattern and
+its row in the book when it first expands the cell, and has the book answer a pattern it has not
+met, so a plan on a new map pays for the cells it expands, not for the map. The dense masks of
+every pose (:func:`tolerance_masks`: the gather of every free cell's pattern, numpy) are made
+only when asked for: by the pure-Python search, a plan's cost check, or a caller. Both are kept
+per (book, grid) in bounded caches.
 """
 
 from __future__ import annotations

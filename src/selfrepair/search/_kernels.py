@@ -34,6 +34,12 @@ read and write arrays handed in, never allocate, and with counting on numba surr
 and tuple of arrays in the hot loops with atomic reference-count updates, which took most of the
 grid kernel's time.
 
+A step term (:class:`~selfrepair.search.term.StepTerm`, the tolerant planner's) is read per
+expanded cell: the cell's row of counts (per heading and move), found for a term by pattern by
+gathering the cell's pattern from the term's grid and probing its table's index
+(:func:`_pattern_row`), and kept per cell between searches on that term (:class:`_TermState`);
+a pattern the table lacks makes the kernel return so the source can add it.
+
 Kernels are resumable: all search state lives in arrays, and a call stops after a given number of
 expansions (so that the Python wrapper can look at the clock between calls) or when the heap or
 queue array is full (the wrapper then grows it and calls again).
