@@ -43,7 +43,7 @@ __all__ = [
 
 def resolve_experiment(spec: str) -> Path:
     """A bundled experiment name (``paper``, ``scale``, ``baselines``, ``full``, ``team``,
-    ``dynamic``, ...) or a path to a TOML file."""
+    ``dynamic``, ``diagnosis``, ...) or a path to a TOML file."""
     from importlib import resources
 
     folder = resources.files("selfrepair").joinpath("data", "experiments")
@@ -78,7 +78,8 @@ def experiment(
         str,
         typer.Argument(
             metavar="CONFIG",
-            help="Bundled experiment (paper, scale, baselines, full, team, dynamic, ...) or "
+            help="Bundled experiment (paper, scale, baselines, full, team, dynamic, diagnosis, "
+            "...) or "
             "FILE.toml.",
         ),
     ],
@@ -153,6 +154,7 @@ def experiment(
     import joblib
 
     from selfrepair.experiment.backends import check_backend
+    from selfrepair.experiment.diagnosis_findings import diagnosis_findings
     from selfrepair.experiment.dynamic_findings import dynamic_findings
     from selfrepair.experiment.findings import check_findings, reference_note, summarize
     from selfrepair.experiment.missions import expand
@@ -224,7 +226,12 @@ def experiment(
             print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
             print_fault_sets(fault_set_bite(rows))
             print_findings(
-                [*check_findings(rows), *tolerance_findings(rows), *dynamic_findings(rows)],
+                [
+                    *check_findings(rows),
+                    *tolerance_findings(rows),
+                    *dynamic_findings(rows),
+                    *diagnosis_findings(rows),
+                ],
                 reference_note(rows),
             )
             print_baselines(rows)

@@ -8,6 +8,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any, TypeVar
 
+from selfrepair.diagnosis.cooperative import Observer
 from selfrepair.execution.faults import Detection
 from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
@@ -85,8 +86,16 @@ def _hidden_json(spec: MissionSpec) -> dict[str, Any]:
             "max_faults": options.max_faults,
             "fault_prior": options.fault_prior,
             "confidence": options.confidence,
+            **({"observers": [_observer(o) for o in spec.observers]} if spec.observers else {}),
         }
     }
+
+
+def _observer(observer: Observer) -> dict[str, Any]:
+    """An observing teammate as the header keeps it."""
+    sensing = observer.sensing
+    return {"name": observer.name, "noise": observer.noise, "range": sensing.cells,
+            "metric": sensing.metric.value}  # fmt: skip
 
 
 def _fault_texts(domain: Domain[A, F], faults: Iterable[F]) -> list[str]:
