@@ -34,7 +34,7 @@ cache), as a table's compiled look-ups are.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from typing import Any, Generic, TypeVar
+from typing import Any, Generic, TypeVar, cast
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
@@ -42,8 +42,8 @@ from selfrepair.repair.core import walk
 from selfrepair.repair.lookups import MISSING, Missing
 from selfrepair.repair.neighbourhood import action_index, occupancy_bit, occupancy_rows
 from selfrepair.repair.replacement import FreeTest, RobotWorld
-from selfrepair.robots.domain import Domain, primitive_by_motion
-from selfrepair.tables.detours import DetourTable, detour_table
+from selfrepair.robots.domain import A, Domain, F, primitive_by_motion
+from selfrepair.tables.detours import DetourTable, SomeDetours, detour_table
 
 __all__ = ["BeliefCodes", "DetourAnswer", "DetourFinder", "believed_free", "find_detour"]
 
@@ -115,21 +115,21 @@ def believed_free(grid: FreeGrid, blocked: frozenset[Cell]) -> FreeTest:
     return free
 
 
-def _bound(table: DetourTable, known: frozenset[Any]) -> tuple[Any | None, ...]:
+def _bound(table: DetourTable[A, F], known: frozenset[F]) -> tuple[A | None, ...]:
     """Each class of ``table`` bound to its fastest available action under ``known``."""
     fastest = primitive_by_motion(table.domain, known)
     return tuple(fastest.get(name) for name in table.classes)
 
 
 def find_detour(
-    table: DetourTable,
+    table: DetourTable[A, F],
     key: tuple[int, int, int, int],
     pose: Pose,
-    known: frozenset[Any],
+    known: frozenset[F],
     free: FreeTest,
     *,
-    bound: tuple[Any | None, ...] | None = None,
-) -> tuple[int, tuple[Any, ...]] | None:
+    bound: tuple[A | None, ...] | None = None,
+) -> tuple[int, tuple[A, ...]] | None:
     """The reference: the first candidate of ``key`` (its position and actions) valid at
     ``pose`` by the core's test under ``known`` with the free test ``free``, or ``None``
     (``bound``: the classes' actions under ``known``, when the caller has them)."""
@@ -140,13 +140,13 @@ def find_detour(
         actions = tuple(bound[k] for k in candidate)
         if None in actions:
             continue
-        walked = walk(world, actions, pose, frozenset())
+        walked = walk(world, cast("tuple[A, ...]", actions), pose, frozenset())  # no None left
         if walked is not None:
-            return position, actions
+            return position, cast("tuple[A, ...]", actions)
     return None
 
 
-def candidate_masks(table: DetourTable, key: tuple[int, int, int, int]) -> tuple[int, ...]:
+def candidate_masks(table: DetourTable[A, F], key: tuple[int, int, int, int]) -> tuple[int, ...]:
     """Per candidate of ``key``, the occupancy bits (at the table's window radius) its steps
     test: every cell each step sweeps but the start cell of the first (the robot's own), so that
     a candidate is valid on a pattern exactly when the pattern has all its bits (for a robot
@@ -157,7 +157,9 @@ def candidate_masks(table: DetourTable, key: tuple[int, int, int, int]) -> tuple
     )
 
 
-def _mask(table: DetourTable, key: tuple[int, int, int, int], candidate: tuple[int, ...]) -> int:
+def _mask(
+    table: DetourTable[A, F], key: tuple[int, int, int, int], candidate: tuple[int, ...]
+) -> int:
     domain, radius = table.domain, table.window
     pose, bits = Pose(0, 0, Heading(key[0])), 0
     for step, k in enumerate(candidate):
@@ -168,7 +170,7 @@ def _mask(table: DetourTable, key: tuple[int, int, int, int], candidate: tuple[i
     return bits
 
 
-_MASKS: BoundedCache[tuple[DetourTable, tuple[int, int, int, int]], tuple[int, ...]] = BoundedCache(
+_MASKS: BoundedCache[tuple[object, tuple[int, int, int, int]], tuple[int, ...]] = BoundedCache(
     "detour candidate masks", 1 << 14, kind=CacheKind.PREFILLED
 )
 """Candidate masks per (table, key): a few per key, for the few tables a process makes."""
@@ -183,7 +185,7 @@ class _Slot(Generic[T]):
 
     def __init__(
         self,
-        table: DetourTable,
+        table: SomeDetours,
         key: tuple[int, int, int, int],
         window: int,
         bound: tuple[Any | None, ...],
@@ -216,7 +218,7 @@ class _Slot(Generic[T]):
         return value
 
 
-_SHARED: BoundedCache[tuple[DetourTable, Any, frozenset[Any]], dict[int, Any]] = BoundedCache(
+_SHARED: BoundedCache[tuple[object, object, frozenset[object]], dict[int, Any]] = BoundedCache(
     "detour answers per fault set", 512, kind=CacheKind.REPAIR
 )
 """The slots and stored answers of each (detour table, answer maker, fault set)."""

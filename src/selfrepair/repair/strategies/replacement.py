@@ -42,7 +42,7 @@ from selfrepair.repair.strategies.protocol import (
 from selfrepair.repair.strategies.registry import register_strategy
 from selfrepair.repair.strategies.replan import replan
 from selfrepair.status import RepairStatus
-from selfrepair.tables.model import ReplacementTable
+from selfrepair.tables.model import SomeTable
 
 __all__ = [
     "DeferringRepairer",
@@ -89,7 +89,7 @@ def _detour(position: int, actions: tuple[Any, ...], consumed: int) -> Repair:
     )
 
 
-def _table(context: MissionContext) -> ReplacementTable:
+def _table(context: MissionContext) -> SomeTable:
     if context.table is None:
         raise ProblemError("the replacement strategy needs a table")
     return context.table
