@@ -81,13 +81,13 @@ from selfrepair.search.lattice import action_cost, cost_scale, plan, planning_ac
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.search.term import StepTerm
 from selfrepair.status import mission_status
-from selfrepair.tables.model import ReplacementTable
+from selfrepair.tables.model import SomeTable
 from selfrepair.world.maze import Maze, clearance_penalties
 
 __all__ = ["mission_context", "run_mission"]
 
 
-def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> MissionContext:
+def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContext:
     """The :class:`~selfrepair.repair.strategies.MissionContext` of ``spec``: its planner, free
     test and step cost on its map, with ``table`` (``None`` for strategies without one)."""
     settings = spec.planner
@@ -162,7 +162,7 @@ _BELIEVED: BoundedCache[tuple[Maze, frozenset[Cell]], Maze] = BoundedCache(
 
 
 def _objective_term(
-    spec: MissionSpec, objective: PlanObjective, table: ReplacementTable | None
+    spec: MissionSpec, objective: PlanObjective, table: SomeTable | None
 ) -> StepTerm:
     """The tolerance term of ``objective`` for the mission's first plan: masks of the
     replacement strategy with the mission's table (or the one its options name) and recursion."""
@@ -290,7 +290,7 @@ def _run_loop(
 NO_PLAN = MissionStatus.NO_INITIAL_PLAN
 
 
-def _prepare(spec: MissionSpec, table: ReplacementTable | None) -> None:
+def _prepare(spec: MissionSpec, table: SomeTable | None) -> None:
     """Check the table's robot and load the compiled planner before anything is timed (the
     table's geometry and the maze's free grid are made by :func:`mission_context`, also before),
     so the first planning time and the first repair latency of a process are not inflated by

@@ -38,6 +38,7 @@ __all__ = [
     "LookaheadStrategy",
     "LpgAdaptStrategy",
     "MazeConfig",
+    "MazeSource",
     "PlannerConfig",
     "ReplacementStrategy",
     "ReplanStrategy",
@@ -89,16 +90,33 @@ class RouteConfig(Frozen):
         return f"{x},{y}"
 
 
-class MazeConfig(Frozen):
-    """Where a maze comes from (exactly one of ``bundled``, ``file``, ``generate``) and its routes.
+class MazeSource(Frozen):
+    """Where a maze comes from: exactly one of ``bundled`` (a bundled maze's name), ``file`` (a
+    maze or map file, relative to the experiment file) or ``generate`` (a seeded maze). Single-robot
+    and team experiment files both describe their mazes so."""
+
+    bundled: str | None = None
+    file: str | None = None
+    generate: GeneratedMaze | None = None
+
+    @model_validator(mode="after")
+    def _one_source(self) -> MazeSource:
+        given = [k for k in ("bundled", "file", "generate") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(
+                "expected exactly one of 'bundled', 'file' or 'generate', got "
+                + (", ".join(repr(k) for k in given) or "none")
+            )
+        return self
+
+
+class MazeConfig(MazeSource):
+    """A maze (see :class:`MazeSource`) and its routes.
 
     ``routes`` is ``"bundled"`` (the bundled maze's route file), a number of random routes (drawn
     from the experiment seed), or a list of explicit routes.
     """
 
-    bundled: str | None = None
-    file: str | None = None
-    generate: GeneratedMaze | None = None
     routes: (
         Literal["bundled"]
         | Annotated[Int, Field(ge=1, le=MAX_ROUTES)]
@@ -106,13 +124,7 @@ class MazeConfig(Frozen):
     ) = "bundled"
 
     @model_validator(mode="after")
-    def _one_source(self) -> MazeConfig:
-        given = [k for k in ("bundled", "file", "generate") if getattr(self, k) is not None]
-        if len(given) != 1:
-            raise ValueError(
-                "expected exactly one of 'bundled', 'file' or 'generate', got "
-                + (", ".join(repr(k) for k in given) or "none")
-            )
+    def _bundled_routes(self) -> MazeConfig:
         if self.routes == "bundled" and self.bundled is None:
             raise ValueError(
                 'routes = "bundled" needs a bundled maze; give a number of random routes or a '

@@ -42,6 +42,7 @@ from selfrepair.limits import MAX_LOOKUP_PATTERNS
 from selfrepair.repair.replacement import DEFAULT_MAX_DEPTH, DEFERRING, RecursionMode
 from selfrepair.repair.tolerance import FaultModel
 from selfrepair.repair.tolerance_book import MaskBook, ToleranceMasks
+from selfrepair.robots.domain import A, F
 from selfrepair.search.term import StepTerm
 from selfrepair.tables.model import ReplacementTable
 
@@ -49,9 +50,9 @@ __all__ = ["ToleranceMasks", "tolerance_masks", "tolerance_term"]
 
 
 def tolerance_masks(
-    table: ReplacementTable,
+    table: ReplacementTable[A, F],
     grid: FreeGrid,
-    actions: tuple[Any, ...],
+    actions: tuple[A, ...],
     model: FaultModel,
     *,
     mode: RecursionMode | str = RecursionMode.FLAT,
@@ -78,9 +79,9 @@ _BOOKS: BoundedCache[tuple[Any, ...], MaskBook] = BoundedCache(
 
 
 def tolerance_term(
-    table: ReplacementTable,
+    table: ReplacementTable[A, F],
     grid: FreeGrid,
-    actions: tuple[Any, ...],
+    actions: tuple[A, ...],
     model: FaultModel,
     *,
     penalty: Fraction | None = None,

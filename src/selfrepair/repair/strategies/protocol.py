@@ -40,7 +40,7 @@ from selfrepair.repair.strategies.options import StrategyOptions
 from selfrepair.robots.domain import Domain
 from selfrepair.search.astar import PlanResult
 from selfrepair.status import RepairStatus
-from selfrepair.tables.model import ReplacementTable
+from selfrepair.tables.model import SomeTable
 
 __all__ = [
     "Assumption",
@@ -95,7 +95,7 @@ class MissionContext:
     goal: Cell
     goal_heading: Heading | None
     options: StrategyOptions
-    table: ReplacementTable | None
+    table: SomeTable | None
     plan: PlanFn
     replan_budget: int | None
     free: FreeTest
