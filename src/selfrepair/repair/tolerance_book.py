@@ -33,7 +33,7 @@ from selfrepair.repair.neighbourhood import occupancy_bit
 from selfrepair.repair.replacement import RecursionMode, Replacement
 from selfrepair.repair.tolerance import FaultModel
 from selfrepair.search.term import MAX_PATTERN_CELLS, PatternTable
-from selfrepair.tables.model import ReplacementTable
+from selfrepair.tables.model import SomeTable
 
 __all__ = ["MAX_BOOK_ROWS", "MaskBook", "ToleranceMasks"]
 
@@ -134,8 +134,8 @@ class MaskBook:
 
     def __init__(
         self,
-        table: ReplacementTable,
-        actions: tuple[Any, ...],
+        table: SomeTable,
+        actions: tuple[object, ...],
         model: FaultModel,
         mode: RecursionMode,
         max_depth: int,

@@ -46,6 +46,7 @@ from selfrepair.limits import MAX_LOOKUP_PATTERNS
 from selfrepair.repair.replacement import DEFAULT_MAX_DEPTH, DEFERRING, RecursionMode
 from selfrepair.repair.tolerance import FaultModel
 from selfrepair.repair.tolerance_book import MaskBook, ToleranceMasks
+from selfrepair.robots.domain import A, F
 from selfrepair.search.term import PatternSource, PatternTable, StepTerm
 from selfrepair.tables.model import ReplacementTable
 
@@ -53,9 +54,9 @@ __all__ = ["ToleranceMasks", "tolerance_masks", "tolerance_term"]
 
 
 def tolerance_masks(
-    table: ReplacementTable,
+    table: ReplacementTable[A, F],
     grid: FreeGrid,
-    actions: tuple[Any, ...],
+    actions: tuple[A, ...],
     model: FaultModel,
     *,
     mode: RecursionMode | str = RecursionMode.FLAT,
@@ -69,8 +70,8 @@ def tolerance_masks(
 
 
 def _book(
-    table: ReplacementTable,
-    actions: tuple[Any, ...],
+    table: ReplacementTable[A, F],
+    actions: tuple[A, ...],
     model: FaultModel,
     recursion: RecursionMode,
     max_depth: int,
@@ -96,9 +97,9 @@ _BOOKS: BoundedCache[tuple[Any, ...], MaskBook] = BoundedCache(
 
 
 def tolerance_term(
-    table: ReplacementTable,
+    table: ReplacementTable[A, F],
     grid: FreeGrid,
-    actions: tuple[Any, ...],
+    actions: tuple[A, ...],
     model: FaultModel,
     *,
     penalty: Fraction | None = None,
