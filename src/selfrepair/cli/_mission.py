@@ -390,7 +390,7 @@ def mission_spec(
     from selfrepair.search.astar import BACKENDS
     from selfrepair.search.lattice import HEURISTICS
     from selfrepair.tables.fileformat import default_table, default_table_name, resolve_table
-    from selfrepair.tables.model import ReplacementTable
+    from selfrepair.tables.model import SomeTable
     from selfrepair.world.bundled import resolve_maze
     from selfrepair.world.events import Sensing, WorldSchedule, parse_events
 
@@ -403,7 +403,7 @@ def mission_spec(
     check_choice(m.clock, tuple(Clock), "--clock")
     check_choice(m.heuristic, tuple(HEURISTICS), "--heuristic")
     check_choice(m.backend, BACKENDS, "--backend")
-    loaded: str | ReplacementTable = default_table_name(domain) if m.table is None else m.table
+    loaded: str | SomeTable = default_table_name(domain) if m.table is None else m.table
     if not any(uses_table(name) for name in (*strategies, strategy)):
         pass
     elif m.table is None:

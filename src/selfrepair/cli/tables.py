@@ -26,7 +26,7 @@ if TYPE_CHECKING:
     from rich.table import Table
 
     from selfrepair.repair.coverage import CoverageReport
-    from selfrepair.tables.model import ReplacementTable
+    from selfrepair.tables.model import SomeTable
     from selfrepair.world.maze import Maze
 
 __all__ = ["table_coverage", "table_generate"]
@@ -215,7 +215,7 @@ def table_coverage(
     return 0
 
 
-def _longer_needed(report: "CoverageReport", table: "ReplacementTable") -> dict[str, Any] | None:
+def _longer_needed(report: "CoverageReport", table: "SomeTable") -> dict[str, Any] | None:
     """The uncovered replaceable pairs whose every replacement is longer than the table's
     longest candidate (``max_length`` of a generated table; the longest candidate listed
     otherwise), with the fewest actions each needs (exact search, the ``length`` objective);

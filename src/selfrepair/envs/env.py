@@ -89,7 +89,7 @@ from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import get_domain
 from selfrepair.search.astar import PlanStatus
 from selfrepair.tables.fileformat import default_table, resolve_table
-from selfrepair.tables.model import ReplacementTable
+from selfrepair.tables.model import ReplacementTable, SomeTable
 
 __all__ = ["MAX_VIEW_RADIUS", "FaultyMazeEnv", "Rewards", "ask", "default_table"]
 
@@ -150,7 +150,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         mazes: MazeSpec | tuple[MazeSpec, ...] | list[MazeSpec] = BUNDLED,
         routes: str = RouteChoice.BUNDLED,
         faults: FaultSpec | None = None,
-        table: str | ReplacementTable | None = None,
+        table: str | SomeTable | None = None,
         recursion: str = RecursionMode.FLAT,
         rewards: Rewards | None = None,
         max_steps: int | None = None,
@@ -193,7 +193,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         self._guide: Stepper | None = None
         self._guided: Entry | None = None
 
-    def _table(self, table: str | ReplacementTable | None) -> ReplacementTable:
+    def _table(self, table: str | SomeTable | None) -> SomeTable:
         resolved = default_table(self.domain) if table is None else (
             table if isinstance(table, ReplacementTable) else resolve_table(table)
         )  # fmt: skip

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from selfrepair.diagnosis import ObservationModel
+from selfrepair.diagnosis.cooperative import Metric, Observer, SensingRange
 from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.result import MissionSpec, StepSource, TraceStep
@@ -34,7 +35,7 @@ from selfrepair.robots.domain import Domain
 from selfrepair.robots.registry import PluginFile, get_domain, load_recorded_plugin
 from selfrepair.tables.fileformat import default_table
 from selfrepair.tables.generate import GENERATOR_SOURCE
-from selfrepair.tables.model import ReplacementTable
+from selfrepair.tables.model import SomeTable
 from selfrepair.textio import read_text
 from selfrepair.world.events import WorldSchedule
 from selfrepair.world.maze import parse_maze
@@ -120,7 +121,7 @@ def _load_robot(name: str, plugin: Any, source: str, number: int) -> None:
         and isinstance(plugin.get("sha256"), str)
     ):
         raise TraceError(
-            f"expected 'plugin' to be {{\"path\": ..., \"sha256\": ...}}, got {plugin!r}",
+            f'expected \'plugin\' to be {{"path": ..., "sha256": ...}}, got {plugin!r}',
             source=source,
             line=number,
         )
@@ -251,6 +252,14 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
             observation=ObservationModel(
                 float(hidden.get("noise", 0.0)), bool(hidden.get("bumps", True))
             ),
+            observers=tuple(
+                Observer(
+                    str(o["name"]),
+                    float(o["noise"]),
+                    SensingRange(int(o["range"]), Metric(o.get("metric", "chebyshev"))),
+                )
+                for o in hidden.get("observers", ())
+            ),
             clearance_weight=Fraction(str(planner.get("clearance_weight", "0"))),
             clearance_radius=int(planner.get("clearance_radius", 2)),
             seed=int(header.get("seed", 0)),
@@ -268,7 +277,7 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
         raise TraceError(f"expected a complete header: {exc!r}", source=source, line=1) from None
 
 
-def _table(label: str, domain: Domain[Any, Any]) -> str | ReplacementTable:
+def _table(label: str, domain: Domain[Any, Any]) -> str | SomeTable:
     """The table a trace names: a bundled name or a file path as written, and a generated table
     (recorded by its source, ``<generator>``) as the robot's default generated table, the only
     generated table the command line runs with (:func:`~selfrepair.tables.fileformat.default_table`;

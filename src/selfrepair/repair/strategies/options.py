@@ -9,7 +9,7 @@ from selfrepair.errors import ProblemError, choice
 from selfrepair.limits import DEFAULT_MAX_WAIT, MAX_LOOKUP_PATTERNS
 from selfrepair.repair.replacement import DEFAULT_MAX_DEPTH, DEFERRING, RecursionMode
 from selfrepair.tables.fileformat import resolve_table
-from selfrepair.tables.model import ReplacementTable
+from selfrepair.tables.model import ReplacementTable, SomeTable
 
 __all__ = ["StrategyOptions"]
 
@@ -40,7 +40,7 @@ class StrategyOptions:
     class as isolated or a set of classes as all that is possible.
     """
 
-    table: str | ReplacementTable = "handwritten"
+    table: str | SomeTable = "handwritten"
     recursion: RecursionMode = RecursionMode.FLAT
     max_depth: int = DEFAULT_MAX_DEPTH
     window: int = 3
@@ -95,7 +95,7 @@ class StrategyOptions:
             return source
         return str(self.table)
 
-    def resolved_table(self) -> ReplacementTable:
+    def resolved_table(self) -> SomeTable:
         """The table itself (bundled tables and files are read once per process)."""
         if isinstance(self.table, ReplacementTable):
             return self.table

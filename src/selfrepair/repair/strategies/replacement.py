@@ -42,7 +42,7 @@ from selfrepair.repair.strategies.protocol import (
 from selfrepair.repair.strategies.registry import register_strategy
 from selfrepair.repair.strategies.replan import replan
 from selfrepair.status import RepairStatus
-from selfrepair.tables.model import ReplacementTable
+from selfrepair.tables.model import SomeTable
 
 __all__ = [
     "DeferringRepairer",
@@ -89,7 +89,7 @@ def _detour(position: int, actions: tuple[Any, ...], consumed: int) -> Repair:
     )
 
 
-def _table(context: MissionContext) -> ReplacementTable:
+def _table(context: MissionContext) -> SomeTable:
     if context.table is None:
         raise ProblemError("the replacement strategy needs a table")
     return context.table
@@ -161,6 +161,7 @@ class ReplacementRepairer:
     """
 
     __slots__ = (
+        "_belief",
         "_context",
         "_detours",
         "_faulty",
@@ -182,6 +183,7 @@ class ReplacementRepairer:
                 f"table for domain {table.domain.name!r} used with domain {context.domain.name!r}"
             )
         self._context = context
+        self._belief = context.belief  # mutable: the stepper keeps its cells up to date
         self._rewrite = context.options.rewrite
         self._index = action_index(context.domain)
         grid = context.grid
@@ -212,7 +214,7 @@ class ReplacementRepairer:
         if finder is None:  # made on the first blocked action (the detour table is kept)
             finder = self._detours = DetourFinder(self._context.domain, self._context.grid, _detour)
         pose, queue, known, _ = request
-        found = finder.find(pose, queue, known, self._context.belief.blocked)
+        found = finder.find(pose, queue, known, self._belief.blocked)
         if found is None:
             return chained(replan(self._context, request), (DETOUR,))
         return found
