@@ -29,6 +29,7 @@ from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES, MAX_MISSIONS, MAX_TRACE
 
 if TYPE_CHECKING:
     from selfrepair.experiment.keys import Mission
+    from selfrepair.experiment.store import Value
 
 __all__ = [
     "animate",
@@ -221,6 +222,8 @@ def experiment(
             )
             keys = {m.key for m in missions}
             rows = [r for r in store.rows() if r["key"] in keys]
+            if cfg.physics is not None:
+                rows = _print_physics(rows, cfg.name)
             print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
             print_fault_sets(fault_set_bite(rows))
             print_findings(
@@ -239,6 +242,22 @@ def experiment(
         sys.stderr.write(f"selfrepair: interrupted: {_stored_after_interrupt(missions, db_path)}\n")
         raise typer.Exit(130) from None
     return 0
+
+
+def _print_physics(rows: "list[dict[str, Value]]", name: str) -> "list[dict[str, Value]]":
+    """For an experiment with a ``[physics]`` section: the per-strategy summary of the physics
+    rows and the footing table (the lattice's missions that physics completes, with and without
+    a wall contact); returns the lattice rows, which the usual summary and findings read."""
+    from selfrepair.cli.physics import print_footing
+    from selfrepair.experiment.findings import summarize
+    from selfrepair.experiment.physics import footing_summary, stored_footing_rows
+
+    physics = [r for r in rows if r.get("simulator") == "physics"]
+    if physics:
+        print_summary(summarize(physics), title=f"{name}: per strategy in physics")
+        echo(f"{name}: the lattice simulator against physics, per strategy")
+        print_footing(footing_summary(stored_footing_rows(rows)))
+    return [r for r in rows if r.get("simulator") != "physics"]
 
 
 def _require_pyarrow() -> None:

@@ -239,6 +239,13 @@ def physics_experiment(
     if as_json:
         echo_json({"summary": summary, "rows": [asdict(r) for r in rows]})
         return 0
+    print_footing(summary)
+    return 0
+
+
+def print_footing(summary: dict[str, dict[str, Any]]) -> None:
+    """The per-strategy footing table of :func:`~selfrepair.experiment.physics.footing_summary`
+    as Markdown (``physics experiment`` and experiments with a ``[physics]`` section)."""
     echo("| strategy | missions | lattice reached | physics reached of those | "
          "of those without wall contact |")  # fmt: skip
     echo("|---|---:|---:|---:|---:|")
@@ -249,7 +256,6 @@ def physics_experiment(
             f"| {label} | {s['missions']} | {s['lattice_reached']} | {s['both_reached']} "
             f"({_percent(share)}) | {s['both_reached_no_contact']} ({_percent(clean)}) |"
         )
-    return 0
 
 
 def _percent(share: float | None) -> str:

@@ -105,6 +105,8 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
     ]
     if config.world is not None:
         factors.append((len(config.world.rates) * len(config.world.sensing), "world settings"))
+    if config.physics is not None:
+        factors.append((len(config.physics.simulators), "simulators"))
     if not filtered:
         factors.append((variants, "strategy variants and weights"))
     total = 1
@@ -164,6 +166,7 @@ def expand(
         Axis("replicate", tuple(range(config.repeats)), "repeats"),
         Axis("world", _worlds(config), "world settings"),
         Axis("variant", variants, "strategy variants and weights"),
+        Axis("simulator", _simulators(config), "simulators"),
     )
     missions: dict[str, Mission] = {}
     for point in cross(axes):
@@ -198,7 +201,7 @@ def expand(
         if plugins:
             situation["plugins"] = plugins
         seed = derive_seed(config.seed, portable(situation))
-        mission = _mission(config, situation, seed, variant, weight, label)
+        mission = _mission(config, situation, seed, variant, weight, label, point["simulator"])
         missions.setdefault(mission.key, mission)
     if not missions:
         raise ConfigError(
@@ -214,8 +217,10 @@ def _mission(
     variant: dict[str, Any],
     weight: str,
     label: str,
+    simulator: dict[str, Any] | None,
 ) -> Mission:
-    """One mission: the situation with its variant, weight and seed, keyed and labelled."""
+    """One mission: the situation with its variant, weight, seed and (with a ``[physics]``
+    section) simulator, keyed and labelled."""
     settings = {
         **situation,
         **variant,
@@ -223,6 +228,8 @@ def _mission(
         "clearance_radius": config.planner.clearance_radius,
         "seed": seed,
     }
+    if simulator is not None:  # absent without a [physics] section: older keys stay valid
+        settings["simulator"] = simulator
     text = canonical_json(settings)
     key = mission_key(canonical_json(portable(settings)))
     options = variant["options"]
@@ -248,6 +255,8 @@ def _mission(
     world = situation.get("world")
     if world is not None:
         labels += (("world_rate", str(world["rate"])), ("sensing", world["sensing"]))
+    if simulator is not None:
+        labels += (("simulator", simulator["name"]),)
     return Mission(key, config.name, seed, text, labels)
 
 
@@ -275,6 +284,18 @@ def _worlds(config: ExperimentConfig) -> tuple[dict[str, Any] | None, ...]:
         }
         for rate in world.rates
         for sensing in world.sensing
+    )
+
+
+def _simulators(config: ExperimentConfig) -> tuple[dict[str, Any] | None, ...]:
+    """The values of the ``simulator`` axis: one per simulator of the ``[physics]`` section
+    (physics with its tracking), or ``None`` alone without one (the lattice simulator)."""
+    physics = config.physics
+    if physics is None:
+        return (None,)
+    return tuple(
+        {"name": name, **({"tracked": physics.tracked} if name == "physics" else {})}
+        for name in physics.simulators
     )
 
 

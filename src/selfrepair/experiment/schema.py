@@ -38,6 +38,7 @@ __all__ = [
     "LookaheadStrategy",
     "LpgAdaptStrategy",
     "MazeConfig",
+    "PhysicsConfig",
     "PlannerConfig",
     "ReplacementStrategy",
     "ReplanStrategy",
@@ -205,6 +206,39 @@ class WorldConfig(Frozen):
     """Steps a robot may wait in place, in all, while no plan exists round what it believes
     blocked (``StrategyOptions.max_wait``; obstacles that stay ``duration`` ticks need more than
     the default of a maze that never changes)."""
+
+
+class PhysicsConfig(Frozen):
+    """Missions in physics (:mod:`selfrepair.physics`, the ``physics`` extra): every mission runs
+    on each of ``simulators``, ``lattice`` (the lattice simulator) and ``physics`` (MuJoCo, the
+    robot localised on the lattice after each action; ``tracked``: under the sign-constrained
+    tracker rather than open loop). The simulator is not part of a mission's situation, so both
+    footings of a mission share its seed (paired)."""
+
+    simulators: Annotated[tuple[Literal["lattice", "physics"], ...], NonEmpty] = (
+        "lattice",
+        "physics",
+    )
+    tracked: bool = True
+
+    @field_validator("simulators")
+    @classmethod
+    def _distinct(cls, value: tuple[str, ...]) -> tuple[str, ...]:
+        if len(set(value)) != len(value):
+            raise ValueError(f"expected each simulator once, got {list(value)}")
+        return value
+
+    @model_validator(mode="after")
+    def _four_wheels(self, info: ValidationInfo) -> PhysicsConfig:
+        domain = _domain(info)
+        if "physics" in self.simulators and not all(
+            len(getattr(a, "wheels", ())) == 4 for a in domain.actions
+        ):
+            raise ValueError(
+                f"expected a robot whose actions command four wheels for physics, got "
+                f"{domain.name!r}"
+            )
+        return self
 
 
 MazeNames = Annotated[tuple[str, ...], Field(min_length=1)] | None
@@ -409,6 +443,7 @@ class ExperimentConfig(Frozen):
     mazes: Annotated[tuple[MazeConfig, ...], Field(min_length=1)]
     faults: FaultsConfig = FaultsConfig()
     world: WorldConfig | None = None
+    physics: PhysicsConfig | None = None
     planner: PlannerConfig = PlannerConfig()
     strategies: Annotated[tuple[StrategyConfig, ...], Field(min_length=1)]
     source: str = "<string>"
