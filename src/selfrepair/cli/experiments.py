@@ -16,6 +16,7 @@ from selfrepair.cli._app import (
     app,
     echo,
 )
+from selfrepair.cli._inputs import TraceArg
 from selfrepair.cli._printing import (
     print_baselines,
     print_crossover,
@@ -328,10 +329,7 @@ def report(
 
 @app.command()
 def animate(
-    trace: Annotated[
-        Path,
-        typer.Argument(metavar="TRACE", help="Trace file (JSON Lines) written by `run --trace`."),
-    ],
+    trace: TraceArg,
     out: Annotated[Path, typer.Option("--out", "-o", metavar="FILE", help="GIF file to write.")],
     fps: Annotated[
         int, typer.Option("--fps", metavar="N", help="Frames per second.", min=1, max=60)
