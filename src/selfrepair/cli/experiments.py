@@ -233,17 +233,13 @@ def _report(
     """What ``experiment`` prints of a single-robot experiment's stored rows: the per-strategy
     summary, the fault sets that bite, the findings, the baselines, and (``crossover``) where
     replanning catches up (a picture next to the database)."""
-    from selfrepair.experiment.dynamic_findings import dynamic_findings
-    from selfrepair.experiment.findings import check_findings, reference_note, summarize
+    from selfrepair.experiment.findings import reference_note, summarize
+    from selfrepair.experiment.report import all_findings
     from selfrepair.experiment.summary import fault_set_bite
-    from selfrepair.experiment.tolerance_findings import tolerance_findings
 
     print_summary(summarize(rows), title=title)
     print_fault_sets(fault_set_bite(rows))
-    print_findings(
-        [*check_findings(rows), *tolerance_findings(rows), *dynamic_findings(rows)],
-        reference_note(rows),
-    )
+    print_findings(all_findings(rows), reference_note(rows))
     print_baselines(rows)
     if crossover:
         print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
