@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from selfrepair.cli._app import app, echo, echo_json
+from selfrepair.cli._app import app, echo, echo_json, limit_option
 from selfrepair.cli._inputs import Braid, Corridor, DomainOpt, Json
 from selfrepair.cli._mission import Recursion
 from selfrepair.errors import InputError
@@ -95,8 +95,7 @@ def gym_eval(
         typer.Option("--max-steps", metavar="N", min=1, help="Steps per episode (default 4*w*h)."),
     ] = None,
     max_episodes: Annotated[
-        int,
-        typer.Option("--max-episodes", metavar="N", min=1, help="Refuse more episodes than this."),
+        int, limit_option("--max-episodes", "Refuse more episodes than this.")
     ] = 10_000,
     as_json: Json = False,
 ) -> int:
