@@ -155,9 +155,11 @@ def expand(
         )
         for route in routes_of(entry, identity, config.seed, config.source, index, max_cells)
     )
+    fault_sets = fault_profile(config.faults.sets, domain)
+    fault_count = {text: len(domain.parse_faults(text)) for text in fault_sets}  # the robot's word
     axes = (
         Axis("route", routes, "routes"),
-        Axis("faults", fault_profile(config.faults.sets, domain), "fault sets"),
+        Axis("faults", fault_sets, "fault sets"),
         Axis("fault_at", (RANDOM,) if config.faults.at_random else config.faults.at, "fault times"),
         Axis("detection", tuple(config.faults.detection), "detections"),
         Axis("noise", tuple(config.faults.noise), "noise rates"),
@@ -198,7 +200,8 @@ def expand(
         if plugins:
             situation["plugins"] = plugins
         seed = derive_seed(config.seed, portable(situation))
-        mission = _mission(config, situation, seed, variant, weight, label)
+        count = fault_count[point["faults"]]
+        mission = _mission(config, situation, seed, variant, weight, label, count)
         missions.setdefault(mission.key, mission)
     if not missions:
         raise ConfigError(
@@ -214,8 +217,10 @@ def _mission(
     variant: dict[str, Any],
     weight: str,
     label: str,
+    fault_count: int,
 ) -> Mission:
-    """One mission: the situation with its variant, weight and seed, keyed and labelled."""
+    """One mission: the situation with its variant, weight and seed, keyed and labelled
+    (``fault_count``: the faults of its fault set, as the robot's domain reads the text)."""
     settings = {
         **situation,
         **variant,
@@ -230,7 +235,7 @@ def _mission(
         ("maze", label),
         ("route", situation["route"]),
         ("faults", situation["faults"]),
-        ("fault_count", len(situation["faults"].split(",")) if situation["faults"] else 0),
+        ("fault_count", fault_count),
         ("fault_at", situation["fault_at"]),
         ("detection", situation["detection"]),
         ("replicate", situation["replicate"]),
