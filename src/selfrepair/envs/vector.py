@@ -32,7 +32,8 @@ environments do: ``outcome`` (codes into :data:`OUTCOME_NAMES`: the single envir
 robots reset in the call the single environment's episode keys (``maze``, ``start``, ``goal``,
 ``faults``, ``schedule``, ``detection``, ``fault_seed``, ``np_random_seed``, ``max_steps``). The
 known faults are the observation's ``faults`` (their text is :meth:`known_text`). There is no guide
-(it plans in Python per robot). The info arrays are assembled by :mod:`~selfrepair.envs.vector_info`.
+(it plans in Python per robot). The info arrays are put together in
+:mod:`~selfrepair.envs.vector_info`.
 """
 
 from __future__ import annotations
