@@ -75,7 +75,7 @@ from selfrepair.errors import ProblemError, choice
 from selfrepair.execution.faults import Clock, Detection, Persistence
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS
 from selfrepair.geometry import Heading, Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.registry import get_domain
 from selfrepair.search.astar import BACKENDS
 
@@ -115,7 +115,7 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         self,
         num_envs: int = 1,
         *,
-        domain: str | Domain[Any, Any] = "four-wheel",
+        domain: str | SomeDomain = "four-wheel",
         mazes: MazeSpec | Sequence[MazeSpec] = BUNDLED,
         routes: str = RouteChoice.BUNDLED,
         faults: FaultSpec | None = None,
@@ -191,7 +191,7 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         self._intermittent = np.zeros(num_envs, dtype=np.bool_)
         self._outcome = np.zeros(num_envs, dtype=np.int8)
         self._obs = self._outputs()
-        self._frames: list[Any] = [None] * num_envs
+        self._frames: list[npt.NDArray[np.uint8] | None] = [None] * num_envs
         self._no_faults = np.zeros((n, 0), dtype=np.int8)
         use_numba = self.backend == "numba"
         step = kernels.STEP_NUMBA if use_numba else kernels.STEP_PYTHON
@@ -285,11 +285,11 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         info.update(final)
         return copy_obs(self._obs), reward, terminated, truncated, info
 
-    def render(self) -> tuple[Any, ...] | None:
+    def render(self) -> tuple[str | npt.NDArray[np.uint8], ...] | None:
         """Every robot's frame of ``render_mode`` (``None`` without a render mode)."""
         if self.render_mode is None:
             return None
-        frames: list[Any] = []
+        frames: list[str | npt.NDArray[np.uint8]] = []
         for i in range(self.num_envs):
             scenario, pose = self.scenario(i), self.pose(i)
             if self.render_mode == "ansi":
@@ -298,9 +298,11 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
                     ansi_frame(scenario.maze, pose, scenario.goal, (status + self.known_text(i),))
                 )
             else:
-                if self._frames[i] is None:
-                    self._frames[i] = maze_frame(scenario.maze, scenario.goal, self.cell_pixels)
-                frames.append(rgb_frame(self._frames[i], pose, self.cell_pixels))
+                background = self._frames[i]
+                if background is None:
+                    background = maze_frame(scenario.maze, scenario.goal, self.cell_pixels)
+                    self._frames[i] = background
+                frames.append(rgb_frame(background, pose, self.cell_pixels))
         return tuple(frames)
 
     # --- robot state, read by tests and policies ----------------------------------------------

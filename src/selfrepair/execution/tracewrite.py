@@ -13,7 +13,7 @@ from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
 from selfrepair.execution.traceformat import TRACE_FORMAT, TRACE_VERSION
 from selfrepair.geometry import Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import Domain, SomeDomain
 from selfrepair.robots.registry import plugin_file
 from selfrepair.world.maze import format_maze
 
@@ -23,11 +23,11 @@ A = TypeVar("A")
 F = TypeVar("F")
 
 
-def _pose_json(pose: Pose) -> list[Any]:
+def _pose_json(pose: Pose) -> list[object]:
     return [pose.x, pose.y, pose.heading.name]
 
 
-def header_json(spec: MissionSpec, initial_plan: Iterable[Any] = ()) -> dict[str, Any]:
+def header_json(spec: MissionSpec, initial_plan: Iterable[object] = ()) -> dict[str, Any]:
     """The header line's object for ``spec``."""
     options = spec.options
     domain = spec.domain
@@ -93,7 +93,7 @@ def _fault_texts(domain: Domain[A, F], faults: Iterable[F]) -> list[str]:
     return sorted(domain.format_faults([f]) for f in faults)
 
 
-def step_json(domain: Domain[Any, Any], step: TraceStep) -> dict[str, Any]:
+def step_json(domain: SomeDomain, step: TraceStep) -> dict[str, Any]:
     """One step line's object."""
     return {
         "type": "step",
@@ -107,7 +107,7 @@ def step_json(domain: Domain[Any, Any], step: TraceStep) -> dict[str, Any]:
     }
 
 
-def repair_json(domain: Domain[Any, Any], record: RepairRecord) -> dict[str, Any]:
+def repair_json(domain: SomeDomain, record: RepairRecord) -> dict[str, Any]:
     """One repair line's object."""
     repair = record.repair
     return {

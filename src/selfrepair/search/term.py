@@ -7,7 +7,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -32,7 +31,7 @@ class StepTerm:
     planner knows); the planner refuses a term made for others. Equality is identity (arrays).
     """
 
-    actions: tuple[Any, ...]
+    actions: tuple[object, ...]
     counts: npt.NDArray[np.int32]
     penalty: Fraction | None = None
     label: str = "tolerant"
