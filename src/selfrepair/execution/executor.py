@@ -81,7 +81,7 @@ from selfrepair.search.problem import PlanningProblem
 from selfrepair.search.term import StepTerm
 from selfrepair.status import mission_status
 from selfrepair.tables.model import SomeTable
-from selfrepair.world.maze import Maze, clearance_penalties
+from selfrepair.world.maze import Maze, believed_maze, clearance_penalties
 
 __all__ = ["mission_context", "run_mission"]
 
@@ -139,25 +139,6 @@ def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContex
         belief=belief,
         behaviour=spec.behaviour,
     )
-
-
-def believed_maze(maze: Maze, blocked: frozenset[Cell]) -> Maze:
-    """``maze`` with the cells ``blocked`` (world events the robot believes in) as walls: the map
-    the robot plans on in a changing world (the last few are kept)."""
-    return _BELIEVED.get((maze, blocked), lambda: _with_walls(maze, blocked))
-
-
-def _with_walls(maze: Maze, blocked: frozenset[Cell]) -> Maze:
-    walls = maze.walls.copy()
-    for x, y in blocked:
-        if maze.in_bounds(x, y):
-            walls[y, x] = True
-    return Maze(walls, name=maze.name)
-
-
-_BELIEVED: BoundedCache[tuple[Maze, frozenset[Cell]], Maze] = BoundedCache(
-    "mazes with believed-blocked cells", 4, kind=CacheKind.PLAN
-)
 
 
 def _objective_term(

@@ -229,7 +229,7 @@ def _repair_totals(repairs: Sequence[RepairRecord]) -> _RepairTotals:
             elif repair.source is RepairSource.LOOKAHEAD:
                 lookaheads += 1
             elif repair.source is RepairSource.DETOUR:
-                detours += 1
+                detours += 1 + repair.rewritten  # a rewriting repair takes several
         elif repair.source is RepairSource.REPLAN:
             failed += 1
     return _RepairTotals(
