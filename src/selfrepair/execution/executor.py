@@ -23,8 +23,9 @@ it, and records the steps and repairs. :func:`run_mission` runs it to the end; p
    the robot did not know yet) is recorded as a step with source ``failed-attempt`` and reveals
    its blocking faults. With detection ``hidden`` the stepper is also given what the robot
    observed (:meth:`Simulator.observe`) and whether the command took it elsewhere than it should
-   have (see :mod:`selfrepair.execution.stepper`). An oracle strategy (registered ``told``) is
-   told the true faults before every command, whatever the detection.
+   have (see :mod:`selfrepair.execution.stepper`), and what its observing teammates saw of
+   it (``MissionSpec.observers``, :meth:`Simulator.witnessed`). An oracle strategy (registered
+   ``told``) is told the true faults before every command, whatever the detection.
 
 The initial plan is made, by default, before any fault is known (``initial_faults_known=False``),
 as in the original experiment. In a changing world it avoids the cells the robot sees blocked at
@@ -205,6 +206,7 @@ def run_mission(
             world=spec.world,
             behaviour=spec.behaviour,
             observation=spec.observation,
+            observers=spec.observers,
         )
     initial_known = sim.sense() if spec.initial_faults_known else frozenset()
     table = spec.options.resolved_table() if uses_table(spec.strategy) else None
@@ -299,6 +301,7 @@ def _loop(
     told = strategy_entry(spec.strategy, ROBOT).told  # an oracle: told the true faults
     sense_now = spec.schedule.detection is Detection.NOW or told
     hidden = spec.schedule.detection is Detection.HIDDEN
+    observers = bool(spec.observers)
     expect = sim.table.moves
     weight = bool(Fraction(spec.clearance_weight))
     margin, stride = sim.grid.margin, sim.grid.stride
@@ -354,7 +357,10 @@ def _loop(
                 (end.x - pose.x, end.y - pose.y, end.heading) != (want.dx, want.dy, want.heading)
             )
             stepper.perceive(
-                sim.observe(step, action, pose, outcome), deviated, outcome is Outcome.MOVED
+                sim.observe(step, action, pose, outcome),
+                deviated,
+                outcome is Outcome.MOVED,
+                sim.witnessed(step, action, pose, outcome) if observers else (),
             )
 
 
@@ -422,6 +428,8 @@ def _result(
         sums,
         footing,
         diagnosis_report(stepper.repairer),
+        tuple(stepper.observations),
+        tuple(stepper.beliefs),
     )
 
 
