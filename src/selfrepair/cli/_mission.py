@@ -196,7 +196,8 @@ Rewrite = Annotated[
     typer.Option(
         "--rewrite",
         help="Replacement: once a fault is known, substitute every faulty action of the rest of "
-        "the plan that has a valid replacement (whole-plan rewriting).",
+        "the plan that has a valid replacement (whole-plan rewriting); in a changing world, "
+        "every later blocked window that has a detour too.",
     ),
 ]
 PlanWithFaults = Annotated[

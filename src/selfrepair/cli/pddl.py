@@ -69,23 +69,14 @@ def pddl_command(
         )
     from selfrepair.baselines.pddl import export_pddl
     from selfrepair.baselines.pddltext import plan_to_pddl, write_pddl
-    from selfrepair.cli.planning import parse_goal
-    from selfrepair.geometry import parse_pose
-    from selfrepair.robots import four_wheel
+    from selfrepair.cli.planning import planning_problem
+    from selfrepair.robots.four_wheel import FOUR_WHEEL
     from selfrepair.search.astar import PlanStatus
     from selfrepair.search.lattice import plan
-    from selfrepair.search.problem import PlanningProblem
     from selfrepair.world.bundled import resolve_maze
 
     maze = resolve_maze(find_input(maze_spec))
-    goal_cell, goal_heading = parse_goal(goal)
-    problem = PlanningProblem(
-        maze=maze,
-        start=parse_pose(start, source="--start"),
-        goal=goal_cell,
-        goal_heading=goal_heading,
-        faults=four_wheel.parse_faults(faults, source="--faults"),
-    )
+    problem = planning_problem(maze, FOUR_WHEEL, start, goal, faults)
     task = export_pddl(problem, name=name, max_cells=max_cells)
     domain_path, problem_path = write_pddl(task, output)
     echo(f"wrote {domain_path} and {problem_path}")

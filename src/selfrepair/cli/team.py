@@ -26,17 +26,15 @@ from selfrepair.cli._inputs import find_input
 from selfrepair.limits import (
     MAX_CELLS,
     MAX_FILE_BYTES,
-    MAX_MISSIONS,
     MAX_ROBOTS,
     MAX_TASKS,
     MAX_TRACE_BYTES,
 )
 
 if TYPE_CHECKING:
-    from selfrepair.experiment.teams import TeamExperimentConfig
     from selfrepair.team.result import TeamResult
 
-__all__ = ["run_team_experiment", "team_app"]
+__all__ = ["print_team_summary", "team_app"]
 
 team_app = command_group(help="Team missions: several robots that repair each other.")
 app.add_typer(team_app, name="team")
@@ -362,56 +360,6 @@ def team_frame(
 
     written = draw_team_frame(trace, out, tick=tick, max_trace_bytes=max_trace_bytes)
     echo(f"wrote {written}")
-    return 0
-
-
-def run_team_experiment(
-    config: "TeamExperimentConfig",
-    db: Path | None,
-    *,
-    jobs: int,
-    backend: str,
-    scheduler: str | None,
-    address: str | None,
-    export_csv: Path | None,
-    export_parquet: Path | None,
-    progress: Any,
-    max_missions: int | None = MAX_MISSIONS,
-    max_cells: int | None = MAX_CELLS,
-) -> int:
-    """The team branch of ``selfrepair experiment``: run the missions (resumable, any
-    backend), then print the per-strategy summary of every stored row of this experiment."""
-    from selfrepair.experiment.runner import run_missions
-    from selfrepair.experiment.store import ResultStore
-    from selfrepair.experiment.teams import execute_team_mission, expand_team
-    from selfrepair.team.summary import summarize_team
-
-    missions = expand_team(config, max_missions=max_missions, max_cells=max_cells)
-    db_path = db if db is not None else Path("results") / f"{config.name}.sqlite"
-    with ResultStore(db_path) as store:
-        with progress(f"{config.name}: {len(missions)} team missions") as on_progress:
-            summary = run_missions(
-                missions,
-                store,
-                jobs=jobs,
-                backend=backend,
-                scheduler=scheduler,
-                address=address,
-                execute=execute_team_mission,
-                on_progress=on_progress,
-            )
-        elsewhere = f", {summary.elsewhere} by another writer" if summary.elsewhere else ""
-        echo(
-            f"{config.name}: {summary.total} missions, {summary.skipped} already stored, "
-            f"{summary.ran} run{elsewhere} in {summary.seconds:.1f} s -> {db_path}"
-        )
-        keys = {m.key for m in missions}
-        rows = [r for r in store.rows() if r["key"] in keys]
-        print_team_summary(summarize_team(rows), title=f"{config.name}: per strategy")
-        if export_csv is not None:
-            echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
-        if export_parquet is not None:
-            echo(f"wrote {store.export_parquet(export_parquet)} rows to {export_parquet}")
     return 0
 
 

@@ -229,7 +229,7 @@ def _repair_totals(repairs: Sequence[RepairRecord]) -> _RepairTotals:
             elif repair.source is RepairSource.LOOKAHEAD:
                 lookaheads += 1
             elif repair.source is RepairSource.DETOUR:
-                detours += 1
+                detours += 1 + repair.rewritten  # a rewriting repair takes several
         elif repair.source is RepairSource.REPLAN:
             failed += 1
     return _RepairTotals(
@@ -431,6 +431,7 @@ ROW_COLUMNS: tuple[str, ...] = (
     "bumps",
     "behaviour",
     "observation_noise",
+    "observers",
     "surprise_step",
     "isolation_actions",
     "isolated_right",
@@ -441,10 +442,11 @@ ROW_COLUMNS: tuple[str, ...] = (
 
 
 def _diagnosis_columns(result: MissionResult) -> Row:
-    """The diagnosis columns (faults hidden, docs/diagnosis.md): the behaviour model and
-    odometry noise of the mission, and what a diagnosing strategy recorded (``None`` for any
-    other): the step of the first surprise, commands after it until one class was isolated,
-    whether that class holds the true fault set (1/0), probes run, classes still possible."""
+    """The diagnosis columns (faults hidden, docs/diagnosis.md): the behaviour model,
+    odometry noise and observing teammates of the mission, and what a diagnosing strategy
+    recorded (``None`` for any other): the step of the first surprise, commands after it until
+    one class was isolated, whether that class holds the true fault set (1/0), probes run,
+    classes still possible."""
     spec = result.spec
     hidden = spec.schedule.detection is Detection.HIDDEN
     row: Row = {
@@ -452,6 +454,7 @@ def _diagnosis_columns(result: MissionResult) -> Row:
         if hidden and spec.domain.behaviours
         else None,
         "observation_noise": spec.observation.noise if hidden else None,
+        "observers": len(spec.observers) if hidden else None,
     }
     report = result.diagnosis or {}
     isolated = report.get("isolated", ())

@@ -14,7 +14,8 @@ from enum import StrEnum
 from fractions import Fraction
 from typing import Any, NamedTuple
 
-from selfrepair.diagnosis.observation import ObservationModel
+from selfrepair.diagnosis.cooperative import Observer
+from selfrepair.diagnosis.observation import Observation, ObservationModel
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.geometry import Cell, Heading, Pose
@@ -109,6 +110,11 @@ class MissionSpec:
     observation: ObservationModel = field(default_factory=ObservationModel)
     """What the robot observes after each command when the faults are hidden (odometry noise,
     bump switch; see :mod:`selfrepair.diagnosis.observation`)."""
+    observers: tuple[Observer, ...] = ()
+    """Faults hidden: the teammates that watch the robot move and add their readings to its
+    belief (:mod:`selfrepair.diagnosis.cooperative`). They follow it: observer ``i`` (from 1)
+    stands where the robot truly was ``i`` commands earlier (its start pose before that), and
+    sees a command when its start and true end cells are in its sensing range."""
     world: WorldSchedule = field(default_factory=WorldSchedule)
     """Cells that become blocked or free during the mission, and how the robot senses them (see
     :mod:`selfrepair.world.events`; empty: the maze never changes)."""
@@ -221,6 +227,13 @@ class MissionResult:
     """What a diagnosing strategy recorded (faults hidden; ``None`` for any other): the step of
     the first surprise, the commands to isolation, the class isolated (its fault sets), probes
     (see :mod:`selfrepair.repair.strategies.diagnosing`)."""
+    observations: tuple[Observation, ...] = ()
+    """Faults hidden: every observation of the mission in order, per command the robot's own
+    reading first, then its observing teammates' (empty otherwise)."""
+    beliefs: tuple[int, ...] = ()
+    """Faults hidden, a strategy that keeps a belief (:class:`~selfrepair.diagnosis.FaultBelief`):
+    the bit set of the hypotheses still possible after each command's observations, one per
+    command (empty for any other strategy)."""
 
     @property
     def reached(self) -> bool:

@@ -38,6 +38,7 @@ from typing import NamedTuple, Protocol
 
 import numpy as np
 
+from selfrepair.diagnosis.cooperative import Observer, observer_streams, team_observations
 from selfrepair.diagnosis.observation import Observation, ObservationModel
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import Detection, FaultClock, FaultSchedule
@@ -132,6 +133,7 @@ class Simulator:
         world: WorldSchedule | None = None,
         behaviour: str | None = None,
         observation: ObservationModel | None = None,
+        observers: tuple[Observer, ...] = (),
     ) -> None:
         self.domain = domain
         self.maze = maze
@@ -180,6 +182,10 @@ class Simulator:
         self.observation = observation or ObservationModel()
         """What the robot's sensors report after each command (faults hidden)."""
         self._rng = np.random.default_rng([seed, OBSERVATION_STREAM]) if self._hidden else None
+        self.observers = observers if self._hidden else ()
+        """The teammates that watch the robot (faults hidden; see :meth:`witnessed`)."""
+        self._streams = observer_streams(seed, observers) if self.observers else ()
+        self._trail: list[Pose] = [start]
 
     @property
     def ticks(self) -> Fraction:
@@ -285,6 +291,32 @@ class Simulator:
             outcome is Outcome.BUMPED,
             outcome is Outcome.FAILED_ATTEMPT,
             self._rng,
+        )
+
+    def witnessed(
+        self, step: int, action: object, start: Pose, outcome: Outcome
+    ) -> tuple[Observation, ...]:
+        """What the observing teammates saw of the last command (see :meth:`observe`): they
+        follow the robot, observer ``i`` (from 1) standing where it truly was ``i`` commands
+        before this one (its start pose before that), and each in range of the motion reads the
+        true end with its own sensor and stream ``[seed, 24, i]``
+        (:func:`~selfrepair.diagnosis.cooperative.team_observations`). Call it once per command,
+        after :meth:`observe`; empty without observers."""
+        if not self.observers:
+            return ()
+        trail = self._trail
+        last = len(trail) - 1
+        behind = [trail[max(0, last - i)] for i in range(1, len(self.observers) + 1)]
+        trail.append(self.pose)
+        return team_observations(
+            step,
+            action,
+            start,
+            self.pose,
+            outcome is Outcome.FAILED_ATTEMPT,
+            self.observers,
+            behind,
+            self._streams,
         )
 
     def _advance_hidden(self, action: object) -> Outcome:

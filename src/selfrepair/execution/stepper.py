@@ -63,7 +63,11 @@ stepper what the robot observed (:meth:`Stepper.perceive`). A repairer that obse
 ``observe`` and ``assumption``, see :class:`~selfrepair.repair.strategies.Repairer`) gets it and
 says whether the queue no longer starts where the robot is (its command went elsewhere); the
 stepper then asks it for a repair before the next command (``rejoin``), even with an empty queue
-or an available front. After each observation and each repair the stepper takes the repairer's
+or an available front. Teammates' readings of the same command
+(:mod:`selfrepair.diagnosis.cooperative`) come with it, to a repairer that declares
+``hears_teammates`` (a fourth argument of ``observe``). The stepper records every observation,
+and after each command the bit set of the hypotheses a repairer with a ``belief`` still holds
+possible (for the trace). After each observation and each repair the stepper takes the repairer's
 :class:`~selfrepair.repair.strategies.Assumption`: the faults the queue is checked against, and
 actions that are unusable whatever the faults. Any other repairer is not told anything.
 """
@@ -136,10 +140,10 @@ class _ActionView(Sequence[object]):
             start, stop, stride = index.indices(len(self._queue))
             if stride == 1:  # in C: a deque is slow to index in the middle
                 return tuple(islice(map(_ACTION, self._queue), start, max(start, stop)))
+
+
             return tuple(self._queue[i][0] for i in range(start, stop, stride))
         return self._queue[index][0]
-
-
 
 
 class Stepper:
@@ -156,18 +160,22 @@ class Stepper:
     __slots__ = (
         "_assume",
         "_available",
+        "_belief",
         "_blocked_repair",
         "_early_at",
+        "_hears",
         "_observe",
         "_perceived",
         "_table",
         "_unusable",
+        "beliefs",
         "blocked",
         "context",
         "failure",
         "horizon",
         "known",
         "max_wait",
+        "observations",
         "queue",
         "rejoin",
         "repairer",
@@ -203,6 +211,13 @@ class Stepper:
             self._blocked_repair = repairer.repair  # its one repair also sees the cells
         self._observe = getattr(repairer, "observe", None)
         self._assume = getattr(repairer, "assumption", None)
+        self._hears = bool(getattr(repairer, "hears_teammates", False))
+        self._belief = getattr(repairer, "belief", None)
+        self.observations: list[Observation] = []
+        """Faults hidden: every observation perceived, per command the robot's own first."""
+        self.beliefs: list[int] = []
+        """Faults hidden, a repairer with a ``belief``: its bit set of the hypotheses still
+        possible after each command's observations."""
         self._unusable: frozenset[object] = frozenset()
         self._perceived = False  # observations came (faults hidden): take the assumption
         self.rejoin = False
@@ -225,17 +240,36 @@ class Stepper:
             self.known = known
             self._available = available_moves(self._table, known)
 
-    def perceive(self, observation: Observation, deviated: bool, moved: bool) -> None:
+    def perceive(
+        self,
+        observation: Observation,
+        deviated: bool,
+        moved: bool,
+        seen: Sequence[Observation] = (),
+    ) -> None:
         """Faults hidden: give an observing repairer ``observation`` of the last command (a
         :class:`~selfrepair.diagnosis.Observation`), with whether the robot truly ``deviated``
-        from the pose its command should have reached and whether it ``moved``; then take its
-        assumption (see the module docstring). Nothing for any other repairer."""
+        from the pose its command should have reached and whether it ``moved``, and the
+        readings ``seen`` by observing teammates (to a repairer that declares
+        ``hears_teammates``); then take its assumption (see the module docstring). Nothing for
+        any other repairer. Every observation is recorded (:attr:`observations`), and so is the
+        repairer's belief after it (:attr:`beliefs`)."""
+        self.observations.append(observation)
+        if seen:
+            self.observations.extend(seen)
         observe = self._observe
         if observe is None:
             return
         self._perceived = True
-        if observe(observation, deviated, moved):
+        asked = (
+            observe(observation, deviated, moved, seen)
+            if seen and self._hears
+            else observe(observation, deviated, moved)
+        )
+        if asked:
             self.rejoin = True
+        if self._belief is not None:
+            self.beliefs.append(self._belief.alive)
         self._sync()
 
     def _sync(self) -> None:

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from selfrepair.diagnosis import ObservationModel
+from selfrepair.diagnosis.cooperative import Metric, Observer, SensingRange
 from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.result import MissionSpec, StepSource, TraceStep
@@ -250,6 +251,14 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
             behaviour=hidden.get("behaviour"),
             observation=ObservationModel(
                 float(hidden.get("noise", 0.0)), bool(hidden.get("bumps", True))
+            ),
+            observers=tuple(
+                Observer(
+                    str(o["name"]),
+                    float(o["noise"]),
+                    SensingRange(int(o["range"]), Metric(o.get("metric", "chebyshev"))),
+                )
+                for o in hidden.get("observers", ())
             ),
             clearance_weight=Fraction(str(planner.get("clearance_weight", "0"))),
             clearance_radius=int(planner.get("clearance_radius", 2)),

@@ -19,6 +19,7 @@ from fractions import Fraction
 from typing import Any
 
 from selfrepair.diagnosis import ObservationModel
+from selfrepair.diagnosis.cooperative import Observer, SensingRange
 from selfrepair.errors import ConfigError
 from selfrepair.execution.faults import Detection, FaultEvent, FaultSchedule, canonical_order
 from selfrepair.execution.result import MissionSpec
@@ -101,6 +102,7 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
         (1 if faults.at_random else len(faults.at), "fault times"),
         (len(faults.detection), "detections"),
         (len(faults.noise), "noise rates"),
+        (len(faults.observers), "observer counts"),
         (config.repeats, "repeats"),
     ]
     if config.world is not None:
@@ -163,6 +165,7 @@ def expand(
         Axis("fault_at", (RANDOM,) if config.faults.at_random else config.faults.at, "fault times"),
         Axis("detection", tuple(config.faults.detection), "detections"),
         Axis("noise", tuple(config.faults.noise), "noise rates"),
+        Axis("observers", tuple(config.faults.observers), "observer counts"),
         Axis("replicate", tuple(range(config.repeats)), "repeats"),
         Axis("world", _worlds(config), "world settings"),
         Axis("variant", variants, "strategy variants and weights"),
@@ -195,6 +198,14 @@ def expand(
             situation["behaviour"] = config.faults.behaviour
             situation["noise"] = point["noise"]
             situation["bump_switch"] = config.faults.bump_switch
+            if point["observers"]:  # absent when alone, so older keys stay valid
+                situation["observers"] = {
+                    "count": point["observers"],
+                    "range": config.faults.observer_range,
+                    "noise": point["noise"]
+                    if config.faults.observer_noise is None
+                    else config.faults.observer_noise,
+                }
         if domain is not FOUR_WHEEL:  # absent for the four-wheel robot, so older keys stay valid
             situation["domain"] = domain.name
         if plugins:
@@ -307,6 +318,16 @@ def _fault_step(
     return random_fault_step(maze, route, domain, derive_seed(config.seed, where))
 
 
+def _observers(settings: dict[str, Any] | None) -> tuple[Observer, ...]:
+    """The observing teammates of a mission's ``observers`` setting (none when absent), named
+    ``t1``, ``t2``, ... as in :mod:`selfrepair.diagnosis.cooperative`."""
+    if not settings:
+        return ()
+    sensing = SensingRange(int(settings["range"]))
+    noise = float(settings["noise"])
+    return tuple(Observer(f"t{i}", noise, sensing) for i in range(1, int(settings["count"]) + 1))
+
+
 def to_spec(mission: Mission) -> MissionSpec:
     """The executor's :class:`~selfrepair.execution.result.MissionSpec` for ``mission``.
 
@@ -358,6 +379,7 @@ def to_spec(mission: Mission) -> MissionSpec:
         ),
         behaviour=s.get("behaviour"),
         observation=ObservationModel(s.get("noise", 0.0), s.get("bump_switch", True)),
+        observers=_observers(s.get("observers")),
         objective=parse_objective(options.get("objective", OPTIMAL)),
         clearance_weight=Fraction(s["clearance_weight"]),
         clearance_radius=s["clearance_radius"],

@@ -34,6 +34,7 @@ from selfrepair.experiment.comparison import (
     has_baselines,
     maze_table,
 )
+from selfrepair.experiment.diagnosis_findings import diagnosis_findings
 from selfrepair.experiment.dynamic_findings import dynamic_findings
 from selfrepair.experiment.findings import (
     Finding,
@@ -234,7 +235,12 @@ def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = N
         render_markdown(
             rows,
             summarize(rows),
-            [*check_findings(rows), *tolerance_findings(rows), *dynamic_findings(rows)],
+            [
+                *check_findings(rows),
+                *tolerance_findings(rows),
+                *dynamic_findings(rows),
+                *diagnosis_findings(rows),
+            ],
             chosen,
             str(db),
             heatmap_variant=plots.heatmap_variant(rows),

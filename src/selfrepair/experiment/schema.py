@@ -38,6 +38,7 @@ __all__ = [
     "LookaheadStrategy",
     "LpgAdaptStrategy",
     "MazeConfig",
+    "MazeSource",
     "PlannerConfig",
     "ReplacementStrategy",
     "ReplanStrategy",
@@ -45,6 +46,13 @@ __all__ = [
     "StrategyConfig",
     "WorldConfig",
 ]
+
+MAX_OBSERVERS = 8
+"""Observing teammates one mission may have."""
+
+DEFAULT_OBSERVER_RANGE = 3
+"""The observers' sensing range in cells unless the file says otherwise (the cooperative
+benchmark's)."""
 
 FAULT_PROFILES = ("paper", "singles", "doubles", "all")
 """Named fault-set profiles; see :func:`selfrepair.experiment.faultsets.fault_profile`."""
@@ -82,16 +90,33 @@ class RouteConfig(Frozen):
         return f"{x},{y}"
 
 
-class MazeConfig(Frozen):
-    """Where a maze comes from (exactly one of ``bundled``, ``file``, ``generate``) and its routes.
+class MazeSource(Frozen):
+    """Where a maze comes from: exactly one of ``bundled`` (a bundled maze's name), ``file`` (a
+    maze or map file, relative to the experiment file) or ``generate`` (a seeded maze). Single-robot
+    and team experiment files both describe their mazes so."""
+
+    bundled: str | None = None
+    file: str | None = None
+    generate: GeneratedMaze | None = None
+
+    @model_validator(mode="after")
+    def _one_source(self) -> MazeSource:
+        given = [k for k in ("bundled", "file", "generate") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(
+                "expected exactly one of 'bundled', 'file' or 'generate', got "
+                + (", ".join(repr(k) for k in given) or "none")
+            )
+        return self
+
+
+class MazeConfig(MazeSource):
+    """A maze (see :class:`MazeSource`) and its routes.
 
     ``routes`` is ``"bundled"`` (the bundled maze's route file), a number of random routes (drawn
     from the experiment seed), or a list of explicit routes.
     """
 
-    bundled: str | None = None
-    file: str | None = None
-    generate: GeneratedMaze | None = None
     routes: (
         Literal["bundled"]
         | Annotated[Int, Field(ge=1, le=MAX_ROUTES)]
@@ -99,13 +124,7 @@ class MazeConfig(Frozen):
     ) = "bundled"
 
     @model_validator(mode="after")
-    def _one_source(self) -> MazeConfig:
-        given = [k for k in ("bundled", "file", "generate") if getattr(self, k) is not None]
-        if len(given) != 1:
-            raise ValueError(
-                "expected exactly one of 'bundled', 'file' or 'generate', got "
-                + (", ".join(repr(k) for k in given) or "none")
-            )
+    def _bundled_routes(self) -> MazeConfig:
         if self.routes == "bundled" and self.bundled is None:
             raise ValueError(
                 'routes = "bundled" needs a bundled maze; give a number of random routes or a '
@@ -130,12 +149,17 @@ class FaultsConfig(Frozen):
     uniformly from the steps of the route's fault-free optimal plan, instead of at each ``at``."""
     behaviour: str | None = None
     """Detection ``hidden``: the robot's fault-behaviour model (its default when absent)."""
-    noise: Annotated[
-        tuple[Annotated[Float, Field(ge=0.0, lt=0.5)], ...], NonEmpty
-    ] = (0.0,)
+    noise: Annotated[tuple[Annotated[Float, Field(ge=0.0, lt=0.5)], ...], NonEmpty] = (0.0,)
     """Detection ``hidden``: the odometry error rates, one axis of the sweep."""
     bump_switch: bool = True
     """Detection ``hidden``: whether the robot senses a motion stopped at a wall."""
+    observers: Annotated[tuple[Annotated[Int, Field(ge=0, le=MAX_OBSERVERS)], ...], NonEmpty] = (0,)
+    """Detection ``hidden``: how many teammates watch the robot move (0: it is alone; 2: a team
+    of 3), one axis of the sweep (:mod:`selfrepair.diagnosis.cooperative`)."""
+    observer_range: Annotated[Int, Field(ge=0, le=64)] = DEFAULT_OBSERVER_RANGE
+    """The observers' sensing range in cells (Chebyshev)."""
+    observer_noise: Annotated[Float, Field(ge=0.0, lt=0.5)] | None = None
+    """The observers' odometry error rate (absent: the mission's own ``noise`` rate)."""
 
     @field_validator("behaviour")
     @classmethod
@@ -153,8 +177,13 @@ class FaultsConfig(Frozen):
     @model_validator(mode="after")
     def _hidden_options(self) -> FaultsConfig:
         hidden = Detection.HIDDEN in self.detection
-        if not hidden and (self.behaviour is not None or self.noise != (0.0,)):
-            raise ValueError('behaviour and noise need detection = ["hidden"] (or a list with it)')
+        watched = self.observers != (0,) or self.observer_noise is not None
+        if not hidden and (self.behaviour is not None or self.noise != (0.0,) or watched):
+            raise ValueError(
+                'behaviour, noise and observers need detection = ["hidden"] (or a list with it)'
+            )
+        if len(set(self.observers)) != len(self.observers):
+            raise ValueError(f"expected distinct numbers of observers, got {list(self.observers)}")
         return self
 
     @model_validator(mode="after")

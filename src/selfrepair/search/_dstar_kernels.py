@@ -374,6 +374,20 @@ def walk(
     return out[: n + 1].copy()
 
 
+class _Scalar:
+    """An ``int`` attribute of :class:`CompiledCore` kept in its scalar array ``sc`` at ``index``,
+    where the kernels read and write it."""
+
+    def __init__(self, index: int) -> None:
+        self.index = index
+
+    def __get__(self, core: CompiledCore, owner: type[CompiledCore] | None = None) -> int:
+        return int(core.sc[self.index])
+
+    def __set__(self, core: CompiledCore, value: int) -> None:
+        core.sc[self.index] = value
+
+
 class CompiledCore:
     """The search of :class:`selfrepair.search._dstar_reference.PythonCore` in the kernels above;
     its state is in arrays (mutable)."""
@@ -412,29 +426,9 @@ class CompiledCore:
         self.sc = sc
         self.rhs[geo.nodes] = 0
 
-    @property
-    def start(self) -> int:
-        return int(self.sc[START])
-
-    @start.setter
-    def start(self, node: int) -> None:
-        self.sc[START] = node
-
-    @property
-    def km(self) -> int:
-        return int(self.sc[KM])
-
-    @km.setter
-    def km(self, value: int) -> None:
-        self.sc[KM] = value
-
-    @property
-    def expansions(self) -> int:
-        return int(self.sc[EXPANSIONS])
-
-    @expansions.setter
-    def expansions(self, value: int) -> None:
-        self.sc[EXPANSIONS] = value
+    start = _Scalar(START)
+    km = _Scalar(KM)
+    expansions = _Scalar(EXPANSIONS)
 
     def set_dur(self, dur: npt.NDArray[np.int64]) -> None:
         pass  # the kernels read the owner's array

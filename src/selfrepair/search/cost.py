@@ -85,7 +85,7 @@ def _term_cost(
         return Fraction(0)
     if action not in term.actions:
         raise ProblemError(f"action {index} ({name}) is not one the step term was made for")
-    count = int(term.counts[pose.y, pose.x, pose.heading, term.actions.index(action)])
+    count = int(term.dense_counts()[pose.y, pose.x, pose.heading, term.actions.index(action)])
     if term.penalty is None:
         if count:
             raise ProblemError(f"action {index} ({name}) at {pose} is forbidden by the hard term")

@@ -132,7 +132,7 @@ def _penalties(free: npt.NDArray[np.uint8], radius: int) -> npt.NDArray[np.int64
 class DStarLite:
     """One D* Lite search kept between changes (mutable: see the module docstring).
 
-    Build it with :meth:`create` (a maze) or :meth:`from_walls` (a wall array). ``backend`` says
+    Build it with :meth:`create` (a maze or a wall array). ``backend`` says
     which implementation runs (``"numba"`` or ``"python"``); ``faults`` are the known faults,
     ``start`` the pose the next plan starts from, ``walls`` the current map (``[y, x]``, true for
     a blocked cell).
@@ -191,7 +191,7 @@ class DStarLite:
     def create(
         cls,
         domain: SomeDomain,
-        maze: WallMap,
+        maze: WallMap | npt.NDArray[np.bool_],
         start: Pose,
         goal: Cell,
         faults: frozenset[object] = frozenset(),
@@ -201,28 +201,10 @@ class DStarLite:
         clearance_radius: int = 2,
         backend: str = "auto",
     ) -> DStarLite:
-        """A search for ``domain`` on ``maze`` from ``start`` to ``goal`` (any heading unless
+        """A search for ``domain`` on ``maze`` (or on a wall array ``[y, x]``, true for a blocked
+        cell, for layers that know no maze) from ``start`` to ``goal`` (any heading unless
         ``goal_heading``) under the known ``faults``; nothing is searched until :meth:`plan`."""
-        return cls.from_walls(
-            domain, maze.walls, start, goal, faults, goal_heading=goal_heading,
-            clearance_weight=clearance_weight, clearance_radius=clearance_radius, backend=backend,
-        )  # fmt: skip
-
-    @classmethod
-    def from_walls(
-        cls,
-        domain: SomeDomain,
-        walls: npt.NDArray[np.bool_],
-        start: Pose,
-        goal: Cell,
-        faults: frozenset[object] = frozenset(),
-        *,
-        goal_heading: Heading | None = None,
-        clearance_weight: Fraction | int = 0,
-        clearance_radius: int = 2,
-        backend: str = "auto",
-    ) -> DStarLite:
-        """As :meth:`create`, from a wall array ``[y, x]`` (for layers that know no maze)."""
+        walls = maze if isinstance(maze, np.ndarray) else maze.walls
         return cls(
             domain, walls, start, goal, faults, goal_heading, Fraction(clearance_weight),
             clearance_radius, backend,
