@@ -27,13 +27,9 @@ from selfrepair.cli._app import (
     table_app,
 )
 from selfrepair.cli._inputs import Json, TableArg, TraceArg, TraceOut, domain_named, find_input
-from selfrepair.cli._mission import (
-    MissionOptions,
-    mission_options,
-    mission_spec,
-    row_json,
-    table_note,
-)
+from selfrepair.cli._mission import MissionOptions, mission_options
+from selfrepair.cli._rowjson import row_json
+from selfrepair.cli._spec import mission_spec, table_note
 from selfrepair.cli.planning import kernel_load_ns
 from selfrepair.limits import MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES, MAX_TRACE_BYTES
 

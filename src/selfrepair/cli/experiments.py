@@ -47,7 +47,7 @@ __all__ = [
 
 def resolve_experiment(spec: str) -> Path:
     """A bundled experiment name (``paper``, ``scale``, ``baselines``, ``full``, ``team``,
-    ``dynamic``, ...) or a path to a TOML file."""
+    ``dynamic``, ``diagnosis``, ...) or a path to a TOML file."""
     from importlib import resources
 
     folder = resources.files("selfrepair").joinpath("data", "experiments")
@@ -82,7 +82,8 @@ def experiment(
         str,
         typer.Argument(
             metavar="CONFIG",
-            help="Bundled experiment (paper, scale, baselines, full, team, dynamic, ...) or "
+            help="Bundled experiment (paper, scale, baselines, full, team, dynamic, diagnosis, "
+            "...) or "
             "FILE.toml.",
         ),
     ],

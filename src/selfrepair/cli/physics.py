@@ -17,7 +17,8 @@ import typer
 
 from selfrepair.cli._app import app, command_group, echo, echo_json, number_json
 from selfrepair.cli._inputs import Json, TraceOut
-from selfrepair.cli._mission import MissionOptions, mission_options, mission_spec
+from selfrepair.cli._mission import MissionOptions, mission_options
+from selfrepair.cli._spec import mission_spec
 from selfrepair.errors import InputError
 
 if TYPE_CHECKING:

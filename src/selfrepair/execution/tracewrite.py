@@ -8,11 +8,12 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any, TypeVar
 
+from selfrepair.diagnosis.cooperative import Observer
 from selfrepair.execution.faults import Detection
 from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
 from selfrepair.execution.traceformat import TRACE_FORMAT, TRACE_VERSION, header_start, pose_json
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import Domain, SomeDomain
 from selfrepair.world.maze import format_maze
 
 __all__ = ["header_json", "repair_json", "step_json", "trace_lines", "write_trace"]
@@ -21,7 +22,7 @@ A = TypeVar("A")
 F = TypeVar("F")
 
 
-def header_json(spec: MissionSpec, initial_plan: Iterable[Any] = ()) -> dict[str, Any]:
+def header_json(spec: MissionSpec, initial_plan: Iterable[object] = ()) -> dict[str, Any]:
     """The header line's object for ``spec``."""
     options = spec.options
     domain = spec.domain
@@ -73,15 +74,23 @@ def _hidden_json(spec: MissionSpec) -> dict[str, Any]:
             "max_faults": options.max_faults,
             "fault_prior": options.fault_prior,
             "confidence": options.confidence,
+            **({"observers": [_observer(o) for o in spec.observers]} if spec.observers else {}),
         }
     }
+
+
+def _observer(observer: Observer) -> dict[str, Any]:
+    """An observing teammate as the header keeps it."""
+    sensing = observer.sensing
+    return {"name": observer.name, "noise": observer.noise, "range": sensing.cells,
+            "metric": sensing.metric.value}  # fmt: skip
 
 
 def _fault_texts(domain: Domain[A, F], faults: Iterable[F]) -> list[str]:
     return sorted(domain.format_faults([f]) for f in faults)
 
 
-def step_json(domain: Domain[Any, Any], step: TraceStep) -> dict[str, Any]:
+def step_json(domain: SomeDomain, step: TraceStep) -> dict[str, Any]:
     """One step line's object."""
     return {
         "type": "step",
@@ -95,7 +104,7 @@ def step_json(domain: Domain[Any, Any], step: TraceStep) -> dict[str, Any]:
     }
 
 
-def repair_json(domain: Domain[Any, Any], record: RepairRecord) -> dict[str, Any]:
+def repair_json(domain: SomeDomain, record: RepairRecord) -> dict[str, Any]:
     """One repair line's object."""
     repair = record.repair
     return {

@@ -34,6 +34,7 @@ from selfrepair.experiment.comparison import (
     has_baselines,
     maze_table,
 )
+from selfrepair.experiment.diagnosis_findings import diagnosis_findings
 from selfrepair.experiment.dynamic_findings import dynamic_findings
 from selfrepair.experiment.findings import (
     Finding,
@@ -331,8 +332,13 @@ def counted(value: object, noun: str) -> str:
 
 def all_findings(rows: Sequence[Row]) -> list[Finding]:
     """Every finding the rows bear on, in the order report and command print them: the
-    original study's, then plan tolerance's, then the changing world's."""
-    return [*check_findings(rows), *tolerance_findings(rows), *dynamic_findings(rows)]
+    original study's, then plan tolerance's, the changing world's and diagnosis's."""
+    return [
+        *check_findings(rows),
+        *tolerance_findings(rows),
+        *dynamic_findings(rows),
+        *diagnosis_findings(rows),
+    ]
 
 
 def baselines_section(rows: Sequence[Row], figure: str | None = None) -> str:

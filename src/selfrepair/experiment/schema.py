@@ -47,6 +47,13 @@ __all__ = [
     "WorldConfig",
 ]
 
+MAX_OBSERVERS = 8
+"""Observing teammates one mission may have."""
+
+DEFAULT_OBSERVER_RANGE = 3
+"""The observers' sensing range in cells unless the file says otherwise (the cooperative
+benchmark's)."""
+
 FAULT_PROFILES = ("paper", "singles", "doubles", "all")
 """Named fault-set profiles; see :func:`selfrepair.experiment.faultsets.fault_profile`."""
 
@@ -142,12 +149,17 @@ class FaultsConfig(Frozen):
     uniformly from the steps of the route's fault-free optimal plan, instead of at each ``at``."""
     behaviour: str | None = None
     """Detection ``hidden``: the robot's fault-behaviour model (its default when absent)."""
-    noise: Annotated[
-        tuple[Annotated[Float, Field(ge=0.0, lt=0.5)], ...], NonEmpty
-    ] = (0.0,)
+    noise: Annotated[tuple[Annotated[Float, Field(ge=0.0, lt=0.5)], ...], NonEmpty] = (0.0,)
     """Detection ``hidden``: the odometry error rates, one axis of the sweep."""
     bump_switch: bool = True
     """Detection ``hidden``: whether the robot senses a motion stopped at a wall."""
+    observers: Annotated[tuple[Annotated[Int, Field(ge=0, le=MAX_OBSERVERS)], ...], NonEmpty] = (0,)
+    """Detection ``hidden``: how many teammates watch the robot move (0: it is alone; 2: a team
+    of 3), one axis of the sweep (:mod:`selfrepair.diagnosis.cooperative`)."""
+    observer_range: Annotated[Int, Field(ge=0, le=64)] = DEFAULT_OBSERVER_RANGE
+    """The observers' sensing range in cells (Chebyshev)."""
+    observer_noise: Annotated[Float, Field(ge=0.0, lt=0.5)] | None = None
+    """The observers' odometry error rate (absent: the mission's own ``noise`` rate)."""
 
     @field_validator("behaviour")
     @classmethod
@@ -165,8 +177,13 @@ class FaultsConfig(Frozen):
     @model_validator(mode="after")
     def _hidden_options(self) -> FaultsConfig:
         hidden = Detection.HIDDEN in self.detection
-        if not hidden and (self.behaviour is not None or self.noise != (0.0,)):
-            raise ValueError('behaviour and noise need detection = ["hidden"] (or a list with it)')
+        watched = self.observers != (0,) or self.observer_noise is not None
+        if not hidden and (self.behaviour is not None or self.noise != (0.0,) or watched):
+            raise ValueError(
+                'behaviour, noise and observers need detection = ["hidden"] (or a list with it)'
+            )
+        if len(set(self.observers)) != len(self.observers):
+            raise ValueError(f"expected distinct numbers of observers, got {list(self.observers)}")
         return self
 
     @model_validator(mode="after")
