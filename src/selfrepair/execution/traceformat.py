@@ -39,7 +39,8 @@ from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.result import TraceStep
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.repair.strategies import RepairSource, RepairStatus
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
+from selfrepair.robots.registry import plugin_file
 
 __all__ = [
     "DEFAULT_DOMAIN",
@@ -48,12 +49,32 @@ __all__ = [
     "Trace",
     "TraceFields",
     "TraceRepair",
+    "header_start",
+    "pose_json",
 ]
 
 TRACE_FORMAT = "selfrepair-trace"
 TRACE_VERSION = 1
 DEFAULT_DOMAIN = "four-wheel"
 """The robot of a trace whose header names none (traces written before domains were named)."""
+
+
+def header_start(trace_format: str, version: int, domain: str) -> dict[str, Any]:
+    """The fields a trace header (a mission's or a team's) begins with: its type, format and
+    version, the robot domain and, for a plug-in robot, the file that registered it (path and
+    SHA-256, so that a replay can check it runs the same robot)."""
+    header: dict[str, Any] = {
+        "type": "header", "format": trace_format, "version": version, "domain": domain
+    }
+    origin = plugin_file(domain)
+    if origin is not None:
+        header["plugin"] = {"path": origin.path, "sha256": origin.sha256}
+    return header
+
+
+def pose_json(pose: Pose) -> list[object]:
+    """A pose as traces write it: ``[x, y, "N"]``."""
+    return [pose.x, pose.y, pose.heading.name]
 
 
 @dataclass(frozen=True, slots=True)
@@ -63,11 +84,11 @@ class TraceRepair:
 
     step: int
     pose: Pose
-    action: Any | None
+    action: object | None
     status: RepairStatus
     source: RepairSource
     attempts: tuple[str, ...]
-    actions: tuple[Any, ...]
+    actions: tuple[object, ...]
     consumed: int
     candidate_index: int | None
     depth: int | None
@@ -80,7 +101,7 @@ class Trace:
     numbers) and the summary (``None`` only for a partial trace)."""
 
     source: str
-    domain: Domain[Any, Any]
+    domain: SomeDomain
     header: Mapping[str, Any]
     steps: tuple[TraceStep, ...]
     step_lines: tuple[int, ...]

@@ -38,7 +38,7 @@ from selfrepair.repair.strategies import StrategyOptions
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.tables.fileformat import default_table
-from selfrepair.tables.model import ReplacementTable
+from selfrepair.tables.model import SomeTable
 from selfrepair.world.bundled import bundled_routes, load_bundled, maze_names
 
 __all__ = [
@@ -89,19 +89,19 @@ ROBOTS = ("four-wheel", CONFIRMED_NAME)
 the one that commands only the 65 actions physics confirms (its generated fault-agnostic table,
 made once per process)."""
 
-_ROBOTS: BoundedCache[str, tuple[Domain[Any, Any], ReplacementTable | None]] = BoundedCache(
+_ROBOTS: BoundedCache[str, tuple[Domain[Any, Any], SomeTable | None]] = BoundedCache(
     "physics experiment robot models", 2, kind=CacheKind.INPUT
 )
 
 
-def _make_robot(name: str) -> tuple[Domain[Any, Any], ReplacementTable | None]:
+def _make_robot(name: str) -> tuple[Domain[Any, Any], SomeTable | None]:
     if name == CONFIRMED_NAME:
         domain = load_identified(name=CONFIRMED_NAME, confirmed_only=True)
         return domain, default_table(domain)  # generated: the identified robot ships none
     return FOUR_WHEEL, None
 
 
-def _robot(name: str) -> tuple[Domain[Any, Any], ReplacementTable | None]:
+def _robot(name: str) -> tuple[Domain[Any, Any], SomeTable | None]:
     """The domain and table of robot model ``name`` (made once per process and kept)."""
     return _ROBOTS.get(name, lambda: _make_robot(name))
 
@@ -233,7 +233,5 @@ def footing_summary(rows: Iterable[FootingRow]) -> dict[str, dict[str, Any]]:
     for s in out.values():
         n = s["lattice_reached"]
         s["physics_share_of_lattice"] = round(s["both_reached"] / n, 4) if n else None
-        s["no_contact_share_of_lattice"] = (
-            round(s["both_reached_no_contact"] / n, 4) if n else None
-        )
+        s["no_contact_share_of_lattice"] = round(s["both_reached_no_contact"] / n, 4) if n else None
     return out

@@ -30,7 +30,13 @@ from selfrepair.execution.faults import Detection, canonical_order
 from selfrepair.execution.result import MissionSpec, StepSource, TraceStep
 from selfrepair.execution.trace import Trace, TraceRepair, parse_trace, replay, spec_from_header
 from selfrepair.experiment.figstyle import SOURCE_COLOURS
-from selfrepair.experiment.viewpage import pose_json, render_html, wall_runs, write_page
+from selfrepair.experiment.viewpage import (
+    check_viewable,
+    pose_json,
+    render_html,
+    wall_runs,
+    write_page,
+)
 from selfrepair.geometry import Cell, Pose, turn_corner
 from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.strategies import RepairSource, StrategyName, uses_table
@@ -304,15 +310,14 @@ def mission_payload(
     page draws only what the robot model says happened); ``max_steps`` bounds its steps.
     ``tolerance``: the ``k`` of the initial plan's tolerance shown (:func:`tolerance_json`; 0
     for none)."""
-    if len(trace.steps) > max_steps:
-        raise TraceError(
-            f"the trace has {len(trace.steps)} steps, more than the viewer's limit of "
-            f"{max_steps} (raise it with --max-steps)",
-            source=trace.source,
-        )
-    check = replay(trace)
-    if not check.ok:
-        raise TraceError(f"the trace does not replay: {check}", source=trace.source)
+    check_viewable(
+        "the trace",
+        len(trace.steps),
+        "steps",
+        max_steps=max_steps,
+        source=trace.source,
+        replay=lambda: replay(trace),
+    )
     spec = spec_from_header(trace.header, trace.source)
     steps = trace.steps
     ticks = _frame_ticks(steps)
