@@ -45,7 +45,7 @@ from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES
 
 if TYPE_CHECKING:
     from selfrepair.geometry import Cell, Heading
-    from selfrepair.robots.domain import Domain
+    from selfrepair.robots.domain import SomeDomain
     from selfrepair.search.astar import PlanResult
     from selfrepair.search.problem import GridResult, PlanningProblem
     from selfrepair.world.maze import Maze
@@ -69,7 +69,7 @@ def parse_goal(text: str) -> "tuple[Cell, Heading | None]":
 
 def planning_problem(
     maze: "Maze",
-    domain: "Domain[Any, Any]",
+    domain: "SomeDomain",
     start: str,
     goal: str,
     faults: str,
@@ -95,7 +95,7 @@ def planning_problem(
     )
 
 
-def kernel_load_ns(backend: str, *kinds: str, domain: "Domain[Any, Any] | None" = None) -> int:
+def kernel_load_ns(backend: str, *kinds: str, domain: "SomeDomain | None" = None) -> int:
     """Load the compiled kernels of ``kinds`` (default: all; see
     :data:`selfrepair.search.warmup.KERNELS`) if ``backend`` uses them (for the robot ``domain``
     when given: an explicit ``numba`` it does not fit is refused); the nanoseconds it took (0
@@ -119,7 +119,7 @@ def _ms(ns: int) -> float:
 
 
 def plan_json(
-    result: "PlanResult", load_ns: int = 0, domain: "Domain[Any, Any] | None" = None
+    result: "PlanResult", load_ns: int = 0, domain: "SomeDomain | None" = None
 ) -> dict[str, Any]:
     """The ``plan --json`` object: ``cost`` and ``duration`` as numbers with exact ``_exact``
     strings; ``actions`` in the text form of ``domain`` (default: the four-wheel robot);

@@ -21,7 +21,7 @@ from selfrepair.limits import DEFAULT_SENSING_RANGE, MAX_CLEARANCE_WEIGHT
 from selfrepair.repair.replacement import DEFERRING, RecursionMode
 from selfrepair.repair.strategies import MissionKind, StrategyName
 from selfrepair.repair.tolerance import OPTIMAL, parse_objective
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import Domain, SomeDomain
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN
 from selfrepair.robots.registry import get_domain
 from selfrepair.tomlfile import Float, Frozen, Int, NonEmpty
@@ -473,7 +473,7 @@ def _weights(value: Any) -> Any:
     return tuple(out)
 
 
-def _domain(info: ValidationInfo) -> Domain[Any, Any]:
+def _domain(info: ValidationInfo) -> SomeDomain:
     context = info.context or {}
     domain = context.get("domain")
     return domain if isinstance(domain, Domain) else get_domain(DEFAULT_DOMAIN)

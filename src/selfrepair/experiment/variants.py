@@ -197,7 +197,7 @@ def short_table(table: Any) -> str | None:
     return table if table in BUNDLED_TABLES else Path(str(table)).stem
 
 
-_LABEL_PARTS: tuple[tuple[str, bool, Callable[[Any], str]], ...] = (
+_LABEL_PARTS: tuple[tuple[str, bool, Callable[[object], str]], ...] = (
     ("table", True, lambda table: str(short_table(table))),
     ("recursion", True, str),
     ("window", True, "k={}".format),
