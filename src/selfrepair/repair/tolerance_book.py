@@ -53,7 +53,7 @@ class ToleranceMasks:
     cell ``(x, y)`` (-1 on walls) and ``words[row, heading, k, w]`` holds bits ``64 w ..`` of the
     fault sets (``model`` order) of that row; :attr:`masks` spreads them to every cell."""
 
-    actions: tuple[Any, ...]
+    actions: tuple[object, ...]
     model: FaultModel
     counts: npt.NDArray[np.int32]
     rows: npt.NDArray[np.int32]
@@ -69,7 +69,7 @@ class ToleranceMasks:
         out[ys, xs] = self.words[self.rows[ys, xs]]
         return out
 
-    def fault_sets_at(self, pose: Pose, k: int) -> tuple[frozenset[Any], ...]:
+    def fault_sets_at(self, pose: Pose, k: int) -> tuple[frozenset[object], ...]:
         """The fault sets whose bit is set for ``actions[k]`` at ``pose`` (model order)."""
         row = int(self.rows[pose.y, pose.x])
         if row < 0:

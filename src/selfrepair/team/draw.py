@@ -263,7 +263,7 @@ def animate_team_trace(
         fig = Figure(figsize=(5.6, 5.6 * maze.height / maze.width + 0.5), dpi=80)
         ax = fig.subplots()
 
-        def draw(t: int) -> list[Any]:
+        def draw(t: int) -> list[Any]:  # matplotlib artists (none: blit is off)
             _draw(ax, trace, _moment(trace, t), t)
             return []
 

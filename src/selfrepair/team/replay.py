@@ -24,7 +24,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
-from typing import Any
 
 from selfrepair.errors import InputError
 from selfrepair.execution.faults import FaultEvent, Persistence
@@ -259,12 +258,12 @@ def _truth(
     robot: str,
     t: int,
     step: int,
-) -> tuple[frozenset[Any], set[Cell]]:
+) -> tuple[frozenset[object], set[Cell]]:
     """The true domain faults of ``robot`` at ``t`` (its command number ``step``: an
     intermittent fault is drawn as :class:`~selfrepair.team.state.RobotFaultClock` draws it,
     from the options' seed) and the blocked cells."""
     domain = trace.scenario.domain
-    faults: set[Any] = set()
+    faults: set[object] = set()
     blocked: set[Cell] = set()
     for f in _faults_at(spans, t):
         if f.kind is TeamFaultKind.BLOCKED:

@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import hashlib
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import numpy as np
 from pydantic import AfterValidator, Field, ValidationInfo, field_validator, model_validator
@@ -51,7 +51,7 @@ from pydantic import AfterValidator, Field, ValidationInfo, field_validator, mod
 from selfrepair.errors import ConfigError, InputError, ProblemError
 from selfrepair.execution.faults import Detection, Persistence
 from selfrepair.geometry import parse_cell, parse_pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import Domain, SomeDomain
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN, file_domain, load_plugins
 from selfrepair.robots.registry import get_domain
 from selfrepair.team.check import check_scenario
@@ -214,7 +214,7 @@ class ScenarioFile(Frozen):
     faults: tuple[FaultEntry, ...] = ()
 
 
-def _domain(info: ValidationInfo) -> Domain[Any, Any]:
+def _domain(info: ValidationInfo) -> SomeDomain:
     domain = (info.context or {}).get("domain")
     return domain if isinstance(domain, Domain) else get_domain(DEFAULT_DOMAIN)
 

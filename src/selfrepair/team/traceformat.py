@@ -76,7 +76,7 @@ class TraceMove:
     robot: str
     start: int
     end: int
-    action: Any
+    action: object
     before: Pose
     after: Pose
     source: StepSource
