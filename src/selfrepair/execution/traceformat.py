@@ -33,7 +33,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal, overload
 
 from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.result import TraceStep
@@ -127,7 +127,20 @@ class TraceFields:
             raise self.fail(f"expected a {self.data.get('type', 'line')} with key {key!r}")
         return self.data[key]
 
-    def integer(self, key: str, *, optional: bool = False, minimum: int | None = None) -> Any:
+    @overload
+    def integer(
+        self, key: str, *, optional: Literal[False] = False, minimum: int | None = None
+    ) -> int: ...
+
+    @overload
+    def integer(
+        self, key: str, *, optional: Literal[True], minimum: int | None = None
+    ) -> int | None: ...
+
+    def integer(
+        self, key: str, *, optional: bool = False, minimum: int | None = None
+    ) -> int | None:
+        """The integer at ``key`` (at least ``minimum``); ``optional``: ``None`` when absent."""
         value = self.data.get(key) if optional else self.get(key)
         if value is None and optional:
             return None
@@ -136,7 +149,14 @@ class TraceFields:
             raise self.fail(f"expected {key!r} to be an integer{bound}, got {value!r}")
         return value
 
-    def text(self, key: str, *, optional: bool = False) -> Any:
+    @overload
+    def text(self, key: str, *, optional: Literal[False] = False) -> str: ...
+
+    @overload
+    def text(self, key: str, *, optional: Literal[True]) -> str | None: ...
+
+    def text(self, key: str, *, optional: bool = False) -> str | None:
+        """The string at ``key``; ``optional``: ``None`` when absent."""
         value = self.data.get(key) if optional else self.get(key)
         if value is None and optional:
             return None
@@ -168,7 +188,7 @@ class TraceFields:
             raise self.fail(f"expected {key!r} in {', '.join(options)}, got {value!r}")
         return str(value)
 
-    def cell(self, value: Any) -> Cell:
+    def cell(self, value: object) -> Cell:
         """``value`` as a cell ``[x, y]``."""
         if not isinstance(value, list) or len(value) != 2 or not all(type(v) is int for v in value):
             raise self.fail(f"expected a cell [x, y], got {value!r}")

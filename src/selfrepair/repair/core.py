@@ -104,7 +104,7 @@ class Replacement(NamedTuple, Generic[End]):
 
 
 def walk(
-    world: LiftedWorld[Step, State], steps: Iterable[Step], state: State, replacing: Set[Any]
+    world: LiftedWorld[Step, State], steps: Iterable[Step], state: State, replacing: Set[object]
 ) -> tuple[tuple[Hashable, ...], State] | None:
     """The validity test of one candidate, without recursion: ``None`` when a step is not
     healthy, not executable from where the steps before it lead, or binds to an action in
@@ -120,7 +120,7 @@ def walk(
 
 
 def _executable(
-    world: LiftedWorld[Step, State], step: Step, state: State, replacing: Set[Any]
+    world: LiftedWorld[Step, State], step: Step, state: State, replacing: Set[object]
 ) -> tuple[tuple[Hashable, ...], State] | None:
     """Conditions 2 and 3 for a healthy ``step``: its actions and the state after it, or
     ``None`` when it cannot be done from ``state`` or binds to an action being replaced."""
@@ -150,9 +150,9 @@ class CoreSearch(Generic[Step, State]):
     candidates: Callable[[Step], Sequence[Sequence[Step]]]
     may_recurse: RecurseRule
     deferrable: frozenset[Step] = frozenset()
-    follow: Callable[[State, Any], State] | None = None
+    follow: Callable[[State, Step], State] | None = None
     examined: int = 0
-    memo: dict[tuple[Any, State, frozenset[object], int, bool], Replacement[State] | None] = field(
+    memo: dict[tuple[Step, State, frozenset[Step], int, bool], Replacement[State] | None] = field(
         default_factory=dict
     )
 
