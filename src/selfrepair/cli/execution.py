@@ -210,7 +210,7 @@ def run(
     return 0 if result.reached else 1
 
 
-def _cell(value: Any) -> str:
+def _cell(value: object) -> str:
     if value is None:
         return ""
     if isinstance(value, dict):

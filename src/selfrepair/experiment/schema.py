@@ -248,7 +248,7 @@ class PlannerConfig(Frozen):
 
     @field_validator("clearance_weights", mode="before")
     @classmethod
-    def _weights(cls, value: Any) -> Any:
+    def _weights(cls, value: object) -> object:
         return _weights(value)
 
 
@@ -261,7 +261,7 @@ class _StrategyEntry(Frozen):
 
     @field_validator("clearance_weights", mode="before")
     @classmethod
-    def _weights(cls, value: Any) -> Any:
+    def _weights(cls, value: object) -> object:
         return _weights(value)
 
 
@@ -314,7 +314,7 @@ class ReplacementStrategy(_StrategyEntry):
 
     @field_validator("rewrite", mode="before")
     @classmethod
-    def _rewrite(cls, value: Any) -> Any:
+    def _rewrite(cls, value: object) -> object:
         if isinstance(value, bool):
             return (value,)
         if isinstance(value, list | tuple) and not value:
@@ -448,7 +448,7 @@ class ExperimentConfig(Frozen):
         return Path(self.source).parent if not self.source.startswith("<") else Path.cwd()
 
 
-def _weights(value: Any) -> Any:
+def _weights(value: object) -> object:
     """Clearance weights as canonical exact strings (``0.5`` -> ``"1/2"``), each from 0 to
     :data:`~selfrepair.limits.MAX_CLEARANCE_WEIGHT`."""
     if value is None:

@@ -190,7 +190,7 @@ def _check_table(path: Path) -> None:
         ) from None
 
 
-def short_table(table: Any) -> str | None:
+def short_table(table: object) -> str | None:
     """A table's readable name: a bundled name, or a table file's stem."""
     if table is None:
         return None

@@ -23,7 +23,7 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from fractions import Fraction
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.faults import Detection, canonical_order
@@ -270,7 +270,10 @@ def _step_json(domain: SomeDomain, step: TraceStep, ticks: Fraction) -> dict[str
     }
 
 
-def _finite(value: Any) -> Any:
+T = TypeVar("T")
+
+
+def _finite(value: T) -> T | str:
     """``value`` with a non-finite float (which a hand-edited trace may hold) as text: the page's
     JSON has no NaN or Infinity."""
     return str(value) if isinstance(value, float) and not math.isfinite(value) else value
