@@ -12,7 +12,7 @@ planning time or a repair latency), and by default the mission runs once untimed
 
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -33,6 +33,7 @@ from selfrepair.cli._rowjson import row_json
 from selfrepair.cli._spec import mission_spec, table_note
 from selfrepair.cli.planning import kernel_load_ns
 from selfrepair.limits import MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES, MAX_TRACE_BYTES
+from selfrepair.textio import JSONObject
 
 if TYPE_CHECKING:
     from selfrepair.execution.result import MissionResult
@@ -317,7 +318,7 @@ def _print_comparison(comparison: "Comparison", title: str, load_ns: int) -> Non
     echo(_timing_note(load_ns, comparison.warmed_up))
 
 
-def _comparison_json(comparison: "Comparison", load_ns: int) -> dict[str, Any]:
+def _comparison_json(comparison: "Comparison", load_ns: int) -> JSONObject:
     return {
         "runs": [
             {

@@ -42,6 +42,7 @@ from selfrepair.cli._inputs import (
 from selfrepair.cli._mission import Recursion, TableOpt
 from selfrepair.errors import InputError
 from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES
+from selfrepair.textio import JSONObject
 
 if TYPE_CHECKING:
     from selfrepair.geometry import Cell, Heading
@@ -120,7 +121,7 @@ def _ms(ns: int) -> float:
 
 def plan_json(
     result: "PlanResult", load_ns: int = 0, domain: "SomeDomain | None" = None
-) -> dict[str, Any]:
+) -> JSONObject:
     """The ``plan --json`` object: ``cost`` and ``duration`` as numbers with exact ``_exact``
     strings; ``actions`` in the text form of ``domain`` (default: the four-wheel robot);
     ``search_ms`` is the search alone, ``kernel_load_ms`` the one-off kernel load."""
@@ -142,7 +143,7 @@ def plan_json(
     }
 
 
-def path_json(result: "GridResult", load_ns: int = 0) -> dict[str, Any]:
+def path_json(result: "GridResult", load_ns: int = 0) -> JSONObject:
     """The ``path --json`` object; ``cost`` is a float, ``cost_exact`` its exact form."""
     cost = result.cost
     return {

@@ -24,6 +24,7 @@ from selfrepair.cli._inputs import (
 from selfrepair.cli._mission import Goal, MaxDepth, Recursion, Rewrite, TableOpt, check_choice
 from selfrepair.errors import InputError
 from selfrepair.limits import MAX_CELLS
+from selfrepair.textio import JSONObject
 
 if TYPE_CHECKING:
     from selfrepair.repair.tolerance import FaultModel, PlanTolerance
@@ -112,7 +113,7 @@ def print_tolerance(domain: "SomeDomain", tolerance: "PlanTolerance", per_step: 
         echo("(deferring recursion: pairs decided by running the strategy from each step)")
 
 
-def tolerance_json(domain: "SomeDomain", tolerance: "PlanTolerance") -> dict[str, Any]:
+def tolerance_json(domain: "SomeDomain", tolerance: "PlanTolerance") -> JSONObject:
     """The tolerance as JSON (:meth:`~selfrepair.repair.tolerance.PlanTolerance.to_json`, the
     share rounded as every JSON number of the CLI): the summary and, per step, the uncovered
     fault sets (what the viewer draws as a heat strip along the route)."""

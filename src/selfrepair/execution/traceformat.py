@@ -41,6 +41,7 @@ from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.repair.strategies import RepairSource, RepairStatus
 from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.registry import plugin_file
+from selfrepair.textio import JSONObject
 
 __all__ = [
     "DEFAULT_DOMAIN",
@@ -59,11 +60,11 @@ DEFAULT_DOMAIN = "four-wheel"
 """The robot of a trace whose header names none (traces written before domains were named)."""
 
 
-def header_start(trace_format: str, version: int, domain: str) -> dict[str, Any]:
+def header_start(trace_format: str, version: int, domain: str) -> JSONObject:
     """The fields a trace header (a mission's or a team's) begins with: its type, format and
     version, the robot domain and, for a plug-in robot, the file that registered it (path and
     SHA-256, so that a replay can check it runs the same robot)."""
-    header: dict[str, Any] = {
+    header: JSONObject = {
         "type": "header", "format": trace_format, "version": version, "domain": domain
     }
     origin = plugin_file(domain)

@@ -28,6 +28,7 @@ from selfrepair.experiment.schema import (
     StrategyConfig,
 )
 from selfrepair.repair.tolerance import OPTIMAL
+from selfrepair.textio import JSONObject
 
 __all__ = [
     "BUNDLED_TABLES",
@@ -71,7 +72,7 @@ def variants_of(
                 for window, before in windows:
                     for rewrite in strategy.rewrite:
                         for objective in strategy.objectives:
-                            options: dict[str, Any] = {
+                            options: JSONObject = {
                                 **_table_identity(table, config),
                                 "recursion": recursion,
                             }
@@ -140,7 +141,7 @@ def maze_filter(
     return frozenset(strategy.mazes)
 
 
-def _plain_options(strategy: StrategyConfig) -> dict[str, Any]:
+def _plain_options(strategy: StrategyConfig) -> JSONObject:
     """The options of a strategy without a table, as its missions record them (defaults left
     out, so that the keys of missions made before an option existed stay valid)."""
     if isinstance(strategy, ReplanStrategy | DStarLiteStrategy) and strategy.backend != "auto":

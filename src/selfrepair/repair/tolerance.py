@@ -58,6 +58,7 @@ from selfrepair.repair.strategies import (
 )
 from selfrepair.robots.domain import SomeDomain
 from selfrepair.search.astar import PlanResult, PlanStatus
+from selfrepair.textio import JSONObject
 
 __all__ = [
     "OPTIMAL",
@@ -207,7 +208,7 @@ class PlanTolerance:
         tolerant planner's soft mode counts."""
         return sum(len(s.needs_replan) for s in self.steps)
 
-    def to_json(self, domain: SomeDomain) -> dict[str, Any]:
+    def to_json(self, domain: SomeDomain) -> JSONObject:
         """The tolerance as JSON (faults and actions in ``domain``'s text form): the summary and,
         per step, the uncovered fault sets and those under which the step needs a replan (what
         ``selfrepair tolerance --json`` prints and the viewer draws as a heat strip)."""

@@ -18,7 +18,7 @@ import numpy as np
 import numpy.typing as npt
 
 from selfrepair.geometry import Heading, Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import A, Domain, F
 
 __all__ = ["INF", "Core", "Geometry", "Graph", "PythonCore", "geometry", "reach"]
 
@@ -52,8 +52,8 @@ def reach(domain: Domain[Any, Any]) -> int:
     return reach
 
 
-def geometry(domain: Domain[Any, Any], pw: int, margin: int, rows: int) -> Geometry:
-    members: dict[str, Any] = {}
+def geometry(domain: Domain[A, F], pw: int, margin: int, rows: int) -> Geometry:
+    members: dict[str, A] = {}  # motion class -> its first moving action
     for action in domain.actions:
         if any(domain.apply(Pose(0, 0, h), action) != Pose(0, 0, h) for h in Heading):
             members.setdefault(domain.motion_class(action), action)
