@@ -42,7 +42,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
 from itertools import combinations, repeat
-from typing import Any
 
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
@@ -283,7 +282,7 @@ def runs_without_replan(
     executed steps (default: ``20 * len(actions) + 100``)."""
     domain = context.domain
     repairer = _repairer(context)
-    queue: deque[tuple[Any, None]] = deque(zip(actions, repeat(None)))
+    queue: deque[tuple[object, None]] = deque(zip(actions, repeat(None)))
     limit = 20 * len(actions) + 100 if max_steps is None else max_steps
     executed = 0
     while queue:

@@ -22,7 +22,6 @@ starts afresh.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -239,7 +238,7 @@ class MaskBook:
         if nbytes <= 8:
             wide = np.zeros((len(at), 8), dtype=np.uint8)
             wide[:, :nbytes] = packed
-            keys: npt.NDArray[Any] = wide.view("<u8").ravel()
+            keys: npt.NDArray[np.uint64] = wide.view("<u8").ravel()
             distinct, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
             codes = [int(v) for v in distinct.tolist()]
         else:  # a union wider than 64 cells: compare the bytes

@@ -27,7 +27,6 @@ import heapq
 from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -197,7 +196,7 @@ def _walk_back(
 
 # --- the lattice and the heuristic ----------------------------------------------------------------
 
-_Edge = tuple[Any, int, tuple[Cell, ...], int]
+_Edge = tuple[object, int, tuple[Cell, ...], int]
 
 
 @dataclass(frozen=True, slots=True, eq=False)

@@ -34,7 +34,7 @@ surprise came, how many commands it took to isolate the class (and which), the p
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from enum import StrEnum
 from typing import Any
 
@@ -362,7 +362,7 @@ def diagnosis_report(repairer: object) -> dict[str, Any] | None:
     return None if report is None else dict(report())
 
 
-def _starter(policy: Policy) -> Any:
+def _starter(policy: Policy) -> Callable[[MissionContext], Repairer]:
     def start(context: MissionContext) -> Repairer:
         return DiagnosingRepairer(context, policy)
 

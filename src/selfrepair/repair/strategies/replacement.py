@@ -14,7 +14,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from itertools import chain, islice
-from typing import Any
 
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import FreeGrid
@@ -191,7 +190,7 @@ class ReplacementRepairer:
         self._quads = self._index.quads
         self._moves = self._index.slot_moves
         self._known: frozenset[object] | None = None
-        self._last: tuple[Any, int] = (None, -1)
+        self._last: tuple[object, int] = (None, -1)
         lookups = _lookups(context, frozenset())
         self._on_grid: GridLookups[Repair] = grid_lookups(lookups, grid)
         self._slots = self._on_grid.slots
@@ -363,7 +362,7 @@ class DeferringRepairer:
 
     def __init__(self, context: MissionContext) -> None:
         self._context = context
-        self._pending: dict[int, tuple[Any, frozenset[object]]] = {}
+        self._pending: dict[int, tuple[object, frozenset[object]]] = {}
 
     def repair(self, request: RepairRequest) -> Repair:
         """The first valid candidate (deferred actions kept), else :func:`replan`."""
