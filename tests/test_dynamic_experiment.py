@@ -101,6 +101,24 @@ def test_findings_judge_the_paired_response_time() -> None:
     assert dynamic_findings([{**r, "world_rate": None} for r in rows]) == []
 
 
+def test_the_rewriting_robot_is_judged_apart() -> None:
+    rows = [
+        row
+        for k in range(12)
+        for row in (
+            {**_row("replan", k, 100_000 + k, 20.0), "rewrite": None},
+            {**_row("dstar-lite", k, 50_000 + k, 20.0), "rewrite": None},
+            {**_row("replacement", k, 20_000 + k, 24.0), "rewrite": 0},
+            {**_row("replacement", k, 400_000 + k, 24.0), "rewrite": 1},
+        )
+    ]
+    found = {f.number: f.outcome for f in dynamic_findings(rows)}
+    assert found["D1"] is Outcome.HELD and found["D2"] is Outcome.HELD  # not mixed
+    assert found["D1r"] is Outcome.NOT_HELD and found["D2r"] is Outcome.NOT_HELD
+    without = [r for r in rows if r["rewrite"] != 1]
+    assert "D1r" not in {f.number for f in dynamic_findings(without)}
+
+
 def test_a_small_dynamic_experiment_runs_and_prints_its_findings(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

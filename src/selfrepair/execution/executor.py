@@ -50,7 +50,6 @@ from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
-from typing import Any
 
 import numpy as np
 
@@ -82,7 +81,7 @@ from selfrepair.search.problem import PlanningProblem
 from selfrepair.search.term import StepTerm
 from selfrepair.status import mission_status
 from selfrepair.tables.model import SomeTable
-from selfrepair.world.maze import Maze, clearance_penalties
+from selfrepair.world.maze import Maze, believed_maze, clearance_penalties
 
 __all__ = ["mission_context", "run_mission"]
 
@@ -99,7 +98,11 @@ def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContex
     belief = Belief()
 
     def plan_to(
-        start: Pose, goal: Cell, heading: Heading | None, known: frozenset[Any], budget: int | None
+        start: Pose,
+        goal: Cell,
+        heading: Heading | None,
+        known: frozenset[object],
+        budget: int | None,
     ) -> PlanResult:
         world = believed_maze(maze, belief.blocked - {start.cell}) if belief.blocked else maze
         problem = PlanningProblem(world, start, goal, heading, known, weight, radius, domain)
@@ -113,7 +116,7 @@ def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContex
                 return found  # a hard objective without a tolerant plan: the plain optimum
         return plan(problem, heuristic=heuristic, max_expansions=budget, backend=backend)
 
-    def cost(pose: Pose, action: Any) -> Fraction:
+    def cost(pose: Pose, action: object) -> Fraction:
         return action_cost(
             maze, pose, action, clearance_weight=weight, clearance_radius=radius, domain=domain
         )
@@ -140,25 +143,6 @@ def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContex
         belief=belief,
         behaviour=spec.behaviour,
     )
-
-
-def believed_maze(maze: Maze, blocked: frozenset[Cell]) -> Maze:
-    """``maze`` with the cells ``blocked`` (world events the robot believes in) as walls: the map
-    the robot plans on in a changing world (the last few are kept)."""
-    return _BELIEVED.get((maze, blocked), lambda: _with_walls(maze, blocked))
-
-
-def _with_walls(maze: Maze, blocked: frozenset[Cell]) -> Maze:
-    walls = maze.walls.copy()
-    for x, y in blocked:
-        if maze.in_bounds(x, y):
-            walls[y, x] = True
-    return Maze(walls, name=maze.name)
-
-
-_BELIEVED: BoundedCache[tuple[Maze, frozenset[Cell]], Maze] = BoundedCache(
-    "mazes with believed-blocked cells", 4, kind=CacheKind.PLAN
-)
 
 
 def _objective_term(

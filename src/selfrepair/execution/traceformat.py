@@ -45,7 +45,7 @@ from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.result import TraceStep
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.repair.strategies import RepairSource, RepairStatus
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.registry import plugin_file
 
 __all__ = [
@@ -83,7 +83,7 @@ def header_start(trace_format: str, version: int, domain: str) -> dict[str, Any]
     return header
 
 
-def pose_json(pose: Pose) -> list[Any]:
+def pose_json(pose: Pose) -> list[object]:
     """A pose as traces write it: ``[x, y, "N"]``."""
     return [pose.x, pose.y, pose.heading.name]
 
@@ -95,11 +95,11 @@ class TraceRepair:
 
     step: int
     pose: Pose
-    action: Any | None
+    action: object | None
     status: RepairStatus
     source: RepairSource
     attempts: tuple[str, ...]
-    actions: tuple[Any, ...]
+    actions: tuple[object, ...]
     consumed: int
     candidate_index: int | None
     depth: int | None
@@ -130,7 +130,7 @@ class Trace:
     numbers) and the summary (``None`` only for a partial trace)."""
 
     source: str
-    domain: Domain[Any, Any]
+    domain: SomeDomain
     header: Mapping[str, Any]
     steps: tuple[TraceStep, ...]
     step_lines: tuple[int, ...]

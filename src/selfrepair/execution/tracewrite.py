@@ -14,7 +14,7 @@ from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
 from selfrepair.execution.traceformat import TRACE_FORMAT, TRACE_VERSION, header_start, pose_json
 from selfrepair.execution.traceobserve import diagnosis_header, observation_fields
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import Domain, SomeDomain
 from selfrepair.world.maze import format_maze
 
 __all__ = ["header_json", "repair_json", "step_json", "trace_lines", "write_trace"]
@@ -23,7 +23,7 @@ A = TypeVar("A")
 F = TypeVar("F")
 
 
-def header_json(spec: MissionSpec, initial_plan: Iterable[Any] = ()) -> dict[str, Any]:
+def header_json(spec: MissionSpec, initial_plan: Iterable[object] = ()) -> dict[str, Any]:
     """The header line's object for ``spec``."""
     options = spec.options
     domain = spec.domain
@@ -92,7 +92,7 @@ def _fault_texts(domain: Domain[A, F], faults: Iterable[F]) -> list[str]:
     return sorted(domain.format_faults([f]) for f in faults)
 
 
-def step_json(domain: Domain[Any, Any], step: TraceStep) -> dict[str, Any]:
+def step_json(domain: SomeDomain, step: TraceStep) -> dict[str, Any]:
     """One step line's object."""
     return {
         "type": "step",
@@ -106,7 +106,7 @@ def step_json(domain: Domain[Any, Any], step: TraceStep) -> dict[str, Any]:
     }
 
 
-def repair_json(domain: Domain[Any, Any], record: RepairRecord) -> dict[str, Any]:
+def repair_json(domain: SomeDomain, record: RepairRecord) -> dict[str, Any]:
     """One repair line's object."""
     repair = record.repair
     return {

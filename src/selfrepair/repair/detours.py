@@ -33,7 +33,7 @@ cache), as a table's compiled look-ups are.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any, Generic, TypeVar, cast
 
 from selfrepair.caching import BoundedCache, CacheKind
@@ -261,7 +261,9 @@ class DetourFinder(Generic[T]):
         "_codes",
         "_domain",
         "_flat",
+        "_height",
         "_index",
+        "_moves",
         "_slots",
         "_starts",
         "_steps",
@@ -281,7 +283,16 @@ class DetourFinder(Generic[T]):
         self._flat = self._codes.codes  # the same list object for the finder's life
         self._width = grid.width
         self._index = action_index(domain)
+        self._height = grid.height
         self._center = 1 << occupancy_bit((0, 0), radius)
+        self._moves = tuple(  # by slot 4 * index + heading: (dx, dy, end heading, sweep bits)
+            (dx, dy, h1, sum(1 << occupancy_bit(c, radius) for c in cells[1:]))
+            for (dx, dy, h1), cells in zip(
+                self._index.slot_moves,
+                (cells for per in self._index.footprints for cells in per),
+                strict=True,
+            )
+        )
         self._steps: tuple[dict[int, _Step], ...] = tuple({} for _ in Heading)
         for action in domain.actions:
             for heading in map(int, Heading):
@@ -301,10 +312,7 @@ class DetourFinder(Generic[T]):
     def _step(self, heading: int, action: Any) -> _Step:
         """The :data:`_Step` of ``action`` from ``heading`` (found by equality, so an equal copy
         of a domain action has one; :class:`ProblemError` for an action not of the domain)."""
-        index = self._index.of(action)
-        dx, dy, h1 = self._index.moves[index][heading]
-        cells = self._index.footprints[index][heading]
-        sweep = sum(1 << occupancy_bit(c, self.table.window) for c in cells[1:])
+        dx, dy, h1, sweep = self._moves[4 * self._index.of(action) + heading]
         delta = _WINDOW_STEP + (h1 - heading) * _SIDE2 + dx * _SIDE + dy
         return (dy * self._width + dx, sweep, delta, self._steps[h1])
 
@@ -383,6 +391,31 @@ class DetourFinder(Generic[T]):
         p += dp  # the whole queue is the window
         slot_id += delta
         return self._last(slot_id, start) if codes[p] & center else None
+
+    def next_blocked(
+        self, pose: Pose, actions: Sequence[Any], begin: int, start: int
+    ) -> tuple[int, Pose] | None:
+        """Where a rewriting pass meets the next blocked window: from ``pose``, the pose the
+        plan predicts before ``actions[begin]``, the first ``k >= start`` whose action sweeps a
+        believed-blocked cell (but the one it starts from) from the pose the plan predicts
+        there, with that pose; ``None`` when none does or a predicted pose leaves the grid (a
+        plan that leaves it is not this walk's to mend). Reads the codes as the last
+        :meth:`find` left them (the belief it was given)."""
+        codes, width, height, moves = self._flat, self._width, self._height, self._moves
+        quads = self._index.quads
+        x, y, h = pose.x, pose.y, int(pose.heading)
+        for k in range(begin, len(actions)):
+            action = actions[k]
+            quad = quads.get(id(action))
+            if quad is None:
+                quad = 4 * self._index.of(action)  # an equal copy of a domain action
+            dx, dy, h1, sweep = moves[quad + h]
+            if k >= start and codes[y * width + x] & sweep != sweep:
+                return k, Pose(x, y, Heading(h))
+            x, y, h = x + dx, y + dy, h1
+            if not (0 <= x < width and 0 <= y < height):
+                return None
+        return None
 
     def _last(self, slot_id: int, start: int) -> T | None:
         """The answer of the window that takes in the whole queue (off the warm loop)."""

@@ -13,7 +13,7 @@ valid replacement at its predicted pose, so later encounters never reach the rep
 from __future__ import annotations
 
 from collections.abc import Sequence
-from itertools import chain
+from itertools import chain, islice
 from typing import Any
 
 from selfrepair.errors import ProblemError
@@ -207,9 +207,9 @@ class ReplacementRepairer:
 
     def repair_blocked(self, request: RepairRequest) -> Repair:
         """The first queued action sweeps a cell believed blocked: a local detour from the
-        detour table (:mod:`selfrepair.repair.detours`; with ``rewrite``, later queued actions
-        that sweep believed-blocked cells get theirs too), else a replan around the
-        believed-blocked cells."""
+        detour table (:mod:`selfrepair.repair.detours`), else a replan around the
+        believed-blocked cells. With ``rewrite`` the detour also walks the rest of the queue
+        (:meth:`_detours_rewritten`)."""
         finder = self._detours
         if finder is None:  # made on the first blocked action (the detour table is kept)
             finder = self._detours = DetourFinder(self._context.domain, self._context.grid, _detour)
@@ -217,7 +217,38 @@ class ReplacementRepairer:
         found = finder.find(pose, queue, known, self._belief.blocked)
         if found is None:
             return chained(replan(self._context, request), (DETOUR,))
-        return found
+        return self._detours_rewritten(request, found, finder) if self._rewrite else found
+
+    def _detours_rewritten(
+        self, request: RepairRequest, head: Repair, finder: DetourFinder[Repair]
+    ) -> Repair:
+        """``head`` (the first window's detour) extended over the rest of the queue in one pass:
+        following the poses the plan predicts, every later window that starts with an action
+        sweeping a believed-blocked cell is replaced by its detour (the same window rule, from
+        the pose where the robot would meet it), up to the first that has none (the robot will
+        replan there, as without rewriting, which drops the rest) or the first predicted pose
+        off the maze. A detour ends where its window ends, so the predicted poses stay exact,
+        and while the belief stays as it is the robot makes the same motions as without
+        rewriting, with one repair instead of one per window. Faulty actions are left to the
+        fault repairs (as they are when the robot meets them)."""
+        actions = tuple(request.queue)
+        known, blocked = request.known, self._belief.blocked
+        parts: list[Sequence[Any]] = [head.actions]
+        done, begin, pose, rewritten = head.consumed, 0, request.pose, 0
+        while (met := finder.next_blocked(pose, actions, begin, done)) is not None:
+            k, pose = met
+            found = finder.find(pose, islice(actions, k, None), known, blocked)
+            if found is None:  # the robot will replan here: what follows would be dropped
+                break
+            parts.append(actions[done:k])
+            parts.append(found.actions)
+            done, begin = k + found.consumed, k
+            rewritten += 1
+        if not rewritten:
+            return head
+        return head._replace(
+            actions=tuple(chain.from_iterable(parts)), consumed=done, rewritten=rewritten
+        )
 
     def _use(self, known: frozenset[Any]) -> None:
         """Switch to the look-ups of ``known`` (a new frozenset of the same faults keeps them)."""
