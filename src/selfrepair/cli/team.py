@@ -15,6 +15,8 @@ import typer
 from selfrepair.cli._app import (
     MaxCells,
     MaxFileBytes,
+    MaxRobots,
+    MaxTasks,
     MaxTraceBytes,
     app,
     command_group,
@@ -22,7 +24,7 @@ from selfrepair.cli._app import (
     echo,
     echo_json,
 )
-from selfrepair.cli._inputs import find_input
+from selfrepair.cli._inputs import Backend, Json, TraceOut, find_input
 from selfrepair.limits import (
     MAX_CELLS,
     MAX_FILE_BYTES,
@@ -41,17 +43,8 @@ app.add_typer(team_app, name="team")
 
 _STRATEGY_HELP = "team-replacement, reallocation or alone."
 
-MaxRobots = Annotated[
-    int,
-    typer.Option(
-        "--max-robots", metavar="N", min=1, help="Refuse a scenario of more robots than this."
-    ),
-]
-MaxTasks = Annotated[
-    int,
-    typer.Option(
-        "--max-tasks", metavar="N", min=0, help="Refuse a scenario of more tasks than this."
-    ),
+_TeamTrace = Annotated[
+    Path, typer.Argument(metavar="TRACE", help="A team trace written by team run --trace.")
 ]
 
 
@@ -101,11 +94,8 @@ def team_run(
         typer.Option("--table", metavar="TABLE", help="Team table: handwritten or generated."),
     ] = "handwritten",
     robot_table: RobotTable = None,
-    trace: Annotated[
-        Path | None,
-        typer.Option("--trace", metavar="FILE", help="Write the team trace (JSON Lines) here."),
-    ] = None,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the metrics row as JSON.")] = False,
+    trace: TraceOut = None,
+    as_json: Json = False,
     max_ticks: Annotated[
         int | None,
         typer.Option(
@@ -114,10 +104,7 @@ def team_run(
             help="End the mission after this many ticks (default: generous).",
         ),
     ] = None,
-    backend: Annotated[
-        str,
-        typer.Option("--backend", metavar="NAME", help="Planner backend: auto, python or numba."),
-    ] = "auto",
+    backend: Backend = "auto",
     detect: Annotated[
         str | None,
         typer.Option(
@@ -213,10 +200,7 @@ def team_compare(
             max=1000,
         ),
     ] = 5,
-    backend: Annotated[
-        str,
-        typer.Option("--backend", metavar="NAME", help="Planner backend: auto, python or numba."),
-    ] = "auto",
+    backend: Backend = "auto",
     robot_table: RobotTable = None,
     max_robots: MaxRobots = MAX_ROBOTS,
     max_tasks: MaxTasks = MAX_TASKS,
@@ -277,10 +261,7 @@ def team_compare(
 
 @team_app.command("replay")
 def team_replay(
-    trace: Annotated[
-        Path,
-        typer.Argument(metavar="TRACE", help="A team trace written by team run --trace."),
-    ],
+    trace: _TeamTrace,
     max_trace_bytes: MaxTraceBytes = MAX_TRACE_BYTES,
 ) -> int:
     """Re-simulate a team trace; report what does not hold.
@@ -299,7 +280,7 @@ def team_table(
     name: Annotated[
         str, typer.Argument(metavar="TABLE", help="handwritten or generated.")
     ] = "handwritten",
-    as_json: Annotated[bool, typer.Option("--json", help="Print the table as JSON.")] = False,
+    as_json: Json = False,
 ) -> int:
     """Print a team replacement table.
 
@@ -337,10 +318,7 @@ def team_table(
 
 @team_app.command("frame")
 def team_frame(
-    trace: Annotated[
-        Path,
-        typer.Argument(metavar="TRACE", help="A team trace written by team run --trace."),
-    ],
+    trace: _TeamTrace,
     out: Annotated[Path, typer.Option("--out", "-o", metavar="FILE", help="PNG file to write.")],
     tick: Annotated[
         float | None,

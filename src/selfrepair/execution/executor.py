@@ -50,7 +50,6 @@ from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
-from typing import Any
 
 import numpy as np
 
@@ -99,7 +98,11 @@ def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContex
     belief = Belief()
 
     def plan_to(
-        start: Pose, goal: Cell, heading: Heading | None, known: frozenset[Any], budget: int | None
+        start: Pose,
+        goal: Cell,
+        heading: Heading | None,
+        known: frozenset[object],
+        budget: int | None,
     ) -> PlanResult:
         world = believed_maze(maze, belief.blocked - {start.cell}) if belief.blocked else maze
         problem = PlanningProblem(world, start, goal, heading, known, weight, radius, domain)
@@ -113,7 +116,7 @@ def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContex
                 return found  # a hard objective without a tolerant plan: the plain optimum
         return plan(problem, heuristic=heuristic, max_expansions=budget, backend=backend)
 
-    def cost(pose: Pose, action: Any) -> Fraction:
+    def cost(pose: Pose, action: object) -> Fraction:
         return action_cost(
             maze, pose, action, clearance_weight=weight, clearance_radius=radius, domain=domain
         )

@@ -37,7 +37,7 @@ from selfrepair.execution.result import (
     TraceStep,
 )
 from selfrepair.repair.strategies import RepairSource, RepairStatus
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.backend import backend_ran
 from selfrepair.search.lattice import action_cost, plan
@@ -78,7 +78,7 @@ def plan_distance(first: Iterable[Hashable], second: Iterable[Hashable]) -> Plan
 
 
 def motion_distance(
-    domain_motion: Callable[[Any], str],
+    domain_motion: Callable[[object], str],
     first: Iterable[tuple[Hashable, Any]],
     second: Iterable[tuple[Hashable, Any]],
 ) -> PlanDistance:
@@ -237,7 +237,7 @@ def _repair_totals(repairs: Sequence[RepairRecord]) -> _RepairTotals:
     )
 
 
-def _schedule_texts(schedule: FaultSchedule, domain: Domain[Any, Any]) -> tuple[str, str]:
+def _schedule_texts(schedule: FaultSchedule, domain: SomeDomain) -> tuple[str, str]:
     """The row's ``faults`` and ``fault_schedule`` texts (made once per schedule and domain)."""
     return _SCHEDULE_TEXTS.get(
         (schedule, domain),
@@ -248,7 +248,7 @@ def _schedule_texts(schedule: FaultSchedule, domain: Domain[Any, Any]) -> tuple[
     )
 
 
-_SCHEDULE_TEXTS: BoundedCache[tuple[FaultSchedule, Domain[Any, Any]], tuple[str, str]] = (
+_SCHEDULE_TEXTS: BoundedCache[tuple[FaultSchedule, SomeDomain], tuple[str, str]] = (
     BoundedCache("fault schedule texts", 256, kind=CacheKind.RECORD)
 )
 

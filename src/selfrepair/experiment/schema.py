@@ -16,14 +16,14 @@ from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.execution.faults import Clock, Detection, Persistence
+from selfrepair.experiment.schema_physics import PhysicsConfig
+from selfrepair.experiment.schema_physics import context_domain as _domain
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import DEFAULT_SENSING_RANGE, MAX_CLEARANCE_WEIGHT
 from selfrepair.repair.replacement import DEFERRING, RecursionMode
 from selfrepair.repair.strategies import MissionKind, StrategyName
 from selfrepair.repair.tolerance import OPTIMAL, parse_objective
-from selfrepair.robots.domain import Domain
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN
-from selfrepair.robots.registry import get_domain
 from selfrepair.tomlfile import Float, Frozen, Int, NonEmpty
 from selfrepair.world.events import Sensing
 from selfrepair.world.routes import MAX_ROUTES
@@ -39,6 +39,7 @@ __all__ = [
     "LpgAdaptStrategy",
     "MazeConfig",
     "MazeSource",
+    "PhysicsConfig",
     "PlannerConfig",
     "ReplacementStrategy",
     "ReplanStrategy",
@@ -458,6 +459,7 @@ class ExperimentConfig(Frozen):
     mazes: Annotated[tuple[MazeConfig, ...], Field(min_length=1)]
     faults: FaultsConfig = FaultsConfig()
     world: WorldConfig | None = None
+    physics: PhysicsConfig | None = None
     planner: PlannerConfig = PlannerConfig()
     strategies: Annotated[tuple[StrategyConfig, ...], Field(min_length=1)]
     source: str = "<string>"
@@ -491,12 +493,6 @@ def _weights(value: Any) -> Any:
             raise ValueError(f"expected a weight of at most {MAX_CLEARANCE_WEIGHT:,}, got {item!r}")
         out.append(str(weight))
     return tuple(out)
-
-
-def _domain(info: ValidationInfo) -> Domain[Any, Any]:
-    context = info.context or {}
-    domain = context.get("domain")
-    return domain if isinstance(domain, Domain) else get_domain(DEFAULT_DOMAIN)
 
 
 def _reraise(parser: Any, text: str) -> Any:

@@ -483,6 +483,7 @@
     highlight(selected);
     updateNow(k);
     updateFaults(k);
+    diagnosisView.update(k);
     updateRepairs(k, selected);
     for (const [frame, item] of eventItems) {
       item.classList.toggle("future", frame > k);
