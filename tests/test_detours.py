@@ -4,6 +4,7 @@ replanning."""
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import pytest
@@ -19,7 +20,6 @@ from selfrepair.world.maze import parse_maze
 from test_world_events import swept_blocked
 
 ROBOT = sr.get_domain("four-wheel")
-FORWARD = next(a for a in ROBOT.actions if ROBOT.motion_class(a) == "forward")
 ROOM = parse_maze("\n".join(["###########", *["#.........#"] * 7, "###########"]))
 
 
@@ -47,8 +47,9 @@ def reference(
     pose: Pose, queue: tuple[Any, ...], known: frozenset[Any], blocked: frozenset[Cell]
 ) -> tuple[int, tuple[Any, ...]] | None:
     """The detour rule written plainly: windows shortest first, each ending on a free cell with
-    a next action that sweeps no blocked cell, the first valid candidate of the first window
-    that has one."""
+    a next action that sweeps no blocked cell (a candidate window), the first valid candidate
+    of the first window that has one; a candidate window ending beyond the table's radius ends
+    the search."""
     table = detour_table(ROBOT)
     grid = ROOM.free_grid(4)
     free = believed_free(grid, blocked)
@@ -56,38 +57,69 @@ def reference(
     for j in range(1, min(len(queue), MAX_WINDOW) + 1):
         end = ROBOT.apply(end, queue[j - 1])
         rx, ry = end.x - pose.x, end.y - pose.y
+        if end.cell in blocked or not grid.is_free(*end.cell):
+            continue
+        if j < len(queue) and not free(ROBOT.footprint(end, queue[j])):
+            continue
         if max(abs(rx), abs(ry)) > table.radius:
             return None
-        if end.cell in blocked:
-            continue
-        if j < len(queue) and blocked.intersection(ROBOT.footprint(end, queue[j])[1:]):
-            continue
         found = find_detour(table, (pose.heading, rx, ry, end.heading), pose, known, free)
         if found is not None:
             return j, found[1]
     return None
 
 
-@settings(max_examples=60, deadline=None)
+def _on_the_room(pose: Pose, queue: tuple[Any, ...]) -> bool:
+    """Whether every pose ``queue`` predicts from ``pose`` is on the room's grid (a planned
+    queue's are)."""
+    for action in queue:
+        pose = ROBOT.apply(pose, action)
+        if not (0 <= pose.x < ROOM.width and 0 <= pose.y < ROOM.height):
+            return False
+    return True
+
+
+@settings(max_examples=150, deadline=None)
 @given(
-    x=st.integers(4, 6),
-    y=st.integers(4, 4),
+    x=st.integers(3, 7),
+    y=st.integers(3, 5),
     heading=st.sampled_from(list(Heading)),
-    cells=st.sets(st.tuples(st.integers(1, 9), st.integers(1, 7)), max_size=5),
+    actions=st.lists(st.sampled_from(ROBOT.actions), min_size=1, max_size=MAX_WINDOW + 2),
+    cells=st.sets(st.tuples(st.integers(1, 9), st.integers(1, 7)), max_size=6),
     faults=st.sampled_from(["", "FL:F", "FR:B,RL:S"]),
+    form=st.sampled_from(["tuple", "list", "iterator", "copies"]),
 )
-def test_the_compiled_detour_is_the_reference(
-    x: int, y: int, heading: Heading, cells: set[Cell], faults: str
+def test_the_compiled_detour_is_the_reference_on_any_queue(
+    x: int,
+    y: int,
+    heading: Heading,
+    actions: list[Any],
+    cells: set[Cell],
+    faults: str,
+    form: str,
 ) -> None:
-    known = frozenset(ROBOT.parse_faults(faults)) if faults else frozenset()
+    """Any queue (mixed actions, windows that leave the radius, come back, end on walls or on
+    blocked cells), given as a tuple, a list, a one-pass iterator (as the stepper's queue view
+    iterates) or as equal copies of the domain's actions: the reference's answer, cold and
+    warm."""
     pose = Pose(x, y, heading)
-    ahead = ROBOT.apply(pose, FORWARD).cell  # the first action meets a blocked cell
-    blocked = (frozenset(cells) | {ahead}) - {pose.cell}
-    queue = (FORWARD,) * 3  # three cells on from (4..6, 4), inside the room
-    finder = DetourFinder(ROBOT, ROOM.free_grid(4), lambda i, actions, j: (j, actions))
-    for _ in range(2):  # cold, then warm: the same answer
-        got = finder.find(pose, queue, known, blocked)
-        assert got == reference(pose, queue, known, blocked)
+    queue = tuple(actions)
+    if not _on_the_room(pose, queue):
+        return
+    known = frozenset(ROBOT.parse_faults(faults)) if faults else frozenset()
+    first = ROBOT.footprint(pose, queue[0])
+    blocked = (frozenset(cells) | set(first[1:])) - {pose.cell}  # the first action meets one
+    finder = DetourFinder(ROBOT, ROOM.free_grid(4), lambda i, acts, j: (j, acts))
+    expected = reference(pose, queue, known, blocked)
+    for _ in range(2):
+        given_queue: Any = {
+            "tuple": queue,
+            "list": list(queue),
+            "iterator": iter(queue),
+            "copies": tuple(dataclasses.replace(a) for a in queue),
+        }[form]
+        got = finder.find(pose, given_queue, known, blocked)
+        assert got == expected
         if got is not None:
             assert all(ROBOT.available(a, known) for a in got[1])
 

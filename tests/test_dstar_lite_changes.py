@@ -72,7 +72,7 @@ def _run(
 ) -> list[tuple[Any, ...]]:  # fmt: skip
     """Apply ``events`` to a search; after each, the plan, its expansions and the number of
     vertex updates the change made."""
-    search = DStarLite.from_walls(
+    search = DStarLite.create(
         FOUR_WHEEL, setup["walls"], setup["start"], setup["goal"],
         goal_heading=setup["goal_heading"], clearance_weight=setup["weight"], backend=backend,
     )  # fmt: skip
@@ -98,7 +98,7 @@ def _run(
 
 
 def _check_against_astar(setup: dict[str, Any], events: list[Event]) -> None:
-    search = DStarLite.from_walls(
+    search = DStarLite.create(
         FOUR_WHEEL, setup["walls"], setup["start"], setup["goal"],
         goal_heading=setup["goal_heading"], clearance_weight=setup["weight"], backend="python",
     )  # fmt: skip
@@ -153,7 +153,7 @@ def test_the_compiled_search_gives_the_reference_plans_costs_and_expansions(
 def _corridor(backend: str) -> DStarLite:
     walls = np.ones((3, 7), dtype=bool)
     walls[1, :] = False  # one row of 7 free cells, y = 1
-    return DStarLite.from_walls(FOUR_WHEEL, walls, Pose(0, 1, Heading.E), (6, 1), backend=backend)
+    return DStarLite.create(FOUR_WHEEL, walls, Pose(0, 1, Heading.E), (6, 1), backend=backend)
 
 
 @pytest.mark.parametrize("backend", ["python", pytest.param("numba", marks=NUMBA)])
@@ -244,10 +244,10 @@ def test_another_robot_and_a_goal_heading() -> None:
 def test_misuse_raises() -> None:
     walls = np.zeros((3, 3), dtype=bool)
     with pytest.raises(ProblemError, match="backend"):
-        DStarLite.from_walls(FOUR_WHEEL, walls, Pose(0, 0, Heading.E), (2, 2), backend="fast")
+        DStarLite.create(FOUR_WHEEL, walls, Pose(0, 0, Heading.E), (2, 2), backend="fast")
     with pytest.raises(ProblemError, match="outside"):
-        DStarLite.from_walls(FOUR_WHEEL, walls, Pose(0, 0, Heading.E), (3, 2))
-    search = DStarLite.from_walls(FOUR_WHEEL, walls, Pose(0, 0, Heading.E), (2, 2))
+        DStarLite.create(FOUR_WHEEL, walls, Pose(0, 0, Heading.E), (3, 2))
+    search = DStarLite.create(FOUR_WHEEL, walls, Pose(0, 0, Heading.E), (2, 2))
     with pytest.raises(ProblemError, match="outside"):
         search.update_cells(blocked=[(5, 0)])
     with pytest.raises(ProblemError, match="both"):

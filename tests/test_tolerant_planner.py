@@ -14,10 +14,12 @@ from selfrepair.errors import ProblemError
 from selfrepair.execution.executor import mission_context
 from selfrepair.execution.result import MissionSpec
 from selfrepair.geometry import Heading, Pose
+from selfrepair.limits import MAX_LOOKUP_PATTERNS
 from selfrepair.repair import tolerance_book
-from selfrepair.repair.replacement import table_reach
+from selfrepair.repair.replacement import DEFAULT_MAX_DEPTH, RecursionMode, table_reach
 from selfrepair.repair.strategies import StrategyOptions
 from selfrepair.repair.tolerance import fault_model, needs_replan, plan_tolerance
+from selfrepair.repair.tolerance_book import MaskBook
 from selfrepair.repair.tolerance_masks import tolerance_masks, tolerance_term
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import PlanStatus
@@ -211,3 +213,66 @@ def test_backends_agree_on_tolerant_plans(case: tuple[PlanningProblem, int]) -> 
     )  # fmt: skip
     if fast.status is PlanStatus.SOLVED:
         assert plan_cost(problem, fast.actions) == fast.cost
+
+
+@NUMBA
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    st.integers(0, 10_000), st.sampled_from([9, 13]), st.sampled_from([1, 2]),
+    st.sampled_from([1, 2]),
+    st.sampled_from(["handwritten", "generated-agnostic", "generated-indexed"]),
+    st.sampled_from(["flat", "guarded", "layered"]),
+)  # fmt: skip
+def test_the_kernels_pattern_reading_equals_the_reference_masks(
+    seed: int, size: int, corridor: int, k: int, table: str, recursion: str
+) -> None:
+    """The counts the compiled search reads per expanded cell (its own pattern gather and index
+    probe, the book filling the patterns it lacks) equal the masks of a book of their own."""
+    from selfrepair.search import _kernels
+    from selfrepair.search import term as term_module
+
+    assert _kernels._MIX == term_module._MIX  # the kernel's slot is pattern_slot's
+    maze = generate_maze(size, size, corridor=corridor, braid=0.4, seed=seed)
+    t = resolve_table(table)
+    grid = maze.free_grid(max(2, table_reach(t)))
+    model = fault_model(FOUR_WHEEL, k)
+    term = tolerance_term(t, grid, ACTIONS, model, mode=recursion)
+    assert term.source is not None and term.counts is None
+    mode = RecursionMode(recursion)
+    reference = MaskBook(t, ACTIONS, model, mode, DEFAULT_MAX_DEPTH, MAX_LOOKUP_PATTERNS)
+    expected = reference.masks(grid).counts
+    assert np.array_equal(_kernels.term_counts(term), expected)
+    assert np.array_equal(term.dense_counts(), expected)
+    assert expected.any()
+
+
+@NUMBA
+def test_a_book_that_starts_afresh_during_a_search_gives_the_same_plan(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """With a book bound of 3 rows, the kernel's misses on a map the book has not met start the
+    book afresh again and again during one search: the cell rows it read before are dropped, and
+    the plans equal the pure-Python search's on the dense masks."""
+    monkeypatch.setattr(tolerance_book, "MAX_BOOK_ROWS", 3)
+    starts = []
+    start = MaskBook._start
+
+    def counted(book: MaskBook) -> None:
+        starts.append(book)
+        start(book)
+
+    monkeypatch.setattr(MaskBook, "_start", counted)
+    maze = generate_maze(15, 15, corridor=1, braid=0.4, seed=41)
+    for penalty in (None, Fraction(1)):
+        term = _term(maze, "generated-agnostic", "flat", 1, penalty)
+        for route in random_routes(maze, 3, 5):
+            problem = PlanningProblem(maze, route.start, route.goal, step_term=term)
+            before = len(starts)
+            fast = plan(problem, backend="numba")
+            if route is random_routes(maze, 3, 5)[0] and penalty is None:
+                assert len(starts) > before + 1  # afresh more than once in the first search
+            slow = plan(problem, backend="python")
+            assert (fast.status, fast.actions, fast.cost) == (slow.status, slow.actions, slow.cost)
+    rows = tolerance_masks(resolve_table("generated-agnostic"), maze.free_grid(2), ACTIONS,
+                           SINGLE).counts  # fmt: skip
+    assert rows.any()

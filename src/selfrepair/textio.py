@@ -12,10 +12,18 @@ business: every reader of selfrepair accepts and ignores one (:func:`strip_bom`)
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TypeAlias
 
 from selfrepair.errors import InputError, LimitError
 
-__all__ = ["BOM", "read_text", "strip_bom", "text_lines"]
+__all__ = ["BOM", "JSONObject", "JSONValue", "read_text", "strip_bom", "text_lines"]
+
+JSONValue: TypeAlias = "str | int | float | bool | list[JSONValue] | dict[str, JSONValue] | None"
+"""A value as :func:`json.loads` returns it (or :func:`json.dumps` takes it): what a JSON file
+holds, to be taken apart with ``isinstance`` checks rather than trusted."""
+
+JSONObject: TypeAlias = "dict[str, JSONValue]"
+"""A JSON object: the header of a table file, one row of a trace, one mission row."""
 
 BOM = "\ufeff"
 """The UTF-8 byte-order mark as a character; some editors write it at the start of a file."""

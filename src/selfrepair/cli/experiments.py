@@ -16,6 +16,7 @@ from selfrepair.cli._app import (
     app,
     echo,
 )
+from selfrepair.cli._inputs import TraceArg
 from selfrepair.cli._printing import (
     print_baselines,
     print_crossover,
@@ -28,7 +29,10 @@ from selfrepair.errors import InputError, ProblemError
 from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES, MAX_MISSIONS, MAX_TRACE_BYTES
 
 if TYPE_CHECKING:
+
+    from selfrepair.experiment.backends import MissionFunction
     from selfrepair.experiment.keys import Mission
+    from selfrepair.experiment.store import Value
 
 __all__ = [
     "animate",
@@ -43,7 +47,7 @@ __all__ = [
 
 def resolve_experiment(spec: str) -> Path:
     """A bundled experiment name (``paper``, ``scale``, ``baselines``, ``full``, ``team``,
-    ``dynamic``, ...) or a path to a TOML file."""
+    ``dynamic``, ``diagnosis``, ...) or a path to a TOML file."""
     from importlib import resources
 
     folder = resources.files("selfrepair").joinpath("data", "experiments")
@@ -78,7 +82,8 @@ def experiment(
         str,
         typer.Argument(
             metavar="CONFIG",
-            help="Bundled experiment (paper, scale, baselines, full, team, dynamic, ...) or "
+            help="Bundled experiment (paper, scale, baselines, full, team, dynamic, diagnosis, "
+            "...) or "
             "FILE.toml.",
         ),
     ],
@@ -153,15 +158,17 @@ def experiment(
     import joblib
 
     from selfrepair.experiment.backends import check_backend
-    from selfrepair.experiment.dynamic_findings import dynamic_findings
-    from selfrepair.experiment.findings import check_findings, reference_note, summarize
     from selfrepair.experiment.missions import expand
     from selfrepair.experiment.runner import run_missions
     from selfrepair.experiment.store import ResultStore
-    from selfrepair.experiment.summary import fault_set_bite
-    from selfrepair.experiment.teams import TeamExperimentConfig, load_experiment
+    from selfrepair.experiment.teams import (
+        TeamExperimentConfig,
+        execute_team_mission,
+        expand_team,
+        load_experiment,
+    )
     from selfrepair.experiment.timing import execute_mission
-    from selfrepair.experiment.tolerance_findings import tolerance_findings
+    from selfrepair.experiment.variants import left_out
 
     missions: tuple[Mission, ...] = ()
     db_path: Path | None = None
@@ -174,44 +181,37 @@ def experiment(
         check_backend(backend, jobs=jobs, scheduler=scheduler)
         if export_parquet is not None:
             _require_pyarrow()  # before the sweep, not after it
-        loaded = load_experiment(resolve_experiment(config), max_file_bytes=max_file_bytes)
-        if isinstance(loaded, TeamExperimentConfig):
-            from selfrepair.cli.team import run_team_experiment
-
+        cfg = load_experiment(resolve_experiment(config), max_file_bytes=max_file_bytes)
+        execute: MissionFunction
+        if isinstance(cfg, TeamExperimentConfig):
             if repeats is not None:
                 raise InputError(
                     "--repeats times single-robot missions; a team experiment runs each once",
                     source="--repeats",
                 )
-            return run_team_experiment(
-                loaded,
-                db,
-                jobs=joblib.cpu_count() if jobs == -1 else jobs,
-                backend=backend,
-                scheduler=scheduler,
-                address=address,
-                export_csv=export_csv,
-                export_parquet=export_parquet,
-                progress=mission_progress,
-                max_missions=max_missions,
-                max_cells=max_cells,
+            missions = expand_team(cfg, max_missions=max_missions, max_cells=max_cells)
+            what, execute, report = "team missions", execute_team_mission, _team_report
+        else:
+            missions = expand(cfg, max_missions=max_missions, max_cells=max_cells)
+            for name, reason in left_out(cfg):  # an optional strategy that cannot run here
+                echo(f"{cfg.name}: {name} left out: {reason}")
+            execute = partial(
+                execute_mission, repeats=repeats or cfg.timing_repeats, footing=footing
             )
-        cfg = loaded
-        missions = expand(cfg, max_missions=max_missions, max_cells=max_cells)
+            what, report = "missions", partial(
+                _report, crossover=cfg.crossover, physics=cfg.physics is not None
+            )
         db_path = db if db is not None else Path("results") / f"{cfg.name}.sqlite"
-        n_jobs = joblib.cpu_count() if jobs == -1 else jobs
         with ResultStore(db_path) as store:
-            with mission_progress(f"{cfg.name}: {len(missions)} missions") as on_progress:
+            with mission_progress(f"{cfg.name}: {len(missions)} {what}") as on_progress:
                 summary = run_missions(
                     missions,
                     store,
-                    jobs=n_jobs,
+                    jobs=joblib.cpu_count() if jobs == -1 else jobs,
                     backend=backend,
                     scheduler=scheduler,
                     address=address,
-                    execute=partial(
-                        execute_mission, repeats=repeats or cfg.timing_repeats, footing=footing
-                    ),
+                    execute=execute,
                     on_progress=on_progress,
                 )
             elsewhere = f", {summary.elsewhere} by another writer" if summary.elsewhere else ""
@@ -221,15 +221,7 @@ def experiment(
             )
             keys = {m.key for m in missions}
             rows = [r for r in store.rows() if r["key"] in keys]
-            print_summary(summarize(rows), title=f"{cfg.name}: per strategy")
-            print_fault_sets(fault_set_bite(rows))
-            print_findings(
-                [*check_findings(rows), *tolerance_findings(rows), *dynamic_findings(rows)],
-                reference_note(rows),
-            )
-            print_baselines(rows)
-            if cfg.crossover:
-                print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
+            report(rows, title=f"{cfg.name}: per strategy", db_path=db_path)
             if export_csv is not None:
                 echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
             if export_parquet is not None:
@@ -239,6 +231,58 @@ def experiment(
         sys.stderr.write(f"selfrepair: interrupted: {_stored_after_interrupt(missions, db_path)}\n")
         raise typer.Exit(130) from None
     return 0
+
+
+def _report(
+    rows: "list[dict[str, Value]]",
+    *,
+    title: str,
+    db_path: Path,
+    crossover: bool,
+    physics: bool = False,
+) -> None:
+    """What ``experiment`` prints of a single-robot experiment's stored rows: (``physics``, an
+    experiment with a ``[physics]`` section) the physics rows' summary and footing table, then
+    of the lattice's rows the per-strategy summary, the fault sets that bite, the findings, the
+    baselines, and (``crossover``) where replanning catches up (a picture next to the
+    database)."""
+    from selfrepair.experiment.findings import reference_note, summarize
+    from selfrepair.experiment.report import all_findings
+    from selfrepair.experiment.summary import fault_set_bite
+
+    if physics:
+        rows = _print_physics(rows, title)
+    print_summary(summarize(rows), title=title)
+    print_fault_sets(fault_set_bite(rows))
+    print_findings(all_findings(rows), reference_note(rows))
+    print_baselines(rows)
+    if crossover:
+        print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
+
+
+def _team_report(rows: "list[dict[str, Value]]", *, title: str, db_path: Path) -> None:
+    """What ``experiment`` prints of a team experiment's stored rows: the per-strategy team
+    summary."""
+    from selfrepair.cli.team import print_team_summary
+    from selfrepair.team.summary import summarize_team
+
+    print_team_summary(summarize_team(rows), title=title)
+
+
+def _print_physics(rows: "list[dict[str, Value]]", title: str) -> "list[dict[str, Value]]":
+    """For an experiment with a ``[physics]`` section: the per-strategy summary of the physics
+    rows and the footing table (the lattice's missions that physics completes, with and without
+    a wall contact); returns the lattice rows, which the usual summary and findings read."""
+    from selfrepair.cli.physics import print_footing
+    from selfrepair.experiment.findings import summarize
+    from selfrepair.experiment.physics import footing_summary, stored_footing_rows
+
+    physics = [r for r in rows if r.get("simulator") == "physics"]
+    if physics:
+        print_summary(summarize(physics), title=f"{title} in physics")
+        echo(f"{title}: the lattice simulator against physics")
+        print_footing(footing_summary(stored_footing_rows(rows)))
+    return [r for r in rows if r.get("simulator") != "physics"]
 
 
 def _require_pyarrow() -> None:
@@ -312,10 +356,7 @@ def report(
 
 @app.command()
 def animate(
-    trace: Annotated[
-        Path,
-        typer.Argument(metavar="TRACE", help="Trace file (JSON Lines) written by `run --trace`."),
-    ],
+    trace: TraceArg,
     out: Annotated[Path, typer.Option("--out", "-o", metavar="FILE", help="GIF file to write.")],
     fps: Annotated[
         int, typer.Option("--fps", metavar="N", help="Frames per second.", min=1, max=60)

@@ -12,8 +12,16 @@ from typing import Annotated
 
 import typer
 
-from selfrepair.cli._app import app, echo
-from selfrepair.cli._inputs import DomainOpt, Faults, MazeArg, Start, domain_named, find_input
+from selfrepair.cli._app import app, echo, limit_option
+from selfrepair.cli._inputs import (
+    DomainOpt,
+    Faults,
+    GoalPose,
+    MazeArg,
+    Start,
+    domain_named,
+    find_input,
+)
 from selfrepair.errors import InputError
 
 __all__ = ["PDDL_CELLS_DEFAULT", "pddl_command"]
@@ -28,9 +36,7 @@ the exporter to start)."""
 def pddl_command(
     maze_spec: MazeArg,
     start: Start,
-    goal: Annotated[
-        str, typer.Option("--goal", metavar="X,Y[,H]", help="Goal cell, or goal pose X,Y,H.")
-    ],
+    goal: GoalPose,
     output: Annotated[
         Path, typer.Option("-o", "--output", metavar="DIR", help="Directory for the files.")
     ],
@@ -43,12 +49,7 @@ def pddl_command(
     ] = "",
     max_cells: Annotated[
         int,
-        typer.Option(
-            "--max-cells",
-            metavar="N",
-            min=1,
-            help="Largest maze (width x height) to export; raise with care.",
-        ),
+        limit_option("--max-cells", "Largest maze (width x height) to export (raise with care)."),
     ] = PDDL_CELLS_DEFAULT,
     with_plan: Annotated[
         bool, typer.Option("--plan", help="Also write the lattice planner's plan as plan.pddl.")
@@ -69,23 +70,14 @@ def pddl_command(
         )
     from selfrepair.baselines.pddl import export_pddl
     from selfrepair.baselines.pddltext import plan_to_pddl, write_pddl
-    from selfrepair.cli.planning import parse_goal
-    from selfrepair.geometry import parse_pose
-    from selfrepair.robots import four_wheel
+    from selfrepair.cli.planning import planning_problem
+    from selfrepair.robots.four_wheel import FOUR_WHEEL
     from selfrepair.search.astar import PlanStatus
     from selfrepair.search.lattice import plan
-    from selfrepair.search.problem import PlanningProblem
     from selfrepair.world.bundled import resolve_maze
 
     maze = resolve_maze(find_input(maze_spec))
-    goal_cell, goal_heading = parse_goal(goal)
-    problem = PlanningProblem(
-        maze=maze,
-        start=parse_pose(start, source="--start"),
-        goal=goal_cell,
-        goal_heading=goal_heading,
-        faults=four_wheel.parse_faults(faults, source="--faults"),
-    )
+    problem = planning_problem(maze, FOUR_WHEEL, start, goal, faults)
     task = export_pddl(problem, name=name, max_cells=max_cells)
     domain_path, problem_path = write_pddl(task, output)
     echo(f"wrote {domain_path} and {problem_path}")

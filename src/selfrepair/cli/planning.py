@@ -28,6 +28,7 @@ from selfrepair.cli._inputs import (
     ClearanceWeight,
     DomainOpt,
     Faults,
+    GoalPose,
     Heuristic,
     Json,
     MaxExpansions,
@@ -50,7 +51,7 @@ if TYPE_CHECKING:
     from selfrepair.search.problem import GridResult, PlanningProblem
     from selfrepair.world.maze import Maze
 
-__all__ = ["kernel_load_ns", "parse_goal", "path_json", "plan_json"]
+__all__ = ["kernel_load_ns", "parse_goal", "path_json", "plan_json", "planning_problem"]
 
 MAX_PICTURE_CELLS = 100 * 100
 """``path`` draws its picture by default only for mazes up to this many cells (``--picture``
@@ -65,6 +66,34 @@ def parse_goal(text: str) -> "tuple[Cell, Heading | None]":
         pose = parse_pose(text, source="--goal")
         return pose.cell, pose.heading
     return parse_cell(text, source="--goal"), None
+
+
+def planning_problem(
+    maze: "Maze",
+    domain: "Domain[Any, Any]",
+    start: str,
+    goal: str,
+    faults: str,
+    clearance_weight: str = "0",
+    *,
+    clearance_radius: int = 2,
+) -> "PlanningProblem":
+    """The problem of planning on ``maze`` that the options ``--start`` (X,Y,H), ``--goal``
+    (X,Y or X,Y,H), ``--faults`` and ``--clearance-weight`` give, each checked."""
+    from selfrepair.geometry import parse_pose
+    from selfrepair.search.problem import PlanningProblem
+
+    goal_cell, goal_heading = parse_goal(goal)
+    return PlanningProblem(
+        maze=maze,
+        start=parse_pose(start, source="--start"),
+        goal=goal_cell,
+        goal_heading=goal_heading,
+        faults=parse_faults(domain, faults),
+        clearance_weight=parse_weight(clearance_weight),
+        clearance_radius=clearance_radius,
+        domain=domain,
+    )
 
 
 def kernel_load_ns(backend: str, *kinds: str, domain: "Domain[Any, Any] | None" = None) -> int:
@@ -139,9 +168,7 @@ def _times(result_ns: int, load_ns: int) -> str:
 def plan_command(
     maze_spec: MazeArg,
     start: Start,
-    goal: Annotated[
-        str, typer.Option("--goal", metavar="X,Y[,H]", help="Goal cell, or goal pose X,Y,H.")
-    ],
+    goal: GoalPose,
     faults: Faults = "",
     clearance_weight: ClearanceWeight = "0",
     clearance_radius: Annotated[
@@ -173,24 +200,14 @@ def plan_command(
 
     Exit 1 when there is no plan (or the budget ran out).
     """
-    from selfrepair.geometry import parse_pose
     from selfrepair.search.astar import PlanStatus
     from selfrepair.search.lattice import plan
-    from selfrepair.search.problem import PlanningProblem
     from selfrepair.world.bundled import resolve_maze
 
     domain = domain_named(domain_name)
     maze = resolve_maze(find_input(maze_spec), max_cells=max_cells)
-    goal_cell, goal_heading = parse_goal(goal)
-    problem = PlanningProblem(
-        maze=maze,
-        start=parse_pose(start, source="--start"),
-        goal=goal_cell,
-        goal_heading=goal_heading,
-        faults=parse_faults(domain, faults),
-        clearance_weight=parse_weight(clearance_weight),
-        clearance_radius=clearance_radius,
-        domain=domain,
+    problem = planning_problem(
+        maze, domain, start, goal, faults, clearance_weight, clearance_radius=clearance_radius
     )
     load_ns = kernel_load_ns(backend, "lattice", domain=domain)
     result = plan(

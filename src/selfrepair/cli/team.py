@@ -15,6 +15,8 @@ import typer
 from selfrepair.cli._app import (
     MaxCells,
     MaxFileBytes,
+    MaxRobots,
+    MaxTasks,
     MaxTraceBytes,
     app,
     command_group,
@@ -22,39 +24,28 @@ from selfrepair.cli._app import (
     echo,
     echo_json,
 )
-from selfrepair.cli._inputs import find_input
+from selfrepair.cli._inputs import Backend, Json, TraceOut, find_input
 from selfrepair.cli._mission import Events, SensingOpt, check_choice
 from selfrepair.limits import (
     MAX_CELLS,
     MAX_FILE_BYTES,
-    MAX_MISSIONS,
     MAX_ROBOTS,
     MAX_TASKS,
     MAX_TRACE_BYTES,
 )
 
 if TYPE_CHECKING:
-    from selfrepair.experiment.teams import TeamExperimentConfig
     from selfrepair.team.result import TeamResult
 
-__all__ = ["run_team_experiment", "team_app"]
+__all__ = ["print_team_summary", "team_app"]
 
 team_app = command_group(help="Team missions: several robots that repair each other.")
 app.add_typer(team_app, name="team")
 
 _STRATEGY_HELP = "team-replacement, reallocation or alone."
 
-MaxRobots = Annotated[
-    int,
-    typer.Option(
-        "--max-robots", metavar="N", min=1, help="Refuse a scenario of more robots than this."
-    ),
-]
-MaxTasks = Annotated[
-    int,
-    typer.Option(
-        "--max-tasks", metavar="N", min=0, help="Refuse a scenario of more tasks than this."
-    ),
+_TeamTrace = Annotated[
+    Path, typer.Argument(metavar="TRACE", help="A team trace written by team run --trace.")
 ]
 
 
@@ -139,11 +130,8 @@ def team_run(
         typer.Option("--table", metavar="TABLE", help="Team table: handwritten or generated."),
     ] = "handwritten",
     robot_table: RobotTable = None,
-    trace: Annotated[
-        Path | None,
-        typer.Option("--trace", metavar="FILE", help="Write the team trace (JSON Lines) here."),
-    ] = None,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the metrics row as JSON.")] = False,
+    trace: TraceOut = None,
+    as_json: Json = False,
     max_ticks: Annotated[
         int | None,
         typer.Option(
@@ -152,10 +140,7 @@ def team_run(
             help="End the mission after this many ticks (default: generous).",
         ),
     ] = None,
-    backend: Annotated[
-        str,
-        typer.Option("--backend", metavar="NAME", help="Planner backend: auto, python or numba."),
-    ] = "auto",
+    backend: Backend = "auto",
     detect: Annotated[
         str | None,
         typer.Option(
@@ -259,10 +244,7 @@ def team_compare(
             max=1000,
         ),
     ] = 5,
-    backend: Annotated[
-        str,
-        typer.Option("--backend", metavar="NAME", help="Planner backend: auto, python or numba."),
-    ] = "auto",
+    backend: Backend = "auto",
     robot_table: RobotTable = None,
     max_robots: MaxRobots = MAX_ROBOTS,
     max_tasks: MaxTasks = MAX_TASKS,
@@ -323,10 +305,7 @@ def team_compare(
 
 @team_app.command("replay")
 def team_replay(
-    trace: Annotated[
-        Path,
-        typer.Argument(metavar="TRACE", help="A team trace written by team run --trace."),
-    ],
+    trace: _TeamTrace,
     max_trace_bytes: MaxTraceBytes = MAX_TRACE_BYTES,
 ) -> int:
     """Re-simulate a team trace; report what does not hold.
@@ -345,7 +324,7 @@ def team_table(
     name: Annotated[
         str, typer.Argument(metavar="TABLE", help="handwritten or generated.")
     ] = "handwritten",
-    as_json: Annotated[bool, typer.Option("--json", help="Print the table as JSON.")] = False,
+    as_json: Json = False,
 ) -> int:
     """Print a team replacement table.
 
@@ -383,10 +362,7 @@ def team_table(
 
 @team_app.command("frame")
 def team_frame(
-    trace: Annotated[
-        Path,
-        typer.Argument(metavar="TRACE", help="A team trace written by team run --trace."),
-    ],
+    trace: _TeamTrace,
     out: Annotated[Path, typer.Option("--out", "-o", metavar="FILE", help="PNG file to write.")],
     tick: Annotated[
         float | None,
@@ -406,56 +382,6 @@ def team_frame(
 
     written = draw_team_frame(trace, out, tick=tick, max_trace_bytes=max_trace_bytes)
     echo(f"wrote {written}")
-    return 0
-
-
-def run_team_experiment(
-    config: "TeamExperimentConfig",
-    db: Path | None,
-    *,
-    jobs: int,
-    backend: str,
-    scheduler: str | None,
-    address: str | None,
-    export_csv: Path | None,
-    export_parquet: Path | None,
-    progress: Any,
-    max_missions: int | None = MAX_MISSIONS,
-    max_cells: int | None = MAX_CELLS,
-) -> int:
-    """The team branch of ``selfrepair experiment``: run the missions (resumable, any
-    backend), then print the per-strategy summary of every stored row of this experiment."""
-    from selfrepair.experiment.runner import run_missions
-    from selfrepair.experiment.store import ResultStore
-    from selfrepair.experiment.teams import execute_team_mission, expand_team
-    from selfrepair.team.summary import summarize_team
-
-    missions = expand_team(config, max_missions=max_missions, max_cells=max_cells)
-    db_path = db if db is not None else Path("results") / f"{config.name}.sqlite"
-    with ResultStore(db_path) as store:
-        with progress(f"{config.name}: {len(missions)} team missions") as on_progress:
-            summary = run_missions(
-                missions,
-                store,
-                jobs=jobs,
-                backend=backend,
-                scheduler=scheduler,
-                address=address,
-                execute=execute_team_mission,
-                on_progress=on_progress,
-            )
-        elsewhere = f", {summary.elsewhere} by another writer" if summary.elsewhere else ""
-        echo(
-            f"{config.name}: {summary.total} missions, {summary.skipped} already stored, "
-            f"{summary.ran} run{elsewhere} in {summary.seconds:.1f} s -> {db_path}"
-        )
-        keys = {m.key for m in missions}
-        rows = [r for r in store.rows() if r["key"] in keys]
-        print_team_summary(summarize_team(rows), title=f"{config.name}: per strategy")
-        if export_csv is not None:
-            echo(f"wrote {store.export_csv(export_csv)} rows to {export_csv}")
-        if export_parquet is not None:
-            echo(f"wrote {store.export_parquet(export_parquet)} rows to {export_parquet}")
     return 0
 
 

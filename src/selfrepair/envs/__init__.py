@@ -36,21 +36,21 @@ HIDDEN_ENV_ID = "selfrepair/FaultyMazeHidden-v0"
 """The partially observable variant: the faults are hidden from the agent (detection ``hidden``:
 no ``faults`` observation, the robot performs what ``Domain.effective`` says)."""
 
-if ENV_ID not in registry:
-    register(
-        id=ENV_ID,
-        entry_point="selfrepair.envs.env:FaultyMazeEnv",
-        vector_entry_point="selfrepair.envs.vector:FaultyMazeVectorEnv",
-        nondeterministic=False,
-    )
-if HIDDEN_ENV_ID not in registry:
-    register(
-        id=HIDDEN_ENV_ID,
-        entry_point="selfrepair.envs.env:FaultyMazeEnv",
-        vector_entry_point="selfrepair.envs.vector:FaultyMazeVectorEnv",
-        nondeterministic=False,
-        kwargs={"faults": FaultSpec(detection=(Detection.HIDDEN,))},
-    )
+_LATTICE_ENVS = {
+    ENV_ID: {},
+    HIDDEN_ENV_ID: {"faults": FaultSpec(detection=(Detection.HIDDEN,))},
+}
+"""Each lattice environment id and the keyword arguments it makes its environment with."""
+
+for _env_id, _kwargs in _LATTICE_ENVS.items():
+    if _env_id not in registry:
+        register(
+            id=_env_id,
+            entry_point="selfrepair.envs.env:FaultyMazeEnv",
+            vector_entry_point="selfrepair.envs.vector:FaultyMazeVectorEnv",
+            nondeterministic=False,
+            kwargs=_kwargs,
+        )
 
 PHYSICS_ENV_ID = "selfrepair/FaultyMazePhysics-v0"
 """The Gymnasium id of :class:`selfrepair.envs.physics.PhysicsMazeEnv` (MuJoCo underneath; the

@@ -14,7 +14,7 @@ __all__ = ["ask", "followed"]
 
 
 def ask(
-    stepper: Stepper, pose: Pose, known: frozenset[Any], step: int
+    stepper: Stepper, pose: Pose, known: frozenset[object], step: int
 ) -> tuple[Entry | None, RepairRecord | None]:
     """What ``stepper`` commands at ``pose`` knowing exactly ``known`` after ``step`` commands
     (``None`` at the goal or when no repair exists), and the last repair it made to answer

@@ -23,8 +23,9 @@ it, and records the steps and repairs. :func:`run_mission` runs it to the end; p
    the robot did not know yet) is recorded as a step with source ``failed-attempt`` and reveals
    its blocking faults. With detection ``hidden`` the stepper is also given what the robot
    observed (:meth:`Simulator.observe`) and whether the command took it elsewhere than it should
-   have (see :mod:`selfrepair.execution.stepper`). An oracle strategy (registered ``told``) is
-   told the true faults before every command, whatever the detection.
+   have (see :mod:`selfrepair.execution.stepper`), and what its observing teammates saw of
+   it (``MissionSpec.observers``, :meth:`Simulator.witnessed`). An oracle strategy (registered
+   ``told``) is told the true faults before every command, whatever the detection.
 
 The initial plan is made, by default, before any fault is known (``initial_faults_known=False``),
 as in the original experiment. In a changing world it avoids the cells the robot sees blocked at
@@ -49,7 +50,6 @@ from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
-from typing import Any
 
 import numpy as np
 
@@ -81,13 +81,13 @@ from selfrepair.search.lattice import action_cost, cost_scale, plan, planning_ac
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.search.term import StepTerm
 from selfrepair.status import mission_status
-from selfrepair.tables.model import ReplacementTable
-from selfrepair.world.maze import Maze, clearance_penalties
+from selfrepair.tables.model import SomeTable
+from selfrepair.world.maze import Maze, believed_maze, clearance_penalties
 
 __all__ = ["mission_context", "run_mission", "start_repairer"]
 
 
-def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> MissionContext:
+def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContext:
     """The :class:`~selfrepair.repair.strategies.MissionContext` of ``spec``: its planner, free
     test and step cost on its map, with ``table`` (``None`` for strategies without one)."""
     settings = spec.planner
@@ -99,7 +99,11 @@ def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> Missio
     belief = Belief()
 
     def plan_to(
-        start: Pose, goal: Cell, heading: Heading | None, known: frozenset[Any], budget: int | None
+        start: Pose,
+        goal: Cell,
+        heading: Heading | None,
+        known: frozenset[object],
+        budget: int | None,
     ) -> PlanResult:
         blocked = belief.blocked
         if blocked and goal in blocked and goal != start.cell:  # no way in while it is blocked
@@ -116,7 +120,7 @@ def mission_context(spec: MissionSpec, table: ReplacementTable | None) -> Missio
                 return found  # a hard objective without a tolerant plan: the plain optimum
         return plan(problem, heuristic=heuristic, max_expansions=budget, backend=backend)
 
-    def cost(pose: Pose, action: Any) -> Fraction:
+    def cost(pose: Pose, action: object) -> Fraction:
         return action_cost(
             maze, pose, action, clearance_weight=weight, clearance_radius=radius, domain=domain
         )
@@ -155,27 +159,8 @@ def start_repairer(spec: MissionSpec, context: MissionContext) -> Repairer:
     return repairer
 
 
-def believed_maze(maze: Maze, blocked: frozenset[Cell]) -> Maze:
-    """``maze`` with the cells ``blocked`` (world events the robot believes in) as walls: the map
-    the robot plans on in a changing world (the last few are kept)."""
-    return _BELIEVED.get((maze, blocked), lambda: _with_walls(maze, blocked))
-
-
-def _with_walls(maze: Maze, blocked: frozenset[Cell]) -> Maze:
-    walls = maze.walls.copy()
-    for x, y in blocked:
-        if maze.in_bounds(x, y):
-            walls[y, x] = True
-    return Maze(walls, name=maze.name)
-
-
-_BELIEVED: BoundedCache[tuple[Maze, frozenset[Cell]], Maze] = BoundedCache(
-    "mazes with believed-blocked cells", 4, kind=CacheKind.PLAN
-)
-
-
 def _objective_term(
-    spec: MissionSpec, objective: PlanObjective, table: ReplacementTable | None
+    spec: MissionSpec, objective: PlanObjective, table: SomeTable | None
 ) -> StepTerm:
     """The tolerance term of ``objective`` for the mission's first plan: masks of the
     replacement strategy with the mission's table (or the one its options name) and recursion."""
@@ -238,6 +223,7 @@ def run_mission(
             world=spec.world,
             behaviour=spec.behaviour,
             observation=spec.observation,
+            observers=spec.observers,
         )
     initial_known = sim.sense() if spec.initial_faults_known else frozenset()
     table = spec.options.resolved_table() if uses_table(spec.strategy) else None
@@ -300,7 +286,7 @@ def _run_loop(
 NO_PLAN = MissionStatus.NO_INITIAL_PLAN
 
 
-def _prepare(spec: MissionSpec, table: ReplacementTable | None) -> None:
+def _prepare(spec: MissionSpec, table: SomeTable | None) -> None:
     """Check the table's robot and load the compiled planner before anything is timed (the
     table's geometry and the maze's free grid are made by :func:`mission_context`, also before),
     so the first planning time and the first repair latency of a process are not inflated by
@@ -330,6 +316,7 @@ def _loop(
     told = strategy_entry(spec.strategy, ROBOT).told  # an oracle: told the true faults
     sense_now = spec.schedule.detection is Detection.NOW or told
     hidden = spec.schedule.detection is Detection.HIDDEN
+    observers = bool(spec.observers)
     expect = sim.table.moves
     weight = bool(Fraction(spec.clearance_weight))
     margin, stride = sim.grid.margin, sim.grid.stride
@@ -385,7 +372,10 @@ def _loop(
                 (end.x - pose.x, end.y - pose.y, end.heading) != (want.dx, want.dy, want.heading)
             )
             stepper.perceive(
-                sim.observe(step, action, pose, outcome), deviated, outcome is Outcome.MOVED
+                sim.observe(step, action, pose, outcome),
+                deviated,
+                outcome is Outcome.MOVED,
+                sim.witnessed(step, action, pose, outcome) if observers else (),
             )
 
 
@@ -453,6 +443,8 @@ def _result(
         sums,
         footing,
         diagnosis_report(stepper.repairer),
+        tuple(stepper.observations),
+        tuple(stepper.beliefs),
     )
 
 

@@ -37,7 +37,7 @@ from selfrepair.execution.result import (
     TraceStep,
 )
 from selfrepair.repair.strategies import RepairSource, RepairStatus
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.backend import backend_ran
 from selfrepair.search.lattice import action_cost, plan
@@ -78,7 +78,7 @@ def plan_distance(first: Iterable[Hashable], second: Iterable[Hashable]) -> Plan
 
 
 def motion_distance(
-    domain_motion: Callable[[Any], str],
+    domain_motion: Callable[[object], str],
     first: Iterable[tuple[Hashable, Any]],
     second: Iterable[tuple[Hashable, Any]],
 ) -> PlanDistance:
@@ -229,7 +229,7 @@ def _repair_totals(repairs: Sequence[RepairRecord]) -> _RepairTotals:
             elif repair.source is RepairSource.LOOKAHEAD:
                 lookaheads += 1
             elif repair.source is RepairSource.DETOUR:
-                detours += 1
+                detours += 1 + repair.rewritten  # a rewriting repair takes several
         elif repair.source is RepairSource.REPLAN:
             failed += 1
     return _RepairTotals(
@@ -237,7 +237,7 @@ def _repair_totals(repairs: Sequence[RepairRecord]) -> _RepairTotals:
     )
 
 
-def _schedule_texts(schedule: FaultSchedule, domain: Domain[Any, Any]) -> tuple[str, str]:
+def _schedule_texts(schedule: FaultSchedule, domain: SomeDomain) -> tuple[str, str]:
     """The row's ``faults`` and ``fault_schedule`` texts (made once per schedule and domain)."""
     return _SCHEDULE_TEXTS.get(
         (schedule, domain),
@@ -248,7 +248,7 @@ def _schedule_texts(schedule: FaultSchedule, domain: Domain[Any, Any]) -> tuple[
     )
 
 
-_SCHEDULE_TEXTS: BoundedCache[tuple[FaultSchedule, Domain[Any, Any]], tuple[str, str]] = (
+_SCHEDULE_TEXTS: BoundedCache[tuple[FaultSchedule, SomeDomain], tuple[str, str]] = (
     BoundedCache("fault schedule texts", 256, kind=CacheKind.RECORD)
 )
 
@@ -431,6 +431,7 @@ ROW_COLUMNS: tuple[str, ...] = (
     "bumps",
     "behaviour",
     "observation_noise",
+    "observers",
     "surprise_step",
     "isolation_actions",
     "isolated_right",
@@ -441,10 +442,11 @@ ROW_COLUMNS: tuple[str, ...] = (
 
 
 def _diagnosis_columns(result: MissionResult) -> Row:
-    """The diagnosis columns (faults hidden, docs/diagnosis.md): the behaviour model and
-    odometry noise of the mission, and what a diagnosing strategy recorded (``None`` for any
-    other): the step of the first surprise, commands after it until one class was isolated,
-    whether that class holds the true fault set (1/0), probes run, classes still possible."""
+    """The diagnosis columns (faults hidden, docs/diagnosis.md): the behaviour model,
+    odometry noise and observing teammates of the mission, and what a diagnosing strategy
+    recorded (``None`` for any other): the step of the first surprise, commands after it until
+    one class was isolated, whether that class holds the true fault set (1/0), probes run,
+    classes still possible."""
     spec = result.spec
     hidden = spec.schedule.detection is Detection.HIDDEN
     row: Row = {
@@ -452,6 +454,7 @@ def _diagnosis_columns(result: MissionResult) -> Row:
         if hidden and spec.domain.behaviours
         else None,
         "observation_noise": spec.observation.noise if hidden else None,
+        "observers": len(spec.observers) if hidden else None,
     }
     report = result.diagnosis or {}
     isolated = report.get("isolated", ())

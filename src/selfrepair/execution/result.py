@@ -14,13 +14,14 @@ from enum import StrEnum
 from fractions import Fraction
 from typing import Any, NamedTuple
 
-from selfrepair.diagnosis.observation import ObservationModel
+from selfrepair.diagnosis.cooperative import Observer
+from selfrepair.diagnosis.observation import Observation, ObservationModel
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.repair.strategies import Repair, RepairSource, StrategyName, StrategyOptions
 from selfrepair.repair.tolerance import PlanObjective
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import PlanResult
 from selfrepair.search.problem import PlannerSettings
@@ -97,7 +98,7 @@ class MissionSpec:
     replan_max_expansions: int | None = None
     initial_faults_known: bool = False
     max_steps: int | None = None
-    domain: Domain[Any, Any] = FOUR_WHEEL
+    domain: SomeDomain = FOUR_WHEEL
     objective: PlanObjective | None = None
     """The tolerant planner's objective for the plan made before any fault is known (``None``:
     the plain cost, duration plus clearance term); replans, made with faults known, always
@@ -109,6 +110,11 @@ class MissionSpec:
     observation: ObservationModel = field(default_factory=ObservationModel)
     """What the robot observes after each command when the faults are hidden (odometry noise,
     bump switch; see :mod:`selfrepair.diagnosis.observation`)."""
+    observers: tuple[Observer, ...] = ()
+    """Faults hidden: the teammates that watch the robot move and add their readings to its
+    belief (:mod:`selfrepair.diagnosis.cooperative`). They follow it: observer ``i`` (from 1)
+    stands where the robot truly was ``i`` commands earlier (its start pose before that), and
+    sees a command when its start and true end cells are in its sensing range."""
     world: WorldSchedule = field(default_factory=WorldSchedule)
     """Cells that become blocked or free during the mission, and how the robot senses them (see
     :mod:`selfrepair.world.events`; empty: the maze never changes)."""
@@ -155,12 +161,12 @@ class TraceStep(NamedTuple):
     a frozen dataclass costs several times more to build)."""
 
     step: int
-    action: Any
+    action: object
     start: Pose
     end: Pose
     duration: Fraction
     source: StepSource
-    known: frozenset[Any]
+    known: frozenset[object]
 
 
 class RepairRecord(NamedTuple):
@@ -170,7 +176,7 @@ class RepairRecord(NamedTuple):
 
     step: int
     pose: Pose
-    action: Any | None
+    action: object | None
     repair: Repair
     latency_ns: int
 
@@ -221,6 +227,13 @@ class MissionResult:
     """What a diagnosing strategy recorded (faults hidden; ``None`` for any other): the step of
     the first surprise, the commands to isolation, the class isolated (its fault sets), probes
     (see :mod:`selfrepair.repair.strategies.diagnosing`)."""
+    observations: tuple[Observation, ...] = ()
+    """Faults hidden: every observation of the mission in order, per command the robot's own
+    reading first, then its observing teammates' (empty otherwise)."""
+    beliefs: tuple[int, ...] = ()
+    """Faults hidden, a strategy that keeps a belief (:class:`~selfrepair.diagnosis.FaultBelief`):
+    the bit set of the hypotheses still possible after each command's observations, one per
+    command (empty for any other strategy)."""
 
     @property
     def reached(self) -> bool:

@@ -63,7 +63,11 @@ stepper what the robot observed (:meth:`Stepper.perceive`). A repairer that obse
 ``observe`` and ``assumption``, see :class:`~selfrepair.repair.strategies.Repairer`) gets it and
 says whether the queue no longer starts where the robot is (its command went elsewhere); the
 stepper then asks it for a repair before the next command (``rejoin``), even with an empty queue
-or an available front. After each observation and each repair the stepper takes the repairer's
+or an available front. Teammates' readings of the same command
+(:mod:`selfrepair.diagnosis.cooperative`) come with it, to a repairer that declares
+``hears_teammates`` (a fourth argument of ``observe``). The stepper records every observation,
+and after each command the bit set of the hypotheses a repairer with a ``belief`` still holds
+possible (for the trace). After each observation and each repair the stepper takes the repairer's
 :class:`~selfrepair.repair.strategies.Assumption`: the faults the queue is checked against, and
 actions that are unusable whatever the faults. Any other repairer is not told anything.
 """
@@ -76,8 +80,9 @@ from collections.abc import Callable, Container, Iterable, Iterator, Sequence
 from fractions import Fraction
 from itertools import islice, repeat
 from operator import itemgetter
-from typing import Any, overload
+from typing import overload
 
+from selfrepair.diagnosis.observation import Observation
 from selfrepair.errors import ProblemError
 from selfrepair.execution.moves import MoveTable, available_moves
 from selfrepair.execution.result import STEP_OF_REPAIR, RepairRecord, StepSource, TraceStep
@@ -100,7 +105,7 @@ MAX_REPAIRS_PER_STEP = 64
 action of a repair is available under the known faults, so a correct strategy needs one, a
 deferring recursion mode a few)."""
 
-Entry = tuple[Any, StepSource]
+Entry = tuple[object, StepSource]
 """One queued action and where it came from."""
 
 _ACTION = itemgetter(0)
@@ -110,7 +115,7 @@ _new_tuple = tuple.__new__
 frame (the same value)."""
 
 
-class _ActionView(Sequence[Any]):
+class _ActionView(Sequence[object]):
     """A read-only view of the queue's actions, so a repair request costs O(1) to build."""
 
     __slots__ = ("_queue",)
@@ -121,24 +126,24 @@ class _ActionView(Sequence[Any]):
     def __len__(self) -> int:
         return len(self._queue)
 
-    def __iter__(self) -> Iterator[Any]:
+    def __iter__(self) -> Iterator[object]:
         return map(_ACTION, self._queue)
 
     @overload
-    def __getitem__(self, index: int) -> Any: ...
+    def __getitem__(self, index: int) -> object: ...
 
     @overload
-    def __getitem__(self, index: slice) -> tuple[Any, ...]: ...
+    def __getitem__(self, index: slice) -> tuple[object, ...]: ...
 
-    def __getitem__(self, index: int | slice) -> Any:
+    def __getitem__(self, index: int | slice) -> object:
         if isinstance(index, slice):
             start, stop, stride = index.indices(len(self._queue))
             if stride == 1:  # in C: a deque is slow to index in the middle
                 return tuple(islice(map(_ACTION, self._queue), start, max(start, stop)))
+
+
             return tuple(self._queue[i][0] for i in range(start, stop, stride))
         return self._queue[index][0]
-
-
 
 
 class Stepper:
@@ -155,18 +160,22 @@ class Stepper:
     __slots__ = (
         "_assume",
         "_available",
+        "_belief",
         "_blocked_repair",
         "_early_at",
+        "_hears",
         "_observe",
         "_perceived",
         "_table",
         "_unusable",
+        "beliefs",
         "blocked",
         "context",
         "failure",
         "horizon",
         "known",
         "max_wait",
+        "observations",
         "queue",
         "rejoin",
         "repairer",
@@ -180,8 +189,8 @@ class Stepper:
         self,
         context: MissionContext,
         repairer: Repairer,
-        actions: Iterable[Any],
-        known: frozenset[Any],
+        actions: Iterable[object],
+        known: frozenset[object],
         table: MoveTable,
         *,
         source: StepSource = StepSource.PLAN,
@@ -193,7 +202,7 @@ class Stepper:
         self.queue: deque[Entry] = deque(zip(actions, repeat(source)))
         self.known = known
         self._table = table
-        self._available: Container[Any] = available_moves(table, known)
+        self._available: Container[object] = available_moves(table, known)
         self.horizon = int(getattr(repairer, "horizon", 0))
         self._blocked_repair: Callable[[RepairRequest], Repair] | None = getattr(
             repairer, "repair_blocked", None
@@ -202,7 +211,14 @@ class Stepper:
             self._blocked_repair = repairer.repair  # its one repair also sees the cells
         self._observe = getattr(repairer, "observe", None)
         self._assume = getattr(repairer, "assumption", None)
-        self._unusable: frozenset[Any] = frozenset()
+        self._hears = bool(getattr(repairer, "hears_teammates", False))
+        self._belief = getattr(repairer, "belief", None)
+        self.observations: list[Observation] = []
+        """Faults hidden: every observation perceived, per command the robot's own first."""
+        self.beliefs: list[int] = []
+        """Faults hidden, a repairer with a ``belief``: its bit set of the hypotheses still
+        possible after each command's observations."""
+        self._unusable: frozenset[object] = frozenset()
         self._perceived = False  # observations came (faults hidden): take the assumption
         self.rejoin = False
         """Whether the observing repairer asked to be asked before the next command."""
@@ -218,23 +234,42 @@ class Stepper:
         self.waits = 0
         """The wait actions answered so far (see the module docstring)."""
 
-    def learn(self, known: frozenset[Any]) -> None:
+    def learn(self, known: frozenset[object]) -> None:
         """The robot now knows exactly ``known`` (what its sensors report, detection ``now``)."""
         if known is not self.known:
             self.known = known
             self._available = available_moves(self._table, known)
 
-    def perceive(self, observation: Any, deviated: bool, moved: bool) -> None:
+    def perceive(
+        self,
+        observation: Observation,
+        deviated: bool,
+        moved: bool,
+        seen: Sequence[Observation] = (),
+    ) -> None:
         """Faults hidden: give an observing repairer ``observation`` of the last command (a
         :class:`~selfrepair.diagnosis.Observation`), with whether the robot truly ``deviated``
-        from the pose its command should have reached and whether it ``moved``; then take its
-        assumption (see the module docstring). Nothing for any other repairer."""
+        from the pose its command should have reached and whether it ``moved``, and the
+        readings ``seen`` by observing teammates (to a repairer that declares
+        ``hears_teammates``); then take its assumption (see the module docstring). Nothing for
+        any other repairer. Every observation is recorded (:attr:`observations`), and so is the
+        repairer's belief after it (:attr:`beliefs`)."""
+        self.observations.append(observation)
+        if seen:
+            self.observations.extend(seen)
         observe = self._observe
         if observe is None:
             return
         self._perceived = True
-        if observe(observation, deviated, moved):
+        asked = (
+            observe(observation, deviated, moved, seen)
+            if seen and self._hears
+            else observe(observation, deviated, moved)
+        )
+        if asked:
             self.rejoin = True
+        if self._belief is not None:
+            self.beliefs.append(self._belief.alive)
         self._sync()
 
     def _sync(self) -> None:
@@ -253,7 +288,7 @@ class Stepper:
             self.blocked = blocked
             self.context.belief.blocked = blocked
 
-    def sweeps_blocked(self, pose: Pose, action: Any) -> bool:
+    def sweeps_blocked(self, pose: Pose, action: object) -> bool:
         """Whether ``action`` from ``pose`` sweeps a cell believed blocked, other than the cell
         the robot stands on."""
         blocked = self.blocked
@@ -261,7 +296,7 @@ class Stepper:
         shape = self._table.shapes[action][pose.heading]
         return any((x + dx, y + dy) in blocked for dx, dy in shape[1:])
 
-    def available(self, action: Any) -> bool:
+    def available(self, action: object) -> bool:
         """Whether ``action`` is available under the known faults."""
         return action in self._available
 
@@ -304,7 +339,7 @@ class Stepper:
             "action is still unavailable: a repair must start with an available action"
         )
 
-    def _wait(self) -> Any | None:
+    def _wait(self) -> object | None:
         """The wait action to splice in while no plan exists (counted), or ``None`` when the
         robot has no waits left or no wait action available under the known faults."""
         if self.waits >= self.max_wait:
@@ -313,10 +348,11 @@ class Stepper:
         for action in self.context.domain.waits:
             if action in available:
                 self.waits += 1
-                return action
+                wait: object = action
+                return wait
         return None
 
-    def _faulty_ahead(self) -> Any | None:
+    def _faulty_ahead(self) -> object | None:
         """The first of the ``horizon`` queued actions after the front that is unavailable under
         the known faults (``None`` when all are available)."""
         queue, available = self.queue, self._available
@@ -327,7 +363,12 @@ class Stepper:
         return None
 
     def _repair(
-        self, pose: Pose, step: int, action: Any | None, blocked: bool = False, asked: bool = False
+        self,
+        pose: Pose,
+        step: int,
+        action: object | None,
+        blocked: bool = False,
+        asked: bool = False,
     ) -> Repair:
         """Ask the strategy (or, with an empty queue or for a blocked action the strategy does not
         see, a plain replan) for a repair of ``action`` and splice it into the queue; the
@@ -375,7 +416,13 @@ class Stepper:
         )
 
     def moved(
-        self, step: int, action: Any, source: StepSource, start: Pose, end: Pose, duration: Fraction
+        self,
+        step: int,
+        action: object,
+        source: StepSource,
+        start: Pose,
+        end: Pose,
+        duration: Fraction,
     ) -> None:
         """:meth:`record` a command that moved the robot (the mission loop's hot path)."""
         queue = self.queue
@@ -391,13 +438,13 @@ class Stepper:
     def record(
         self,
         step: int,
-        action: Any,
+        action: object,
         source: StepSource,
         outcome: Outcome,
         start: Pose,
         end: Pose,
         duration: Fraction,
-        blocking: frozenset[Any] = frozenset(),
+        blocking: frozenset[object] = frozenset(),
         bumped: tuple[Cell, ...] = (),
     ) -> None:
         """Tell the stepper what command ``action`` (number ``step``, of ``source``) did: a move

@@ -8,13 +8,13 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any, TypeVar
 
+from selfrepair.diagnosis.cooperative import Observer
 from selfrepair.execution.faults import Detection
 from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
-from selfrepair.execution.traceformat import TRACE_FORMAT, TRACE_VERSION
-from selfrepair.geometry import Pose
-from selfrepair.robots.domain import Domain
-from selfrepair.robots.registry import plugin_file
+from selfrepair.execution.traceformat import TRACE_FORMAT, TRACE_VERSION, header_start, pose_json
+from selfrepair.execution.traceobserve import diagnosis_header, observation_fields
+from selfrepair.robots.domain import Domain, SomeDomain
 from selfrepair.world.maze import format_maze
 
 __all__ = ["header_json", "repair_json", "step_json", "trace_lines", "write_trace"]
@@ -23,24 +23,14 @@ A = TypeVar("A")
 F = TypeVar("F")
 
 
-def _pose_json(pose: Pose) -> list[Any]:
-    return [pose.x, pose.y, pose.heading.name]
-
-
-def header_json(spec: MissionSpec, initial_plan: Iterable[Any] = ()) -> dict[str, Any]:
+def header_json(spec: MissionSpec, initial_plan: Iterable[object] = ()) -> dict[str, Any]:
     """The header line's object for ``spec``."""
     options = spec.options
     domain = spec.domain
-    origin = plugin_file(domain.name)
-    plugin = {} if origin is None else {"plugin": {"path": origin.path, "sha256": origin.sha256}}
     return {
-        "type": "header",
-        "format": TRACE_FORMAT,
-        "version": TRACE_VERSION,
-        "domain": domain.name,
-        **plugin,
+        **header_start(TRACE_FORMAT, TRACE_VERSION, domain.name),
         "maze": {"name": spec.maze.name, "rows": format_maze(spec.maze).splitlines()},
-        "start": _pose_json(spec.start),
+        "start": pose_json(spec.start),
         "goal": [spec.goal[0], spec.goal[1]],
         "goal_heading": None if spec.goal_heading is None else spec.goal_heading.name,
         "schedule": spec.schedule.to_json(domain),
@@ -85,35 +75,44 @@ def _hidden_json(spec: MissionSpec) -> dict[str, Any]:
             "max_faults": options.max_faults,
             "fault_prior": options.fault_prior,
             "confidence": options.confidence,
+            **diagnosis_header(spec),
+            **({"observers": [_observer(o) for o in spec.observers]} if spec.observers else {}),
         }
     }
+
+
+def _observer(observer: Observer) -> dict[str, Any]:
+    """An observing teammate as the header keeps it."""
+    sensing = observer.sensing
+    return {"name": observer.name, "noise": observer.noise, "range": sensing.cells,
+            "metric": sensing.metric.value}  # fmt: skip
 
 
 def _fault_texts(domain: Domain[A, F], faults: Iterable[F]) -> list[str]:
     return sorted(domain.format_faults([f]) for f in faults)
 
 
-def step_json(domain: Domain[Any, Any], step: TraceStep) -> dict[str, Any]:
+def step_json(domain: SomeDomain, step: TraceStep) -> dict[str, Any]:
     """One step line's object."""
     return {
         "type": "step",
         "step": step.step,
         "action": domain.format_action(step.action),
-        "from": _pose_json(step.start),
-        "to": _pose_json(step.end),
+        "from": pose_json(step.start),
+        "to": pose_json(step.end),
         "duration": str(step.duration),
         "source": step.source.value,
         "known": _fault_texts(domain, step.known),
     }
 
 
-def repair_json(domain: Domain[Any, Any], record: RepairRecord) -> dict[str, Any]:
+def repair_json(domain: SomeDomain, record: RepairRecord) -> dict[str, Any]:
     """One repair line's object."""
     repair = record.repair
     return {
         "type": "repair",
         "step": record.step,
-        "pose": _pose_json(record.pose),
+        "pose": pose_json(record.pose),
         "action": None if record.action is None else domain.format_action(record.action),
         "status": repair.status.value,
         "source": repair.source.value,
@@ -131,10 +130,14 @@ def trace_lines(result: MissionResult) -> list[str]:
     domain = result.spec.domain
     lines = [json.dumps(header_json(result.spec, result.initial_plan.actions))]
     repairs = list(result.repairs)
+    observed = observation_fields(result)
     for step in result.steps:
         while repairs and repairs[0].step <= step.step:
             lines.append(json.dumps(repair_json(domain, repairs.pop(0))))
-        lines.append(json.dumps(step_json(domain, step)))
+        line = step_json(domain, step)
+        if step.step in observed:
+            line.update(observed[step.step])
+        lines.append(json.dumps(line))
     lines.extend(json.dumps(repair_json(domain, r)) for r in repairs)
     lines.append(json.dumps({"type": "summary", **mission_row(result)}))
     return lines

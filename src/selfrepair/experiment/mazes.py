@@ -16,7 +16,7 @@ from typing import Any
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ConfigError
 from selfrepair.experiment.keys import canonical_json, derive_seed, portable
-from selfrepair.experiment.schema import MazeConfig
+from selfrepair.experiment.schema import MazeConfig, MazeSource
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CELLS, check_limit, maze_file_bytes
 from selfrepair.world.maze import Maze
@@ -26,7 +26,7 @@ __all__ = ["entry_label", "maze_identity", "maze_label", "maze_of", "route_count
 
 
 def maze_identity(
-    entry: MazeConfig, base_dir: Path, source: str, index: int, max_cells: int | None = MAX_CELLS
+    entry: MazeSource, base_dir: Path, source: str, index: int, max_cells: int | None = MAX_CELLS
 ) -> dict[str, Any]:
     """What identifies a maze in a mission key (a file is identified by path and content hash).
 
@@ -74,7 +74,7 @@ def maze_label(identity: dict[str, Any]) -> str:
     return f"gen{g['width']}x{g['height']}-c{g['corridor']}{braid}-s{g['seed']}"
 
 
-def entry_label(entry: MazeConfig) -> str:
+def entry_label(entry: MazeSource) -> str:
     """The label :func:`maze_label` gives a maze entry, without reading its file."""
     if entry.bundled is not None:
         return entry.bundled

@@ -19,6 +19,7 @@ from fractions import Fraction
 from typing import Any
 
 from selfrepair.diagnosis import ObservationModel
+from selfrepair.diagnosis.cooperative import Observer, SensingRange
 from selfrepair.errors import ConfigError
 from selfrepair.execution.faults import Detection, FaultEvent, FaultSchedule, canonical_order
 from selfrepair.execution.result import MissionSpec
@@ -101,10 +102,13 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
         (1 if faults.at_random else len(faults.at), "fault times"),
         (len(faults.detection), "detections"),
         (len(faults.noise), "noise rates"),
+        (len(faults.observers), "observer counts"),
         (config.repeats, "repeats"),
     ]
     if config.world is not None:
         factors.append((len(config.world.rates) * len(config.world.sensing), "world settings"))
+    if config.physics is not None:
+        factors.append((len(config.physics.simulators), "simulators"))
     if not filtered:
         factors.append((variants, "strategy variants and weights"))
     total = 1
@@ -155,15 +159,19 @@ def expand(
         )
         for route in routes_of(entry, identity, config.seed, config.source, index, max_cells)
     )
+    fault_sets = fault_profile(config.faults.sets, domain)
+    fault_count = {text: len(domain.parse_faults(text)) for text in fault_sets}  # the robot's word
     axes = (
         Axis("route", routes, "routes"),
-        Axis("faults", fault_profile(config.faults.sets, domain), "fault sets"),
+        Axis("faults", fault_sets, "fault sets"),
         Axis("fault_at", (RANDOM,) if config.faults.at_random else config.faults.at, "fault times"),
         Axis("detection", tuple(config.faults.detection), "detections"),
         Axis("noise", tuple(config.faults.noise), "noise rates"),
+        Axis("observers", tuple(config.faults.observers), "observer counts"),
         Axis("replicate", tuple(range(config.repeats)), "repeats"),
         Axis("world", _worlds(config), "world settings"),
         Axis("variant", variants, "strategy variants and weights"),
+        Axis("simulator", _simulators(config), "simulators"),
     )
     missions: dict[str, Mission] = {}
     for point in cross(axes):
@@ -193,12 +201,23 @@ def expand(
             situation["behaviour"] = config.faults.behaviour
             situation["noise"] = point["noise"]
             situation["bump_switch"] = config.faults.bump_switch
+            if point["observers"]:  # absent when alone, so older keys stay valid
+                situation["observers"] = {
+                    "count": point["observers"],
+                    "range": config.faults.observer_range,
+                    "noise": point["noise"]
+                    if config.faults.observer_noise is None
+                    else config.faults.observer_noise,
+                }
         if domain is not FOUR_WHEEL:  # absent for the four-wheel robot, so older keys stay valid
             situation["domain"] = domain.name
         if plugins:
             situation["plugins"] = plugins
         seed = derive_seed(config.seed, portable(situation))
-        mission = _mission(config, situation, seed, variant, weight, label)
+        count = fault_count[point["faults"]]
+        mission = _mission(
+            config, situation, seed, variant, weight, label, count, point["simulator"]
+        )
         missions.setdefault(mission.key, mission)
     if not missions:
         raise ConfigError(
@@ -214,8 +233,12 @@ def _mission(
     variant: dict[str, Any],
     weight: str,
     label: str,
+    fault_count: int,
+    simulator: dict[str, Any] | None,
 ) -> Mission:
-    """One mission: the situation with its variant, weight and seed, keyed and labelled."""
+    """One mission: the situation with its variant, weight, seed and (with a ``[physics]``
+    section) simulator, keyed and labelled (``fault_count``: the faults of its fault set, as
+    the robot's domain reads the text)."""
     settings = {
         **situation,
         **variant,
@@ -223,6 +246,8 @@ def _mission(
         "clearance_radius": config.planner.clearance_radius,
         "seed": seed,
     }
+    if simulator is not None:  # absent without a [physics] section: older keys stay valid
+        settings["simulator"] = simulator
     text = canonical_json(settings)
     key = mission_key(canonical_json(portable(settings)))
     options = variant["options"]
@@ -230,7 +255,7 @@ def _mission(
         ("maze", label),
         ("route", situation["route"]),
         ("faults", situation["faults"]),
-        ("fault_count", len(situation["faults"].split(",")) if situation["faults"] else 0),
+        ("fault_count", fault_count),
         ("fault_at", situation["fault_at"]),
         ("detection", situation["detection"]),
         ("replicate", situation["replicate"]),
@@ -248,6 +273,8 @@ def _mission(
     world = situation.get("world")
     if world is not None:
         labels += (("world_rate", str(world["rate"])), ("sensing", world["sensing"]))
+    if simulator is not None:
+        labels += (("simulator", simulator["name"]),)
     return Mission(key, config.name, seed, text, labels)
 
 
@@ -278,6 +305,18 @@ def _worlds(config: ExperimentConfig) -> tuple[dict[str, Any] | None, ...]:
     )
 
 
+def _simulators(config: ExperimentConfig) -> tuple[dict[str, Any] | None, ...]:
+    """The values of the ``simulator`` axis: one per simulator of the ``[physics]`` section
+    (physics with its tracking), or ``None`` alone without one (the lattice simulator)."""
+    physics = config.physics
+    if physics is None:
+        return (None,)
+    return tuple(
+        {"name": name, **({"tracked": physics.tracked} if name == "physics" else {})}
+        for name in physics.simulators
+    )
+
+
 RANDOM = "random"
 """The ``fault_at`` axis value of ``at_random``: one step drawn per situation."""
 
@@ -300,6 +339,16 @@ def _fault_step(
     where = portable({"maze": identity, "route": route.name, "faults": faults, "at": RANDOM})
     maze = maze_of(canonical_json(identity))
     return random_fault_step(maze, route, domain, derive_seed(config.seed, where))
+
+
+def _observers(settings: dict[str, Any] | None) -> tuple[Observer, ...]:
+    """The observing teammates of a mission's ``observers`` setting (none when absent), named
+    ``t1``, ``t2``, ... as in :mod:`selfrepair.diagnosis.cooperative`."""
+    if not settings:
+        return ()
+    sensing = SensingRange(int(settings["range"]))
+    noise = float(settings["noise"])
+    return tuple(Observer(f"t{i}", noise, sensing) for i in range(1, int(settings["count"]) + 1))
 
 
 def to_spec(mission: Mission) -> MissionSpec:
@@ -353,6 +402,7 @@ def to_spec(mission: Mission) -> MissionSpec:
         ),
         behaviour=s.get("behaviour"),
         observation=ObservationModel(s.get("noise", 0.0), s.get("bump_switch", True)),
+        observers=_observers(s.get("observers")),
         objective=parse_objective(options.get("objective", OPTIMAL)),
         clearance_weight=Fraction(s["clearance_weight"]),
         clearance_radius=s["clearance_radius"],

@@ -209,7 +209,8 @@ def figure_heatmap(rows: Sequence[Row], path: Path, variant: str | None = None) 
     variant = variant or heatmap_variant(rows)
     chosen = [r for r in rows if str(r.get("variant")) == variant and _weight(r) == 0]
     mazes = sorted({str(r.get("maze")) for r in chosen}, key=lambda m: (_first_int(chosen, m), m))
-    faults = sorted({str(r.get("faults")) for r in chosen}, key=lambda f: (f.count(","), f))
+    sizes = {str(r.get("faults")): int(str(r.get("fault_count") or 0)) for r in chosen}
+    faults = sorted(sizes, key=lambda f: (sizes[f], f))  # singles first: the robot's count
     share = np.full((len(faults), len(mazes)), np.nan)
     extra = np.full((len(faults), len(mazes)), np.nan)
     for i, f in enumerate(faults):

@@ -16,14 +16,14 @@ from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.execution.faults import Clock, Detection, Persistence
+from selfrepair.experiment.schema_physics import PhysicsConfig
+from selfrepair.experiment.schema_physics import context_domain as _domain
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import DEFAULT_SENSING_RANGE, MAX_CLEARANCE_WEIGHT
 from selfrepair.repair.replacement import DEFERRING, RecursionMode
 from selfrepair.repair.strategies import MissionKind, StrategyName
 from selfrepair.repair.tolerance import OPTIMAL, parse_objective
-from selfrepair.robots.domain import Domain
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN
-from selfrepair.robots.registry import get_domain
 from selfrepair.tomlfile import Float, Frozen, Int, NonEmpty
 from selfrepair.world.events import Sensing
 from selfrepair.world.routes import MAX_ROUTES
@@ -38,6 +38,8 @@ __all__ = [
     "LookaheadStrategy",
     "LpgAdaptStrategy",
     "MazeConfig",
+    "MazeSource",
+    "PhysicsConfig",
     "PlannerConfig",
     "ReplacementStrategy",
     "ReplanStrategy",
@@ -45,6 +47,13 @@ __all__ = [
     "StrategyConfig",
     "WorldConfig",
 ]
+
+MAX_OBSERVERS = 8
+"""Observing teammates one mission may have."""
+
+DEFAULT_OBSERVER_RANGE = 3
+"""The observers' sensing range in cells unless the file says otherwise (the cooperative
+benchmark's)."""
 
 FAULT_PROFILES = ("paper", "singles", "doubles", "all")
 """Named fault-set profiles; see :func:`selfrepair.experiment.faultsets.fault_profile`."""
@@ -82,16 +91,33 @@ class RouteConfig(Frozen):
         return f"{x},{y}"
 
 
-class MazeConfig(Frozen):
-    """Where a maze comes from (exactly one of ``bundled``, ``file``, ``generate``) and its routes.
+class MazeSource(Frozen):
+    """Where a maze comes from: exactly one of ``bundled`` (a bundled maze's name), ``file`` (a
+    maze or map file, relative to the experiment file) or ``generate`` (a seeded maze). Single-robot
+    and team experiment files both describe their mazes so."""
+
+    bundled: str | None = None
+    file: str | None = None
+    generate: GeneratedMaze | None = None
+
+    @model_validator(mode="after")
+    def _one_source(self) -> MazeSource:
+        given = [k for k in ("bundled", "file", "generate") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(
+                "expected exactly one of 'bundled', 'file' or 'generate', got "
+                + (", ".join(repr(k) for k in given) or "none")
+            )
+        return self
+
+
+class MazeConfig(MazeSource):
+    """A maze (see :class:`MazeSource`) and its routes.
 
     ``routes`` is ``"bundled"`` (the bundled maze's route file), a number of random routes (drawn
     from the experiment seed), or a list of explicit routes.
     """
 
-    bundled: str | None = None
-    file: str | None = None
-    generate: GeneratedMaze | None = None
     routes: (
         Literal["bundled"]
         | Annotated[Int, Field(ge=1, le=MAX_ROUTES)]
@@ -99,13 +125,7 @@ class MazeConfig(Frozen):
     ) = "bundled"
 
     @model_validator(mode="after")
-    def _one_source(self) -> MazeConfig:
-        given = [k for k in ("bundled", "file", "generate") if getattr(self, k) is not None]
-        if len(given) != 1:
-            raise ValueError(
-                "expected exactly one of 'bundled', 'file' or 'generate', got "
-                + (", ".join(repr(k) for k in given) or "none")
-            )
+    def _bundled_routes(self) -> MazeConfig:
         if self.routes == "bundled" and self.bundled is None:
             raise ValueError(
                 'routes = "bundled" needs a bundled maze; give a number of random routes or a '
@@ -130,12 +150,17 @@ class FaultsConfig(Frozen):
     uniformly from the steps of the route's fault-free optimal plan, instead of at each ``at``."""
     behaviour: str | None = None
     """Detection ``hidden``: the robot's fault-behaviour model (its default when absent)."""
-    noise: Annotated[
-        tuple[Annotated[Float, Field(ge=0.0, lt=0.5)], ...], NonEmpty
-    ] = (0.0,)
+    noise: Annotated[tuple[Annotated[Float, Field(ge=0.0, lt=0.5)], ...], NonEmpty] = (0.0,)
     """Detection ``hidden``: the odometry error rates, one axis of the sweep."""
     bump_switch: bool = True
     """Detection ``hidden``: whether the robot senses a motion stopped at a wall."""
+    observers: Annotated[tuple[Annotated[Int, Field(ge=0, le=MAX_OBSERVERS)], ...], NonEmpty] = (0,)
+    """Detection ``hidden``: how many teammates watch the robot move (0: it is alone; 2: a team
+    of 3), one axis of the sweep (:mod:`selfrepair.diagnosis.cooperative`)."""
+    observer_range: Annotated[Int, Field(ge=0, le=64)] = DEFAULT_OBSERVER_RANGE
+    """The observers' sensing range in cells (Chebyshev)."""
+    observer_noise: Annotated[Float, Field(ge=0.0, lt=0.5)] | None = None
+    """The observers' odometry error rate (absent: the mission's own ``noise`` rate)."""
 
     @field_validator("behaviour")
     @classmethod
@@ -153,8 +178,13 @@ class FaultsConfig(Frozen):
     @model_validator(mode="after")
     def _hidden_options(self) -> FaultsConfig:
         hidden = Detection.HIDDEN in self.detection
-        if not hidden and (self.behaviour is not None or self.noise != (0.0,)):
-            raise ValueError('behaviour and noise need detection = ["hidden"] (or a list with it)')
+        watched = self.observers != (0,) or self.observer_noise is not None
+        if not hidden and (self.behaviour is not None or self.noise != (0.0,) or watched):
+            raise ValueError(
+                'behaviour, noise and observers need detection = ["hidden"] (or a list with it)'
+            )
+        if len(set(self.observers)) != len(self.observers):
+            raise ValueError(f"expected distinct numbers of observers, got {list(self.observers)}")
         return self
 
     @model_validator(mode="after")
@@ -333,24 +363,44 @@ class DStarLiteStrategy(_StrategyEntry):
 
 class LpgAdaptStrategy(_StrategyEntry):
     """Plan repair with LPG-adapt (``pddl`` extra, four-wheel robot): ``time_limit`` seconds per
-    call, LPG's ``seed``; LPG's failures and time-outs fall back to replanning."""
+    call, LPG's ``seed``; LPG's failures and time-outs fall back to replanning. Where it cannot
+    run (extra, robot) the experiment is refused before any mission runs, unless ``optional``:
+    then the entry has no missions and :attr:`refusal` says why (the command prints it)."""
 
+    optional: bool = False  # before ``name``, whose validator reads it
     name: Literal[StrategyName.LPG_ADAPT]
     time_limit: Annotated[Float, Field(gt=0, le=3600)] = 5.0
     seed: Annotated[Int, Field(ge=0, lt=2**31)] = 0
+    refusal: str | None = None
+    """Why the strategy cannot run here (set by validation, for an ``optional`` entry)."""
 
     @field_validator("name")
     @classmethod
     def _runnable(cls, value: str, info: ValidationInfo) -> str:
-        """Refuse the strategy before any mission runs where it cannot run (extra, robot)."""
-        from selfrepair.baselines.adapt import check_lpg_adapt
-        from selfrepair.errors import ProblemError
-
-        try:
-            check_lpg_adapt(_domain(info).name)
-        except ProblemError as exc:
-            raise ValueError(str(exc)) from None
+        """Refuse the strategy before any mission runs where it cannot run (extra, robot),
+        unless the entry is optional."""
+        refusal = _lpg_refusal(info)
+        if refusal is not None and not info.data.get("optional"):
+            raise ValueError(refusal)
         return value
+
+    @model_validator(mode="after")
+    def _left_out(self, info: ValidationInfo) -> LpgAdaptStrategy:
+        """Record why an optional entry cannot run (never what the file says)."""
+        object.__setattr__(self, "refusal", _lpg_refusal(info) if self.optional else None)
+        return self
+
+
+def _lpg_refusal(info: ValidationInfo) -> str | None:
+    """Why LPG-adapt cannot run here for the experiment's robot, or ``None``."""
+    from selfrepair.baselines.adapt import check_lpg_adapt
+    from selfrepair.errors import ProblemError
+
+    try:
+        check_lpg_adapt(_domain(info).name)
+    except ProblemError as exc:
+        return str(exc)
+    return None
 
 
 class DiagnosisStrategy(_StrategyEntry):
@@ -409,6 +459,7 @@ class ExperimentConfig(Frozen):
     mazes: Annotated[tuple[MazeConfig, ...], Field(min_length=1)]
     faults: FaultsConfig = FaultsConfig()
     world: WorldConfig | None = None
+    physics: PhysicsConfig | None = None
     planner: PlannerConfig = PlannerConfig()
     strategies: Annotated[tuple[StrategyConfig, ...], Field(min_length=1)]
     source: str = "<string>"
@@ -442,12 +493,6 @@ def _weights(value: Any) -> Any:
             raise ValueError(f"expected a weight of at most {MAX_CLEARANCE_WEIGHT:,}, got {item!r}")
         out.append(str(weight))
     return tuple(out)
-
-
-def _domain(info: ValidationInfo) -> Domain[Any, Any]:
-    context = info.context or {}
-    domain = context.get("domain")
-    return domain if isinstance(domain, Domain) else get_domain(DEFAULT_DOMAIN)
 
 
 def _reraise(parser: Any, text: str) -> Any:

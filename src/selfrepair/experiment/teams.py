@@ -61,7 +61,7 @@ from selfrepair.experiment.keys import (
     portable,
 )
 from selfrepair.experiment.mazes import maze_identity, maze_label, maze_of
-from selfrepair.experiment.schema import ExperimentConfig, GeneratedMaze, MazeConfig
+from selfrepair.experiment.schema import ExperimentConfig, MazeSource
 from selfrepair.experiment.store import Value
 from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES, MAX_MISSIONS, MAX_ROBOTS, check_limit
 from selfrepair.repair.replacement import RecursionMode
@@ -87,26 +87,9 @@ TEAM_KIND = "team"
 """The ``kind`` of a team experiment file (a file without ``kind`` is a single-robot one)."""
 
 
-class TeamMaze(Frozen):
-    """Where a team maze comes from: exactly one of ``bundled``, ``file``, ``generate``."""
-
-    bundled: str | None = None
-    file: str | None = None
-    generate: GeneratedMaze | None = None
-
-    @model_validator(mode="after")
-    def _one_source(self) -> TeamMaze:
-        given = [k for k in ("bundled", "file", "generate") if getattr(self, k) is not None]
-        if len(given) != 1:
-            raise ValueError(
-                "expected exactly one of 'bundled', 'file' or 'generate', got "
-                + (", ".join(repr(k) for k in given) or "none")
-            )
-        return self
-
-    def as_maze_config(self) -> MazeConfig:
-        """The same maze as the single-robot experiments describe it (routes unused)."""
-        return MazeConfig(bundled=self.bundled, file=self.file, generate=self.generate, routes=1)
+class TeamMaze(MazeSource):
+    """Where a team maze comes from: exactly one of ``bundled``, ``file``, ``generate`` (a team
+    mission has no routes: its scenario places the robots and tasks)."""
 
 
 class TeamSettings(Frozen):
@@ -207,7 +190,7 @@ def load_experiment(
 def _check_sizes(config: TeamExperimentConfig, text: str) -> None:
     """Every team and its tasks must fit each maze: one cell per robot, two per task."""
     for index, entry in enumerate(config.mazes):
-        identity = maze_identity(entry.as_maze_config(), config.base_dir, config.source, index)
+        identity = maze_identity(entry, config.base_dir, config.source, index)
         maze = maze_of(canonical_json(identity))
         label = components(maze)
         sizes: dict[int, int] = {}
@@ -264,7 +247,7 @@ def expand_team(
         detail=describe((mazes, *rest)), source=config.source,
     )  # fmt: skip
     identities = tuple(
-        maze_identity(entry.as_maze_config(), config.base_dir, config.source, index, max_cells)
+        maze_identity(entry, config.base_dir, config.source, index, max_cells)
         for index, entry in enumerate(config.mazes)
     )
     axes = (Axis("maze", identities, "mazes"), *rest)

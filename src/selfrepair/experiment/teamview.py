@@ -20,9 +20,8 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from selfrepair.errors import TraceError
 from selfrepair.experiment.figstyle import SOURCE_COLOURS
-from selfrepair.experiment.viewpage import pose_json, wall_runs, write_page
+from selfrepair.experiment.viewpage import check_viewable, pose_json, wall_runs, write_page
 from selfrepair.geometry import Cell, Pose
 from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.team.model import ActionKind, TeamFaultKind
@@ -181,16 +180,14 @@ def team_payload(
 ) -> dict[str, Any]:
     """The team page's data for ``trace`` (see the module docstring). The trace must replay;
     ``max_steps`` bounds its moves and acts."""
-    count = len(trace.moves) + len(trace.acts)
-    if count > max_steps:
-        raise TraceError(
-            f"the team trace has {count} moves and acts, more than the viewer's limit of "
-            f"{max_steps} (raise it with --max-steps)",
-            source=trace.source,
-        )
-    check = replay_team(trace)
-    if not check.ok:
-        raise TraceError(f"the team trace does not replay: {check}", source=trace.source)
+    check = check_viewable(
+        "the team trace",
+        len(trace.moves) + len(trace.acts),
+        "moves and acts",
+        max_steps=max_steps,
+        source=trace.source,
+        replay=lambda: replay_team(trace),
+    )
     scenario, scale = trace.scenario, trace.scale
     times = _instants(trace)
     lanes = []

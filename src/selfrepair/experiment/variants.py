@@ -11,7 +11,7 @@ so a bad table stops the experiment before its sweep.
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -32,6 +32,7 @@ from selfrepair.repair.tolerance import OPTIMAL
 __all__ = [
     "BUNDLED_TABLES",
     "REWRITE_LABEL",
+    "left_out",
     "maze_filter",
     "objective_label",
     "short_table",
@@ -55,10 +56,22 @@ def strategy_variants(config: ExperimentConfig) -> Iterator[tuple[dict[str, Any]
         yield from variants_of(strategy, config)
 
 
+def left_out(config: ExperimentConfig) -> tuple[tuple[str, str], ...]:
+    """The optional strategy entries that cannot run here, as ``(name, reason)``."""
+    return tuple(
+        (str(s.name), s.refusal)
+        for s in config.strategies
+        if isinstance(s, LpgAdaptStrategy) and s.refusal is not None
+    )
+
+
 def variants_of(
     strategy: StrategyConfig, config: ExperimentConfig
 ) -> Iterator[tuple[dict[str, Any], tuple[str, ...]]]:
-    """The (strategy settings, clearance weights) pairs of one strategy entry."""
+    """The (strategy settings, clearance weights) pairs of one strategy entry (none for an
+    optional entry that cannot run here: :func:`left_out`)."""
+    if isinstance(strategy, LpgAdaptStrategy) and strategy.refusal is not None:
+        return
     weights = strategy.clearance_weights or config.planner.clearance_weights
     if isinstance(strategy, ReplacementStrategy):
         windows: tuple[tuple[int | None, int], ...] = (
@@ -103,6 +116,8 @@ _DIAGNOSIS_DEFAULTS = (("max_faults", 2), ("fault_prior", 0.05), ("confidence", 
 def variant_count(strategy: StrategyConfig, config: ExperimentConfig) -> int:
     """How many (variant, clearance weight) pairs :func:`variants_of` gives, by arithmetic
     (without reading any table file)."""
+    if isinstance(strategy, LpgAdaptStrategy) and strategy.refusal is not None:
+        return 0
     weights = len(strategy.clearance_weights or config.planner.clearance_weights)
     if isinstance(strategy, DiagnosisStrategy):
         return len(strategy.tables) * len(strategy.recursion) * weights
@@ -197,29 +212,30 @@ def short_table(table: Any) -> str | None:
     return table if table in BUNDLED_TABLES else Path(str(table)).stem
 
 
+_LABEL_PARTS: tuple[tuple[str, bool, Callable[[Any], str]], ...] = (
+    ("table", True, lambda table: str(short_table(table))),
+    ("recursion", True, str),
+    ("window", True, "k={}".format),
+    ("before", False, "before={}".format),
+    ("backend", True, str),
+    ("lpg_time_limit_s", True, "{:g}s".format),
+    ("lpg_seed", False, "seed={}".format),
+    ("rewrite", False, lambda _: REWRITE_LABEL),
+    ("objective", False, str),
+)
+"""The parts of a variant label, in order: the option, whether it shows whenever it is given
+(``True``) or only when it is set (not 0, false or empty), and how it reads."""
+
+
 def variant_label(strategy: str, options: dict[str, Any]) -> str:
     """A short readable strategy variant, e.g. ``replacement[handwritten,guarded]``."""
     if not options:
         return strategy
-    parts = []
-    if "table" in options:
-        parts.append(str(short_table(options["table"])))
-    if "recursion" in options:
-        parts.append(str(options["recursion"]))
-    if "window" in options:
-        parts.append(f"k={options['window']}")
-    if options.get("before"):
-        parts.append(f"before={options['before']}")
-    if "backend" in options:
-        parts.append(str(options["backend"]))
-    if "lpg_time_limit_s" in options:
-        parts.append(f"{options['lpg_time_limit_s']:g}s")
-    if options.get("lpg_seed"):
-        parts.append(f"seed={options['lpg_seed']}")
-    if options.get("rewrite"):
-        parts.append(REWRITE_LABEL)
-    if options.get("objective"):
-        parts.append(str(options["objective"]))
+    parts = [
+        show(options[key])
+        for key, whenever_given, show in _LABEL_PARTS
+        if (key in options if whenever_given else options.get(key))
+    ]
     return f"{strategy}[{','.join(parts)}]"
 
 

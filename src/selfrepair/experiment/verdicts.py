@@ -165,9 +165,12 @@ SITUATION = (
     "replicate",
     "world_rate",
     "sensing",
+    "observation_noise",
+    "observers",
 )
 """What makes two missions of different strategies comparable (the world columns are absent,
-so equal, for an experiment whose maze never changes)."""
+so equal, for an experiment whose maze never changes; the noise rate and observers likewise
+for faults that are not hidden)."""
 
 
 def situation(row: Row) -> tuple[Value, ...]:

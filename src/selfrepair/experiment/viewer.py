@@ -5,8 +5,9 @@ initial plan and every executed step as drawable segments, the robot's pose and 
 each step, the true faults (from the header's fault schedule) and the known faults (from the
 step lines) at each step, the fault events, and every repair (from the trace's repair lines) with
 where it came from (table candidate, lookahead window or replan), what it spliced in and its
-latency. Every pose, heading vector, swept cell and fault set comes from the library (the robot
-model, the schedule); the page's script only draws.
+latency, and with the faults hidden what the robot believed after each step
+(:mod:`selfrepair.experiment.viewdiagnosis`). Every pose, heading vector, swept cell and fault
+set comes from the library (the robot model, the schedule); the page's script only draws.
 
 :func:`render_html` puts the payload, the page template, its CSS and its script (package data in
 ``selfrepair/data/viewer/``) into one HTML file that needs no server and no network: everything
@@ -30,7 +31,14 @@ from selfrepair.execution.faults import Detection, canonical_order
 from selfrepair.execution.result import MissionSpec, StepSource, TraceStep
 from selfrepair.execution.trace import Trace, TraceRepair, parse_trace, replay, spec_from_header
 from selfrepair.experiment.figstyle import SOURCE_COLOURS
-from selfrepair.experiment.viewpage import pose_json, render_html, wall_runs, write_page
+from selfrepair.experiment.viewdiagnosis import diagnosis_json
+from selfrepair.experiment.viewpage import (
+    check_viewable,
+    pose_json,
+    render_html,
+    wall_runs,
+    write_page,
+)
 from selfrepair.geometry import Cell, Pose, turn_corner
 from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.strategies import RepairSource, StrategyName, uses_table
@@ -304,15 +312,14 @@ def mission_payload(
     page draws only what the robot model says happened); ``max_steps`` bounds its steps.
     ``tolerance``: the ``k`` of the initial plan's tolerance shown (:func:`tolerance_json`; 0
     for none)."""
-    if len(trace.steps) > max_steps:
-        raise TraceError(
-            f"the trace has {len(trace.steps)} steps, more than the viewer's limit of "
-            f"{max_steps} (raise it with --max-steps)",
-            source=trace.source,
-        )
-    check = replay(trace)
-    if not check.ok:
-        raise TraceError(f"the trace does not replay: {check}", source=trace.source)
+    check_viewable(
+        "the trace",
+        len(trace.steps),
+        "steps",
+        max_steps=max_steps,
+        source=trace.source,
+        replay=lambda: replay(trace),
+    )
     spec = spec_from_header(trace.header, trace.source)
     steps = trace.steps
     ticks = _frame_ticks(steps)
@@ -359,6 +366,7 @@ def mission_payload(
         "colours": {str(source): colour for source, colour in SOURCE_COLOURS.items()},
         "plan": plan,
         "tolerance": tolerance_json(spec, initial, tolerance),
+        "diagnosis": diagnosis_json(trace),
         "steps": [_step_json(domain, s, t) for s, t in zip(steps, ticks, strict=False)],
         "frames": [
             {

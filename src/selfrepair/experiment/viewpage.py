@@ -11,17 +11,25 @@ from __future__ import annotations
 import html
 import json
 import re
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol, TypeVar
 
-from selfrepair.errors import InputError, ProblemError
+from selfrepair.errors import InputError, ProblemError, TraceError
 from selfrepair.geometry import Pose
 from selfrepair.world.maze import Maze
 
-__all__ = ["PAGES", "Page", "pose_json", "render_html", "wall_runs", "write_page"]
+__all__ = [
+    "PAGES",
+    "Page",
+    "check_viewable",
+    "pose_json",
+    "render_html",
+    "wall_runs",
+    "write_page",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -38,6 +46,9 @@ class Page:
     timeline_label: str
     strip: str = ""
     """A fragment shown above the timeline (the mission page's plan-tolerance strip), or none."""
+    before: tuple[str, ...] = ()
+    """Scripts of the page's own panels, run after ``common.js`` and before ``script`` (the
+    mission page's diagnosis panel)."""
 
 
 PAGES = {
@@ -49,6 +60,7 @@ PAGES = {
         "Faults over the mission",
         "fault timeline",
         "mission-strip.html",
+        ("diagnosis.js",),
     ),
     "team": Page(
         "team.js",
@@ -60,6 +72,35 @@ PAGES = {
     ),
 }
 """The pages, by the name :func:`render_html` takes."""
+
+
+class Replayed(Protocol):
+    """What a replay of a trace reports: whether the trace replayed (and, as text, why not)."""
+
+    @property
+    def ok(self) -> bool: ...
+
+
+_R = TypeVar("_R", bound=Replayed)
+
+
+def check_viewable(
+    trace: str, size: int, unit: str, *, max_steps: int, source: str, replay: Callable[[], _R]
+) -> _R:
+    """The report of ``replay``, or a :class:`TraceError` unless the viewer can show ``trace``
+    (``"the trace"``, ``"the team trace"``): at most ``max_steps`` of its ``size`` frames
+    (``unit``: what they are), and it replays (the page draws only what the robot model says
+    happened)."""
+    if size > max_steps:
+        raise TraceError(
+            f"{trace} has {size} {unit}, more than the viewer's limit of {max_steps} (raise it "
+            "with --max-steps)",
+            source=source,
+        )
+    check = replay()
+    if not check.ok:
+        raise TraceError(f"{trace} does not replay: {check}", source=source)
+    return check
 
 
 def pose_json(pose: Pose) -> dict[str, Any]:
@@ -115,7 +156,7 @@ def render_html(payload: Mapping[str, Any], *, page: str = "mission") -> str:
     parts = {
         "TITLE": html.escape(str(payload.get("title", "mission"))),
         "STYLE": _asset("viewer.css"),
-        "SCRIPT": _asset("common.js") + "\n" + _asset(chosen.script),
+        "SCRIPT": "\n".join(_asset(name) for name in ("common.js", *chosen.before, chosen.script)),
         "DATA": _script_safe_json(payload),
         "PANEL": _asset(chosen.panel),
         "UNIT": chosen.unit,

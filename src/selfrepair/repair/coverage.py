@@ -18,7 +18,7 @@ from __future__ import annotations
 from collections.abc import Iterable, Sequence
 from dataclasses import asdict, dataclass
 from fractions import Fraction
-from typing import Any, Protocol
+from typing import Protocol, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -34,13 +34,14 @@ from selfrepair.repair.optimum import (
     reachable,
 )
 from selfrepair.repair.replacement import find_replacement
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import A, Domain, F
 from selfrepair.tables.enumerate import (
     Objective,
     candidate_cost,
     scope_fault_sets,
 )
 from selfrepair.tables.model import ReplacementTable
+from selfrepair.textio import JSONObject, JSONValue
 
 
 class WallGrid(Protocol):
@@ -106,7 +107,7 @@ class PairResult:
     depth: int | None
     actions: tuple[str, ...]
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self) -> JSONObject:
         """JSON-ready (fractions as strings)."""
         return {
             "faults": self.faults,
@@ -152,7 +153,7 @@ class CoverageReport:
     walls: tuple[WallRow, ...]
     pairs: tuple[PairResult, ...] = ()
 
-    def totals(self) -> dict[str, Any]:
+    def totals(self) -> JSONObject:
         """Sums over fault sets and mazes, with the headline shares (``None`` where the
         denominator is zero: nothing replaceable, nothing covered, no wall pairs)."""
         disabled = sum(r.disabled for r in self.rows)
@@ -178,15 +179,15 @@ class CoverageReport:
             "wall_uncovered_share": uncovered / pairs if pairs else None,
         }
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self) -> JSONObject:
         """A JSON-ready dictionary (fractions as strings)."""
-        rows = []
+        rows: list[JSONValue] = []
         for r in self.rows:
             row = asdict(r)
             row["excess_sum"] = str(r.excess_sum)
             row["excess_max"] = str(r.excess_max)
             rows.append(row)
-        walls = [{**asdict(w), "share": w.share} for w in self.walls]
+        walls: list[JSONValue] = [{**asdict(w), "share": w.share} for w in self.walls]
         return {
             "table": self.table,
             "shape": self.shape,
@@ -202,8 +203,8 @@ class CoverageReport:
 
 
 def free_space_rows(
-    table: ReplacementTable,
-    fault_sets: Sequence[frozenset[Any]],
+    table: ReplacementTable[A, F],
+    fault_sets: Sequence[frozenset[F]],
     objective: str = "duration",
     mode: str = "flat",
 ) -> tuple[FaultRow, ...]:
@@ -212,8 +213,8 @@ def free_space_rows(
 
 
 def free_space(
-    table: ReplacementTable,
-    fault_sets: Sequence[frozenset[Any]],
+    table: ReplacementTable[A, F],
+    fault_sets: Sequence[frozenset[F]],
     objective: str = "duration",
     mode: str = "flat",
 ) -> tuple[tuple[FaultRow, ...], tuple[PairResult, ...]]:
@@ -276,7 +277,7 @@ def free_space(
 # --- coverage next to walls -------------------------------------------------------------------
 
 
-def _offsets(domain: Domain[Any, Any], candidate: Sequence[Any]) -> frozenset[tuple[int, int]]:
+def _offsets(domain: Domain[A, F], candidate: Sequence[A]) -> frozenset[tuple[int, int]]:
     """The cells a sequence sweeps from the canonical state, as (forward, right) offsets."""
     start: Pose = domain.canonical
     state, cells = start, set[Cell]()
@@ -316,17 +317,21 @@ class _MaskCache:
 _HEADINGS = tuple(Heading)
 
 
-_OPTIMA: BoundedCache[tuple[Domain[Any, Any], frozenset[Any]], dict[Any, Fraction | None]] = (
-    BoundedCache("exact optimal replacements", 256, kind=CacheKind.REPAIR)
+_OPTIMA: BoundedCache[tuple[object, frozenset[object]], object] = BoundedCache(
+    "exact optimal replacements", 256, kind=CacheKind.REPAIR
 )
 
 
-def _optimum_cached(domain: Domain[Any, Any], faults: frozenset[Any]) -> dict[Any, Fraction | None]:
-    return _OPTIMA.get((domain, faults), lambda: optimal_replacements(domain, faults))
+def _optimum_cached(domain: Domain[A, F], faults: frozenset[F]) -> dict[A, Fraction | None]:
+    optima = _OPTIMA.get((domain, faults), lambda: optimal_replacements(domain, faults))
+    return cast("dict[A, Fraction | None]", optima)  # keyed by the domain: its actions
 
 
 def wall_coverage(
-    table: ReplacementTable, maze: WallGrid, fault_sets: Sequence[frozenset[Any]], name: str = ""
+    table: ReplacementTable[A, F],
+    maze: WallGrid,
+    fault_sets: Sequence[frozenset[F]],
+    name: str = "",
 ) -> WallRow:
     """Coverage next to walls (flat mode) over every free cell and heading of ``maze``.
 
@@ -336,9 +341,9 @@ def wall_coverage(
     that leaves the corridor and comes back) is not asked: that would need a search per pose.
     """
     dom = table.domain
-    fp_cache: dict[tuple[Any, ...], frozenset[tuple[int, int]]] = {}
+    fp_cache: dict[tuple[A, ...], frozenset[tuple[int, int]]] = {}
 
-    def offsets(seq: tuple[Any, ...]) -> frozenset[tuple[int, int]]:
+    def offsets(seq: tuple[A, ...]) -> frozenset[tuple[int, int]]:
         hit = fp_cache.get(seq)
         if hit is None:
             hit = fp_cache[seq] = _offsets(dom, seq)
@@ -387,7 +392,7 @@ def maze_name(maze: WallGrid) -> str:
 
 
 def coverage_report(
-    table: ReplacementTable,
+    table: ReplacementTable[A, F],
     *,
     faults: str = "all",
     objective: str | None = None,

@@ -50,7 +50,7 @@ def _search(context: MissionContext, pose: Pose, known: frozenset[Any]) -> DStar
     m = grid.margin
     padded = np.frombuffer(grid.data, dtype=np.uint8).reshape(grid.height + 2 * m, grid.stride)
     walls = padded[m : m + grid.height, m : m + grid.width] == 0
-    return DStarLite.from_walls(
+    return DStarLite.create(
         context.domain, walls, pose, context.goal, known, goal_heading=context.goal_heading,
         clearance_weight=context.clearance_weight, clearance_radius=context.clearance_radius,
         backend=context.backend,

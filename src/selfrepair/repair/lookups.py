@@ -58,7 +58,7 @@ import sys
 from collections.abc import Callable, Hashable, Iterable
 from dataclasses import dataclass
 from enum import Enum
-from typing import Any, Final, Generic, Literal, TypeVar
+from typing import Final, Generic, Literal, TypeVar, cast
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError, choice
@@ -80,7 +80,8 @@ from selfrepair.repair.replacement import (
     find_replacement,
     table_reach,
 )
-from selfrepair.tables.model import ReplacementTable
+from selfrepair.robots.domain import A, F
+from selfrepair.tables.model import ReplacementTable, SomeTable
 
 __all__ = [
     "ENUMERATE_BITS",
@@ -133,7 +134,7 @@ class Missing(Enum):
 
 MISSING: Final = Missing.MISSING
 
-Answer = Callable[[Replacement], Any]
+Answer = Callable[[Replacement], T]
 """Turns a found replacement (end pose relative to the start cell) into the stored answer."""
 
 
@@ -152,7 +153,7 @@ class ActionLookup(Generic[T]):
 
     __slots__ = ("action", "answers", "cells", "masks", "radius")
 
-    def __init__(self, action: Any, cells: tuple[frozenset[Cell], ...], radius: int) -> None:
+    def __init__(self, action: object, cells: tuple[frozenset[Cell], ...], radius: int) -> None:
         self.action = action
         self.cells = cells
         reach = max((max(abs(x), abs(y)) for per in cells for x, y in per), default=0)
@@ -193,12 +194,12 @@ class FaultLookups(Generic[T]):
 
     def __init__(
         self,
-        table: ReplacementTable,
-        known: frozenset[Any],
+        table: SomeTable,
+        known: frozenset[object],
         mode: RecursionMode,
         max_depth: int,
-        answer: Answer,
-        guard: frozenset[Any] = frozenset(),
+        answer: Answer[T],
+        guard: frozenset[object] = frozenset(),
         max_patterns: int = MAX_PATTERNS,
     ) -> None:
         domain = table.domain
@@ -293,7 +294,7 @@ class FaultLookups(Generic[T]):
             self.stored += 1
         return value
 
-    def get(self, action: Any, pose: Pose, grid: FreeGrid) -> T | None:
+    def get(self, action: object, pose: Pose, grid: FreeGrid) -> T | None:
         """The answer for ``action`` at ``pose`` on ``grid`` (the convenient, slower entry: the
         strategies inline this)."""
         lookup = self.action(self.index.of(action))
@@ -353,21 +354,20 @@ def _key(mode: RecursionMode, max_depth: int) -> int:
 
 
 _LOOKUPS: BoundedCache[
-    tuple[ReplacementTable, frozenset[Any], RecursionMode, int, Hashable, frozenset[Any], int],
-    FaultLookups[Any],
+    tuple[object, frozenset[object], RecursionMode, int, Hashable, frozenset[object], int], object
 ] = BoundedCache("compiled replacement look-ups", MAX_FAULT_LOOKUPS, kind=CacheKind.REPAIR)
 
 
 def fault_lookups(
-    table: ReplacementTable,
-    known: Iterable[Any],
+    table: ReplacementTable[A, F],
+    known: Iterable[F],
     *,
     mode: RecursionMode | str = RecursionMode.FLAT,
     max_depth: int = DEFAULT_MAX_DEPTH,
-    answer: Answer,
-    guard: frozenset[Any] = frozenset(),
+    answer: Answer[T],
+    guard: frozenset[A] = frozenset(),
     max_patterns: int = MAX_PATTERNS,
-) -> FaultLookups[Any]:
+) -> FaultLookups[T]:
     """The compiled look-ups of ``table`` under ``known`` faults in recursion ``mode`` (made on
     first use, kept in a bounded cache). ``answer`` must be a module-level function: it is part
     of the cache key. ``guard``: actions an outer replacement is still replacing (none of them
@@ -382,10 +382,13 @@ def fault_lookups(
         raise ProblemError(f"max_depth must be at least 0, got {max_depth}")
     faults = known if type(known) is frozenset else frozenset(known)
     depth = _key(recursion, max_depth)
-    return _LOOKUPS.get(
-        (table, faults, recursion, depth, answer, guard, max_patterns),
-        lambda: FaultLookups(table, faults, recursion, max_depth, answer, guard, max_patterns),
-    )
+
+    def make() -> FaultLookups[T]:
+        return FaultLookups(table, faults, recursion, max_depth, answer, guard, max_patterns)
+
+    # the key holds ``answer``: the value's answers are what it makes
+    key = (table, faults, recursion, depth, answer, guard, max_patterns)
+    return cast("FaultLookups[T]", _LOOKUPS.get(key, make))
 
 
 def _same(found: Replacement) -> Replacement:
@@ -393,15 +396,15 @@ def _same(found: Replacement) -> Replacement:
 
 
 def compiled_replacement(
-    table: ReplacementTable,
-    action: Any,
+    table: ReplacementTable[A, F],
+    action: A,
     pose: Pose,
-    known_faults: Iterable[Any],
+    known_faults: Iterable[F],
     grid: FreeGrid,
     *,
     mode: RecursionMode | str = RecursionMode.FLAT,
     max_depth: int = DEFAULT_MAX_DEPTH,
-    guard: Iterable[Any] = (),
+    guard: Iterable[A] = (),
     max_patterns: int = MAX_PATTERNS,
 ) -> Replacement | None:
     """:func:`~selfrepair.repair.replacement.find_replacement` through the compiled look-ups:
@@ -425,7 +428,7 @@ def compiled_replacement(
 
 # --- look-ups read on one grid -------------------------------------------------------------------
 
-Slot = tuple[int, dict[int, Any], list[list[int]]]
+Slot = tuple[int, dict[int, T | None], list[list[int]]]
 """What a hit reads for one (action, heading): the neighbourhood mask, the map from masked codes
 to answers, and the grid's occupancy codes at the look-up's radius by row
 (:func:`occupancy_rows`: ``rows[y][x]``)."""
@@ -445,9 +448,9 @@ class GridLookups(Generic[T]):
     def __init__(self, lookups: FaultLookups[T], grid: FreeGrid) -> None:
         self.lookups = lookups
         self.grid = grid
-        self.slots: list[Slot | None] = [None] * len(lookups.faulty_slots)
+        self.slots: list[Slot[T] | None] = [None] * len(lookups.faulty_slots)
 
-    def slot(self, slot: int) -> Slot:
+    def slot(self, slot: int) -> Slot[T]:
         """Fill the four slots of the action of ``slot`` (compiling its look-up if need be)."""
         first = slot & ~3
         lookup = self.lookups.action(first >> 2)
@@ -465,15 +468,15 @@ class GridLookups(Generic[T]):
         return found
 
 
-_ON_GRIDS: BoundedCache[tuple[FaultLookups[Any], FreeGrid], GridLookups[Any]] = BoundedCache(
+_ON_GRIDS: BoundedCache[tuple[object, FreeGrid], object] = BoundedCache(
     "compiled look-ups on grids", MAX_FAULT_LOOKUPS, kind=CacheKind.REPAIR
 )
 
 
 def grid_lookups(lookups: FaultLookups[T], grid: FreeGrid) -> GridLookups[T]:
     """``lookups`` as read on ``grid`` (kept per fault set and grid, a bounded number)."""
-    found: GridLookups[T] = _ON_GRIDS.get((lookups, grid), lambda: GridLookups(lookups, grid))
-    return found
+    found = _ON_GRIDS.get((lookups, grid), lambda: GridLookups(lookups, grid))
+    return cast("GridLookups[T]", found)  # keyed by ``lookups``: its answers
 
 
 # --- memory -------------------------------------------------------------------------------------
@@ -496,5 +499,5 @@ class LookupMemory:
 
 def lookup_memory() -> tuple[LookupMemory, ...]:
     """The memory of every compiled look-up kept now, largest first."""
-    items = [value.memory() for value in _LOOKUPS.values()]
+    items = [v.memory() for v in _LOOKUPS.values() if isinstance(v, FaultLookups)]  # all are
     return tuple(sorted(items, key=lambda m: (-m.bytes, m.table, m.faults, m.mode)))

@@ -10,9 +10,10 @@ module's docstring for what is kept and how much memory it takes.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Generic, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError, choice
@@ -25,7 +26,7 @@ from selfrepair.repair.replacement import (
     RecursionMode,
     complex_actions,
 )
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import A, Domain, F
 from selfrepair.tables.model import ReplacementTable
 
 __all__ = [
@@ -48,7 +49,7 @@ MAX_CODE_GRIDS = 16
 
 
 @dataclass(frozen=True, slots=True, eq=False)
-class ActionIndex:
+class ActionIndex(Generic[A, F]):
     """A domain's actions by position, with their moves, found without hashing an action.
 
     ``ids`` maps ``id(action)`` of the domain's own action objects to their index (``quads``
@@ -59,15 +60,15 @@ class ActionIndex:
     per step in a walk over a plan).
     """
 
-    domain: Domain[Any, Any]
+    domain: Domain[A, F]
     ids: dict[int, int]
-    positions: dict[Any, int]
+    positions: dict[A, int]
     moves: tuple[tuple[tuple[int, int, int], ...], ...]
     footprints: tuple[tuple[tuple[Cell, ...], ...], ...]
     quads: dict[int, int]
     slot_moves: tuple[tuple[int, int, int], ...]
 
-    def of(self, action: Any) -> int:
+    def of(self, action: A) -> int:
         """The index of ``action`` in ``domain.actions``; :class:`ProblemError` if it has none."""
         found = self.ids.get(id(action))
         if found is not None:
@@ -78,7 +79,7 @@ class ActionIndex:
         return found
 
 
-def _action_index(domain: Domain[Any, Any]) -> ActionIndex:
+def _action_index(domain: Domain[A, F]) -> ActionIndex[A, F]:
     starts = [Pose(0, 0, heading) for heading in Heading]
     moves = []
     for action in domain.actions:
@@ -95,23 +96,22 @@ def _action_index(domain: Domain[Any, Any]) -> ActionIndex:
     )
 
 
-_INDEX: BoundedCache[Domain[Any, Any], ActionIndex] = BoundedCache(
-    "action index", 16, kind=CacheKind.REPAIR
-)
+_INDEX: BoundedCache[object, object] = BoundedCache("action index", 16, kind=CacheKind.REPAIR)
 
 
-def action_index(domain: Domain[Any, Any]) -> ActionIndex:
+def action_index(domain: Domain[A, F]) -> ActionIndex[A, F]:
     """The :class:`ActionIndex` of ``domain`` (built once per domain)."""
-    return _INDEX.get(domain, lambda: _action_index(domain))
+    # keyed by the domain itself: the value is its index
+    return cast("ActionIndex[A, F]", _INDEX.get(domain, lambda: _action_index(domain)))
 
 
 # --- neighbourhoods -----------------------------------------------------------------------------
 
 
 def neighbourhood(
-    table: ReplacementTable,
-    action: Any,
-    known: frozenset[Any],
+    table: ReplacementTable[A, F],
+    action: A,
+    known: frozenset[F],
     heading: Heading,
     *,
     mode: RecursionMode | str = RecursionMode.FLAT,
@@ -126,17 +126,17 @@ def neighbourhood(
 
 
 def neighbourhood_walk(
-    table: ReplacementTable, known: frozenset[Any], mode: RecursionMode, max_depth: int
-) -> NeighbourhoodWalk:
+    table: ReplacementTable[A, F], known: frozenset[F], mode: RecursionMode, max_depth: int
+) -> NeighbourhoodWalk[A, F]:
     """The walk of :func:`neighbourhood` for ``table`` under ``known`` in ``mode`` (the compiled
     look-ups keep one per (table, faults, mode) to find each action's neighbourhood)."""
     rule = RECURSION_MODES[mode](table.domain, max_depth)
-    deferrable = complex_actions(table, known) if mode in DEFERRING else frozenset()
+    deferrable: frozenset[A] = complex_actions(table, known) if mode in DEFERRING else frozenset()
     return NeighbourhoodWalk(table, known, rule, action_index(table.domain), deferrable)
 
 
 @dataclass(slots=True)
-class NeighbourhoodWalk:
+class NeighbourhoodWalk(Generic[A, F]):
     """The symbolic search behind :func:`neighbourhood` (mutable: memoises sub-neighbourhoods).
 
     It mirrors the core's search (:class:`~selfrepair.repair.core.CoreSearch`) but follows every
@@ -149,17 +149,17 @@ class NeighbourhoodWalk:
     heading, guard set, depth, whether it runs first) is walked once.
     """
 
-    table: ReplacementTable
-    known: frozenset[Any]
+    table: ReplacementTable[A, F]
+    known: frozenset[F]
     rule: RecurseRule
-    index: ActionIndex
-    deferrable: frozenset[Any] = frozenset()
-    memo: dict[tuple[Any, int, frozenset[Any], int, bool], frozenset[Cell]] = field(
+    index: ActionIndex[A, F]
+    deferrable: frozenset[A] = frozenset()
+    memo: dict[tuple[A, int, frozenset[A], int, bool], frozenset[Cell]] = field(
         default_factory=dict
     )
 
     def cells(
-        self, action: Any, heading: int, replacing: frozenset[Any], depth: int, first: bool = True
+        self, action: A, heading: int, replacing: frozenset[A], depth: int, first: bool = True
     ) -> frozenset[Cell]:
         key = (action, heading, replacing, depth, first)
         found = self.memo.get(key)
@@ -169,7 +169,7 @@ class NeighbourhoodWalk:
         return found
 
     def _walk(
-        self, action: Any, heading: int, replacing: frozenset[Any], depth: int, first: bool
+        self, action: A, heading: int, replacing: frozenset[A], depth: int, first: bool
     ) -> frozenset[Cell]:
         index = self.index
         available = self.table.domain.available
@@ -227,7 +227,7 @@ def _rows(grid: FreeGrid, radius: int) -> list[list[int]]:
 
 
 def _band_codes(
-    padded: np.ndarray[Any, np.dtype[np.uint8]],
+    padded: npt.NDArray[np.uint8],
     top: int,
     band: int,
     left: int,

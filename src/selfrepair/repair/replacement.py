@@ -58,13 +58,13 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from enum import StrEnum
-from typing import Any
+from typing import Generic, cast
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError, choice
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.repair.core import CoreSearch, RecurseRule, Replacement
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import A, Domain, F, SomeDomain
 from selfrepair.tables.model import ReplacementTable
 
 __all__ = [
@@ -98,22 +98,21 @@ class RecursionMode(StrEnum):
     PRIMITIVE = "primitive"
 
 
-
-ModeRule = Callable[[Domain[Any, Any], int], RecurseRule]
+ModeRule = Callable[[SomeDomain, int], RecurseRule]
 """A recursion mode: given the domain and the depth bound, its recursion rule."""
 
 
-def _flat(domain: Domain[Any, Any], max_depth: int) -> RecurseRule:
+def _flat(domain: Domain[A, F], max_depth: int) -> RecurseRule:
     """Never recurse: only candidates whose actions are all healthy."""
     return lambda b, a, d: False
 
 
-def _guarded(domain: Domain[Any, Any], max_depth: int) -> RecurseRule:
+def _guarded(domain: Domain[A, F], max_depth: int) -> RecurseRule:
     """Recurse while shallower than ``max_depth`` (the guard set is carried by the search)."""
     return lambda b, a, d: d < max_depth
 
 
-def _layered(domain: Domain[Any, Any], max_depth: int) -> RecurseRule:
+def _layered(domain: Domain[A, F], max_depth: int) -> RecurseRule:
     """Recurse only into strictly lower-level actions, so recursion always terminates."""
     level = domain.level
     return lambda b, a, d: level(b) < level(a)
@@ -137,15 +136,16 @@ PRIMITIVE_DISTINCT = 2
 """An action is primitive when every candidate for it uses at most this many different actions."""
 
 
-def complex_actions(table: ReplacementTable, known: frozenset[Any]) -> frozenset[Any]:
+def complex_actions(table: ReplacementTable[A, F], known: frozenset[F]) -> frozenset[A]:
     """The actions that are complex in ``table`` under the faults ``known`` (see the module
     docstring, ``primitive`` mode): no candidate, or some candidate made of more than
     :data:`PRIMITIVE_DISTINCT` different actions. Computed once per (table, faults)."""
-    return _COMPLEX.get((table, known), lambda: _complex(table, known))
+    # keyed by the table: the value holds its actions
+    return cast("frozenset[A]", _COMPLEX.get((table, known), lambda: _complex(table, known)))
 
 
-def _complex(table: ReplacementTable, known: frozenset[Any]) -> frozenset[Any]:
-    out = set()
+def _complex(table: ReplacementTable[A, F], known: frozenset[F]) -> frozenset[A]:
+    out: set[A] = set()
     for action in table.domain.actions:
         candidates = table.candidates(action, known)
         if not candidates or any(len(set(c)) > PRIMITIVE_DISTINCT for c in candidates):
@@ -153,27 +153,27 @@ def _complex(table: ReplacementTable, known: frozenset[Any]) -> frozenset[Any]:
     return frozenset(out)
 
 
-_COMPLEX: BoundedCache[tuple[ReplacementTable, frozenset[Any]], frozenset[Any]] = BoundedCache(
+_COMPLEX: BoundedCache[tuple[object, frozenset[object]], frozenset[object]] = BoundedCache(
     "complex actions", 256, kind=CacheKind.REPAIR
 )
 
 
 @dataclass(frozen=True, slots=True)
-class RobotWorld:
+class RobotWorld(Generic[A, F]):
     """One robot's primitive actions as the replacement core sees them
     (:class:`~selfrepair.repair.core.LiftedWorld`): an action is healthy when the known faults
     leave it available, and executable from a pose when its footprint there is free; it binds to
     itself and leads to the pose the domain says."""
 
-    domain: Domain[Any, Any]
-    known: frozenset[Any]
+    domain: Domain[A, F]
+    known: frozenset[F]
     free: FreeTest
 
-    def healthy(self, action: Any, state: Pose) -> bool:
+    def healthy(self, action: A, state: Pose) -> bool:
         """Whether the known faults leave ``action`` available."""
         return self.domain.available(action, self.known)
 
-    def advance(self, action: Any, state: Pose) -> tuple[tuple[Any, ...], Pose] | None:
+    def advance(self, action: A, state: Pose) -> tuple[tuple[A, ...], Pose] | None:
         """``((action,), end)`` when ``action``'s footprint at ``state`` is free, else ``None``."""
         domain = self.domain
         if not self.free(domain.footprint(state, action)):
@@ -182,15 +182,15 @@ class RobotWorld:
 
 
 def find_replacement(
-    table: ReplacementTable,
-    action: Any,
+    table: ReplacementTable[A, F],
+    action: A,
     state: Pose,
-    known_faults: Iterable[Any],
+    known_faults: Iterable[F],
     free: FreeTest,
     *,
     mode: RecursionMode | str = RecursionMode.FLAT,
     max_depth: int = DEFAULT_MAX_DEPTH,
-    guard: Iterable[Any] = (),
+    guard: Iterable[A] = (),
 ) -> Replacement | None:
     """The first valid replacement for ``action`` at ``state``, or ``None`` when there is none.
 
@@ -208,7 +208,7 @@ def find_replacement(
     known = frozenset(known_faults)
     deferrable = complex_actions(table, known) if chosen in DEFERRING else frozenset()
     domain = table.domain
-    search: CoreSearch[Any, Pose] = CoreSearch(
+    search: CoreSearch[A, Pose] = CoreSearch(
         RobotWorld(domain, known, free),
         lambda a: table.candidates(a, known),
         rule(domain, max_depth),
@@ -219,11 +219,11 @@ def find_replacement(
 
 
 def is_valid_replacement(
-    domain: Domain[Any, Any],
-    action: Any,
+    domain: Domain[A, F],
+    action: A,
     state: Pose,
-    actions: Iterable[Any],
-    known_faults: Iterable[Any],
+    actions: Iterable[A],
+    known_faults: Iterable[F],
     free: FreeTest,
     *,
     deferred: Iterable[int] = (),
@@ -261,7 +261,7 @@ class _Geometry:
     reach: int
 
 
-def _geometry(domain: Domain[Any, Any], candidate: tuple[Any, ...]) -> _Geometry:
+def _geometry(domain: Domain[A, F], candidate: tuple[A, ...]) -> _Geometry:
     cells_by_heading = []
     ends = []
     for heading in Heading:
@@ -276,16 +276,16 @@ def _geometry(domain: Domain[Any, Any], candidate: tuple[Any, ...]) -> _Geometry
     return _Geometry(tuple(cells_by_heading), tuple(ends), reach)
 
 
-_GEOMETRY: BoundedCache[tuple[Domain[Any, Any], tuple[Any, ...]], _Geometry] = BoundedCache(
+_GEOMETRY: BoundedCache[tuple[object, tuple[object, ...]], _Geometry] = BoundedCache(
     "candidate geometry", 1 << 16, kind=CacheKind.PREFILLED
 )
 
 
-def _candidate_geometry(domain: Domain[Any, Any], candidate: tuple[Any, ...]) -> _Geometry:
+def _candidate_geometry(domain: Domain[A, F], candidate: tuple[A, ...]) -> _Geometry:
     return _GEOMETRY.get((domain, candidate), lambda: _geometry(domain, candidate))
 
 
-def table_reach(table: ReplacementTable) -> int:
+def table_reach(table: ReplacementTable[A, F]) -> int:
     """How many cells (Chebyshev) from its start cell any candidate of ``table`` reaches: the
     margin a :class:`~selfrepair.geometry.FreeGrid` needs for :func:`flat_replacement`.
 
@@ -295,7 +295,7 @@ def table_reach(table: ReplacementTable) -> int:
     return _REACH.get(table, lambda: _reach(table))
 
 
-def _reach(table: ReplacementTable) -> int:
+def _reach(table: ReplacementTable[A, F]) -> int:
     return max(
         (
             _candidate_geometry(table.domain, c).reach
@@ -306,27 +306,24 @@ def _reach(table: ReplacementTable) -> int:
     )
 
 
-_REACH: BoundedCache[ReplacementTable, int] = BoundedCache(
-    "table reach", 64, kind=CacheKind.PREFILLED
-)
-
+_REACH: BoundedCache[object, int] = BoundedCache("table reach", 64, kind=CacheKind.PREFILLED)
 
 
 @dataclass(frozen=True, slots=True)
-class _Compiled:
+class _Compiled(Generic[A]):
     """A healthy candidate, ready to test: its cells as buffer offsets per heading."""
 
     position: int
-    candidate: tuple[Any, ...]
+    candidate: tuple[A, ...]
     offsets: tuple[tuple[int, ...], ...]
     ends: tuple[Pose, ...]
 
 
 def _compile_flat(
-    table: ReplacementTable, action: Any, known: frozenset[Any], stride: int
-) -> tuple[_Compiled, ...]:
+    table: ReplacementTable[A, F], action: A, known: frozenset[F], stride: int
+) -> tuple[_Compiled[A], ...]:
     domain = table.domain
-    compiled = []
+    compiled: list[_Compiled[A]] = []
     for position, candidate in enumerate(table.candidates(action, known)):
         if action in candidate or not all(domain.available(b, known) for b in candidate):
             continue
@@ -336,16 +333,16 @@ def _compile_flat(
     return tuple(compiled)
 
 
-_COMPILED: BoundedCache[
-    tuple[ReplacementTable, Any, frozenset[Any], int], tuple[_Compiled, ...]
-] = BoundedCache("compiled flat look-ups", 1 << 14, kind=CacheKind.REPAIR)
+_COMPILED: BoundedCache[tuple[object, object, frozenset[object], int], tuple[object, ...]] = (
+    BoundedCache("compiled flat look-ups", 1 << 14, kind=CacheKind.REPAIR)
+)
 
 
 def flat_replacement(
-    table: ReplacementTable,
-    action: Any,
+    table: ReplacementTable[A, F],
+    action: A,
     pose: Pose,
-    known_faults: frozenset[Any],
+    known_faults: frozenset[F],
     grid: FreeGrid,
 ) -> Replacement | None:
     """``find_replacement(..., mode="flat")`` on a :class:`~selfrepair.geometry.FreeGrid`, at a
@@ -358,7 +355,12 @@ def flat_replacement(
     """
     stride = grid.stride
     key = (table, action, known_faults, stride)
-    compiled = _COMPILED.get(key, lambda: _compile_flat(table, action, known_faults, stride))
+
+    def compile_flat() -> tuple[_Compiled[A], ...]:
+        return _compile_flat(table, action, known_faults, stride)
+
+    # keyed by the table: the value is compiled from its candidates
+    compiled = cast("tuple[_Compiled[A], ...]", _COMPILED.get(key, compile_flat))
     data = grid.data
     base = grid.index(pose.x, pose.y)
     heading = pose.heading

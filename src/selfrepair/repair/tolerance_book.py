@@ -32,7 +32,8 @@ from selfrepair.repair.lookups import MISSING, ActionLookup, action_index, fault
 from selfrepair.repair.neighbourhood import occupancy_bit
 from selfrepair.repair.replacement import RecursionMode, Replacement
 from selfrepair.repair.tolerance import FaultModel
-from selfrepair.tables.model import ReplacementTable
+from selfrepair.search.term import MAX_PATTERN_CELLS, PatternTable
+from selfrepair.tables.model import SomeTable
 
 __all__ = ["MAX_BOOK_ROWS", "MaskBook", "ToleranceMasks"]
 
@@ -119,6 +120,7 @@ class MaskBook:
         "_parts",
         "_row_of",
         "_size",
+        "_table",
         "_words",
         "actions",
         "cells",
@@ -132,8 +134,8 @@ class MaskBook:
 
     def __init__(
         self,
-        table: ReplacementTable,
-        actions: tuple[Any, ...],
+        table: SomeTable,
+        actions: tuple[object, ...],
         model: FaultModel,
         mode: RecursionMode,
         max_depth: int,
@@ -185,6 +187,11 @@ class MaskBook:
         self._words = np.zeros((*shape, words), dtype=np.uint64)
         self._size = 0
         self._row_of: dict[int, int] = {}
+        self._table = (  # the rows again, indexed for the compiled search (patterns it can read)
+            PatternTable(self.cells, len(Heading), len(self.actions))
+            if len(self.cells) <= MAX_PATTERN_CELLS
+            else None
+        )
         self._parts: tuple[tuple[dict[int, tuple[int, int]], ...], ...] = tuple(
             tuple({} for _ in self.actions) for _ in Heading
         )
@@ -193,6 +200,31 @@ class MaskBook:
     def rows(self) -> int:
         """Rows (distinct patterns) kept now."""
         return self._size
+
+    @property
+    def pattern_table(self) -> PatternTable | None:
+        """The rows as a :class:`~selfrepair.search.term.PatternTable` the compiled search reads
+        per expanded cell (row numbers are this book's), or ``None`` when the union has more
+        than :data:`~selfrepair.search.term.MAX_PATTERN_CELLS` cells; a new one after the book
+        starts afresh."""
+        return self._table
+
+    def code(self, grid: FreeGrid, x: int, y: int) -> int:
+        """The pattern of cell ``(x, y)`` of ``grid`` (bit ``j``: ``cells[j]`` around it free)."""
+        return sum(
+            1 << j for j, (dx, dy) in enumerate(self.cells) if grid.is_free(x + dx, y + dy)
+        )
+
+    def fill(self, grid: FreeGrid, x: int, y: int) -> int:
+        """The row of the pattern around cell ``(x, y)`` of ``grid``, found now if it is new
+        (the book starts afresh first when it is full)."""
+        code = self.code(grid, x, y)
+        row = self._row_of.get(code)
+        if row is None:
+            if self._size + 1 > MAX_BOOK_ROWS:
+                self._start()
+            row = self._add(code, x, y, grid)
+        return row
 
     def patterns(self, grid: FreeGrid) -> _Patterns:
         """The free cells of ``grid``, their distinct patterns and which cell has which."""
@@ -263,6 +295,8 @@ class MaskBook:
                     self._words[row, h, k, w] = (bits >> (64 * w)) & 0xFFFFFFFFFFFFFFFF
         self._size += 1
         self._row_of[code] = row
+        if self._table is not None:
+            self._table.add(code, self._counts[row])
         return row
 
     def _part(

@@ -24,10 +24,14 @@ fate depends on the replacement it came from: the masks are then the per-encount
 approximate even the hard mode. :func:`tolerance_term` refuses that mode.
 
 Computation (:mod:`selfrepair.repair.tolerance_book`): a :class:`MaskBook` per (table, actions,
-model, mode) answers each neighbourhood pattern once per process, through the compiled look-ups;
-the masks of a grid gather each free cell's pattern (numpy) and its row. Masks are kept per (book,
-grid) in a bounded cache: a second plan on the same map pays nothing, a plan on a new map pays
-the gather (and the search only for patterns never met before).
+model, mode) answers each neighbourhood pattern once per process, through the compiled look-ups.
+The term :func:`tolerance_term` gives the planner holds the counts **by pattern**
+(:class:`~selfrepair.search.term.PatternSource`): the compiled search reads a cell's pattern and
+its row in the book when it first expands the cell, and has the book answer a pattern it has not
+met, so a plan on a new map pays for the cells it expands, not for the map. The dense masks of
+every pose (:func:`tolerance_masks`: the gather of every free cell's pattern, numpy) are made
+only when asked for: by the pure-Python search, a plan's cost check, or a caller. Both are kept
+per (book, grid) in bounded caches.
 """
 
 from __future__ import annotations
@@ -42,16 +46,17 @@ from selfrepair.limits import MAX_LOOKUP_PATTERNS
 from selfrepair.repair.replacement import DEFAULT_MAX_DEPTH, DEFERRING, RecursionMode
 from selfrepair.repair.tolerance import FaultModel
 from selfrepair.repair.tolerance_book import MaskBook, ToleranceMasks
-from selfrepair.search.term import StepTerm
+from selfrepair.robots.domain import A, F
+from selfrepair.search.term import PatternSource, PatternTable, StepTerm
 from selfrepair.tables.model import ReplacementTable
 
 __all__ = ["ToleranceMasks", "tolerance_masks", "tolerance_term"]
 
 
 def tolerance_masks(
-    table: ReplacementTable,
+    table: ReplacementTable[A, F],
     grid: FreeGrid,
-    actions: tuple[Any, ...],
+    actions: tuple[A, ...],
     model: FaultModel,
     *,
     mode: RecursionMode | str = RecursionMode.FLAT,
@@ -60,11 +65,25 @@ def tolerance_masks(
 ) -> ToleranceMasks:
     """The masks of ``actions`` on ``grid`` under ``model`` (see the module docstring; kept in a
     bounded cache). ``grid`` needs a margin of at least the table's reach, as a mission's has."""
-    recursion = RecursionMode(mode)
+    book = _book(table, actions, model, RecursionMode(mode), max_depth, max_patterns)
+    return _masks(book, grid)
+
+
+def _book(
+    table: ReplacementTable[A, F],
+    actions: tuple[A, ...],
+    model: FaultModel,
+    recursion: RecursionMode,
+    max_depth: int,
+    max_patterns: int,
+) -> MaskBook:
     key = (table, actions, model, recursion, max_depth, max_patterns)
-    book = _BOOKS.get(
+    return _BOOKS.get(
         key, lambda: MaskBook(table, actions, model, recursion, max_depth, max_patterns)
     )
+
+
+def _masks(book: MaskBook, grid: FreeGrid) -> ToleranceMasks:
     return _MASKS.get((book, grid), lambda: book.masks(grid))
 
 
@@ -78,9 +97,9 @@ _BOOKS: BoundedCache[tuple[Any, ...], MaskBook] = BoundedCache(
 
 
 def tolerance_term(
-    table: ReplacementTable,
+    table: ReplacementTable[A, F],
     grid: FreeGrid,
-    actions: tuple[Any, ...],
+    actions: tuple[A, ...],
     model: FaultModel,
     *,
     penalty: Fraction | None = None,
@@ -97,16 +116,33 @@ def tolerance_term(
             f"tolerant planning needs a non-deferring recursion mode, not {recursion} (a "
             "step's replacement there depends on the replacement it came from)"
         )
-    found = tolerance_masks(
-        table, grid, actions, model, mode=recursion, max_depth=max_depth,
-        max_patterns=max_patterns,
-    )  # fmt: skip
+    book = _book(table, actions, model, recursion, max_depth, max_patterns)
     label = (
         f"tolerant {model.label}" if penalty is None else f"tolerant soft {penalty} {model.label}"
     )
-    return _TERMS.get((found, penalty), lambda: StepTerm(actions, found.counts, penalty, label))
+    return _TERMS.get((book, grid, penalty), lambda: _term(book, grid, penalty, label))
 
 
-_TERMS: BoundedCache[tuple[ToleranceMasks, Fraction | None], StepTerm] = BoundedCache(
+def _term(book: MaskBook, grid: FreeGrid, penalty: Fraction | None, label: str) -> StepTerm:
+    """The term of ``book`` on ``grid``: by pattern when the compiled search can read the
+    book's patterns (the masks of a cell found when the search first expands it), else dense."""
+    if book.pattern_table is None:
+        return StepTerm(book.actions, _masks(book, grid).counts, penalty, label)
+
+    def table() -> PatternTable:
+        current = book.pattern_table
+        assert current is not None  # a book's union, hence its table's use, never changes
+        return current
+
+    def fill(x: int, y: int) -> None:
+        book.fill(grid, x, y)
+
+    source = PatternSource(
+        grid, table, fill, lambda: _masks(book, grid).counts, len(book.model.fault_sets)
+    )
+    return StepTerm(book.actions, None, penalty, label, source)
+
+
+_TERMS: BoundedCache[tuple[MaskBook, FreeGrid, Fraction | None], StepTerm] = BoundedCache(
     "tolerance terms", 16, kind=CacheKind.REPAIR
 )

@@ -59,15 +59,18 @@ import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Generic, TypeVar
+from typing import Any, Generic, TypeAlias, TypeVar
 
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
 
 __all__ = [
     "CANONICAL",
+    "A",
     "Domain",
+    "F",
     "FaultBehaviour",
+    "SomeDomain",
     "check_domain",
     "primitive_by_motion",
     "progress_rate",
@@ -76,7 +79,9 @@ __all__ = [
 ]
 
 A = TypeVar("A")
+"""The action type of a domain, in code generic over robots (the four-wheel robot: ``Action``)."""
 F = TypeVar("F")
+"""The fault type of a domain, in code generic over robots (the four-wheel robot: ``Fault``)."""
 
 CANONICAL = Pose(0, 0, Heading.N)
 """The state candidates of a replacement table are stored relative to (origin, facing north)."""
@@ -204,15 +209,20 @@ class Domain(Generic[A, F]):
         return frozenset(f for f in faults if not self.available(action, frozenset((f,))))
 
 
+SomeDomain: TypeAlias = "Domain[Any, Any]"
+"""A domain whose action and fault types are known only at run time: what the registry gives for
+a name read from a file or the command line. Code that takes a domain *and* its actions is
+generic in :data:`A` and :data:`F` instead; this is for what truly holds any robot (the registry,
+an experiment's configuration, a cache keyed by domain)."""
+
+
 def _waits(domain: Domain[A, F]) -> tuple[A, ...]:
     """The actions of ``domain`` that stay in place from every heading (:attr:`Domain.waits`)."""
     probes = tuple(Pose(0, 0, heading) for heading in Heading)
     stay = [
         a
         for a in domain.actions
-        if all(
-            domain.apply(p, a) == p and set(domain.footprint(p, a)) <= {p.cell} for p in probes
-        )
+        if all(domain.apply(p, a) == p and set(domain.footprint(p, a)) <= {p.cell} for p in probes)
     ]
     rest = sorted(
         (a for a in stay if a not in domain.wait_actions),

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from selfrepair.errors import ConfigError, InputError
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.registry import get_domain, load_plugin
 from selfrepair.tomlfile import find_line
 
@@ -43,7 +43,7 @@ def load_plugins(data: Mapping[str, Any], text: str, source: str) -> None:
             raise ConfigError(f"key 'plugins': {exc}", source=source, line=line) from None
 
 
-def file_domain(data: Mapping[str, Any], text: str, source: str) -> Domain[Any, Any]:
+def file_domain(data: Mapping[str, Any], text: str, source: str) -> SomeDomain:
     """The robot the file names (key ``domain``, default four-wheel), looked up in the registry."""
     name = data.get("domain", DEFAULT_DOMAIN)
     line = find_line(text, ("domain",))

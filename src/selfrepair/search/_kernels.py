@@ -34,6 +34,12 @@ read and write arrays handed in, never allocate, and with counting on numba surr
 and tuple of arrays in the hot loops with atomic reference-count updates, which took most of the
 grid kernel's time.
 
+A step term (:class:`~selfrepair.search.term.StepTerm`, the tolerant planner's) is read per
+expanded cell: the cell's row of counts (per heading and move), found for a term by pattern by
+gathering the cell's pattern from the term's grid and probing its table's index
+(:func:`_pattern_row`), and kept per cell between searches on that term (:class:`_TermState`);
+a pattern the table lacks makes the kernel return so the source can add it.
+
 Kernels are resumable: all search state lives in arrays, and a call stops after a given number of
 expansions (so that the Python wrapper can look at the clock between calls) or when the heap or
 queue array is full (the wrapper then grows it and calls again).
@@ -58,6 +64,7 @@ from selfrepair.jit import NUMBA, njit
 from selfrepair.robots.domain import Domain
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.problem import CellBound, PlanningProblem, make_pose, pose_table
+from selfrepair.search.term import PatternTable, StepTerm
 from selfrepair.world.maze import Maze
 
 _Fn = TypeVar("_Fn", bound=Callable[..., Any])
@@ -71,13 +78,18 @@ def _search_kernel(fn: _Fn) -> _Fn:
     return njit(**options)(fn)  # type: ignore[no-any-return]
 
 
-__all__ = ["CHUNK", "NUMBA", "bfs_padded", "grid_search", "plan_lattice"]
+__all__ = ["CHUNK", "NUMBA", "bfs_padded", "grid_search", "plan_lattice", "term_counts"]
 
 CHUNK = 1 << 15
 """Expansions per kernel call when a time limit is set (between two looks at the clock)."""
 
-_PAUSED, _SOLVED, _UNSOLVABLE, _GROW = 0, 1, 2, 3
+_PAUSED, _SOLVED, _UNSOLVABLE, _GROW, _MISS = 0, 1, 2, 3, 4
 _SIZE, _COUNTER, _EXPANSIONS, _FOUND = 0, 1, 2, 3
+_WITH, _HARD, _PER, _PW, _FSTRIDE, _FBASE = 0, 1, 2, 3, 4, 5
+"""The lattice kernel's step-term parameters: whether there is a term, whether it is hard, the
+scaled cost per count (soft), the kernel's padded width, and the stride and base offset of the
+term's grid (see :func:`_pattern_row`)."""
+_MIX = 0x2545F4914F6CDD1D  # selfrepair.search.term's pattern_slot multiplier (a test checks)
 _F, _H, _C, _NODE = 0, 1, 2, 3  # heap record columns
 _MOVE_BITS = 10
 """Lattice words: the parent's heading (2 bits) and the move index (8 bits) below the stamp."""
@@ -418,14 +430,38 @@ _FIRST_QUEUE = 1 << 12
 # --- robot lattice -------------------------------------------------------------------------
 
 
+@njit(cache=True, inline="always")
+def _pattern_row(cell: int, pw: int, term: Any, free: Any, offs: Any, keys: Any, rows: Any) -> int:
+    """The pattern row of kernel cell ``cell`` (-1: a pattern the table has not met): the code
+    read from ``free`` (the term's grid, ``term[_FSTRIDE]`` bytes a row, cell ``(x, y)`` at
+    ``(y + 1) * stride + x + 1 + term[_FBASE]`` in padded coordinates) at ``offs``, then probed
+    in the open-addressing index ``keys``/``rows`` from
+    :func:`selfrepair.search.term.pattern_slot`'s slot."""
+    y = cell // pw
+    q = y * term[_FSTRIDE] + (cell - y * pw) + term[_FBASE]
+    code = np.int64(0)
+    for j in range(offs.shape[0]):
+        code |= np.int64(free[q + offs[j]]) << j
+    mask = keys.shape[0] - 1
+    slot = ((code ^ (code >> 7) ^ (code >> 19)) * _MIX) & mask
+    while True:
+        key = keys[slot]
+        if key == code:
+            return int(rows[slot])
+        if key < 0:
+            return -1
+        slot = (slot + 1) & mask
+
+
 @_search_kernel
 def _lattice(
-    nbr: Any, pen: Any, hdist: Any, mt: Any, par: Any,
-    rec: Any, heap: Any, scal: Any, extra: Any,
+    nbr: Any, pen: Any, hdist: Any, mt: Any, par: Any, rec: Any, heap: Any, scal: Any,
+    term: Any, counts: Any, crow: Any, free: Any, offs: Any, keys: Any, rows: Any,
 ) -> int:  # fmt: skip
     rnum, rden, wmul = par[0], par[1], par[2]
     goal_cell, goal_head, limit, opened, shift = par[3], par[4], par[5], par[6], par[7]
-    with_extra = par[8]
+    with_term, hard, per_count = term[_WITH], term[_HARD], term[_PER]
+    pw = term[_PW]
     closed = opened + 1
     size, counter, expansions = scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS]
     nmoves = mt.shape[1]
@@ -439,12 +475,24 @@ def _lattice(
             status = _GROW
             break
         s = heap[_BASE, 1] & _TIE_MASK
+        cell = s >> 2
+        head = s & 3
+        at_goal = cell == goal_cell and (goal_head < 0 or head == goal_head)
+        row = 0
+        if with_term and not at_goal:  # the step term's row of this cell, read on expansion
+            row = crow[cell]
+            if row < 0:
+                row = _pattern_row(cell, pw, term, free, offs, keys, rows)
+                if row < 0:  # a pattern never met: the caller fills it, then calls again
+                    scal[_FOUND] = cell
+                    status = _MISS
+                    break
+                crow[cell] = row
+            row = (row * 4 + head) * nmoves
         size = _pop2(heap, rec, size)
         rec[s, _WORD] = (closed << _MOVE_BITS) | (rec[s, _WORD] & _MOVE_MASK)
         expansions += 1
-        cell = s >> 2
-        head = s & 3
-        if cell == goal_cell and (goal_head < 0 or head == goal_head):
+        if at_goal:
             scal[_FOUND] = s
             status = _SOLVED
             break
@@ -460,11 +508,12 @@ def _lattice(
             if m == closed:
                 continue
             gn = gs + mt[head, k, _DUR]
-            if with_extra:  # the step term: -1 forbids the step (hard), else its scaled cost
-                x = extra[s * nmoves + k]
-                if x < 0:
-                    continue
-                gn += x
+            if with_term:  # the step term: a count forbids the step (hard) or costs per_count
+                c = counts[row + k]
+                if c:
+                    if hard:
+                        continue
+                    gn += c * per_count
             if wmul:
                 penalty = 0
                 for j in range(mt[head, k, _NSW]):
@@ -589,39 +638,125 @@ _NO_PENALTY = np.zeros(1, dtype=np.int64)
 _NO_PENALTY.setflags(write=False)
 
 
-_NO_EXTRA = np.zeros(1, dtype=np.int64)
-_NO_EXTRA.setflags(write=False)
+class _TermState:
+    """What the lattice kernel reads of one step term, kept between its searches (mutable: the
+    cell rows fill as cells are expanded): the counts per row (flat), each padded kernel cell's
+    row (-1: not read yet), and for a term by pattern its grid's bytes, the pattern's cells as
+    offsets in them and the pattern table the rows refer to."""
+
+    __slots__ = ("base", "counts", "crow", "free", "keys", "offs", "rows", "stride", "table")
+
+    def __init__(self, term: StepTerm, pw: int) -> None:
+        height, width = term.size
+        self.crow = np.full((height + 2) * pw, -1, dtype=np.int32)
+        self.table: PatternTable | None = None
+        source = term.source
+        if source is None:  # dense counts: cell (x, y) is row y * width + x
+            inner = self.crow.reshape(height + 2, pw)[1:-1, 1:-1]
+            inner[:] = np.arange(height * width, dtype=np.int32).reshape(height, width)
+            self.counts = term.dense_counts().astype(np.int32).reshape(-1)  # a writable copy
+            self.free, self.offs, self.keys, self.rows = _NO_BYTES, _NO_INTS, _NO_INTS, _NO_ROWS
+            self.stride = self.base = 0
+            return
+        grid = source.grid
+        table = source.table()
+        reach = table.reach
+        margin = grid.margin
+        free = np.frombuffer(grid.data, dtype=np.uint8)
+        if margin < reach:  # cells beyond the margin are walls
+            free = np.pad(free.reshape(grid.height + 2 * margin, grid.stride), reach - margin)
+            margin = reach
+            free = free.ravel()
+            free.setflags(write=False)
+        self.free = free
+        self.stride = grid.width + 2 * margin
+        self.base = (margin - 1) * self.stride + margin - 1
+        self.offs = table.dy * self.stride + table.dx
+        self.counts, self.keys, self.rows = _NO_COUNTS, _NO_INTS, _NO_ROWS
+        self.refresh(table)
+
+    def arrays(self) -> tuple[npt.NDArray[Any], ...]:
+        """The kernel's term arrays: counts, cell rows, grid bytes, offsets, index keys, rows."""
+        return self.counts, self.crow, self.free, self.offs, self.keys, self.rows
+
+    def refresh(self, table: PatternTable) -> None:
+        """Read ``table``'s current arrays; a new table (the source started afresh) makes every
+        cell row read so far stale."""
+        if table is not self.table and self.table is not None:
+            self.crow.fill(-1)
+        self.table = table
+        self.counts = table.counts.reshape(-1)
+        self.keys, self.rows = table.keys, table.rows
 
 
-def _step_extra(
-    problem: PlanningProblem, scale: int, n_states: int, n_moves: int
-) -> tuple[npt.NDArray[np.int64], int]:
-    """The step term of ``problem`` in the kernel's layout, ``extra[state * n_moves + k]``: -1
-    where a hard term forbids the step, else its scaled cost; and the largest cost. Without a
-    term a one-element array the kernel never reads (the default objective pays one branch)."""
-    term = problem.step_term
-    if term is None:
-        return _NO_EXTRA, 0
-
-    def make() -> tuple[npt.NDArray[np.int64], int]:
-        counts = term.counts.astype(np.int64)
-        if term.penalty is None:
-            values = np.where(counts > 0, -1, 0)
-        else:
-            values = counts * int(term.penalty * scale)
-        height, width = counts.shape[:2]
-        padded = np.zeros((height + 2, width + 2, 4, n_moves), dtype=np.int64)
-        padded[1:-1, 1:-1] = values
-        out = padded.reshape(n_states * n_moves)
-        out.setflags(write=False)
-        return out, int(max(0, values.max(initial=0)))
-
-    return _cached(_EXTRA, (term, scale), make)  # type: ignore[no-any-return]
+# Stand-ins the kernel never reads (no term, or a dense one), with the flags of the real arrays
+# (only the grid's bytes are read-only), so that every call has one signature.
+_NO_BYTES = np.zeros(1, dtype=np.uint8)
+_NO_BYTES.setflags(write=False)
+_NO_INTS = np.full(1, -1, dtype=np.int64)
+_NO_ROWS = np.zeros(1, dtype=np.int32)
+_NO_COUNTS = np.zeros(1, dtype=np.int32)
+_NO_CELLS = np.zeros(1, dtype=np.int32)
+_NO_TERM = np.zeros(6, dtype=np.int64)
+_NO_TERM_ARRAYS = (_NO_COUNTS, _NO_CELLS, _NO_BYTES, _NO_INTS, _NO_INTS, _NO_ROWS)
 
 
-_EXTRA: BoundedCache[Hashable, tuple[npt.NDArray[np.int64], int]] = BoundedCache(
-    "step terms in kernel layout", 8, kind=CacheKind.PLAN
+def _term_state(term: StepTerm, pw: int) -> _TermState:
+    state: _TermState = _cached(_TERM_STATES, term, lambda: _TermState(term, pw))
+    return state
+
+
+_TERM_STATES: BoundedCache[StepTerm, _TermState] = BoundedCache(
+    "step terms as the lattice kernel reads them", 16, kind=CacheKind.PLAN
 )
+
+
+@njit(cache=True)
+def _pattern_rows(
+    cells: Any, pw: int, term: Any, free: Any, offs: Any, keys: Any, rows: Any, out: Any
+) -> None:
+    for i in range(cells.shape[0]):
+        out[i] = _pattern_row(cells[i], pw, term, free, offs, keys, rows)
+
+
+def term_counts(term: StepTerm) -> npt.NDArray[np.int32]:
+    """The counts of ``term`` at every pose, ``[y, x, heading, k]``, read as the lattice kernel
+    reads them: a term by pattern through the kernel's own pattern gather and index probe (the
+    source filling the patterns its table lacks), a dense one as is. For checking the compiled
+    path against :meth:`StepTerm.dense_counts`; 0 on walls (never expanded). The table must hold
+    the patterns of every free cell at once."""
+    height, width = term.size
+    source = term.source
+    if source is None:
+        return term.dense_counts()
+    pw = width + 2
+    state = _TermState(term, pw)
+    free = np.array([source.grid.is_free(x, y) for y in range(height) for x in range(width)])
+    ys, xs = np.divmod(np.flatnonzero(free).astype(np.int64), width)
+    cells = (ys + 1) * pw + xs + 1
+    tpar = np.array([1, 0, 0, pw, state.stride, state.base], dtype=np.int64)
+    out = np.empty(len(cells), dtype=np.int32)
+    while True:
+        _pattern_rows(cells, pw, tpar, state.free, state.offs, state.keys, state.rows, out)
+        missing = np.flatnonzero(out < 0)
+        if not len(missing):
+            break
+        at = int(missing[0])
+        source.fill(int(xs[at]), int(ys[at]))
+        state.refresh(source.table())
+    n_actions = len(term.actions)
+    found = np.zeros((height, width, 4, n_actions), dtype=np.int32)
+    found[ys, xs] = state.counts.reshape(-1, 4, n_actions)[out]
+    return found
+
+
+def _term_bound(term: StepTerm | None, per_count: int) -> int:
+    """The largest scaled cost a step term adds to one step (0 for a hard term)."""
+    if term is None or term.hard:
+        return 0
+    if term.source is not None:
+        return term.source.max_count * per_count
+    return int(term.dense_counts().max(initial=0)) * per_count
 
 
 def plan_lattice(
@@ -665,10 +800,11 @@ def plan_lattice(
     mt = motion.table
     hmax = (int(hdist.max(initial=0)) if largest is None else largest) * rnum // rden
     shift = hmax.bit_length()  # heap key: (f << shift) | h, ordered as (f, h)
-    extra, extra_max = _step_extra(problem, scale, n_states, len(moves))
+    term = problem.step_term
+    per_count = 0 if term is None or term.penalty is None else int(term.penalty * scale)
     f_max = _check_int64(
-        motion.dur_max + extra_max, mt.shape[2] - _SW, pen_max, wmul, hmax, shift, n_states,
-        len(moves),
+        motion.dur_max + _term_bound(term, per_count), mt.shape[2] - _SW, pen_max, wmul, hmax,
+        shift, n_states, len(moves),
     )  # fmt: skip
     start = problem.start
     start_cell = (start.y + 1) * pw + start.x + 1
@@ -690,20 +826,33 @@ def plan_lattice(
     heap[_BASE] = ((h0 << shift) | h0, start_state)
     heap[_BASE + 1 : _BASE + 4, 0] = _NO_KEY  # slots from the size on never win a comparison
     scal = np.array([1, 0, 0, -1], dtype=np.int64)
-    with_extra = int(extra is not _NO_EXTRA)
-    par = np.array(
-        [rnum, rden, wmul, goal_cell, goal_head, 0, opened, shift, with_extra], dtype=np.int64
-    )
+    par = np.array([rnum, rden, wmul, goal_cell, goal_head, 0, opened, shift], dtype=np.int64)
     nbr = _neighbourhoods(maze)
+    ts = None if term is None else _term_state(term, pw)
+    tpar = _NO_TERM
+    if ts is not None:
+        tpar = np.array([1, int(term is not None and term.hard), per_count, pw, ts.stride,
+                         ts.base], dtype=np.int64)  # fmt: skip
+    missed = -1
 
     def run(limit: int) -> int:
-        nonlocal heap
+        nonlocal heap, missed
         while True:
             par[5] = limit
-            code = int(_lattice(nbr, pen, hdist, mt, par, rec, heap, scal, extra))
-            if code != _GROW:
+            arrays = _NO_TERM_ARRAYS if ts is None else ts.arrays()
+            code = int(_lattice(nbr, pen, hdist, mt, par, rec, heap, scal, tpar, *arrays))
+            if code == _GROW:
+                heap = _heap("lattice", np.int64, 2 * heap.shape[0], 2)
+            elif code == _MISS:  # a pattern the term's table has not met: the source adds it
+                assert ts is not None and term is not None and term.source is not None
+                cell = int(scal[_FOUND])
+                if cell == missed:
+                    raise AssertionError(f"pattern of kernel cell {cell} is still missing")
+                missed = cell
+                term.source.fill(cell % pw - 1, cell // pw - 1)
+                ts.refresh(term.source.table())
+            else:
                 return code
-            heap = _heap("lattice", np.int64, 2 * heap.shape[0], 2)
 
     status = _drive(run, scal, max_expansions, deadline_ns)
     expansions = int(scal[_EXPANSIONS])

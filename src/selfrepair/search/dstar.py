@@ -61,14 +61,14 @@ import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
 
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
-from selfrepair.robots.domain import Domain, primitive_by_motion, progress_rate
+from selfrepair.robots.domain import SomeDomain, primitive_by_motion, progress_rate
 from selfrepair.search._dstar_reference import INF, Core, PythonCore, geometry, reach
 from selfrepair.search.astar import BACKENDS, PlanStatus
 from selfrepair.search.backend import use_numba
@@ -108,7 +108,7 @@ class DStarPlan:
     ``expansions`` since the previous plan, and the wall time of the call."""
 
     status: PlanStatus
-    actions: tuple[Any, ...]
+    actions: tuple[object, ...]
     cost: Fraction | None
     scaled_cost: int
     expansions: int
@@ -132,7 +132,7 @@ def _penalties(free: npt.NDArray[np.uint8], radius: int) -> npt.NDArray[np.int64
 class DStarLite:
     """One D* Lite search kept between changes (mutable: see the module docstring).
 
-    Build it with :meth:`create` (a maze) or :meth:`from_walls` (a wall array). ``backend`` says
+    Build it with :meth:`create` (a maze or a wall array). ``backend`` says
     which implementation runs (``"numba"`` or ``"python"``); ``faults`` are the known faults,
     ``start`` the pose the next plan starts from, ``walls`` the current map (``[y, x]``, true for
     a blocked cell).
@@ -140,11 +140,11 @@ class DStarLite:
 
     def __init__(
         self,
-        domain: Domain[Any, Any],
+        domain: SomeDomain,
         walls: npt.NDArray[np.bool_],
         start: Pose,
         goal: Cell,
-        faults: frozenset[Any],
+        faults: frozenset[object],
         goal_heading: Heading | None,
         clearance_weight: Fraction,
         clearance_radius: int,
@@ -177,8 +177,8 @@ class DStarLite:
         self.goal_heading = goal_heading
         self.goal_cell = self._cell(*goal)
         self.goal_head = -1 if goal_heading is None else int(goal_heading)
-        self.faults: frozenset[Any] = frozenset()
-        self.chosen: tuple[Any, ...] = ()
+        self.faults: frozenset[object] = frozenset()
+        self.chosen: tuple[object, ...] = ()
         self.dur = np.full(len(self.geometry.classes), -1, dtype=np.int64)
         self._choose(frozenset(faults))
         self.backend = "numba" if numba else "python"
@@ -190,39 +190,21 @@ class DStarLite:
     @classmethod
     def create(
         cls,
-        domain: Domain[Any, Any],
-        maze: WallMap,
+        domain: SomeDomain,
+        maze: WallMap | npt.NDArray[np.bool_],
         start: Pose,
         goal: Cell,
-        faults: frozenset[Any] = frozenset(),
+        faults: frozenset[object] = frozenset(),
         *,
         goal_heading: Heading | None = None,
         clearance_weight: Fraction | int = 0,
         clearance_radius: int = 2,
         backend: str = "auto",
     ) -> DStarLite:
-        """A search for ``domain`` on ``maze`` from ``start`` to ``goal`` (any heading unless
+        """A search for ``domain`` on ``maze`` (or on a wall array ``[y, x]``, true for a blocked
+        cell, for layers that know no maze) from ``start`` to ``goal`` (any heading unless
         ``goal_heading``) under the known ``faults``; nothing is searched until :meth:`plan`."""
-        return cls.from_walls(
-            domain, maze.walls, start, goal, faults, goal_heading=goal_heading,
-            clearance_weight=clearance_weight, clearance_radius=clearance_radius, backend=backend,
-        )  # fmt: skip
-
-    @classmethod
-    def from_walls(
-        cls,
-        domain: Domain[Any, Any],
-        walls: npt.NDArray[np.bool_],
-        start: Pose,
-        goal: Cell,
-        faults: frozenset[Any] = frozenset(),
-        *,
-        goal_heading: Heading | None = None,
-        clearance_weight: Fraction | int = 0,
-        clearance_radius: int = 2,
-        backend: str = "auto",
-    ) -> DStarLite:
-        """As :meth:`create`, from a wall array ``[y, x]`` (for layers that know no maze)."""
+        walls = maze if isinstance(maze, np.ndarray) else maze.walls
         return cls(
             domain, walls, start, goal, faults, goal_heading, Fraction(clearance_weight),
             clearance_radius, backend,
@@ -246,7 +228,7 @@ class DStarLite:
 
     # --- changes -------------------------------------------------------------------------------
 
-    def _choose(self, faults: frozenset[Any]) -> bool:
+    def _choose(self, faults: frozenset[object]) -> bool:
         fastest = primitive_by_motion(self.domain, faults)
         chosen = tuple(fastest.get(m) for m in self.geometry.classes)
         changed = chosen != self.chosen
@@ -257,7 +239,7 @@ class DStarLite:
             )
         return changed
 
-    def update_faults(self, faults: frozenset[Any]) -> int:
+    def update_faults(self, faults: frozenset[object]) -> int:
         """The known faults are now ``faults``; returns the number of vertex updates made (0 when
         no motion class changed its action)."""
         faults = frozenset(faults)

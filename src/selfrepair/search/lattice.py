@@ -247,7 +247,7 @@ def _plan_python(
     distance = bound.distance.tolist()
     rate = bound.rate * scale
     term = problem.step_term
-    counts = term.counts.tolist() if term is not None else None
+    counts = term.dense_counts() if term is not None else None
     hard = term is not None and term.hard
     per_count = 0 if term is None or term.penalty is None else int(term.penalty * scale)
 
@@ -257,7 +257,7 @@ def _plan_python(
 
     def successors(pose: Pose) -> list[tuple[Pose, int, Any]]:
         out = []
-        here = counts[pose.y][pose.x][pose.heading] if counts is not None else None
+        here = counts[pose.y, pose.x, pose.heading].tolist() if counts is not None else None
         for k, action in enumerate(actions):
             end, swept, dur = domain.step(pose, action)
             if maze.all_free(swept):
@@ -298,10 +298,10 @@ def _check_term(problem: PlanningProblem, term: StepTerm, actions: tuple[Any, ..
             f"the faults known ({problem.domain.format_faults(problem.faults) or 'none'})"
         )
     height, width = problem.maze.walls.shape
-    if term.counts.shape[:2] != (height, width):
+    if term.size != (height, width):
         raise ProblemError(
-            f"the step term {term.label!r} is for a {term.counts.shape[1]}x"
-            f"{term.counts.shape[0]} maze, not {width}x{height}"
+            f"the step term {term.label!r} is for a {term.size[1]}x{term.size[0]} maze, "
+            f"not {width}x{height}"
         )
 
 

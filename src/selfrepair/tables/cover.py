@@ -14,13 +14,13 @@ import operator
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import partial
-from typing import Any
+from typing import Generic
 
 import numpy as np
 import numpy.typing as npt
 
 from selfrepair.geometry import Cell
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import A, Domain, F
 from selfrepair.tables.enumerate import (
     Objective,
     Path,
@@ -37,18 +37,18 @@ __all__ = ["fault_agnostic_entries"]
 
 
 @dataclass(frozen=True, slots=True)
-class _Option:
+class _Option(Generic[A]):
     """A concrete candidate in the fault-agnostic pool with its usability bitmask."""
 
-    actions: tuple[Any, ...]
+    actions: tuple[A, ...]
     rank: tuple[int, int, int, int, tuple[str, ...]]
     usable: int
     extra: frozenset[Cell]
 
 
 def fault_agnostic_entries(
-    domain: Domain[Any, Any], options: GenerateOptions, searcher: Searcher
-) -> list[TableEntry]:
+    domain: Domain[A, F], options: GenerateOptions, searcher: Searcher[A, F]
+) -> list[TableEntry[A, F]]:
     info = domain_classes(domain)
     scope = scope_fault_sets(domain, options.faults)
     masks = {
@@ -57,7 +57,7 @@ def fault_agnostic_entries(
     }
     full = (1 << len(scope)) - 1
     durations = {a: int(domain.duration(a) * info.scale) for a in domain.actions}
-    entries: list[TableEntry] = []
+    entries: list[TableEntry[A, F]] = []
     for action in domain.actions:
         motion = info.classes[info.of_action[action]]
         relevant = full & ~masks[action]
@@ -85,7 +85,7 @@ def fault_agnostic_entries(
 
 
 @dataclass(slots=True)
-class _Pool:
+class _Pool(Generic[A, F]):
     """The concrete candidates considered for one fault-agnostic entry.
 
     ``paths`` are the class sequences found under any fault set that disables the action (the
@@ -95,18 +95,18 @@ class _Pool:
     that stays usable under the most fault sets not yet covered.
     """
 
-    domain: Domain[Any, Any]
+    domain: Domain[A, F]
     gen: GenerateOptions
-    action: Any
+    action: A
     base: frozenset[Cell]
-    masks: Mapping[Any, int]
-    durations: Mapping[Any, int]
+    masks: Mapping[A, int]
+    durations: Mapping[A, int]
     full: int
     paths: dict[tuple[int, ...], Path]
-    options: dict[tuple[Any, ...], _Option]
-    members: dict[int, list[tuple[int, int, Any]]] = field(default_factory=dict)
+    options: dict[tuple[A, ...], _Option[A]]
+    members: dict[int, list[tuple[int, int, A]]] = field(default_factory=dict)
 
-    def add(self, concrete: tuple[Any, ...], path: Path) -> None:
+    def add(self, concrete: tuple[A, ...], path: Path) -> None:
         if concrete in self.options or self.action in concrete:
             return
         usable = self.full
@@ -131,13 +131,13 @@ class _Pool:
                 ]
         for path in self.paths.values():
             usable = self.full
-            concrete = []
+            concrete: list[A] = []
             for ci in path.motions:
                 members = self.members[ci]
                 if not members:
                     break
                 best_key: tuple[int, int, int] | None = None
-                pick = None
+                pick = members[0][2]  # the first member always wins the first comparison
                 for mask, neg_duration, member in members:
                     key = (
                         (usable & mask & uncovered).bit_count(),
@@ -153,7 +153,7 @@ class _Pool:
 
 
 def _healthy_rank(
-    domain: Domain[Any, Any], concrete: tuple[Any, ...], path: Path, options: GenerateOptions
+    domain: Domain[A, F], concrete: tuple[A, ...], path: Path, options: GenerateOptions
 ) -> tuple[int, int, int, int, tuple[str, ...]]:
     scale = domain_classes(domain).scale
     duration = sum(int(domain.duration(a) * scale) for a in concrete)
@@ -170,6 +170,10 @@ fault set, fault sets with a usable candidate that fits wherever the action does
 ``walls`` the last two swap places."""
 
 
+_Row = tuple[npt.NDArray[np.int64], npt.NDArray[np.bool_]]
+"""One option's costs and "fits" flags over the fault-set columns."""
+
+
 @dataclass(frozen=True, slots=True)
 class _Matrices:
     """Per option (row) and fault set (column): its cost where usable, and whether it is usable
@@ -181,11 +185,11 @@ class _Matrices:
 
     @staticmethod
     def build(
-        ranked: Sequence[_Option],
+        ranked: Sequence[_Option[A]],
         bits: Sequence[int],
         no_faults: bool,
         walls_first: bool,
-        rows: dict[tuple[Any, ...], tuple[Any, Any]],
+        rows: dict[tuple[A, ...], _Row],
     ) -> _Matrices:
         """``rows`` memoises each option's row across rounds (the columns never change)."""
         columns = 1 if no_faults else len(bits)
@@ -239,7 +243,9 @@ class _Matrices:
         return (int(covered[best]), -int(total[best]), int(safe[best])), best
 
 
-def _greedy_cover(pool: _Pool, relevant: int, limit: int, *, no_faults: bool) -> list[_Option]:
+def _greedy_cover(
+    pool: _Pool[A, F], relevant: int, limit: int, *, no_faults: bool
+) -> list[_Option[A]]:
     """Choose up to ``limit`` options for one fault-agnostic entry.
 
     First maximise the :data:`Value` (fault sets covered; then minus the summed cost of the
@@ -251,10 +257,10 @@ def _greedy_cover(pool: _Pool, relevant: int, limit: int, *, no_faults: bool) ->
     some fault set.
     """
     bits = [i for i in range(relevant.bit_length()) if relevant >> i & 1]
-    chosen: list[_Option] = []
+    chosen: list[_Option[A]] = []
     current: Value = (0, 0, 0)
     walls_first = pool.gen.priority == "walls"
-    rows: dict[tuple[Any, ...], tuple[Any, Any]] = {}
+    rows: dict[tuple[A, ...], _Row] = {}
     while len(chosen) < limit:
         covered_mask = 0
         for o in chosen:
@@ -275,8 +281,8 @@ def _greedy_cover(pool: _Pool, relevant: int, limit: int, *, no_faults: bool) ->
 
 
 def _improve_by_swaps(
-    chosen: list[_Option], ranked: Sequence[_Option], matrices: _Matrices, current: Value
-) -> list[_Option]:
+    chosen: list[_Option[A]], ranked: Sequence[_Option[A]], matrices: _Matrices, current: Value
+) -> list[_Option[A]]:
     """Local search after the greedy pass: replace one pick by the best pool option while that
     strictly improves the value (greedy maximum coverage can miss the optimum)."""
     for _ in range(4 * len(chosen)):
@@ -292,8 +298,13 @@ def _improve_by_swaps(
 
 
 def _fill_diverse(
-    chosen: list[_Option], ranked: Sequence[_Option], relevant: int, limit: int, *, no_faults: bool
-) -> list[_Option]:
+    chosen: list[_Option[A]],
+    ranked: Sequence[_Option[A]],
+    relevant: int,
+    limit: int,
+    *,
+    no_faults: bool,
+) -> list[_Option[A]]:
     """Add, cheapest first, options that are the first to fit some wall arrangement under some
     fault set: no chosen option usable there sweeps a subset of their extra cells."""
     chosen = list(chosen)

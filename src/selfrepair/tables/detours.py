@@ -27,14 +27,21 @@ from __future__ import annotations
 import heapq
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
+from typing import Any, Generic, TypeAlias, cast
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
-from selfrepair.robots.domain import Domain, primitive_by_motion
+from selfrepair.robots.domain import A, Domain, F, primitive_by_motion
 
-__all__ = ["DEFAULT_RADIUS", "DEFAULT_WINDOW", "DetourKey", "DetourTable", "detour_table"]
+__all__ = [
+    "DEFAULT_RADIUS",
+    "DEFAULT_WINDOW",
+    "DetourKey",
+    "DetourTable",
+    "SomeDetours",
+    "detour_table",
+]
 
 DEFAULT_RADIUS = 2
 """Chebyshev cells between the start cell and the end cell of a detour."""
@@ -47,7 +54,7 @@ DetourKey = tuple[int, int, int, int]
 
 
 @dataclass(frozen=True, slots=True, eq=False)
-class DetourTable:
+class DetourTable(Generic[A, F]):
     """Detour candidates by :data:`DetourKey`, best first (see the module docstring).
 
     ``classes`` are the motion classes in the order of ``actions`` (one action per class, the
@@ -55,11 +62,11 @@ class DetourTable:
     is the set of cells candidate ``i`` of ``key`` sweeps, relative to the start cell.
     """
 
-    domain: Domain[Any, Any]
+    domain: Domain[A, F]
     radius: int
     window: int
     classes: tuple[str, ...]
-    actions: tuple[Any, ...]
+    actions: tuple[A, ...]
     entries: dict[DetourKey, tuple[tuple[int, ...], ...]]
     cells: dict[DetourKey, tuple[frozenset[Cell], ...]]
 
@@ -72,16 +79,22 @@ class DetourTable:
         return sum(len(c) for c in self.entries.values())
 
 
+SomeDetours: TypeAlias = "DetourTable[Any, Any]"
+"""A detour table of a robot known only at run time (see
+:data:`~selfrepair.robots.domain.SomeDomain`)."""
+
+
 def detour_table(
-    domain: Domain[Any, Any], radius: int = DEFAULT_RADIUS, window: int = DEFAULT_WINDOW
-) -> DetourTable:
+    domain: Domain[A, F], radius: int = DEFAULT_RADIUS, window: int = DEFAULT_WINDOW
+) -> DetourTable[A, F]:
     """The detour table of ``domain`` (made on first use, then kept)."""
     if radius < 1 or window < radius:
         raise ProblemError(f"expected 1 <= radius <= window, got {radius} and {window}")
-    return _TABLES.get((domain, radius, window), lambda: _generate(domain, radius, window))
+    table = _TABLES.get((domain, radius, window), lambda: _generate(domain, radius, window))
+    return cast("DetourTable[A, F]", table)  # keyed by the domain: the value is its table
 
 
-_TABLES: BoundedCache[tuple[Domain[Any, Any], int, int], DetourTable] = BoundedCache(
+_TABLES: BoundedCache[tuple[object, int, int], object] = BoundedCache(
     "detour tables", 16, kind=CacheKind.PREFILLED
 )
 
@@ -93,7 +106,7 @@ _Found = dict[tuple[int, int, int], tuple[tuple[int, ...], int]]
 """Per end pose ``(x, y, heading)``: the class indices of the cheapest path and its cost."""
 
 
-def _generate(domain: Domain[Any, Any], radius: int, window: int) -> DetourTable:
+def _generate(domain: Domain[A, F], radius: int, window: int) -> DetourTable[A, F]:
     fastest = primitive_by_motion(domain, frozenset())
     moving = {
         name: action

@@ -12,12 +12,12 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
 from fractions import Fraction
-from typing import Any
+from typing import Generic, cast
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import TableError, choice
-from selfrepair.geometry import Cell
-from selfrepair.robots.domain import Domain, run_open
+from selfrepair.geometry import Cell, Pose
+from selfrepair.robots.domain import A, Domain, F, run_open
 
 __all__ = [
     "ClassCost",
@@ -61,57 +61,58 @@ class Objective(StrEnum):
 
 
 @dataclass(frozen=True, slots=True)
-class MotionClass:
+class MotionClass(Generic[A]):
     """Actions with one effect: ``end`` and ``footprint`` are taken from the canonical state."""
 
     index: int
     name: str
-    end: Any
+    end: Pose
     footprint: frozenset[Cell]
-    members: tuple[Any, ...]
+    members: tuple[A, ...]
 
 
 @dataclass(frozen=True, slots=True)
-class DomainClasses:
+class DomainClasses(Generic[A, F]):
     """The motion classes of a domain and how each action maps to one."""
 
-    domain: Domain[Any, Any]
-    classes: tuple[MotionClass, ...]
-    of_action: Mapping[Any, int]
+    domain: Domain[A, F]
+    classes: tuple[MotionClass[A], ...]
+    of_action: Mapping[A, int]
     identity: frozenset[int]
     scale: int
 
 
-_CLASSES: BoundedCache[Domain[Any, Any], DomainClasses] = BoundedCache(
+_CLASSES: BoundedCache[object, object] = BoundedCache(
     "domain motion classes", 16, kind=CacheKind.REPAIR
 )
 
 
-def motion_classes(domain: Domain[Any, Any]) -> tuple[MotionClass, ...]:
+def motion_classes(domain: Domain[A, F]) -> tuple[MotionClass[A], ...]:
     """The domain's motion classes, in order of their first member in ``domain.actions``."""
     return domain_classes(domain).classes
 
 
-def class_of(domain: Domain[Any, Any], action: Any) -> MotionClass:
+def class_of(domain: Domain[A, F], action: A) -> MotionClass[A]:
     """The motion class ``action`` belongs to."""
     info = domain_classes(domain)
     return info.classes[info.of_action[action]]
 
 
-def cost_scale(domain: Domain[Any, Any]) -> int:
+def cost_scale(domain: Domain[A, F]) -> int:
     """The factor that turns every action cost of ``domain`` into an integer (search units)."""
     return domain_classes(domain).scale
 
 
-def domain_classes(domain: Domain[Any, Any]) -> DomainClasses:
+def domain_classes(domain: Domain[A, F]) -> DomainClasses[A, F]:
     """The domain's actions grouped by effect from the canonical state (computed once per
     domain)."""
-    return _CLASSES.get(domain, lambda: _classes(domain))
+    # keyed by the domain itself, so the value is that domain's classes
+    return cast("DomainClasses[A, F]", _CLASSES.get(domain, lambda: _classes(domain)))
 
 
-def _classes(domain: Domain[Any, Any]) -> DomainClasses:
+def _classes(domain: Domain[A, F]) -> DomainClasses[A, F]:
     start = domain.canonical
-    by_key: dict[tuple[Any, frozenset[Cell]], list[Any]] = {}
+    by_key: dict[tuple[Pose, frozenset[Cell]], list[A]] = {}
     for action in domain.actions:
         key = (domain.apply(start, action), frozenset(domain.footprint(start, action)))
         by_key.setdefault(key, []).append(action)
@@ -129,7 +130,7 @@ def _classes(domain: Domain[Any, Any]) -> DomainClasses:
 # --- fault scopes and class costs -------------------------------------------------------------
 
 
-def scope_fault_sets(domain: Domain[Any, Any], scope: str) -> tuple[frozenset[Any], ...]:
+def scope_fault_sets(domain: Domain[A, F], scope: str) -> tuple[frozenset[F], ...]:
     """The domain's fault sets selected by ``scope``: all, singles, doubles or none."""
     selected = choice(FaultScope, scope, "fault scope")
     if selected is FaultScope.NONE:
@@ -141,13 +142,13 @@ def scope_fault_sets(domain: Domain[Any, Any], scope: str) -> tuple[frozenset[An
     return tuple(domain.fault_sets)
 
 
-ClassCost = tuple[int, int, Any]
+ClassCost = tuple[int, int, A]
 """(objective cost, duration, concrete action) of a class; costs scaled to integers."""
 
 
 def class_costs(
-    domain: Domain[Any, Any], allowed: Callable[[Any], bool], objective: str = "duration"
-) -> dict[int, ClassCost]:
+    domain: Domain[A, F], allowed: Callable[[A], bool], objective: str = "duration"
+) -> dict[int, ClassCost[A]]:
     """For each class with an allowed member, its cheapest allowed member and that member's cost.
 
     Costs are integers: durations multiplied by the least common multiple of the domain's cost
@@ -155,9 +156,9 @@ def class_costs(
     one, and the member is still the fastest one.
     """
     info = domain_classes(domain)
-    out: dict[int, ClassCost] = {}
+    out: dict[int, ClassCost[A]] = {}
     for motion in info.classes:
-        best: tuple[int, Any] | None = None
+        best: tuple[int, A] | None = None
         for action in motion.members:
             if not allowed(action):
                 continue
@@ -180,7 +181,7 @@ class Path:
     cost: int
     duration: int
     motions: tuple[int, ...]
-    end: Any
+    end: Pose
     footprint: frozenset[Cell]
 
     def rank(self) -> tuple[int, int, int, int, tuple[int, ...]]:
@@ -193,11 +194,11 @@ def _chebyshev(a: Cell, b: Cell) -> int:
 
 
 def enumerate_paths(
-    domain: Domain[Any, Any],
-    costs: Mapping[int, ClassCost],
-    targets: Iterable[Any],
+    domain: Domain[A, F],
+    costs: Mapping[int, ClassCost[A]],
+    targets: Iterable[Pose],
     max_length: int,
-) -> dict[Any, list[Path]]:
+) -> dict[Pose, list[Path]]:
     """Every non-dominated class sequence of at most ``max_length`` steps ending at a target.
 
     Breadth-first over lengths; a node is (end state, swept cells) and keeps only its cheapest
@@ -211,9 +212,9 @@ def enumerate_paths(
     target_cells = {t.cell for t in target_set}
     reach = max((_chebyshev(c.end.cell, start.cell) for c in info.classes), default=0) or 1
     order = sorted(costs)
-    step_cache: dict[tuple[Any, int], tuple[Any, frozenset[Cell]]] = {}
+    step_cache: dict[tuple[Pose, int], tuple[Pose, frozenset[Cell]]] = {}
 
-    def step(state: Any, ci: int) -> tuple[Any, frozenset[Cell]]:
+    def step(state: Pose, ci: int) -> tuple[Pose, frozenset[Cell]]:
         hit = step_cache.get((state, ci))
         if hit is None:
             action = costs[ci][2]
@@ -224,8 +225,8 @@ def enumerate_paths(
     def near(cell: Cell, steps_left: int) -> bool:
         return any(_chebyshev(cell, t) <= steps_left * reach for t in target_cells)
 
-    best: dict[tuple[Any, frozenset[Cell]], tuple[int, int]] = {}
-    found: dict[tuple[Any, frozenset[Cell]], Path] = {}
+    best: dict[tuple[Pose, frozenset[Cell]], tuple[int, int]] = {}
+    found: dict[tuple[Pose, frozenset[Cell]], Path] = {}
     frontier: list[Path] = [Path(0, 0, (), start, frozenset({start.cell}))]
     for length in range(1, max_length + 1):
         nxt: list[Path] = []
@@ -254,7 +255,7 @@ def enumerate_paths(
                 if end in target_set:
                     found[key] = new
         frontier = nxt
-    out: dict[Any, list[Path]] = {t: [] for t in target_set}
+    out: dict[Pose, list[Path]] = {t: [] for t in target_set}
     for (end, _), path in found.items():
         out[end].append(path)
     for paths in out.values():
@@ -286,28 +287,28 @@ def select_diverse(paths: Sequence[Path], base: frozenset[Cell], limit: int) -> 
 
 
 @dataclass(slots=True)
-class Searcher:
+class Searcher(Generic[A, F]):
     """Runs :func:`enumerate_paths` once per distinct class-cost signature (many fault sets leave
     the same cheapest cost per class), and computes class costs once per fault set."""
 
-    domain: Domain[Any, Any]
+    domain: Domain[A, F]
     objective: str
     max_length: int
-    memo: dict[tuple[tuple[int, int, int], ...], dict[Any, list[Path]]]
-    costs_memo: dict[Any, dict[int, ClassCost]]
+    memo: dict[tuple[tuple[int, int, int], ...], dict[Pose, list[Path]]]
+    costs_memo: dict[frozenset[F], dict[int, ClassCost[A]]]
 
-    def costs(self, allowed: Callable[[Any], bool]) -> dict[int, ClassCost]:
+    def costs(self, allowed: Callable[[A], bool]) -> dict[int, ClassCost[A]]:
         """Class costs with the actions ``allowed`` says are left (not memoised)."""
         return class_costs(self.domain, allowed, self.objective)
 
-    def costs_under(self, faults: frozenset[Any]) -> dict[int, ClassCost]:
+    def costs_under(self, faults: frozenset[F]) -> dict[int, ClassCost[A]]:
         """Class costs under a fault set, memoised."""
         hit = self.costs_memo.get(faults)
         if hit is None:
             hit = self.costs_memo[faults] = self.costs(lambda a: self.domain.available(a, faults))
         return hit
 
-    def paths(self, costs: Mapping[int, ClassCost]) -> dict[Any, list[Path]]:
+    def paths(self, costs: Mapping[int, ClassCost[A]]) -> dict[Pose, list[Path]]:
         """Every class's candidate sequences under ``costs`` (see :func:`enumerate_paths`)."""
         signature = tuple((ci, c[0], c[1]) for ci, c in sorted(costs.items()))
         hit = self.memo.get(signature)
@@ -318,7 +319,7 @@ class Searcher:
         return hit
 
 
-def concrete_actions(path: Path, costs: Mapping[int, ClassCost]) -> tuple[Any, ...]:
+def concrete_actions(path: Path, costs: Mapping[int, ClassCost[A]]) -> tuple[A, ...]:
     return tuple(costs[ci][2] for ci in path.motions)
 
 
@@ -326,10 +327,10 @@ def concrete_actions(path: Path, costs: Mapping[int, ClassCost]) -> tuple[Any, .
 
 
 def verify_entry(
-    domain: Domain[Any, Any],
-    action: Any,
-    candidates: Iterable[tuple[Any, ...]],
-    faults: frozenset[Any] | None = None,
+    domain: Domain[A, F],
+    action: A,
+    candidates: Iterable[tuple[A, ...]],
+    faults: frozenset[F] | None = None,
 ) -> None:
     """Re-simulate every candidate: it must be non-empty, avoid ``action``, end where ``action``
     ends, and (for a fault-indexed entry) use only actions available under ``faults``.
@@ -358,7 +359,7 @@ def verify_entry(
             )
 
 
-def candidate_cost(domain: Domain[Any, Any], candidate: Iterable[Any], objective: str) -> Fraction:
+def candidate_cost(domain: Domain[A, F], candidate: Iterable[A], objective: str) -> Fraction:
     """A candidate's exact cost under ``objective``: total duration, or number of actions."""
     actions = tuple(candidate)
     if objective == Objective.LENGTH:

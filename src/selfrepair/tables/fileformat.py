@@ -27,18 +27,26 @@ import math
 import re
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import cast
 
 import numpy as np
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import InputError, TableError
 from selfrepair.limits import MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES, check_limit
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import A, Domain, F
 from selfrepair.robots.registry import domain_names, get_domain
 from selfrepair.tables.generate import generate_table
-from selfrepair.tables.model import FORMAT_NAME, Candidate, ReplacementTable, TableEntry
-from selfrepair.textio import read_text, strip_bom
+from selfrepair.tables.model import (
+    FORMAT_NAME,
+    Candidate,
+    MadeBy,
+    ReplacementTable,
+    SomeTable,
+    TableEntry,
+    TableShape,
+)
+from selfrepair.textio import JSONObject, JSONValue, read_text, strip_bom
 
 __all__ = [
     "MAX_JSON_DEPTH",
@@ -95,7 +103,7 @@ def parse_table(
     *,
     max_table_bytes: int | None = MAX_TABLE_BYTES,
     max_table_candidates: int | None = MAX_TABLE_CANDIDATES,
-) -> ReplacementTable:
+) -> SomeTable:
     """Parse and validate a table in the JSON format of the module docstring.
 
     ``max_table_bytes`` bounds the text's length in characters (a lower bound of its size in
@@ -117,8 +125,8 @@ def parse_table(
     for key in ("version", "domain", "shape", "made_by", "entries"):
         if key not in data:
             raise TableError(f"expected a {key!r} key in the header", source=source)
-    _check_header(data, source)
-    dom = get_domain(data["domain"])
+    name, parameters = _check_header(data, source)
+    dom = get_domain(name)
     raw_entries = data["entries"]
     if not isinstance(raw_entries, list):
         raise TableError('expected "entries" to be a list', source=source)
@@ -130,26 +138,29 @@ def parse_table(
         source=source,
     )
     lines = _entry_lines(text, len(raw_entries))
-    parameters = data.get("parameters", {})
     entries = tuple(
         _parse_entry(dom, raw, number, lines[number], source)
         for number, raw in enumerate(raw_entries)
     )
     return ReplacementTable(
         domain=dom,
-        shape=data["shape"],
-        made_by=data["made_by"],
+        # strings, converted (or refused, naming the allowed values) by ReplacementTable
+        shape=cast(TableShape, data["shape"]),
+        made_by=cast(MadeBy, data["made_by"]),
         entries=entries,
         parameters=parameters,
-        version=data["version"],
+        version=cast(int, data["version"]),  # an int: _check_header says so
         source=source,
     )
 
 
-def _load_json(text: str, source: str) -> Any:
+def _load_json(text: str, source: str) -> JSONValue:
     try:
-        return json.loads(
-            text, parse_int=_json_int, parse_float=_json_float, parse_constant=_json_constant
+        return cast(
+            JSONValue,
+            json.loads(
+                text, parse_int=_json_int, parse_float=_json_float, parse_constant=_json_constant
+            ),
         )
     except json.JSONDecodeError as exc:
         raise TableError(
@@ -197,14 +208,15 @@ def _position(text: str, index: int) -> tuple[int, int]:
     return line, index - (text.rfind("\n", 0, index) + 1) + 1
 
 
-def _short(value: Any) -> str:
+def _short(value: object) -> str:
     """``value`` as JSON, cut to 60 characters, for messages."""
     text = json.dumps(value)
     return text if len(text) <= 60 else text[:57] + "..."
 
 
-def _check_header(data: dict[str, Any], source: str) -> None:
-    """Types of the header fields; their values are checked by :class:`ReplacementTable`."""
+def _check_header(data: JSONObject, source: str) -> tuple[str, dict[str, JSONValue]]:
+    """Types of the header fields (their values are checked by :class:`ReplacementTable`);
+    returns the domain's name and the parameters."""
     if type(data["version"]) is not int:  # bool is an int in Python: refuse it explicitly
         raise TableError(
             f'expected "version" to be an integer, got {_short(data["version"])}', source=source
@@ -214,9 +226,10 @@ def _check_header(data: dict[str, Any], source: str) -> None:
             raise TableError(
                 f"expected {key!r} to be a string, got {_short(data[key])}", source=source
             )
-    if data["domain"] not in _domain_names():
+    name = data["domain"]
+    if not isinstance(name, str) or name not in _domain_names():
         raise TableError(
-            f"expected a domain in {', '.join(_domain_names())}, got {data['domain']!r}",
+            f"expected a domain in {', '.join(_domain_names())}, got {name!r}",
             source=source,
         )
     parameters = data.get("parameters", {})
@@ -230,13 +243,14 @@ def _check_header(data: dict[str, Any], source: str) -> None:
                 f"of those, got {key!r}: {_short(value)}",
                 source=source,
             )
+    return name, parameters
 
 
-def _count_candidates(raw_entries: list[Any]) -> int:
+def _count_candidates(raw_entries: list[JSONValue]) -> int:
     return sum(
-        len(raw["candidates"])
+        len(candidates)
         for raw in raw_entries
-        if isinstance(raw, dict) and isinstance(raw.get("candidates"), list)
+        if isinstance(raw, dict) and isinstance(candidates := raw.get("candidates"), list)
     )
 
 
@@ -259,34 +273,36 @@ def _entry_lines(text: str, count: int) -> list[int | None]:
 
 
 def _parse_entry(
-    dom: Domain[Any, Any], raw: Any, number: int, line: int | None, source: str
-) -> TableEntry:
+    dom: Domain[A, F], raw: JSONValue, number: int, line: int | None, source: str
+) -> TableEntry[A, F]:
     def fail(what: str) -> TableError:
         return TableError(f"entry {number}: {what}", source=source, line=line)
 
-    if not isinstance(raw, dict) or not isinstance(raw.get("action"), str):
+    if not isinstance(raw, dict) or not isinstance(name := raw.get("action"), str):
         raise fail('expected an object with a string "action"')
     unknown = set(raw) - {"action", "faults", "candidates"}
     if unknown:
         raise fail(f"expected keys action, faults, candidates, got also {sorted(unknown)}")
     try:
-        action = dom.parse_action(raw["action"])
+        action = dom.parse_action(name)
         faults = None if "faults" not in raw else dom.parse_faults(_string(raw["faults"]))
     except InputError as exc:
         raise fail(exc.reason) from None
     candidates = raw.get("candidates")
     if not isinstance(candidates, list) or not all(isinstance(c, list) for c in candidates):
         raise fail('expected "candidates" to be a list of lists of action strings')
-    parsed: list[Candidate] = []
+    parsed: list[Candidate[A]] = []
     for k, candidate in enumerate(candidates):
         try:
-            parsed.append(tuple(dom.parse_action(_string(a)) for a in candidate))
+            parsed.append(
+                tuple(dom.parse_action(_string(a)) for a in cast(list[JSONValue], candidate))
+            )
         except InputError as exc:
             raise fail(f"candidate {k}: {exc.reason}") from None
     return TableEntry(action=action, candidates=tuple(parsed), faults=faults, line=line)
 
 
-def _string(value: Any) -> str:
+def _string(value: object) -> str:
     if not isinstance(value, str):
         raise InputError(f"expected a string, got {value!r}")
     return value
@@ -297,7 +313,7 @@ def load_table(
     *,
     max_table_bytes: int | None = MAX_TABLE_BYTES,
     max_table_candidates: int | None = MAX_TABLE_CANDIDATES,
-) -> ReplacementTable:
+) -> SomeTable:
     """Read and validate a table file; errors name the file.
 
     A file larger than ``max_table_bytes`` is refused before it is read (a 2.9 GB file used to
@@ -318,24 +334,24 @@ def load_table(
     )
 
 
-def _entry_sort_key(dom: Domain[Any, Any], entry: TableEntry) -> tuple[int, int, str]:
+def _entry_sort_key(dom: Domain[A, F], entry: TableEntry[A, F]) -> tuple[int, int, str]:
     faults = entry.faults or frozenset()
     return (dom.actions.index(entry.action), len(faults), dom.format_faults(faults))
 
 
-def dump_table(table: ReplacementTable) -> str:
+def dump_table(table: ReplacementTable[A, F]) -> str:
     """The table as deterministic JSON: sorted keys, entries in domain action order, one a line."""
     dom = table.domain
     rows = []
     for entry in sorted(table.entries, key=lambda e: _entry_sort_key(dom, e)):
-        row: dict[str, Any] = {
+        row: JSONObject = {
             "action": dom.format_action(entry.action),
             "candidates": [[dom.format_action(a) for a in c] for c in entry.candidates],
         }
         if entry.faults is not None:
             row["faults"] = dom.format_faults(entry.faults)
         rows.append("  " + json.dumps(row, sort_keys=True))
-    header = {
+    header: JSONObject = {
         "domain": dom.name,
         "format": FORMAT_NAME,
         "made_by": table.made_by.value,
@@ -371,7 +387,7 @@ def bundled_table_names() -> tuple[str, ...]:
     return _NAMES.get("tables", listing)
 
 
-def bundled_table(name: str = "handwritten") -> ReplacementTable:
+def bundled_table(name: str = "handwritten") -> SomeTable:
     """A table shipped with the package, e.g. ``"handwritten"`` or ``"three-action"`` (parsed
     once per process; a few are kept)."""
     if name not in bundled_table_names():
@@ -381,15 +397,13 @@ def bundled_table(name: str = "handwritten") -> ReplacementTable:
     return _BUNDLED.get(name, lambda: _read_bundled(name))
 
 
-def _read_bundled(name: str) -> ReplacementTable:
+def _read_bundled(name: str) -> SomeTable:
     resource = resources.files("selfrepair").joinpath("data", "tables", f"{name}.json")
     return parse_table(resource.read_text(encoding="utf-8"), source=f"<bundled:{name}>")
 
 
-_BUNDLED: BoundedCache[str, ReplacementTable] = BoundedCache(
-    "bundled tables", 8, kind=CacheKind.INPUT
-)
-_FILES: BoundedCache[tuple[str, int, int, int | None, int | None], ReplacementTable] = BoundedCache(
+_BUNDLED: BoundedCache[str, SomeTable] = BoundedCache("bundled tables", 8, kind=CacheKind.INPUT)
+_FILES: BoundedCache[tuple[str, int, int, int | None, int | None], SomeTable] = BoundedCache(
     "table files", 8, kind=CacheKind.INPUT
 )
 
@@ -399,7 +413,7 @@ def resolve_table(
     *,
     max_table_bytes: int | None = MAX_TABLE_BYTES,
     max_table_candidates: int | None = MAX_TABLE_CANDIDATES,
-) -> ReplacementTable:
+) -> SomeTable:
     """A bundled table by name, else a table file by path, checked against the limits (see
     :func:`load_table`). A file is read again when its size or modification time changed since it
     was last read in this process, or when it is asked for with other limits."""
@@ -408,7 +422,7 @@ def resolve_table(
         return bundled_table(text)
     path = Path(text)
 
-    def load() -> ReplacementTable:
+    def load() -> SomeTable:
         return load_table(
             path, max_table_bytes=max_table_bytes, max_table_candidates=max_table_candidates
         )
@@ -431,7 +445,7 @@ GENERATED_DEFAULT = "generated"
 """What :func:`default_table_name` calls a table generated for a robot that ships none."""
 
 
-def default_table_name(domain: Domain[Any, Any]) -> str:
+def default_table_name(domain: Domain[A, F]) -> str:
     """Which table :func:`default_table` gives ``domain``: ``"handwritten"`` (the paper's, for
     the four-wheel robot), the name of a bundled table named after the domain
     (``"three-action"``), else :data:`GENERATED_DEFAULT`."""
@@ -442,16 +456,17 @@ def default_table_name(domain: Domain[Any, Any]) -> str:
     return GENERATED_DEFAULT
 
 
-def default_table(domain: Domain[Any, Any]) -> ReplacementTable:
+def default_table(domain: Domain[A, F]) -> ReplacementTable[A, F]:
     """The table a robot gets when none is named (the command line, the Gymnasium environment):
     the bundled table :func:`default_table_name` names, else one generated for the domain with
     the default options (fault-agnostic; made once per process for a few domains)."""
     name = default_table_name(domain)
     if name != GENERATED_DEFAULT:
         return bundled_table(name)
-    return _GENERATED.get(domain, lambda: generate_table(domain))
+    # keyed by the domain itself, so the table is of that domain
+    return cast("ReplacementTable[A, F]", _GENERATED.get(domain, lambda: generate_table(domain)))
 
 
-_GENERATED: BoundedCache[Domain[Any, Any], ReplacementTable] = BoundedCache(
+_GENERATED: BoundedCache[object, object] = BoundedCache(
     "generated default tables", 4, kind=CacheKind.INPUT
 )

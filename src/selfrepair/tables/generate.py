@@ -45,9 +45,7 @@ bytes from :func:`selfrepair.tables.fileformat.dump_table`.
 
 from __future__ import annotations
 
-from typing import Any
-
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import A, Domain, F
 from selfrepair.tables.cover import fault_agnostic_entries
 from selfrepair.tables.enumerate import (
     FaultScope,
@@ -103,14 +101,14 @@ __all__ = [
 
 
 def _fault_indexed(
-    domain: Domain[Any, Any], options: GenerateOptions, searcher: Searcher
-) -> list[TableEntry]:
+    domain: Domain[A, F], options: GenerateOptions, searcher: Searcher[A, F]
+) -> list[TableEntry[A, F]]:
     info = domain_classes(domain)
-    entries: list[TableEntry] = []
+    entries: list[TableEntry[A, F]] = []
     for faults in scope_fault_sets(domain, options.faults):
         costs = searcher.costs_under(faults)
         found = searcher.paths(costs)
-        chosen: dict[int, tuple[tuple[Any, ...], ...]] = {}
+        chosen: dict[int, tuple[tuple[A, ...], ...]] = {}
         for action in domain.actions:
             if domain.available(action, faults):
                 continue
@@ -125,8 +123,8 @@ def _fault_indexed(
 
 
 def generate_table(
-    domain: Domain[Any, Any], options: GenerateOptions | None = None
-) -> ReplacementTable:
+    domain: Domain[A, F], options: GenerateOptions | None = None
+) -> ReplacementTable[A, F]:
     """Generate a replacement table for ``domain`` (see the module docstring); deterministic in
     the domain and ``options``."""
     options = options or GenerateOptions()

@@ -25,13 +25,14 @@ import itertools
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from enum import StrEnum
-from typing import Any
+from typing import Any, Generic, TypeAlias, cast
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError, TableError, choice
 from selfrepair.geometry import Heading, Pose
-from selfrepair.robots.domain import Domain, run_open
+from selfrepair.robots.domain import A, Domain, F, run_open
 from selfrepair.tables.enumerate import FaultScope, Objective
+from selfrepair.textio import JSONValue
 
 __all__ = [
     "FORMAT_NAME",
@@ -40,6 +41,7 @@ __all__ = [
     "MadeBy",
     "Priority",
     "ReplacementTable",
+    "SomeTable",
     "TableEntry",
     "TableProblem",
     "TableShape",
@@ -49,7 +51,8 @@ __all__ = [
 FORMAT_NAME = "selfrepair-table"
 FORMAT_VERSION = 1
 
-Candidate = tuple[Any, ...]
+Candidate = tuple[A, ...]
+"""One replacement sub-plan: actions of the table's domain, relative to the robot."""
 
 
 class TableShape(StrEnum):
@@ -67,12 +70,12 @@ class MadeBy(StrEnum):
 
 
 @dataclass(frozen=True, slots=True)
-class TableEntry:
+class TableEntry(Generic[A, F]):
     """One row of a table: an action, its fault set (fault-indexed only) and its candidates."""
 
-    action: Any
-    candidates: tuple[Candidate, ...]
-    faults: frozenset[Any] | None = None
+    action: A
+    candidates: tuple[Candidate[A], ...]
+    faults: frozenset[F] | None = None
     line: int | None = field(default=None, compare=False)
 
 
@@ -90,11 +93,11 @@ class TableProblem:
         return f"{self.severity}: {where}{self.message}"
 
 
-_Key = tuple[Any, frozenset[Any] | None]
+_Key = tuple[A, frozenset[F] | None]
 
 
 @dataclass(frozen=True, slots=True, eq=False)
-class ReplacementTable:
+class ReplacementTable(Generic[A, F]):
     """A validated replacement table for ``domain`` (see the module docstring).
 
     Build one directly (entries are re-simulated in ``__post_init__``) or with
@@ -104,14 +107,14 @@ class ReplacementTable:
     shape, author, entries, parameters and version; the hash is computed once.
     """
 
-    domain: Domain[Any, Any]
+    domain: Domain[A, F]
     shape: TableShape
     made_by: MadeBy
-    entries: tuple[TableEntry, ...]
-    parameters: Mapping[str, Any] = field(default_factory=dict)
+    entries: tuple[TableEntry[A, F], ...]
+    parameters: Mapping[str, JSONValue] = field(default_factory=dict)
     version: int = FORMAT_VERSION
     source: str = "<table>"
-    _index: dict[_Key, tuple[Candidate, ...]] = field(init=False, repr=False)
+    _index: dict[_Key[A, F], tuple[Candidate[A], ...]] = field(init=False, repr=False)
     _hash: int = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -132,8 +135,8 @@ class ReplacementTable:
             raise TableError(
                 f"expected version {FORMAT_VERSION}, got {self.version!r}", source=self.source
             )
-        index: dict[_Key, tuple[Candidate, ...]] = {}
-        checked: set[tuple[Any, Candidate]] = set()
+        index: dict[_Key[A, F], tuple[Candidate[A], ...]] = {}
+        checked: set[tuple[A, Candidate[A]]] = set()
         for number, entry in enumerate(self.entries):
             _validate_entry(self, number, entry, checked)
             key = (entry.action, entry.faults)
@@ -163,7 +166,7 @@ class ReplacementTable:
     def __hash__(self) -> int:
         return self._hash
 
-    def _error(self, number: int, entry: TableEntry, what: str) -> TableError:
+    def _error(self, number: int, entry: TableEntry[A, F], what: str) -> TableError:
         dom = self.domain
         label = f"entry {number} (action {dom.format_action(entry.action)}"
         if entry.faults is not None:
@@ -171,8 +174,8 @@ class ReplacementTable:
         return TableError(f"{label}): {what}", source=self.source, line=entry.line)
 
     def candidates(
-        self, action: Any, known_faults: Iterable[Any] = frozenset()
-    ) -> tuple[Candidate, ...]:
+        self, action: A, known_faults: Iterable[F] = frozenset()
+    ) -> tuple[Candidate[A], ...]:
         """The ordered candidates for replacing ``action`` when ``known_faults`` are known."""
         if self.shape is TableShape.FAULT_AGNOSTIC:
             return self._index.get((action, None), ())
@@ -180,24 +183,31 @@ class ReplacementTable:
         exact = self._index.get((action, known))
         if exact is not None:
             return exact
-        return _MERGED.get((self, action, known), lambda: self._merged(action, known))
+        merged = _MERGED.get((self, action, known), lambda: self._merged(action, known))
+        # the key holds this table, so the value is its own candidates
+        return cast("tuple[Candidate[A], ...]", merged)
 
-    def _merged(self, action: Any, known: frozenset[Any]) -> tuple[Candidate, ...]:
+    def _merged(self, action: A, known: frozenset[F]) -> tuple[Candidate[A], ...]:
         dom = self.domain
         ordered = sorted(known, key=lambda f: dom.format_faults([f]))
-        merged: dict[Candidate, None] = {}
+        merged: dict[Candidate[A], None] = {}
         for size in range(len(ordered) - 1, -1, -1):
             for subset in itertools.combinations(ordered, size):
                 for candidate in self._index.get((action, frozenset(subset)), ()):
                     merged.setdefault(candidate, None)
         return tuple(merged)
 
-    def actions_with_entries(self) -> frozenset[Any]:
+    def actions_with_entries(self) -> frozenset[A]:
         """Every action that has at least one entry."""
         return frozenset(entry.action for entry in self.entries)
 
 
-_MERGED: BoundedCache[tuple[ReplacementTable, Any, frozenset[Any]], tuple[Candidate, ...]] = (
+SomeTable: TypeAlias = "ReplacementTable[Any, Any]"
+"""A table for a robot known only at run time: one read from a file or looked up by name, whose
+domain comes from the registry (:data:`~selfrepair.robots.domain.SomeDomain`)."""
+
+
+_MERGED: BoundedCache[tuple[object, object, frozenset[object]], tuple[tuple[object, ...], ...]] = (
     BoundedCache("fault-indexed merged look-ups", 4096, kind=CacheKind.REPAIR)
 )
 """Candidates for fault sets a fault-indexed table has no entry of its own for."""
@@ -206,10 +216,10 @@ _STARTS = tuple(Pose(0, 0, heading) for heading in Heading)
 
 
 def _validate_entry(
-    table: ReplacementTable,
+    table: ReplacementTable[A, F],
     number: int,
-    entry: TableEntry,
-    checked: set[tuple[Any, Candidate]],
+    entry: TableEntry[A, F],
+    checked: set[tuple[A, Candidate[A]]],
 ) -> None:
     """Raise :class:`TableError` unless every candidate of ``entry`` re-simulates correctly from
     every heading (``checked`` remembers (action, candidate) pairs already found correct)."""
@@ -252,7 +262,7 @@ def _validate_entry(
 # --- checks -----------------------------------------------------------------------------------
 
 
-def check_table(table: ReplacementTable) -> list[TableProblem]:
+def check_table(table: ReplacementTable[A, F]) -> list[TableProblem]:
     """Problems that loading does not reject: gaps and dead candidates.
 
     Errors: a fault-indexed candidate that uses an action its own fault set forbids (it can never
@@ -272,7 +282,7 @@ def check_table(table: ReplacementTable) -> list[TableProblem]:
         covered.add(entry.action)
         if not entry.candidates and entry.faults is None:
             problems.append(TableProblem("warning", "no candidates", number, name))
-        seen: set[Candidate] = set()
+        seen: set[Candidate[A]] = set()
         for k, candidate in enumerate(entry.candidates):
             if candidate in seen:
                 problems.append(
@@ -299,7 +309,7 @@ def check_table(table: ReplacementTable) -> list[TableProblem]:
     return problems
 
 
-def no_replacement_marks(table: ReplacementTable) -> int:
+def no_replacement_marks(table: ReplacementTable[A, F]) -> int:
     """The fault-indexed entries with an empty candidate list: each marks "no replacement under
     exactly these faults" (see :func:`check_table`)."""
     return sum(1 for e in table.entries if e.faults is not None and not e.candidates)
@@ -350,7 +360,7 @@ class GenerateOptions:
         if self.per_action < 1:
             raise ProblemError(f"per_action must be at least 1, got {self.per_action}")
 
-    def parameters(self) -> dict[str, Any]:
+    def parameters(self) -> dict[str, JSONValue]:
         """The options as the JSON header's ``parameters`` object."""
         return {
             "faults": self.faults.value,

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from selfrepair.errors import ProblemError
 from selfrepair.tables.fileformat import default_table, default_table_name, resolve_table
-from selfrepair.tables.model import ReplacementTable
+from selfrepair.tables.model import SomeTable
 from selfrepair.team.model import TeamScenario
 from selfrepair.team.result import TeamOptions
 
@@ -22,7 +22,7 @@ def _spec(scenario: TeamScenario, options: TeamOptions) -> str:
     return options.robot_table or scenario.table
 
 
-def robot_table(scenario: TeamScenario, options: TeamOptions) -> ReplacementTable:
+def robot_table(scenario: TeamScenario, options: TeamOptions) -> SomeTable:
     """The table every robot of ``scenario`` repairs its own wheel faults with (bundled tables
     and files are read once per process, a generated default is made once). Raises
     :class:`ProblemError` when the table is for another robot."""

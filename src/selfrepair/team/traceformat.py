@@ -36,6 +36,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from selfrepair.execution.result import StepSource
+from selfrepair.execution.traceformat import pose_json
 from selfrepair.geometry import Cell, Pose
 from selfrepair.team.model import TeamAction, TeamScenario
 from selfrepair.team.result import TeamOptions
@@ -59,11 +60,6 @@ TEAM_TRACE_VERSION = 2
 """The version written (2: the header records the scenario file and the maze's digest)."""
 TEAM_TRACE_VERSIONS = (1, 2)
 """The versions read."""
-
-
-def pose_json(pose: Pose) -> list[Any]:
-    """A pose as the trace writes it: ``[x, y, "N"]``."""
-    return [pose.x, pose.y, pose.heading.name]
 
 
 def cell_json(cell: Cell) -> list[int]:

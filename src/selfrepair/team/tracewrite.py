@@ -8,8 +8,8 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+from selfrepair.execution.traceformat import header_start
 from selfrepair.robots.domain import Domain
-from selfrepair.robots.registry import plugin_file
 from selfrepair.team.metrics import team_row
 from selfrepair.team.result import MoveRecord, TeamResult
 from selfrepair.team.robottable import robot_table_label
@@ -29,16 +29,10 @@ def header_json(result: TeamResult) -> dict[str, Any]:
     """The header line's object for ``result``."""
     scenario, options = result.scenario, result.options
     rows = format_maze(scenario.maze).splitlines()
-    origin = plugin_file(scenario.domain.name)
-    plugin = {} if origin is None else {"plugin": {"path": origin.path, "sha256": origin.sha256}}
     return {
-        "type": "header",
-        "format": TEAM_TRACE_FORMAT,
-        "version": TEAM_TRACE_VERSION,
+        **header_start(TEAM_TRACE_FORMAT, TEAM_TRACE_VERSION, scenario.domain.name),
         "scenario": scenario.name,
         "scenario_file": {"path": scenario.source, "sha256": scenario.digest},
-        "domain": scenario.domain.name,
-        **plugin,
         "scale": result.scale,
         "maze": {"name": scenario.maze.name, "rows": rows, "sha256": maze_digest(rows)},
         "robots": [

@@ -25,9 +25,10 @@ from __future__ import annotations
 
 import re
 from collections import deque
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
@@ -51,6 +52,7 @@ __all__ = [
 MAX_ROUTES = 10_000
 """Most routes :func:`random_routes` draws in one call (each costs a search over the maze)."""
 
+_T = TypeVar("_T")
 _FIELD = re.compile(r"\S+")
 
 
@@ -103,19 +105,19 @@ def _parse_line(fields: Sequence[re.Match[str]], number: int, source: str) -> Ro
             column=column,
         )
     name, pose_field, goal_field = fields
-    try:
-        start = parse_pose(pose_field.group())
-    except InputError as exc:
-        raise InputError(
-            exc.reason, source=source, line=number, column=pose_field.start() + 1
-        ) from exc
-    try:
-        goal = parse_cell(goal_field.group())
-    except InputError as exc:
-        raise InputError(
-            exc.reason, source=source, line=number, column=goal_field.start() + 1
-        ) from exc
+    start = _parse_field(parse_pose, pose_field, source, number)
+    goal = _parse_field(parse_cell, goal_field, source, number)
     return Route(name.group(), start, goal)
+
+
+def _parse_field(
+    parse: Callable[[str], _T], field: re.Match[str], source: str, number: int
+) -> _T:
+    """``parse`` of one field of a route line; its error names the field's line and column."""
+    try:
+        return parse(field.group())
+    except InputError as exc:
+        raise InputError(exc.reason, source=source, line=number, column=field.start() + 1) from exc
 
 
 def _check(

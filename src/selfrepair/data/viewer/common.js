@@ -28,6 +28,17 @@ const viewer = (function () {
     return (value + 0.5) * CELL;
   }
 
+  // Put a robot's drawing `node` at `pose` (cell x, y, the angle of its heading) and record the
+  // pose and the frame `k` on it (data-x, data-y, data-heading, data-frame: what tests read).
+  function placeRobot(node, pose, k) {
+    node.setAttribute("transform", "translate(" + centre(pose.x) + " " + centre(pose.y) +
+      ") rotate(" + pose.angle + ")");
+    node.setAttribute("data-x", pose.x);
+    node.setAttribute("data-y", pose.y);
+    node.setAttribute("data-heading", pose.heading);
+    node.setAttribute("data-frame", k);
+  }
+
   // The maze in the #map element: a white ground and the walls as one path of horizontal runs,
   // then one group per name of `layers`, in drawing order. Returns the groups by name.
   function drawMaze(maze, layers) {
@@ -132,5 +143,7 @@ const viewer = (function () {
     return { stop: stop, play: play, jump: jump };
   }
 
-  return { NS, CELL, data, svg, html, centre, drawMaze, drawBlocked, buildSummary, controls };
+  return {
+    NS, CELL, data, svg, html, centre, placeRobot, drawMaze, drawBlocked, buildSummary, controls,
+  };
 })();

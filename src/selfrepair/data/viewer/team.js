@@ -205,13 +205,7 @@
           fill: colourOf[r.name], opacity: r.moving ? 0.35 : 0.2, "data-held": r.name },
         layers.held);
       }
-      const node = robots[r.name];
-      node.setAttribute("transform", "translate(" + centre(r.x) + " " + centre(r.y) +
-        ") rotate(" + r.angle + ")");
-      node.setAttribute("data-x", r.x);
-      node.setAttribute("data-y", r.y);
-      node.setAttribute("data-heading", r.heading);
-      node.setAttribute("data-frame", k);
+      viewer.placeRobot(robots[r.name], r, k);
     }
     for (const it of frame.items) {
       const node = items[it.item];

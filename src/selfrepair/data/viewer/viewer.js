@@ -460,12 +460,7 @@
     state.shown = k;
     state.frame = k;
     const pose = frames[k].pose;
-    robot.setAttribute("transform", "translate(" + centre(pose.x) + " " + centre(pose.y) +
-      ") rotate(" + pose.angle + ")");
-    robot.setAttribute("data-x", pose.x);
-    robot.setAttribute("data-y", pose.y);
-    robot.setAttribute("data-heading", pose.heading);
-    robot.setAttribute("data-frame", k);
+    viewer.placeRobot(robot, pose, k);
     viewer.drawBlocked(layers.blocked, frames[k].blocked || []);
     slider.value = String(k);
     label.textContent = "step " + k + " / " + last + " \u00b7 " + poseText(pose);
@@ -476,6 +471,7 @@
     highlight(selected);
     updateNow(k);
     updateFaults(k);
+    diagnosisView.update(k);
     updateRepairs(k, selected);
     for (const [frame, item] of eventItems) {
       item.classList.toggle("future", frame > k);

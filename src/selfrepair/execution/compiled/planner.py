@@ -139,7 +139,9 @@ def plan_in_kernel(
     unsolvable, 2 budget spent, 3 solved but ``out`` too short for its ``length`` actions, 4 the
     heap is full (the caller grows it and plans again). ``rec`` and ``gen`` are the search
     records and their generation (reused from plan to plan, as the planner's own scratch is);
-    ``scal``, ``par`` and ``extra`` scratch of 4, 9 and 1 words. Allocates nothing (compiled
+    ``scal``, ``par`` and ``extra`` scratch of 4, 9 and 6 words (``extra``: the lattice
+    kernel's step-term parameters, all 0: no term, so it also stands in for the term's arrays,
+    which the kernel then never reads). Allocates nothing (compiled
     without reference counting, like the search kernels)."""
     rnum, rden, wmul, goal_cell, goal_head, shift, pw = (
         ppar[0], ppar[1], ppar[2], ppar[3], ppar[4], ppar[5], ppar[6],
@@ -167,7 +169,9 @@ def plan_in_kernel(
     scal[0], scal[1], scal[2], scal[3] = 1, 0, 0, -1
     par[0], par[1], par[2], par[3], par[4] = rnum, rden, wmul, goal_cell, goal_head
     par[5], par[6], par[7], par[8] = budget, opened, shift, 0
-    code = kn._lattice(nbr, pen, hdist, mt, par, rec, heap, scal, extra)
+    code = kn._lattice(
+        nbr, pen, hdist, mt, par, rec, heap, scal, extra, extra, extra, extra, extra, extra, extra
+    )
     expansions = scal[kn._EXPANSIONS]
     if code == kn._GROW:
         return 4, 0, expansions
@@ -201,5 +205,5 @@ def new_records(states: int) -> tuple[Int64s, Int64s, Int64s, Int64s, Int64s, In
     rec = np.zeros((states, 3), dtype=np.int64)
     heap = np.empty((kn._FIRST_HEAP, 2), dtype=np.int64)
     scratch = (np.zeros(4, dtype=np.int64), np.zeros(9, dtype=np.int64),
-               np.zeros(1, dtype=np.int64))  # fmt: skip
+               np.zeros(6, dtype=np.int64))  # fmt: skip
     return rec, np.zeros(1, dtype=np.int64), heap, *scratch

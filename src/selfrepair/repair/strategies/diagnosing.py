@@ -34,6 +34,7 @@ surprise came, how many commands it took to isolate the class (and which), the p
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from enum import StrEnum
 from typing import Any
 
@@ -131,16 +132,31 @@ class DiagnosingRepairer:
         as they are)."""
         return Assumption(frozenset() if self._probing else self._known)
 
-    def observe(self, observation: Observation, deviated: bool, moved: bool) -> bool:
-        """Take ``observation`` in (see the module docstring); whether to be asked for a rejoin
-        before the next command."""
+    hears_teammates = True
+    """Observing teammates' readings enter the belief (see :meth:`observe`)."""
+
+    def observe(
+        self,
+        observation: Observation,
+        deviated: bool,
+        moved: bool,
+        seen: Sequence[Observation] = (),
+    ) -> bool:
+        """Take ``observation`` in, and the readings ``seen`` of the same command by observing
+        teammates (:mod:`selfrepair.diagnosis.cooperative`; the same update, each with its
+        sensor's noise) (see the module docstring); whether to be asked for a rejoin before the
+        next command."""
         before = self.belief.alive
         belief = self.belief
         belief.update(observation)
-        if observation.noise > 0:
+        noisy = observation.noise > 0
+        for reading in seen:
+            belief.update(reading)
+            noisy = noisy or reading.noise > 0
+        if noisy:
             self._margin = self._error
         self._record(observation, deviated or not moved)
-        if belief.alive != before or observation.noise > 0:
+        if belief.alive != before or noisy:
             self._relaxed = False
             self._known = self._assume()
         rejoin = False

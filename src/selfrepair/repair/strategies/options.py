@@ -9,7 +9,7 @@ from selfrepair.errors import ProblemError, choice
 from selfrepair.limits import DEFAULT_MAX_WAIT, MAX_LOOKUP_PATTERNS
 from selfrepair.repair.replacement import DEFAULT_MAX_DEPTH, DEFERRING, RecursionMode
 from selfrepair.tables.fileformat import resolve_table
-from selfrepair.tables.model import ReplacementTable
+from selfrepair.tables.model import ReplacementTable, SomeTable
 
 __all__ = ["StrategyOptions"]
 
@@ -26,8 +26,10 @@ class StrategyOptions:
     ``lookahead_expansions`` the budget of one window search; ``rewrite``: the ``replacement``
     strategy substitutes, when it first meets a faulty action under the faults known, every
     faulty action of the rest of the plan that has a valid replacement at its predicted pose
-    (whole-plan rewriting; other strategies ignore it; not in a deferring recursion mode such as
-    ``primitive``, whose replacements may keep faulty actions for later);
+    (whole-plan rewriting; in a changing world the detour of a blocked action likewise
+    replaces every later blocked window by its detour; other strategies ignore it; not in a
+    deferring recursion mode such as ``primitive``, whose replacements may keep faulty actions
+    for later);
     ``max_lookup_patterns`` the patterns one compiled look-up stores at most
     (:data:`~selfrepair.limits.MAX_LOOKUP_PATTERNS`). ``lpg_time_limit_s`` and ``lpg_seed`` are
     the wall-clock limit (seconds) and the seed of each LPG-adapt call of the ``lpg-adapt``
@@ -40,7 +42,7 @@ class StrategyOptions:
     class as isolated or a set of classes as all that is possible.
     """
 
-    table: str | ReplacementTable = "handwritten"
+    table: str | SomeTable = "handwritten"
     recursion: RecursionMode = RecursionMode.FLAT
     max_depth: int = DEFAULT_MAX_DEPTH
     window: int = 3
@@ -95,7 +97,7 @@ class StrategyOptions:
             return source
         return str(self.table)
 
-    def resolved_table(self) -> ReplacementTable:
+    def resolved_table(self) -> SomeTable:
         """The table itself (bundled tables and files are read once per process)."""
         if isinstance(self.table, ReplacementTable):
             return self.table

@@ -40,7 +40,7 @@ from selfrepair.repair.strategies.options import StrategyOptions
 from selfrepair.robots.domain import Domain
 from selfrepair.search.astar import PlanResult
 from selfrepair.status import RepairStatus
-from selfrepair.tables.model import ReplacementTable
+from selfrepair.tables.model import SomeTable
 
 __all__ = [
     "Assumption",
@@ -95,7 +95,7 @@ class MissionContext:
     goal: Cell
     goal_heading: Heading | None
     options: StrategyOptions
-    table: ReplacementTable | None
+    table: SomeTable | None
     plan: PlanFn
     replan_budget: int | None
     free: FreeTest
@@ -210,7 +210,10 @@ class Repairer(Protocol[RequestT, AnswerT]):
     whether it must be asked for a repair before the next command even if the front is available
     (the queue was planned from a pose the robot is not at). Such a repairer also has
     ``assumption() -> Assumption``, which the stepper reads after each observation and each
-    repair (see :mod:`selfrepair.execution.stepper`).
+    repair (see :mod:`selfrepair.execution.stepper`). One that declares ``hears_teammates =
+    True`` takes the readings of observing teammates too, as a fourth argument of ``observe``
+    (a sequence of observations of the same command); one with a ``belief`` attribute (a
+    :class:`~selfrepair.diagnosis.FaultBelief`) has its bit set recorded after each command.
     """
 
     def repair(self, request: RequestT) -> AnswerT:

@@ -13,7 +13,7 @@ valid replacement at its predicted pose, so later encounters never reach the rep
 from __future__ import annotations
 
 from collections.abc import Sequence
-from itertools import chain
+from itertools import chain, islice
 from typing import Any
 
 from selfrepair.errors import ProblemError
@@ -42,7 +42,7 @@ from selfrepair.repair.strategies.protocol import (
 from selfrepair.repair.strategies.registry import register_strategy
 from selfrepair.repair.strategies.replan import replan
 from selfrepair.status import RepairStatus
-from selfrepair.tables.model import ReplacementTable
+from selfrepair.tables.model import SomeTable
 
 __all__ = [
     "DeferringRepairer",
@@ -89,7 +89,7 @@ def _detour(position: int, actions: tuple[Any, ...], consumed: int) -> Repair:
     )
 
 
-def _table(context: MissionContext) -> ReplacementTable:
+def _table(context: MissionContext) -> SomeTable:
     if context.table is None:
         raise ProblemError("the replacement strategy needs a table")
     return context.table
@@ -161,6 +161,7 @@ class ReplacementRepairer:
     """
 
     __slots__ = (
+        "_belief",
         "_context",
         "_detours",
         "_faulty",
@@ -182,6 +183,7 @@ class ReplacementRepairer:
                 f"table for domain {table.domain.name!r} used with domain {context.domain.name!r}"
             )
         self._context = context
+        self._belief = context.belief  # mutable: the stepper keeps its cells up to date
         self._rewrite = context.options.rewrite
         self._index = action_index(context.domain)
         grid = context.grid
@@ -205,17 +207,48 @@ class ReplacementRepairer:
 
     def repair_blocked(self, request: RepairRequest) -> Repair:
         """The first queued action sweeps a cell believed blocked: a local detour from the
-        detour table (:mod:`selfrepair.repair.detours`; with ``rewrite``, later queued actions
-        that sweep believed-blocked cells get theirs too), else a replan around the
-        believed-blocked cells."""
+        detour table (:mod:`selfrepair.repair.detours`), else a replan around the
+        believed-blocked cells. With ``rewrite`` the detour also walks the rest of the queue
+        (:meth:`_detours_rewritten`)."""
         finder = self._detours
         if finder is None:  # made on the first blocked action (the detour table is kept)
             finder = self._detours = DetourFinder(self._context.domain, self._context.grid, _detour)
         pose, queue, known, _ = request
-        found = finder.find(pose, queue, known, self._context.belief.blocked)
+        found = finder.find(pose, queue, known, self._belief.blocked)
         if found is None:
             return chained(replan(self._context, request), (DETOUR,))
-        return found
+        return self._detours_rewritten(request, found, finder) if self._rewrite else found
+
+    def _detours_rewritten(
+        self, request: RepairRequest, head: Repair, finder: DetourFinder[Repair]
+    ) -> Repair:
+        """``head`` (the first window's detour) extended over the rest of the queue in one pass:
+        following the poses the plan predicts, every later window that starts with an action
+        sweeping a believed-blocked cell is replaced by its detour (the same window rule, from
+        the pose where the robot would meet it), up to the first that has none (the robot will
+        replan there, as without rewriting, which drops the rest) or the first predicted pose
+        off the maze. A detour ends where its window ends, so the predicted poses stay exact,
+        and while the belief stays as it is the robot makes the same motions as without
+        rewriting, with one repair instead of one per window. Faulty actions are left to the
+        fault repairs (as they are when the robot meets them)."""
+        actions = tuple(request.queue)
+        known, blocked = request.known, self._belief.blocked
+        parts: list[Sequence[Any]] = [head.actions]
+        done, begin, pose, rewritten = head.consumed, 0, request.pose, 0
+        while (met := finder.next_blocked(pose, actions, begin, done)) is not None:
+            k, pose = met
+            found = finder.find(pose, islice(actions, k, None), known, blocked)
+            if found is None:  # the robot will replan here: what follows would be dropped
+                break
+            parts.append(actions[done:k])
+            parts.append(found.actions)
+            done, begin = k + found.consumed, k
+            rewritten += 1
+        if not rewritten:
+            return head
+        return head._replace(
+            actions=tuple(chain.from_iterable(parts)), consumed=done, rewritten=rewritten
+        )
 
     def _use(self, known: frozenset[Any]) -> None:
         """Switch to the look-ups of ``known`` (a new frozenset of the same faults keeps them)."""

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from collections import deque
 from fractions import Fraction
-from typing import Any
+from typing import Any, cast
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.diagnosis import Observation
@@ -37,7 +37,7 @@ from selfrepair.repair.strategies.protocol import (
     RepairRequest,
 )
 from selfrepair.repair.strategies.registry import register_strategy
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import A, Domain, F
 from selfrepair.status import RepairStatus
 from selfrepair.tables.model import ReplacementTable
 
@@ -51,29 +51,30 @@ SEARCH_NODES = 4000
 Candidate = tuple[Any, ...]
 
 
-def learned_order(table: ReplacementTable) -> dict[Any, tuple[Candidate, ...]]:
+def learned_order(table: ReplacementTable[A, F]) -> dict[A, tuple[tuple[A, ...], ...]]:
     """Per action, every candidate the table holds for it (under any fault set it indexes),
     ranked by its success share under simulated damage (see the module docstring)."""
-    return _ORDERS.get(table, lambda: _learn(table))
+    # keyed by the table: the value orders its candidates
+    return cast("dict[A, tuple[tuple[A, ...], ...]]", _ORDERS.get(table, lambda: _learn(table)))
 
 
-_ORDERS: BoundedCache[ReplacementTable, dict[Any, tuple[Candidate, ...]]] = BoundedCache(
+_ORDERS: BoundedCache[object, object] = BoundedCache(
     "trial-and-error candidate orders", 8, kind=CacheKind.PREFILLED
 )
 
 
-def _learn(table: ReplacementTable) -> dict[Any, tuple[Candidate, ...]]:
+def _learn(table: ReplacementTable[A, F]) -> dict[A, tuple[tuple[A, ...], ...]]:
     domain = table.domain
     damage = domain.fault_sets
-    order: dict[Any, tuple[Candidate, ...]] = {}
+    order: dict[A, tuple[tuple[A, ...], ...]] = {}
     for action in domain.actions:
-        pooled: dict[Candidate, None] = {}
+        pooled: dict[tuple[A, ...], None] = {}
         for faults in (frozenset(), *damage):
             for candidate in table.candidates(action, faults):
                 pooled.setdefault(tuple(candidate), None)
         broken = [f for f in damage if not domain.available(action, f)]
 
-        def share(candidate: Candidate, broken: list[frozenset[Any]] = broken) -> Fraction:
+        def share(candidate: tuple[A, ...], broken: list[frozenset[F]] = broken) -> Fraction:
             works = sum(all(domain.available(b, f) for b in candidate) for f in broken)
             return Fraction(works, len(broken) or 1)
 
