@@ -25,15 +25,21 @@ if TYPE_CHECKING:
 
 __all__ = [
     "Backend",
+    "Braid",
     "ClearanceWeight",
+    "Corridor",
     "DomainOpt",
     "Faults",
+    "GoalPose",
     "Heuristic",
     "Json",
     "MaxExpansions",
     "MazeArg",
     "Start",
+    "TableArg",
     "TimeLimit",
+    "TraceArg",
+    "TraceOut",
     "checkout_root",
     "domain_named",
     "find_input",
@@ -51,6 +57,23 @@ MazeArg = Annotated[
 ]
 Start = Annotated[
     str, typer.Option("--start", metavar="X,Y,H", help="Start pose (heading H: N, E, S or W).")
+]
+GoalPose = Annotated[
+    str, typer.Option("--goal", metavar="X,Y[,H]", help="Goal cell, or goal pose X,Y,H.")
+]
+TableArg = Annotated[
+    str, typer.Argument(metavar="TABLE", help="Table file or bundled name (e.g. handwritten).")
+]
+TraceArg = Annotated[
+    Path, typer.Argument(metavar="TRACE", help="A JSON Lines trace written by run --trace.")
+]
+TraceOut = Annotated[
+    Path | None, typer.Option("--trace", metavar="FILE", help="Write the JSON Lines trace here.")
+]
+Corridor = Annotated[int, typer.Option("--corridor", metavar="N", help="Corridor width in cells.")]
+Braid = Annotated[
+    float,
+    typer.Option("--braid", metavar="P", help="Share of dead ends to open (0 = perfect maze)."),
 ]
 Faults = Annotated[
     str,

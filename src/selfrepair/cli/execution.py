@@ -11,7 +11,6 @@ planning time or a repair latency), and by default the mission runs once untimed
 """
 
 
-from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
@@ -27,7 +26,7 @@ from selfrepair.cli._app import (
     number_json,
     table_app,
 )
-from selfrepair.cli._inputs import Json, domain_named, find_input
+from selfrepair.cli._inputs import Json, TableArg, TraceArg, TraceOut, domain_named, find_input
 from selfrepair.cli._mission import MissionOptions, mission_options
 from selfrepair.cli._rowjson import row_json
 from selfrepair.cli._spec import mission_spec, table_note
@@ -161,11 +160,8 @@ def run(
         ),
     ] = "replacement",
     mission: MissionOptions,
-    trace: Annotated[
-        Path | None,
-        typer.Option("--trace", metavar="FILE", help="Write a JSON Lines trace here."),
-    ] = None,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the metrics row as JSON.")] = False,
+    trace: TraceOut = None,
+    as_json: Json = False,
 ) -> int:
     """Run one mission: plan, execute with faults, repair.
 
@@ -354,9 +350,7 @@ _Partial = Annotated[
 
 @app.command()
 def replay(
-    trace: Annotated[
-        Path, typer.Argument(metavar="TRACE", help="A JSON Lines trace written by run --trace.")
-    ],
+    trace: TraceArg,
     partial: _Partial = False,
     max_trace_bytes: MaxTraceBytes = MAX_TRACE_BYTES,
 ) -> int:
@@ -380,11 +374,8 @@ def replay(
 
 @table_app.command("show")
 def table_show(
-    spec: Annotated[
-        str,
-        typer.Argument(metavar="TABLE", help="Table file or bundled table name (handwritten)."),
-    ],
-    as_json: Annotated[bool, typer.Option("--json", help="Print the table file text.")] = False,
+    spec: TableArg,
+    as_json: Json = False,
     max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
     max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
@@ -423,9 +414,7 @@ def table_show(
 
 @table_app.command("check")
 def table_check(
-    spec: Annotated[
-        str, typer.Argument(metavar="TABLE", help="Table file or bundled table name.")
-    ],
+    spec: TableArg,
     max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
     max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:

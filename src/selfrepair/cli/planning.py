@@ -28,6 +28,7 @@ from selfrepair.cli._inputs import (
     ClearanceWeight,
     DomainOpt,
     Faults,
+    GoalPose,
     Heuristic,
     Json,
     MaxExpansions,
@@ -168,9 +169,7 @@ def _times(result_ns: int, load_ns: int) -> str:
 def plan_command(
     maze_spec: MazeArg,
     start: Start,
-    goal: Annotated[
-        str, typer.Option("--goal", metavar="X,Y[,H]", help="Goal cell, or goal pose X,Y,H.")
-    ],
+    goal: GoalPose,
     faults: Faults = "",
     clearance_weight: ClearanceWeight = "0",
     clearance_radius: Annotated[

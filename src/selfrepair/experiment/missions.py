@@ -107,6 +107,8 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
     ]
     if config.world is not None:
         factors.append((len(config.world.rates) * len(config.world.sensing), "world settings"))
+    if config.physics is not None:
+        factors.append((len(config.physics.simulators), "simulators"))
     if not filtered:
         factors.append((variants, "strategy variants and weights"))
     total = 1
@@ -169,6 +171,7 @@ def expand(
         Axis("replicate", tuple(range(config.repeats)), "repeats"),
         Axis("world", _worlds(config), "world settings"),
         Axis("variant", variants, "strategy variants and weights"),
+        Axis("simulator", _simulators(config), "simulators"),
     )
     missions: dict[str, Mission] = {}
     for point in cross(axes):
@@ -212,7 +215,9 @@ def expand(
             situation["plugins"] = plugins
         seed = derive_seed(config.seed, portable(situation))
         count = fault_count[point["faults"]]
-        mission = _mission(config, situation, seed, variant, weight, label, count)
+        mission = _mission(
+            config, situation, seed, variant, weight, label, count, point["simulator"]
+        )
         missions.setdefault(mission.key, mission)
     if not missions:
         raise ConfigError(
@@ -229,9 +234,11 @@ def _mission(
     weight: str,
     label: str,
     fault_count: int,
+    simulator: dict[str, Any] | None,
 ) -> Mission:
-    """One mission: the situation with its variant, weight and seed, keyed and labelled
-    (``fault_count``: the faults of its fault set, as the robot's domain reads the text)."""
+    """One mission: the situation with its variant, weight, seed and (with a ``[physics]``
+    section) simulator, keyed and labelled (``fault_count``: the faults of its fault set, as
+    the robot's domain reads the text)."""
     settings = {
         **situation,
         **variant,
@@ -239,6 +246,8 @@ def _mission(
         "clearance_radius": config.planner.clearance_radius,
         "seed": seed,
     }
+    if simulator is not None:  # absent without a [physics] section: older keys stay valid
+        settings["simulator"] = simulator
     text = canonical_json(settings)
     key = mission_key(canonical_json(portable(settings)))
     options = variant["options"]
@@ -264,6 +273,8 @@ def _mission(
     world = situation.get("world")
     if world is not None:
         labels += (("world_rate", str(world["rate"])), ("sensing", world["sensing"]))
+    if simulator is not None:
+        labels += (("simulator", simulator["name"]),)
     return Mission(key, config.name, seed, text, labels)
 
 
@@ -291,6 +302,18 @@ def _worlds(config: ExperimentConfig) -> tuple[dict[str, Any] | None, ...]:
         }
         for rate in world.rates
         for sensing in world.sensing
+    )
+
+
+def _simulators(config: ExperimentConfig) -> tuple[dict[str, Any] | None, ...]:
+    """The values of the ``simulator`` axis: one per simulator of the ``[physics]`` section
+    (physics with its tracking), or ``None`` alone without one (the lattice simulator)."""
+    physics = config.physics
+    if physics is None:
+        return (None,)
+    return tuple(
+        {"name": name, **({"tracked": physics.tracked} if name == "physics" else {})}
+        for name in physics.simulators
     )
 
 

@@ -16,14 +16,14 @@ from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.execution.faults import Clock, Detection, Persistence
+from selfrepair.experiment.schema_physics import PhysicsConfig
+from selfrepair.experiment.schema_physics import context_domain as _domain
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import DEFAULT_SENSING_RANGE, MAX_CLEARANCE_WEIGHT
 from selfrepair.repair.replacement import DEFERRING, RecursionMode
 from selfrepair.repair.strategies import MissionKind, StrategyName
 from selfrepair.repair.tolerance import OPTIMAL, parse_objective
-from selfrepair.robots.domain import Domain, SomeDomain
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN
-from selfrepair.robots.registry import get_domain
 from selfrepair.tomlfile import Float, Frozen, Int, NonEmpty
 from selfrepair.world.events import Sensing
 from selfrepair.world.routes import MAX_ROUTES
@@ -39,6 +39,7 @@ __all__ = [
     "LpgAdaptStrategy",
     "MazeConfig",
     "MazeSource",
+    "PhysicsConfig",
     "PlannerConfig",
     "ReplacementStrategy",
     "ReplanStrategy",
@@ -362,24 +363,44 @@ class DStarLiteStrategy(_StrategyEntry):
 
 class LpgAdaptStrategy(_StrategyEntry):
     """Plan repair with LPG-adapt (``pddl`` extra, four-wheel robot): ``time_limit`` seconds per
-    call, LPG's ``seed``; LPG's failures and time-outs fall back to replanning."""
+    call, LPG's ``seed``; LPG's failures and time-outs fall back to replanning. Where it cannot
+    run (extra, robot) the experiment is refused before any mission runs, unless ``optional``:
+    then the entry has no missions and :attr:`refusal` says why (the command prints it)."""
 
+    optional: bool = False  # before ``name``, whose validator reads it
     name: Literal[StrategyName.LPG_ADAPT]
     time_limit: Annotated[Float, Field(gt=0, le=3600)] = 5.0
     seed: Annotated[Int, Field(ge=0, lt=2**31)] = 0
+    refusal: str | None = None
+    """Why the strategy cannot run here (set by validation, for an ``optional`` entry)."""
 
     @field_validator("name")
     @classmethod
     def _runnable(cls, value: str, info: ValidationInfo) -> str:
-        """Refuse the strategy before any mission runs where it cannot run (extra, robot)."""
-        from selfrepair.baselines.adapt import check_lpg_adapt
-        from selfrepair.errors import ProblemError
-
-        try:
-            check_lpg_adapt(_domain(info).name)
-        except ProblemError as exc:
-            raise ValueError(str(exc)) from None
+        """Refuse the strategy before any mission runs where it cannot run (extra, robot),
+        unless the entry is optional."""
+        refusal = _lpg_refusal(info)
+        if refusal is not None and not info.data.get("optional"):
+            raise ValueError(refusal)
         return value
+
+    @model_validator(mode="after")
+    def _left_out(self, info: ValidationInfo) -> LpgAdaptStrategy:
+        """Record why an optional entry cannot run (never what the file says)."""
+        object.__setattr__(self, "refusal", _lpg_refusal(info) if self.optional else None)
+        return self
+
+
+def _lpg_refusal(info: ValidationInfo) -> str | None:
+    """Why LPG-adapt cannot run here for the experiment's robot, or ``None``."""
+    from selfrepair.baselines.adapt import check_lpg_adapt
+    from selfrepair.errors import ProblemError
+
+    try:
+        check_lpg_adapt(_domain(info).name)
+    except ProblemError as exc:
+        return str(exc)
+    return None
 
 
 class DiagnosisStrategy(_StrategyEntry):
@@ -438,6 +459,7 @@ class ExperimentConfig(Frozen):
     mazes: Annotated[tuple[MazeConfig, ...], Field(min_length=1)]
     faults: FaultsConfig = FaultsConfig()
     world: WorldConfig | None = None
+    physics: PhysicsConfig | None = None
     planner: PlannerConfig = PlannerConfig()
     strategies: Annotated[tuple[StrategyConfig, ...], Field(min_length=1)]
     source: str = "<string>"
@@ -471,12 +493,6 @@ def _weights(value: object) -> object:
             raise ValueError(f"expected a weight of at most {MAX_CLEARANCE_WEIGHT:,}, got {item!r}")
         out.append(str(weight))
     return tuple(out)
-
-
-def _domain(info: ValidationInfo) -> SomeDomain:
-    context = info.context or {}
-    domain = context.get("domain")
-    return domain if isinstance(domain, Domain) else get_domain(DEFAULT_DOMAIN)
 
 
 def _reraise(parser: Any, text: str) -> Any:

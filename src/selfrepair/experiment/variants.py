@@ -33,6 +33,7 @@ from selfrepair.textio import JSONObject
 __all__ = [
     "BUNDLED_TABLES",
     "REWRITE_LABEL",
+    "left_out",
     "maze_filter",
     "objective_label",
     "short_table",
@@ -56,10 +57,22 @@ def strategy_variants(config: ExperimentConfig) -> Iterator[tuple[dict[str, Any]
         yield from variants_of(strategy, config)
 
 
+def left_out(config: ExperimentConfig) -> tuple[tuple[str, str], ...]:
+    """The optional strategy entries that cannot run here, as ``(name, reason)``."""
+    return tuple(
+        (str(s.name), s.refusal)
+        for s in config.strategies
+        if isinstance(s, LpgAdaptStrategy) and s.refusal is not None
+    )
+
+
 def variants_of(
     strategy: StrategyConfig, config: ExperimentConfig
 ) -> Iterator[tuple[dict[str, Any], tuple[str, ...]]]:
-    """The (strategy settings, clearance weights) pairs of one strategy entry."""
+    """The (strategy settings, clearance weights) pairs of one strategy entry (none for an
+    optional entry that cannot run here: :func:`left_out`)."""
+    if isinstance(strategy, LpgAdaptStrategy) and strategy.refusal is not None:
+        return
     weights = strategy.clearance_weights or config.planner.clearance_weights
     if isinstance(strategy, ReplacementStrategy):
         windows: tuple[tuple[int | None, int], ...] = (
@@ -104,6 +117,8 @@ _DIAGNOSIS_DEFAULTS = (("max_faults", 2), ("fault_prior", 0.05), ("confidence", 
 def variant_count(strategy: StrategyConfig, config: ExperimentConfig) -> int:
     """How many (variant, clearance weight) pairs :func:`variants_of` gives, by arithmetic
     (without reading any table file)."""
+    if isinstance(strategy, LpgAdaptStrategy) and strategy.refusal is not None:
+        return 0
     weights = len(strategy.clearance_weights or config.planner.clearance_weights)
     if isinstance(strategy, DiagnosisStrategy):
         return len(strategy.tables) * len(strategy.recursion) * weights

@@ -5,8 +5,9 @@ initial plan and every executed step as drawable segments, the robot's pose and 
 each step, the true faults (from the header's fault schedule) and the known faults (from the
 step lines) at each step, the fault events, and every repair (from the trace's repair lines) with
 where it came from (table candidate, lookahead window or replan), what it spliced in and its
-latency. Every pose, heading vector, swept cell and fault set comes from the library (the robot
-model, the schedule); the page's script only draws.
+latency, and with the faults hidden what the robot believed after each step
+(:mod:`selfrepair.experiment.viewdiagnosis`). Every pose, heading vector, swept cell and fault
+set comes from the library (the robot model, the schedule); the page's script only draws.
 
 :func:`render_html` puts the payload, the page template, its CSS and its script (package data in
 ``selfrepair/data/viewer/``) into one HTML file that needs no server and no network: everything
@@ -30,6 +31,7 @@ from selfrepair.execution.faults import Detection, canonical_order
 from selfrepair.execution.result import MissionSpec, StepSource, TraceStep
 from selfrepair.execution.trace import Trace, TraceRepair, parse_trace, replay, spec_from_header
 from selfrepair.experiment.figstyle import SOURCE_COLOURS
+from selfrepair.experiment.viewdiagnosis import diagnosis_json
 from selfrepair.experiment.viewpage import (
     check_viewable,
     pose_json,
@@ -367,6 +369,7 @@ def mission_payload(
         "colours": {str(source): colour for source, colour in SOURCE_COLOURS.items()},
         "plan": plan,
         "tolerance": tolerance_json(spec, initial, tolerance),
+        "diagnosis": diagnosis_json(trace),
         "steps": [_step_json(domain, s, t) for s, t in zip(steps, ticks, strict=False)],
         "frames": [
             {

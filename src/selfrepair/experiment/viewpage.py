@@ -47,6 +47,9 @@ class Page:
     timeline_label: str
     strip: str = ""
     """A fragment shown above the timeline (the mission page's plan-tolerance strip), or none."""
+    before: tuple[str, ...] = ()
+    """Scripts of the page's own panels, run after ``common.js`` and before ``script`` (the
+    mission page's diagnosis panel)."""
 
 
 PAGES = {
@@ -58,6 +61,7 @@ PAGES = {
         "Faults over the mission",
         "fault timeline",
         "mission-strip.html",
+        ("diagnosis.js",),
     ),
     "team": Page(
         "team.js",
@@ -153,7 +157,7 @@ def render_html(payload: Mapping[str, Any], *, page: str = "mission") -> str:
     parts = {
         "TITLE": html.escape(str(payload.get("title", "mission"))),
         "STYLE": _asset("viewer.css"),
-        "SCRIPT": _asset("common.js") + "\n" + _asset(chosen.script),
+        "SCRIPT": "\n".join(_asset(name) for name in ("common.js", *chosen.before, chosen.script)),
         "DATA": _script_safe_json(payload),
         "PANEL": _asset(chosen.panel),
         "UNIT": chosen.unit,

@@ -119,6 +119,13 @@ def _less(a1: int, a2: int, an: int, b1: int, b2: int, bn: int) -> bool:
     return an < bn
 
 
+@_inline
+def _put(hk1: Any, hk2: Any, hn: Any, pos: Any, i: int, k1: int, k2: int, n: int) -> None:
+    """Put node ``n`` with key ``(k1, k2)`` in heap slot ``i`` and record the slot."""
+    hk1[i], hk2[i], hn[i] = k1, k2, n
+    pos[n] = i
+
+
 @_kernel
 def _sift_up(hk1: I64, hk2: I64, hn: I64, pos: I64, i: int) -> None:
     k1, k2, n = hk1[i], hk2[i], hn[i]
@@ -126,11 +133,9 @@ def _sift_up(hk1: I64, hk2: I64, hn: I64, pos: I64, i: int) -> None:
         up = (i - 1) >> 1
         if not _less(k1, k2, n, hk1[up], hk2[up], hn[up]):
             break
-        hk1[i], hk2[i], hn[i] = hk1[up], hk2[up], hn[up]
-        pos[hn[i]] = i
+        _put(hk1, hk2, hn, pos, i, hk1[up], hk2[up], hn[up])
         i = up
-    hk1[i], hk2[i], hn[i] = k1, k2, n
-    pos[n] = i
+    _put(hk1, hk2, hn, pos, i, k1, k2, n)
 
 
 @_kernel
@@ -144,11 +149,9 @@ def _sift_down(hk1: I64, hk2: I64, hn: I64, pos: I64, i: int, size: int) -> None
             c += 1
         if not _less(hk1[c], hk2[c], hn[c], k1, k2, n):
             break
-        hk1[i], hk2[i], hn[i] = hk1[c], hk2[c], hn[c]
-        pos[hn[i]] = i
+        _put(hk1, hk2, hn, pos, i, hk1[c], hk2[c], hn[c])
         i = c
-    hk1[i], hk2[i], hn[i] = k1, k2, n
-    pos[n] = i
+    _put(hk1, hk2, hn, pos, i, k1, k2, n)
 
 
 @_kernel
@@ -161,8 +164,7 @@ def _remove(hk1: I64, hk2: I64, hn: I64, pos: I64, sc: I64, u: int) -> None:
     sc[SIZE] = size
     if i == size:
         return
-    hk1[i], hk2[i], hn[i] = hk1[size], hk2[size], hn[size]
-    pos[hn[i]] = i
+    _put(hk1, hk2, hn, pos, i, hk1[size], hk2[size], hn[size])
     if i > 0 and _less(
         hk1[i], hk2[i], hn[i], hk1[(i - 1) >> 1], hk2[(i - 1) >> 1], hn[(i - 1) >> 1]
     ):

@@ -4,9 +4,9 @@ records kept for the result.
 Only the engine (:mod:`selfrepair.team.engine`) and the team strategies
 (:mod:`selfrepair.team.strategies`) touch it, within one call of
 :func:`selfrepair.team.engine.run_team`; nothing of it outlives the mission. What the team
-*knows* (the known map: walls, blocked cells met so far, robots believed unable to move, each
-robot's known faults) is kept apart from what is *true* (every active blocked cell, and each
-robot's true faults, held by the robot's own
+*knows* (the known map: walls, blocked cells met so far, cells seen blocked by world events,
+robots believed unable to move, each robot's known faults) is kept apart from what is *true*
+(every active blocked cell, and each robot's true faults, held by the robot's own
 :class:`~selfrepair.execution.simulator.Simulator` with a :class:`RobotFaultClock`), as a single
 robot's simulator keeps the true faults apart from what the robot knows.
 """
@@ -28,6 +28,7 @@ from selfrepair.geometry import Cell, Pose
 from selfrepair.robots.domain import SomeDomain
 from selfrepair.team.model import (
     ActionKind,
+    IncidentKind,
     RobotSpec,
     TeamAction,
     TeamFault,
@@ -173,7 +174,8 @@ class RobotState:
     noticed. ``stuck`` says whether the team believes it cannot drive (set by a ``stuck``
     incident, cleared when it can move again). ``retry_at`` is when a robot that could not plan
     tries again; ``deferred`` the incident it is waiting out (the same incident is not reported
-    again).
+    again); ``last_incident`` its last incident and when (the same one again at the same instant
+    is waited out).
     """
 
     spec: RobotSpec
@@ -193,6 +195,7 @@ class RobotState:
     stale: bool = False
     first_pick: int | None = None
     deferred: tuple[TeamAction, str] | None = None
+    last_incident: tuple[int, TeamAction, IncidentKind] | None = None
     failures: int = 0
     discovered: set[int] = field(default_factory=set)
 
@@ -249,6 +252,10 @@ class TeamWorld:
     now: int = 0
     blocked: set[Cell] = field(default_factory=set)
     known_blocked: set[Cell] = field(default_factory=set)
+    seen: frozenset[Cell] = frozenset()
+    """The cells the team believes blocked by world events: what the robots' sensors report
+    (range sensing: the true state of the cells around each robot, shared with the team; bump
+    sensing: the cells robots bumped into, for good). Every robot's stepper sees it."""
     moves: list[MoveRecord] = field(default_factory=list)
     acts: list[ActRecord] = field(default_factory=list)
     fault_log: list[FaultRecord] = field(default_factory=list)
@@ -268,16 +275,24 @@ class TeamWorld:
         """The robots in priority order (scenario order)."""
         return iter(self.robots.values())
 
-    def known_extra(self, exclude: str = "") -> frozenset[Cell]:
-        """Free cells of the maze the team treats as walls: known blocked cells and cells of
-        robots believed stuck (but robot ``exclude``, which plans for itself)."""
-        return frozenset(self.known_blocked) | frozenset(
+    def known_extra(self, exclude: str = "", events: bool = True) -> frozenset[Cell]:
+        """Free cells of the maze the team treats as walls: known blocked cells, cells of
+        robots believed stuck (but robot ``exclude``, which plans for itself) and, with
+        ``events``, the cells :attr:`seen` blocked by world events (but the cell ``exclude``
+        stands on: an obstacle on a robot's own cell never traps it)."""
+        extra = frozenset(self.known_blocked) | frozenset(
             r.pose.cell for r in self.robots.values() if r.stuck and r.name != exclude
         )
+        if events and self.seen:
+            own = self.robots[exclude].pose.cell if exclude else None
+            extra |= frozenset(c for c in self.seen if c != own)
+        return extra
 
-    def known_map(self, exclude: str = "") -> Maze:
-        """The map the team plans on: the maze with :meth:`known_extra` as walls."""
-        return known_maze(self.scenario.maze, self.known_extra(exclude))
+    def known_map(self, exclude: str = "", events: bool = True) -> Maze:
+        """The map the team plans on: the maze with :meth:`known_extra` as walls (``events``
+        false: without the world-event cells, which a robot's own planner and stepper take
+        from their belief, as a single robot's do)."""
+        return known_maze(self.scenario.maze, self.known_extra(exclude, events))
 
     def item_cell(self, item: str) -> Cell:
         """Where ``item`` is now: its floor cell or its carrier's cell."""

@@ -58,6 +58,7 @@ def header_json(result: TeamResult) -> dict[str, Any]:
             for f in scenario.faults
         ],
         "detection": scenario.detection.value,
+        **({"world": scenario.world.to_json()} if scenario.world else {}),
         "options": {
             "strategy": str(options.strategy),
             "table": str(options.table),
