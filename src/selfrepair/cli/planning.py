@@ -10,7 +10,7 @@ reported on its own line (``kernels loaded in ... ms``); the search time is the 
 
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -46,6 +46,8 @@ from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES
 from selfrepair.textio import JSONObject
 
 if TYPE_CHECKING:
+    from collections.abc import Iterable
+
     from selfrepair.geometry import Cell, Heading
     from selfrepair.robots.domain import SomeDomain
     from selfrepair.search.astar import PlanResult
@@ -327,7 +329,9 @@ def path_command(
     return 0 if result.status is PlanStatus.SOLVED else 1
 
 
-def _print_path_picture(maze: "Maze", path: Any, start: "Cell", goal: "Cell") -> None:
+def _print_path_picture(
+    maze: "Maze", path: "Iterable[Cell]", start: "Cell", goal: "Cell"
+) -> None:
     from selfrepair.world.render import GOAL_CHAR, path_layer, render_ascii
 
     layers = [path_layer(path), {goal: GOAL_CHAR, start: "S"}]

@@ -8,9 +8,10 @@ set by :func:`selfrepair.experiment.config.parse_config` after the plug-ins are 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from fractions import Fraction
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal, TypeVar
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
@@ -495,7 +496,10 @@ def _weights(value: object) -> object:
     return tuple(out)
 
 
-def _reraise(parser: Any, text: str) -> Any:
+T = TypeVar("T")
+
+
+def _reraise(parser: Callable[[str], T], text: str) -> T:
     """Run a robot-model parser, turning its InputError into a plain ValueError for pydantic."""
     try:
         return parser(text)

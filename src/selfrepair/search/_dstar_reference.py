@@ -12,7 +12,7 @@ from __future__ import annotations
 import heapq
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -41,7 +41,7 @@ class Geometry:
     """Per end heading: ``(class, node offset)`` of every move that arrives facing it."""
 
 
-def reach(domain: Domain[Any, Any]) -> int:
+def reach(domain: Domain[A, F]) -> int:
     reach = 0
     for action in domain.actions:
         for heading in Heading:
