@@ -29,7 +29,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Generic, NamedTuple, Protocol
+from typing import Generic, NamedTuple, Protocol
 
 from typing_extensions import TypeVar
 
@@ -100,7 +100,7 @@ class MissionContext:
     replan_budget: int | None
     free: FreeTest
     grid: FreeGrid
-    cost: Callable[[Pose, Any], Fraction]
+    cost: Callable[[Pose, object], Fraction]
     world: object = None
     cost_scale: int = 1
     start: Pose | None = None
