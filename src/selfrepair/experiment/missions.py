@@ -58,7 +58,7 @@ from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, check_limit
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import StrategyOptions
 from selfrepair.repair.tolerance import OPTIMAL, parse_objective
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.robots.registry import get_domain, load_plugin
 from selfrepair.world.events import WorldSchedule
@@ -107,6 +107,8 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
     ]
     if config.world is not None:
         factors.append((len(config.world.rates) * len(config.world.sensing), "world settings"))
+    if config.physics is not None:
+        factors.append((len(config.physics.simulators), "simulators"))
     if not filtered:
         factors.append((variants, "strategy variants and weights"))
     total = 1
@@ -169,6 +171,7 @@ def expand(
         Axis("replicate", tuple(range(config.repeats)), "repeats"),
         Axis("world", _worlds(config), "world settings"),
         Axis("variant", variants, "strategy variants and weights"),
+        Axis("simulator", _simulators(config), "simulators"),
     )
     missions: dict[str, Mission] = {}
     for point in cross(axes):
@@ -212,7 +215,9 @@ def expand(
             situation["plugins"] = plugins
         seed = derive_seed(config.seed, portable(situation))
         count = fault_count[point["faults"]]
-        mission = _mission(config, situation, seed, variant, weight, label, count)
+        mission = _mission(
+            config, situation, seed, variant, weight, label, count, point["simulator"]
+        )
         missions.setdefault(mission.key, mission)
     if not missions:
         raise ConfigError(
@@ -229,9 +234,11 @@ def _mission(
     weight: str,
     label: str,
     fault_count: int,
+    simulator: dict[str, Any] | None,
 ) -> Mission:
-    """One mission: the situation with its variant, weight and seed, keyed and labelled
-    (``fault_count``: the faults of its fault set, as the robot's domain reads the text)."""
+    """One mission: the situation with its variant, weight, seed and (with a ``[physics]``
+    section) simulator, keyed and labelled (``fault_count``: the faults of its fault set, as
+    the robot's domain reads the text)."""
     settings = {
         **situation,
         **variant,
@@ -239,6 +246,8 @@ def _mission(
         "clearance_radius": config.planner.clearance_radius,
         "seed": seed,
     }
+    if simulator is not None:  # absent without a [physics] section: older keys stay valid
+        settings["simulator"] = simulator
     text = canonical_json(settings)
     key = mission_key(canonical_json(portable(settings)))
     options = variant["options"]
@@ -264,6 +273,8 @@ def _mission(
     world = situation.get("world")
     if world is not None:
         labels += (("world_rate", str(world["rate"])), ("sensing", world["sensing"]))
+    if simulator is not None:
+        labels += (("simulator", simulator["name"]),)
     return Mission(key, config.name, seed, text, labels)
 
 
@@ -294,6 +305,18 @@ def _worlds(config: ExperimentConfig) -> tuple[dict[str, Any] | None, ...]:
     )
 
 
+def _simulators(config: ExperimentConfig) -> tuple[dict[str, Any] | None, ...]:
+    """The values of the ``simulator`` axis: one per simulator of the ``[physics]`` section
+    (physics with its tracking), or ``None`` alone without one (the lattice simulator)."""
+    physics = config.physics
+    if physics is None:
+        return (None,)
+    return tuple(
+        {"name": name, **({"tracked": physics.tracked} if name == "physics" else {})}
+        for name in physics.simulators
+    )
+
+
 RANDOM = "random"
 """The ``fault_at`` axis value of ``at_random``: one step drawn per situation."""
 
@@ -303,7 +326,7 @@ def _fault_step(
     identity: dict[str, Any],
     route: Route,
     point: dict[str, Any],
-    domain: Domain[Any, Any],
+    domain: SomeDomain,
 ) -> int:
     """When the faults of one situation (``point``) appear: its ``fault_at``, or for
     :data:`RANDOM` one step drawn
