@@ -117,6 +117,9 @@ def test_the_rewriting_robot_is_judged_apart() -> None:
     assert found["D1r"] is Outcome.NOT_HELD and found["D2r"] is Outcome.NOT_HELD
     without = [r for r in rows if r["rewrite"] != 1]
     assert "D1r" not in {f.number for f in dynamic_findings(without)}
+    assert "D4" not in found
+    lpg = [{**_row("lpg-adapt", k, 1_500_000 + k, 22.0), "rewrite": None} for k in range(12)]
+    assert {f.number: f.outcome for f in dynamic_findings(rows + lpg)}["D4"] is Outcome.HELD
 
 
 def test_a_small_dynamic_experiment_runs_and_prints_its_findings(
@@ -127,3 +130,21 @@ def test_a_small_dynamic_experiment_runs_and_prints_its_findings(
     assert main(["experiment", str(config), "--db", str(tmp_path / "s.sqlite"), "--jobs", "1"]) == 0
     out = capsys.readouterr().out
     assert "Finding D1" in out and "Finding D2" in out and "Finding D3" in out
+
+
+def test_an_optional_lpg_adapt_is_left_out_with_its_reason_where_it_cannot_run(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import selfrepair.baselines.adapt as adapt
+    from selfrepair.experiment.variants import left_out
+
+    lpg = '[[strategies]]\nname = "lpg-adapt"\ntime_limit = 1\nmazes = ["wide-short"]\n'
+    monkeypatch.setattr(adapt, "lpg_available", lambda: False)
+    with pytest.raises((ConfigError, InputError), match="pddl extra"):
+        parse_config(SMALL + lpg)
+    config = parse_config(SMALL + lpg + "optional = true\n")
+    assert [name for name, _ in left_out(config)] == ["lpg-adapt"]
+    assert "pddl extra" in left_out(config)[0][1]
+    missions = expand(config)
+    assert len(missions) == len(expand(parse_config(SMALL)))  # none of LPG's
+    assert "lpg-adapt" not in {dict(m.labels)["strategy"] for m in missions}

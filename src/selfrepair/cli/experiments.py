@@ -168,6 +168,7 @@ def experiment(
         load_experiment,
     )
     from selfrepair.experiment.timing import execute_mission
+    from selfrepair.experiment.variants import left_out
 
     missions: tuple[Mission, ...] = ()
     db_path: Path | None = None
@@ -192,6 +193,8 @@ def experiment(
             what, execute, report = "team missions", execute_team_mission, _team_report
         else:
             missions = expand(cfg, max_missions=max_missions, max_cells=max_cells)
+            for name, reason in left_out(cfg):  # an optional strategy that cannot run here
+                echo(f"{cfg.name}: {name} left out: {reason}")
             execute = partial(
                 execute_mission, repeats=repeats or cfg.timing_repeats, footing=footing
             )

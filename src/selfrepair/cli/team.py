@@ -25,6 +25,7 @@ from selfrepair.cli._app import (
     echo_json,
 )
 from selfrepair.cli._inputs import Backend, Json, TraceOut, find_input
+from selfrepair.cli._mission import Events, SensingOpt, check_choice
 from selfrepair.limits import (
     MAX_CELLS,
     MAX_FILE_BYTES,
@@ -35,6 +36,7 @@ from selfrepair.limits import (
 
 if TYPE_CHECKING:
     from selfrepair.team.result import TeamResult
+    from selfrepair.team.summary import TeamSummary
 
 __all__ = ["print_team_summary", "team_app"]
 
@@ -64,6 +66,41 @@ RobotTable = Annotated[
         "without a bundled one).",
     ),
 ]
+
+
+TeamSensingRange = Annotated[
+    int | None,
+    typer.Option(
+        "--sensing-range",
+        metavar="R",
+        min=0,
+        help="Chebyshev cells each robot sees around it (default: the scenario's).",
+    ),
+]
+
+
+def _with_world(parsed: Any, events: str, sensing: str, sensing_range: int | None) -> Any:
+    """``parsed`` with the world events and sensing of the command line (``--events`` replaces
+    the scenario's events; an empty option keeps the scenario's)."""
+    from dataclasses import replace
+
+    from selfrepair.world.events import Sensing, parse_events
+
+    world = parsed.world
+    if events:
+        world = replace(world, events=parse_events(events))
+    if sensing:
+        check_choice(sensing, tuple(Sensing), "--sensing")
+        world = replace(world, sensing=Sensing(sensing))
+    if sensing_range is not None:
+        world = replace(world, sensing_range=sensing_range)
+    if world is parsed.world:
+        return parsed
+    from selfrepair.team.check import check_scenario
+
+    changed = replace(parsed, world=world, digest="")  # no longer the file's content
+    check_scenario(changed)
+    return changed
 
 
 def _options(
@@ -113,6 +150,9 @@ def team_run(
             help="How robots learn their wheel faults: now or on-use (default: the scenario's).",
         ),
     ] = None,
+    events: Events = "",
+    sensing: SensingOpt = "",
+    sensing_range: TeamSensingRange = None,
     max_robots: MaxRobots = MAX_ROBOTS,
     max_tasks: MaxTasks = MAX_TASKS,
     max_cells: MaxCells = MAX_CELLS,
@@ -120,7 +160,8 @@ def team_run(
 ) -> int:
     """Run one team mission.
 
-    Allocation, team plan, execution with faults and repairs. Exit 1 when an item is not
+    Allocation, team plan, execution with faults, world events and repairs (--events,
+    --sensing and --sensing-range replace the scenario's [world]). Exit 1 when an item is not
     delivered.
     """
     from selfrepair.team.engine import run_team
@@ -138,9 +179,11 @@ def team_run(
         from selfrepair.execution.faults import Detection
 
         parsed = replace(parsed, detection=choice(Detection, detect, "detection"))
+    parsed = _with_world(parsed, events, sensing, sensing_range)
     options = _options(strategy, table, max_ticks, backend, robot_table)
     result = run_team(parsed, options)
-    baseline = run_team(parsed.without_faults(), options).makespan if parsed.faults else None
+    disturbed = parsed.faults or parsed.world
+    baseline = run_team(parsed.without_faults(), options).makespan if disturbed else None
     if trace is not None:
         write_team_trace(result, trace, baseline)
     if as_json:
@@ -158,6 +201,8 @@ def _print_result(result: "TeamResult", baseline: Any) -> None:
     )
     for fault in scenario.faults:
         echo(f"  fault: {fault.describe()} ({fault.persistence})")
+    if scenario.world:
+        echo(f"  world: {scenario.world.describe()}")
     for d in result.discoveries:
         echo(
             f"  tick {d.at / result.scale:g}: {d.robot} learns of fault {d.index} "
@@ -341,7 +386,7 @@ def team_frame(
     return 0
 
 
-def print_team_summary(summaries: list[Any], *, title: str) -> None:
+def print_team_summary(summaries: "list[TeamSummary]", *, title: str) -> None:
     """The per-strategy team summary as a table."""
     from rich.table import Table
     from rich.text import Text

@@ -66,6 +66,7 @@ from selfrepair.repair.strategies import (
     Belief,
     MissionContext,
     Repair,
+    Repairer,
     RepairStatus,
     diagnosis_report,
     get_strategy,
@@ -83,7 +84,7 @@ from selfrepair.status import mission_status
 from selfrepair.tables.model import SomeTable
 from selfrepair.world.maze import Maze, believed_maze, clearance_penalties
 
-__all__ = ["mission_context", "run_mission"]
+__all__ = ["mission_context", "run_mission", "start_repairer"]
 
 
 def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContext:
@@ -104,7 +105,10 @@ def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContex
         known: frozenset[object],
         budget: int | None,
     ) -> PlanResult:
-        world = believed_maze(maze, belief.blocked - {start.cell}) if belief.blocked else maze
+        blocked = belief.blocked
+        if blocked and goal in blocked and goal != start.cell:  # no way in while it is blocked
+            return PlanResult(PlanStatus.UNSOLVABLE, (), (), None, Fraction(0), 0, 0)
+        world = believed_maze(maze, blocked - {start.cell}) if blocked else maze
         problem = PlanningProblem(world, start, goal, heading, known, weight, radius, domain)
         if objective is not None and not known:  # the tolerant objective: before any fault
             term = _objective_term(spec, objective, table)
@@ -143,6 +147,16 @@ def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContex
         belief=belief,
         behaviour=spec.behaviour,
     )
+
+
+def start_repairer(spec: MissionSpec, context: MissionContext) -> Repairer:
+    """The repairer of ``spec``'s strategy started for a mission (or a team robot's drive) on
+    ``context``; in a changing world a strategy that repairs blocked actions itself prepares for
+    them (``expect_blocked``) before the clock runs."""
+    repairer = get_strategy(spec.strategy)(context)
+    if spec.world and (expect := getattr(repairer, "expect_blocked", None)) is not None:
+        expect()
+    return repairer
 
 
 def _objective_term(
@@ -196,7 +210,7 @@ def run_mission(
     """Plan, execute and repair one mission (see the module docstring). ``simulator`` makes the
     simulator that holds the truth (default: the lattice :class:`Simulator`; a physics one is
     :class:`selfrepair.physics.simulator.PhysicsSimulator`)."""
-    factory = get_strategy(spec.strategy)  # fails fast on a bad name
+    get_strategy(spec.strategy)  # fails fast on a bad name
     if simulator is not None:
         sim = simulator(spec)
     else:
@@ -229,9 +243,7 @@ def run_mission(
     planning_ns = time.perf_counter_ns() - t0
     # on-use and hidden: the known faults never clear by themselves, so waiting cannot help
     waits = None if spec.schedule.detection is Detection.NOW else 0
-    repairer = factory(context)
-    if spec.world and (expect := getattr(repairer, "expect_blocked", None)) is not None:
-        expect()  # a strategy that repairs blocked actions itself prepares before the clock runs
+    repairer = start_repairer(spec, context)
     stepper = Stepper(context, repairer, initial.actions, initial_known, sim.table, max_wait=waits)
     tally = _Tally()
     if initial.status is not PlanStatus.SOLVED:

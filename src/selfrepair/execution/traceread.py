@@ -23,11 +23,13 @@ from selfrepair.execution.result import MissionSpec, StepSource, TraceStep
 from selfrepair.execution.traceformat import (
     DEFAULT_DOMAIN,
     TRACE_FORMAT,
-    TRACE_VERSION,
+    TRACE_VERSIONS,
     Trace,
     TraceFields,
+    TraceObservation,
     TraceRepair,
 )
+from selfrepair.execution.traceobserve import parse_observation
 from selfrepair.geometry import Heading
 from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.strategies import RepairSource, RepairStatus, StrategyName, StrategyOptions
@@ -90,9 +92,11 @@ def _header(data: Any, source: str, number: int) -> tuple[Mapping[str, Any], Som
             f'expected a header line with "format": "{TRACE_FORMAT}"', source=source, line=number
         )
     version = data.get("version")
-    if type(version) is not int or version != TRACE_VERSION:
+    if type(version) is not int or version not in TRACE_VERSIONS:
         raise TraceError(
-            f"expected trace version {TRACE_VERSION}, got {version!r}", source=source, line=number
+            f"expected trace version {' or '.join(map(str, TRACE_VERSIONS))}, got {version!r}",
+            source=source,
+            line=number,
         )
     name = data.get("domain", DEFAULT_DOMAIN)
     if not isinstance(name, str):
@@ -142,6 +146,7 @@ def parse_trace(text: str, source: str = "<trace>", *, partial: bool = False) ->
     lines: list[int] = []
     repairs: list[TraceRepair] = []
     repair_lines: list[int] = []
+    observations: list[TraceObservation | None] = []
     for number, raw in enumerate(text.split("\n"), start=1):
         if not raw.strip():
             continue
@@ -159,7 +164,9 @@ def parse_trace(text: str, source: str = "<trace>", *, partial: bool = False) ->
         if summary is not None:
             raise TraceError("expected nothing after the summary line", source=source, line=number)
         if kind == "step":
-            steps.append(_parse_step(domain, TraceFields(data, source, number)))
+            fields = TraceFields(data, source, number)
+            steps.append(_parse_step(domain, fields))
+            observations.append(parse_observation(fields))
             lines.append(number)
         elif kind == "repair":
             next_step = len(steps)
@@ -192,6 +199,7 @@ def parse_trace(text: str, source: str = "<trace>", *, partial: bool = False) ->
         tuple(repair_lines),
         summary,
         summary_line,
+        tuple(observations) if any(o is not None for o in observations) else (),
     )
 
 

@@ -13,6 +13,7 @@ from selfrepair.execution.faults import Detection
 from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
 from selfrepair.execution.traceformat import TRACE_FORMAT, TRACE_VERSION, header_start, pose_json
+from selfrepair.execution.traceobserve import diagnosis_header, observation_fields
 from selfrepair.robots.domain import Domain, SomeDomain
 from selfrepair.world.maze import format_maze
 
@@ -74,6 +75,7 @@ def _hidden_json(spec: MissionSpec) -> dict[str, Any]:
             "max_faults": options.max_faults,
             "fault_prior": options.fault_prior,
             "confidence": options.confidence,
+            **diagnosis_header(spec),
             **({"observers": [_observer(o) for o in spec.observers]} if spec.observers else {}),
         }
     }
@@ -128,10 +130,14 @@ def trace_lines(result: MissionResult) -> list[str]:
     domain = result.spec.domain
     lines = [json.dumps(header_json(result.spec, result.initial_plan.actions))]
     repairs = list(result.repairs)
+    observed = observation_fields(result)
     for step in result.steps:
         while repairs and repairs[0].step <= step.step:
             lines.append(json.dumps(repair_json(domain, repairs.pop(0))))
-        lines.append(json.dumps(step_json(domain, step)))
+        line = step_json(domain, step)
+        if step.step in observed:
+            line.update(observed[step.step])
+        lines.append(json.dumps(line))
     lines.extend(json.dumps(repair_json(domain, r)) for r in repairs)
     lines.append(json.dumps({"type": "summary", **mission_row(result)}))
     return lines
