@@ -17,7 +17,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -151,7 +150,7 @@ class StepTerm:
     planner knows); the planner refuses a term made for others. Equality is identity (arrays).
     """
 
-    actions: tuple[Any, ...]
+    actions: tuple[object, ...]
     counts: npt.NDArray[np.int32] | None
     penalty: Fraction | None = None
     label: str = "tolerant"
