@@ -101,6 +101,27 @@ def test_findings_judge_the_paired_response_time() -> None:
     assert dynamic_findings([{**r, "world_rate": None} for r in rows]) == []
 
 
+def test_the_rewriting_robot_is_judged_apart() -> None:
+    rows = [
+        row
+        for k in range(12)
+        for row in (
+            {**_row("replan", k, 100_000 + k, 20.0), "rewrite": None},
+            {**_row("dstar-lite", k, 50_000 + k, 20.0), "rewrite": None},
+            {**_row("replacement", k, 20_000 + k, 24.0), "rewrite": 0},
+            {**_row("replacement", k, 400_000 + k, 24.0), "rewrite": 1},
+        )
+    ]
+    found = {f.number: f.outcome for f in dynamic_findings(rows)}
+    assert found["D1"] is Outcome.HELD and found["D2"] is Outcome.HELD  # not mixed
+    assert found["D1r"] is Outcome.NOT_HELD and found["D2r"] is Outcome.NOT_HELD
+    without = [r for r in rows if r["rewrite"] != 1]
+    assert "D1r" not in {f.number for f in dynamic_findings(without)}
+    assert "D4" not in found
+    lpg = [{**_row("lpg-adapt", k, 1_500_000 + k, 22.0), "rewrite": None} for k in range(12)]
+    assert {f.number: f.outcome for f in dynamic_findings(rows + lpg)}["D4"] is Outcome.HELD
+
+
 def test_a_small_dynamic_experiment_runs_and_prints_its_findings(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -109,3 +130,21 @@ def test_a_small_dynamic_experiment_runs_and_prints_its_findings(
     assert main(["experiment", str(config), "--db", str(tmp_path / "s.sqlite"), "--jobs", "1"]) == 0
     out = capsys.readouterr().out
     assert "Finding D1" in out and "Finding D2" in out and "Finding D3" in out
+
+
+def test_an_optional_lpg_adapt_is_left_out_with_its_reason_where_it_cannot_run(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import selfrepair.baselines.adapt as adapt
+    from selfrepair.experiment.variants import left_out
+
+    lpg = '[[strategies]]\nname = "lpg-adapt"\ntime_limit = 1\nmazes = ["wide-short"]\n'
+    monkeypatch.setattr(adapt, "lpg_available", lambda: False)
+    with pytest.raises((ConfigError, InputError), match="pddl extra"):
+        parse_config(SMALL + lpg)
+    config = parse_config(SMALL + lpg + "optional = true\n")
+    assert [name for name, _ in left_out(config)] == ["lpg-adapt"]
+    assert "pddl extra" in left_out(config)[0][1]
+    missions = expand(config)
+    assert len(missions) == len(expand(parse_config(SMALL)))  # none of LPG's
+    assert "lpg-adapt" not in {dict(m.labels)["strategy"] for m in missions}

@@ -357,3 +357,36 @@ def test_a_bad_table_file_stops_the_experiment_before_the_sweep(tmp_path: Path) 
     (tmp_path / "data" / "t.json").write_text('{"format": "selfrepair-table"}')
     with pytest.raises(TableError, match="expected a 'version' key"):
         expand(load_config(path))
+
+
+def _plus_robot() -> None:
+    """Register ``three-action-plus``: the three-action robot, its fault sets written ``L+R``."""
+    import dataclasses
+    from collections.abc import Iterable
+
+    from selfrepair.robots.registry import register_domain
+    from selfrepair.robots.three_action import THREE_ACTION
+
+    def parse(text: str) -> frozenset[str]:
+        return frozenset(p.strip().upper() for p in text.split("+") if p.strip())
+
+    def write(faults: Iterable[str]) -> str:
+        return "+".join(sorted(faults, key="FLR".index))
+
+    plus = dataclasses.replace(
+        THREE_ACTION, name="three-action-plus", parse_faults=parse, format_faults=write
+    )
+    register_domain(plus, replace=True)
+
+
+def test_fault_count_is_the_robots_count_of_its_fault_set() -> None:
+    """``fault_count`` asks the robot's domain what a fault text holds (issue 23): a robot that
+    writes its fault sets ``L+R`` has two faults there, not one comma-less item."""
+    _plus_robot()
+    text = (
+        'name = "plus"\nseed = 1\ndomain = "three-action-plus"\n\n[[mazes]]\n'
+        'bundled = "narrow-short"\n\n[faults]\nsets = ["L", "L+R"]\n\n'
+        '[[strategies]]\nname = "replan"\n'
+    )
+    labels = [dict(m.labels) for m in expand(parse_config(text))]
+    assert {row["faults"]: row["fault_count"] for row in labels} == {"L": 1, "L+R": 2}

@@ -25,9 +25,15 @@ from selfrepair.execution.result import MissionSpec
 from selfrepair.execution.stepper import Stepper
 from selfrepair.geometry import Heading, Pose
 from selfrepair.physics.identified import load_identified
-from selfrepair.physics.model import ORIGIN, RobotParams, WallBox, heading_yaw, wall_boxes
+from selfrepair.physics.model import ORIGIN, RobotParams, WallBox, heading_yaw, mjcf, wall_boxes
 from selfrepair.physics.simulator import lattice_motion
-from selfrepair.physics.tracker import ContinuousPose, _side, reference
+from selfrepair.physics.tracker import (
+    ContinuousPose,
+    LatticeMotion,
+    _side,
+    balanced_drive,
+    reference,
+)
 from selfrepair.physics.world import lattice_pose, snap
 from selfrepair.robots.domain import check_domain
 from selfrepair.robots.four_wheel import ACTIONS, FOUR_WHEEL, parse_action
@@ -39,6 +45,42 @@ OPEN = parse_maze("......\n......\n......\n......\n......\n......\n", name="open
 
 
 # --- the model, without MuJoCo --------------------------------------------------------------
+
+
+def test_only_the_chassis_and_the_tyres_touch_walls_and_only_the_wheel_spheres_the_floor() -> None:
+    import xml.etree.ElementTree as ET
+
+    params = RobotParams()
+    root = ET.fromstring(mjcf(parse_maze("###\n#.#\n###\n"), params))
+    geoms = {g.get("name"): g for g in root.iter("geom")}
+
+    def bits(name: str) -> tuple[int, int]:
+        g = geoms[name]
+        return int(g.get("contype", "1")), int(g.get("conaffinity", "1"))
+
+    def collide(a: str, b: str) -> bool:
+        (ta, aa), (tb, ab) = bits(a), bits(b)
+        return bool(ta & ab or tb & aa)
+
+    for wheel in ("FL", "FR", "RL", "RR"):
+        assert collide(wheel, "floor") and not collide(wheel, "wall0")  # the sphere rolls
+        assert collide(f"{wheel}_tyre", "wall0") and not collide(f"{wheel}_tyre", "floor")
+    assert collide("chassis", "wall0") and not collide("wall0", "floor")
+    # what touches a wall reaches sideways no further than the tyres' outer faces
+    assert params.wheel_y + params.wheel_half_width == pytest.approx(0.145)
+
+
+def test_a_turn_in_place_drives_a_diagonal_pair_within_its_commands() -> None:
+    turn = LatticeMotion(0, 0, 1)  # clockwise: the left side forward, the right backward
+    assert balanced_drive((1, 1, 1, -1), turn) == (1, 0, 0, -1)  # FFFB: FL with RR
+    assert balanced_drive((0, -1, 1, -1), turn) == (0, -1, 1, 0)  # SBFB: FR with RL
+    assert balanced_drive((1, -1, 1, -1), turn) == (1, -1, 1, -1)  # all four: as commanded
+    assert balanced_drive((1, -1, 0, 0), turn) == (1, -1, 0, 0)  # no diagonal pair
+    assert balanced_drive((1, 1, 1, -1), LatticeMotion(1, 0, 0)) == (1, 1, 1, -1)
+    for commands in itertools.product((1, 0, -1), repeat=4):
+        for motion in (turn, LatticeMotion(0, 0, -1)):
+            drive = balanced_drive(commands, motion)  # type: ignore[arg-type]
+            assert all(d in (0, c) for d, c in zip(drive, commands, strict=True))
 
 
 def test_wall_boxes_merge_each_rows_runs_and_add_the_border() -> None:
@@ -128,6 +170,34 @@ def test_straight_and_spin_are_confirmed_and_a_pivot_on_a_stopped_side_is_not() 
     assert not rows["FSSS"].confirmed and rows["FSSS"].snapped is None
     assert rows["FSSS"].tracked_position > 0.3  # its centre swings about the braked wheels
     assert report.summary()["nominal"]["tracked_confirmed"] == 2
+
+
+@PHYSICS
+def test_the_motor_controllers_ramp_each_wheel_at_most_wheel_accel() -> None:
+    from selfrepair.physics.world import PhysicsWorld
+
+    params = RobotParams()
+    seen: list[list[float]] = [[0.0] * 4]
+    world = PhysicsWorld(None, ORIGIN, params, observer=lambda w: seen.append(list(w.data.ctrl)))
+    world.run((1, 1, 1, 1), Fraction(1))  # open loop: the command is full speed from the start
+    step = params.wheel_accel * params.control_every * params.timestep / params.wheel_radius
+    assert seen[1] == pytest.approx([step] * 4)  # not the full 10 rad/s at once
+    jumps = [
+        abs(b - a)
+        for before, after in itertools.pairwise(seen)
+        for a, b in zip(before, after, strict=True)
+    ]
+    assert max(jumps) <= step + 1e-9 and seen[-1] == pytest.approx([params.wheel_omega] * 4)
+    with pytest.raises(ProblemError, match="wheel_accel"):
+        RobotParams(wheel_accel=0.0)
+
+
+@PHYSICS
+def test_a_three_wheel_turn_turns_in_place_on_its_diagonal_pair() -> None:
+    from selfrepair.physics.fidelity import measure
+
+    (row,) = measure(actions=[parse_action("FFFB")], faulty=False).rows
+    assert row.confirmed and row.tracked_position < 0.02  # it drifted 0.2 cells on three wheels
 
 
 @PHYSICS
@@ -289,7 +359,8 @@ def test_the_confirmed_only_domain_keeps_the_confirmed_actions_and_every_basic_m
     domain = load_identified(name=CONFIRMED_NAME, confirmed_only=True)
     check_domain(domain)
     kept = {a.code for a in domain.actions}
-    assert len(kept) == 49 and "FFFB" not in kept and "FSSB" in kept  # drifts / turns in place
+    # the single-axle turns drift; FFFB turns in place on its diagonal pair (balanced_drive)
+    assert len(kept) == 65 and "FBSS" not in kept and {"FFFB", "FSSB"} <= kept
     assert kept < {a.code for a in load_identified().actions}
     for fault in FOUR_WHEEL.faults:  # every single fault leaves a way to turn and drive
         motions = {domain.motion_class(a) for a in domain.actions if domain.available(a, {fault})}

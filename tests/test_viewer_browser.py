@@ -296,3 +296,57 @@ def test_blocked_cells_grey_out_at_their_time(driver: Any, tmp_path: Path) -> No
             ".map(r => r.getAttribute('data-cell')).sort();"
         )
         assert drawn == sorted(f"{x},{y}" for x, y in world.blocked_at(ticks[frame]))
+
+
+def test_the_diagnosis_panel_shows_the_hypotheses_shrinking_and_the_surprises(
+    driver: Any, tmp_path: Path
+) -> None:
+    """Faults hidden: one bar per step with the hypotheses the trace records as still possible,
+    one marker per surprise, and the facts of the frame (issue 24 item 6)."""
+    from selenium.webdriver.common.by import By
+
+    from selfrepair.diagnosis import ObservationModel
+    from selfrepair.diagnosis.cooperative import Observer
+
+    route = bundled_routes("narrow-long")[0]
+    schedule = FaultSchedule.permanent(
+        four_wheel.FOUR_WHEEL.parse_faults("FL:F"), detection="hidden"
+    )
+    spec = MissionSpec(
+        load_bundled("narrow-long"), route.start, route.goal, schedule=schedule,
+        strategy="active-diagnosis", seed=3, observation=ObservationModel(0.05),
+        observers=(Observer("t1", 0.05),),
+    )  # fmt: skip
+    trace_path, html = tmp_path / "h.jsonl", tmp_path / "h.html"
+    write_trace(run_mission(spec), trace_path)
+    assert main(["view", str(trace_path), "-o", str(html)]) == 0
+    log = _open(driver, html)
+    assert [e for e in log if e["level"] == "SEVERE"] == []
+    trace = read_trace(trace_path)
+    alive = [bin(o.belief or 0).count("1") for o in trace.observations if o is not None]
+    surprises = [i for i, o in enumerate(trace.observations) if o is not None and o.surprise]
+    assert surprises and alive[-1] < 79
+    visible, bars, marks = driver.execute_script(
+        "return [!document.getElementById('diagnosis').hidden,"
+        "[...document.querySelectorAll('#belief-strip rect[data-alive]')]"
+        ".map(r => Number(r.getAttribute('data-alive'))),"
+        "[...document.querySelectorAll('#belief-strip [data-surprise]')]"
+        ".map(r => Number(r.getAttribute('data-surprise')))]"
+    )
+    assert visible and bars == alive and marks == surprises
+    for frame in (0, surprises[0] + 1, len(trace.steps)):
+        _drag_slider_to(driver, frame)
+        left = driver.find_element(By.CSS_SELECTOR, "dd[data-fact='hypotheses left']").text
+        assert left == f"{79 if frame == 0 else alive[frame - 1]} of 79"
+        said = driver.find_element(By.CSS_SELECTOR, "dd[data-fact='surprise']").text
+        assert said == ("-" if frame == 0 else "yes" if frame - 1 in surprises else "no")
+    best = driver.find_element(By.CSS_SELECTOR, "dd[data-fact='most probable']").text
+    assert "FL:F" in best
+
+
+def test_the_diagnosis_panel_stays_hidden_when_the_robot_is_told(
+    driver: Any, page: tuple[Path, Trace]
+) -> None:
+    html, _ = page
+    _open(driver, html)
+    assert driver.execute_script("return document.getElementById('diagnosis').hidden") is True

@@ -3,7 +3,7 @@
 ``selfrepair physics fidelity --write-domain FILE`` measures every action in physics and writes
 the actions whose end pose snaps to the lattice (the others are dropped, with why); this file
 registers the bundled result (written with the default parameters) as the domain
-``four-wheel-physics``, and its 49 actions that physics confirms as ``four-wheel-confirmed``,
+``four-wheel-physics``, and its 65 actions that physics confirms as ``four-wheel-confirmed``,
 so that tables, missions and experiments use them like any robot:
 
     selfrepair --plugin examples/physics/robot.py table generate --domain four-wheel-physics \

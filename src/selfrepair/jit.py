@@ -11,7 +11,7 @@ from typing import Any, TypeVar
 
 __all__ = ["NUMBA", "njit", "no_refcount"]
 
-_Fn = TypeVar("_Fn", bound=Callable[..., Any])
+_Fn = TypeVar("_Fn", bound=Callable[..., object])
 
 try:
     from numba import njit

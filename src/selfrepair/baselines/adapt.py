@@ -21,6 +21,13 @@ plus 11 constants). The strategy counts them once per mission: on a maze with mo
 maze. LPG looks for any valid plan, not a cheapest one, and knows nothing of the clearance term
 (the export has none): the executed plan is costed by the metrics like every other strategy's.
 
+In a changing world (:mod:`selfrepair.world.events`) the strategy sees cells
+(``sees_cells``): the stepper asks its ``repair`` when the next action sweeps a cell the robot
+believes blocked too, and every LPG problem is posed on the maze with the believed-blocked cells
+as walls (:func:`~selfrepair.world.maze.believed_maze`, the robot's own cell left free), so
+LPG-adapt is told the changed cells as a changed initial state, and its plan is checked on that
+map (as a replan's is planned on it).
+
 The strategy plans for the four-wheel robot only (the PDDL export's robot) and needs the ``pddl``
 extra; starting it without either raises :class:`~selfrepair.errors.ProblemError` with a
 one-line reason.
@@ -29,6 +36,7 @@ one-line reason.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar, cast
 
 from selfrepair.baselines.lpg import (
     LPG_MAX_OBJECTS,
@@ -50,9 +58,9 @@ from selfrepair.repair.strategies import (
     register_strategy,
     replan,
 )
-from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.robots.four_wheel import FOUR_WHEEL, Action
 from selfrepair.search.problem import PlanningProblem
-from selfrepair.world.maze import Maze
+from selfrepair.world.maze import Maze, believed_maze
 
 __all__ = ["LPG_ADAPT", "LpgAdaptRepairer", "check_lpg_adapt", "lpg_objects", "start_lpg_adapt"]
 
@@ -75,14 +83,17 @@ class LpgAdaptRepairer:
     context: MissionContext
     maze: Maze
     fits: bool
+    sees_cells: ClassVar[bool] = True
+    """Asked for blocked actions too; its problems carry the believed-blocked cells."""
 
     def repair(self, request: RepairRequest) -> Repair:
         """LPG-adapt's repair of the remaining plan, else a replan (see the module docstring)."""
         context = self.context
         if not self.fits:
             return _fall_back(context, request, LpgStatus.ERROR)
+        blocked = context.belief.blocked - {request.pose.cell}
         problem = PlanningProblem(
-            self.maze,
+            believed_maze(self.maze, blocked) if blocked else self.maze,
             request.pose,
             context.goal,
             context.goal_heading,
@@ -92,7 +103,7 @@ class LpgAdaptRepairer:
         options = context.options
         result = lpg_adapt_repair(
             problem,
-            tuple(request.queue),
+            cast("tuple[Action, ...]", tuple(request.queue)),  # a four-wheel robot's queue
             time_limit_s=options.lpg_time_limit_s,
             seed=options.lpg_seed,
         )

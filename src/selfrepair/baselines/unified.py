@@ -98,7 +98,7 @@ class _WrittenProblem(up_model.Problem):  # type: ignore[misc]
     """
 
     @property
-    def initial_values(self) -> dict[Any, Any]:
+    def initial_values(self) -> dict[object, Any]:
         return dict(self.explicit_initial_values)
 
 

@@ -32,7 +32,7 @@ from typer.core import TyperArgument, TyperCommand, TyperGroup
 if TYPE_CHECKING:
     from rich.console import Console
 
-_F = TypeVar("_F", bound=Callable[..., Any])
+_F = TypeVar("_F", bound=Callable[..., object])
 
 
 def _no_type_label(ctx: Any) -> None:
@@ -194,7 +194,7 @@ def echo(text: str = "") -> None:
     sys.stdout.write(text + "\n")
 
 
-def echo_json(data: Any) -> None:
+def echo_json(data: object) -> None:
     """Print ``data`` as indented, valid JSON to stdout (never ``NaN`` or ``Infinity``: a
     non-finite number is a bug and raises ``ValueError`` instead of printing invalid JSON)."""
     sys.stdout.write(json.dumps(data, indent=2, allow_nan=False) + "\n")
@@ -203,69 +203,53 @@ def echo_json(data: Any) -> None:
 # --- limits: one flag per limit of selfrepair.limits, the same on every command ----------------
 # A command declares ``max_cells: MaxCells = MAX_CELLS`` and so on; --help shows the default.
 
+def limit_option(flag: str, help: str, *, least: int = 1) -> Any:
+    """The option of one limit of :mod:`selfrepair.limits`: ``flag N``, a whole number of at least
+    ``least``, with ``help`` (what is refused past it)."""
+    return typer.Option(flag, metavar="N", min=least, help=help)
+
+
 MaxCells = Annotated[
     int,
-    typer.Option(
-        "--max-cells",
-        metavar="N",
-        min=1,
-        help="Refuse a maze (file, map or generated) of more cells than this.",
-    ),
+    limit_option("--max-cells", "Refuse a maze (file, map or generated) of more cells than this."),
 ]
 MaxMissions = Annotated[
-    int,
-    typer.Option(
-        "--max-missions",
-        metavar="N",
-        min=1,
-        help="Refuse an experiment of more missions than this.",
-    ),
+    int, limit_option("--max-missions", "Refuse an experiment of more missions than this.")
 ]
 MaxTableBytes = Annotated[
-    int,
-    typer.Option(
-        "--max-table-bytes",
-        metavar="N",
-        min=1,
-        help="Refuse a table file larger than this, unread.",
-    ),
+    int, limit_option("--max-table-bytes", "Refuse a table file larger than this, unread.")
 ]
 MaxLookupPatterns = Annotated[
     int,
-    typer.Option(
+    limit_option(
         "--max-lookup-patterns",
-        metavar="N",
-        min=0,
-        help="Occupancy patterns one compiled table look-up stores at most (past it, answers "
-        "are computed each time).",
+        "Occupancy patterns one compiled table look-up stores at most (past it, answers are "
+        "computed each time).",
+        least=0,
     ),
 ]
 MaxTableCandidates = Annotated[
     int,
-    typer.Option(
+    limit_option(
         "--max-table-candidates",
-        metavar="N",
-        min=1,
-        help="Refuse a table of more candidates than this, before re-simulating any.",
+        "Refuse a table of more candidates than this, before re-simulating any.",
     ),
 ]
 MaxFileBytes = Annotated[
     int,
-    typer.Option(
+    limit_option(
         "--max-file-bytes",
-        metavar="N",
-        min=1,
-        help="Refuse a scenario, route, experiment or team file larger than this, unread.",
+        "Refuse a scenario, route, experiment or team file larger than this, unread.",
     ),
 ]
 MaxTraceBytes = Annotated[
-    int,
-    typer.Option(
-        "--max-trace-bytes",
-        metavar="N",
-        min=1,
-        help="Refuse a trace file larger than this, unread.",
-    ),
+    int, limit_option("--max-trace-bytes", "Refuse a trace file larger than this, unread.")
+]
+MaxRobots = Annotated[
+    int, limit_option("--max-robots", "Refuse a scenario of more robots than this.")
+]
+MaxTasks = Annotated[
+    int, limit_option("--max-tasks", "Refuse a scenario of more tasks than this.", least=0)
 ]
 
 

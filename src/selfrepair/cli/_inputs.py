@@ -13,26 +13,33 @@ from __future__ import annotations
 
 from fractions import Fraction
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from selfrepair.errors import InputError
 
 if TYPE_CHECKING:
-    from selfrepair.robots.domain import Domain
+    from selfrepair.robots.domain import A, Domain, F, SomeDomain
+    pass
 
 __all__ = [
     "Backend",
+    "Braid",
     "ClearanceWeight",
+    "Corridor",
     "DomainOpt",
     "Faults",
+    "GoalPose",
     "Heuristic",
     "Json",
     "MaxExpansions",
     "MazeArg",
     "Start",
+    "TableArg",
     "TimeLimit",
+    "TraceArg",
+    "TraceOut",
     "checkout_root",
     "domain_named",
     "find_input",
@@ -50,6 +57,23 @@ MazeArg = Annotated[
 ]
 Start = Annotated[
     str, typer.Option("--start", metavar="X,Y,H", help="Start pose (heading H: N, E, S or W).")
+]
+GoalPose = Annotated[
+    str, typer.Option("--goal", metavar="X,Y[,H]", help="Goal cell, or goal pose X,Y,H.")
+]
+TableArg = Annotated[
+    str, typer.Argument(metavar="TABLE", help="Table file or bundled name (e.g. handwritten).")
+]
+TraceArg = Annotated[
+    Path, typer.Argument(metavar="TRACE", help="A JSON Lines trace written by run --trace.")
+]
+TraceOut = Annotated[
+    Path | None, typer.Option("--trace", metavar="FILE", help="Write the JSON Lines trace here.")
+]
+Corridor = Annotated[int, typer.Option("--corridor", metavar="N", help="Corridor width in cells.")]
+Braid = Annotated[
+    float,
+    typer.Option("--braid", metavar="P", help="Share of dead ends to open (0 = perfect maze)."),
 ]
 Faults = Annotated[
     str,
@@ -148,7 +172,7 @@ def parse_weight(text: str, option: str = "--clearance-weight") -> Fraction:
     return weight
 
 
-def domain_named(name: str) -> Domain[Any, Any]:
+def domain_named(name: str) -> SomeDomain:
     """The registered domain ``name`` (bad names are an error on ``--domain``)."""
     from selfrepair.robots.registry import get_domain
 
@@ -158,7 +182,7 @@ def domain_named(name: str) -> Domain[Any, Any]:
         raise InputError(exc.reason, source="--domain") from None
 
 
-def parse_faults(domain: Domain[Any, Any], text: str) -> frozenset[Any]:
+def parse_faults(domain: Domain[A, F], text: str) -> frozenset[F]:
     """The fault set ``text`` names for ``domain`` (bad text is an error on ``--faults``)."""
     try:
         return domain.parse_faults(text)

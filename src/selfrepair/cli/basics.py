@@ -10,7 +10,14 @@ from typing import TYPE_CHECKING, Annotated
 import typer
 
 from selfrepair.cli._app import MaxCells, MaxFileBytes, app, echo, echo_json, maze_app, text_table
-from selfrepair.cli._inputs import MazeArg, domain_named, find_input
+from selfrepair.cli._inputs import (
+    Braid,
+    Corridor,
+    Json,
+    MazeArg,
+    domain_named,
+    find_input,
+)
 from selfrepair.errors import InputError
 from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES
 
@@ -23,9 +30,7 @@ __all__ = ["actions", "maze_generate", "maze_list", "maze_routes", "maze_show", 
 
 @app.command()
 def actions(
-    as_json: Annotated[
-        bool, typer.Option("--json", help="Print JSON rows instead of a table.")
-    ] = False,
+    as_json: Json = False,
     as_markdown: Annotated[
         bool,
         typer.Option(
@@ -40,7 +45,7 @@ def actions(
             help="The robot: a registered domain name ({domains}); default four-wheel.",
             show_default=False,
         ),
-    ] = None,
+    ] = None,  # not "four-wheel": a value given is coerced by pydantic, which is slow to import
 ) -> int:
     """Print a robot's actions (default: the four-wheel robot's 81).
 
@@ -202,6 +207,10 @@ def maze_list() -> int:
 _Seed = Annotated[
     int, typer.Option("--seed", metavar="S", help="Random seed (non-negative integer).")
 ]
+_Output = Annotated[
+    Path | None,
+    typer.Option("-o", "--output", metavar="FILE", help="Write the file here (default: print it)."),
+]
 
 
 def _check_seed(seed: int) -> None:
@@ -214,13 +223,8 @@ def maze_generate(
     width: Annotated[int, typer.Option("--width", metavar="N", help="Columns, border included.")],
     height: Annotated[int, typer.Option("--height", metavar="N", help="Rows, border included.")],
     seed: _Seed,
-    corridor: Annotated[
-        int, typer.Option("--corridor", metavar="N", help="Corridor width in cells.")
-    ] = 1,
-    braid: Annotated[
-        float,
-        typer.Option("--braid", metavar="P", help="Share of dead ends to open (0 = perfect maze)."),
-    ] = 0.0,
+    corridor: Corridor = 1,
+    braid: Braid = 0.0,
     routes: Annotated[
         int | None,
         typer.Option(
@@ -229,12 +233,7 @@ def maze_generate(
             help="Also draw N seeded routes and write them next to the maze (FILE.routes).",
         ),
     ] = None,
-    output: Annotated[
-        Path | None,
-        typer.Option(
-            "-o", "--output", metavar="FILE", help="Write the maze here (default: print it)."
-        ),
-    ] = None,
+    output: _Output = None,
     max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Generate a seeded maze in the plain-text format.
@@ -312,12 +311,7 @@ def maze_routes(
     spec: MazeArg,
     count: Annotated[int, typer.Option("-n", "--count", metavar="N", help="How many routes.")] = 4,
     seed: _Seed = 0,
-    output: Annotated[
-        Path | None,
-        typer.Option(
-            "-o", "--output", metavar="FILE", help="Write the route file here (default: print)."
-        ),
-    ] = None,
+    output: _Output = None,
     max_cells: MaxCells = MAX_CELLS,
 ) -> int:
     """Draw seeded routes for a maze.

@@ -2,16 +2,13 @@
 with ``--plugin``)."""
 
 
-from typing import Annotated
-
-import typer
-
 from selfrepair.cli._app import app, echo, echo_json
+from selfrepair.cli._inputs import Json
 
 
 @app.command()
 def domains(
-    as_json: Annotated[bool, typer.Option("--json", help="Print the list as JSON.")] = False,
+    as_json: Json = False,
 ) -> int:
     """List the robot domains this installation knows.
 

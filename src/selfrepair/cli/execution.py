@@ -11,8 +11,7 @@ planning time or a repair latency), and by default the mission runs once untimed
 """
 
 
-from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -27,16 +26,13 @@ from selfrepair.cli._app import (
     number_json,
     table_app,
 )
-from selfrepair.cli._inputs import Json, domain_named, find_input
-from selfrepair.cli._mission import (
-    MissionOptions,
-    mission_options,
-    mission_spec,
-    row_json,
-    table_note,
-)
+from selfrepair.cli._inputs import Json, TableArg, TraceArg, TraceOut, domain_named, find_input
+from selfrepair.cli._mission import MissionOptions, mission_options
+from selfrepair.cli._rowjson import row_json
+from selfrepair.cli._spec import mission_spec, table_note
 from selfrepair.cli.planning import kernel_load_ns
 from selfrepair.limits import MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES, MAX_TRACE_BYTES
+from selfrepair.textio import JSONObject
 
 if TYPE_CHECKING:
     from selfrepair.execution.result import MissionResult
@@ -164,11 +160,8 @@ def run(
         ),
     ] = "replacement",
     mission: MissionOptions,
-    trace: Annotated[
-        Path | None,
-        typer.Option("--trace", metavar="FILE", help="Write a JSON Lines trace here."),
-    ] = None,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the metrics row as JSON.")] = False,
+    trace: TraceOut = None,
+    as_json: Json = False,
 ) -> int:
     """Run one mission: plan, execute with faults, repair.
 
@@ -214,7 +207,7 @@ def run(
     return 0 if result.reached else 1
 
 
-def _cell(value: Any) -> str:
+def _cell(value: object) -> str:
     if value is None:
         return ""
     if isinstance(value, dict):
@@ -321,7 +314,7 @@ def _print_comparison(comparison: "Comparison", title: str, load_ns: int) -> Non
     echo(_timing_note(load_ns, comparison.warmed_up))
 
 
-def _comparison_json(comparison: "Comparison", load_ns: int) -> dict[str, Any]:
+def _comparison_json(comparison: "Comparison", load_ns: int) -> JSONObject:
     return {
         "runs": [
             {
@@ -357,9 +350,7 @@ _Partial = Annotated[
 
 @app.command()
 def replay(
-    trace: Annotated[
-        Path, typer.Argument(metavar="TRACE", help="A JSON Lines trace written by run --trace.")
-    ],
+    trace: TraceArg,
     partial: _Partial = False,
     max_trace_bytes: MaxTraceBytes = MAX_TRACE_BYTES,
 ) -> int:
@@ -383,11 +374,8 @@ def replay(
 
 @table_app.command("show")
 def table_show(
-    spec: Annotated[
-        str,
-        typer.Argument(metavar="TABLE", help="Table file or bundled table name (handwritten)."),
-    ],
-    as_json: Annotated[bool, typer.Option("--json", help="Print the table file text.")] = False,
+    spec: TableArg,
+    as_json: Json = False,
     max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
     max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:
@@ -426,9 +414,7 @@ def table_show(
 
 @table_app.command("check")
 def table_check(
-    spec: Annotated[
-        str, typer.Argument(metavar="TABLE", help="Table file or bundled table name.")
-    ],
+    spec: TableArg,
     max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
     max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
 ) -> int:

@@ -16,6 +16,7 @@ from selfrepair.cli._app import (
     app,
     echo,
 )
+from selfrepair.cli._inputs import TraceArg
 from selfrepair.cli._printing import (
     print_baselines,
     print_crossover,
@@ -167,6 +168,7 @@ def experiment(
         load_experiment,
     )
     from selfrepair.experiment.timing import execute_mission
+    from selfrepair.experiment.variants import left_out
 
     missions: tuple[Mission, ...] = ()
     db_path: Path | None = None
@@ -191,10 +193,14 @@ def experiment(
             what, execute, report = "team missions", execute_team_mission, _team_report
         else:
             missions = expand(cfg, max_missions=max_missions, max_cells=max_cells)
+            for name, reason in left_out(cfg):  # an optional strategy that cannot run here
+                echo(f"{cfg.name}: {name} left out: {reason}")
             execute = partial(
                 execute_mission, repeats=repeats or cfg.timing_repeats, footing=footing
             )
-            what, report = "missions", partial(_report, crossover=cfg.crossover)
+            what, report = "missions", partial(
+                _report, crossover=cfg.crossover, physics=cfg.physics is not None
+            )
         db_path = db if db is not None else Path("results") / f"{cfg.name}.sqlite"
         with ResultStore(db_path) as store:
             with mission_progress(f"{cfg.name}: {len(missions)} {what}") as on_progress:
@@ -228,28 +234,27 @@ def experiment(
 
 
 def _report(
-    rows: "list[dict[str, Value]]", *, title: str, db_path: Path, crossover: bool
+    rows: "list[dict[str, Value]]",
+    *,
+    title: str,
+    db_path: Path,
+    crossover: bool,
+    physics: bool = False,
 ) -> None:
-    """What ``experiment`` prints of a single-robot experiment's stored rows: the per-strategy
-    summary, the fault sets that bite, the findings, the baselines, and (``crossover``) where
-    replanning catches up (a picture next to the database)."""
-    from selfrepair.experiment.diagnosis_findings import diagnosis_findings
-    from selfrepair.experiment.dynamic_findings import dynamic_findings
-    from selfrepair.experiment.findings import check_findings, reference_note, summarize
+    """What ``experiment`` prints of a single-robot experiment's stored rows: (``physics``, an
+    experiment with a ``[physics]`` section) the physics rows' summary and footing table, then
+    of the lattice's rows the per-strategy summary, the fault sets that bite, the findings, the
+    baselines, and (``crossover``) where replanning catches up (a picture next to the
+    database)."""
+    from selfrepair.experiment.findings import reference_note, summarize
+    from selfrepair.experiment.report import all_findings
     from selfrepair.experiment.summary import fault_set_bite
-    from selfrepair.experiment.tolerance_findings import tolerance_findings
 
+    if physics:
+        rows = _print_physics(rows, title)
     print_summary(summarize(rows), title=title)
     print_fault_sets(fault_set_bite(rows))
-    print_findings(
-        [
-            *check_findings(rows),
-            *tolerance_findings(rows),
-            *dynamic_findings(rows),
-            *diagnosis_findings(rows),
-        ],
-        reference_note(rows),
-    )
+    print_findings(all_findings(rows), reference_note(rows))
     print_baselines(rows)
     if crossover:
         print_crossover(rows, db_path.with_name(f"{db_path.stem}-crossover.png"))
@@ -262,6 +267,22 @@ def _team_report(rows: "list[dict[str, Value]]", *, title: str, db_path: Path) -
     from selfrepair.team.summary import summarize_team
 
     print_team_summary(summarize_team(rows), title=title)
+
+
+def _print_physics(rows: "list[dict[str, Value]]", title: str) -> "list[dict[str, Value]]":
+    """For an experiment with a ``[physics]`` section: the per-strategy summary of the physics
+    rows and the footing table (the lattice's missions that physics completes, with and without
+    a wall contact); returns the lattice rows, which the usual summary and findings read."""
+    from selfrepair.cli.physics import print_footing
+    from selfrepair.experiment.findings import summarize
+    from selfrepair.experiment.physics import footing_summary, stored_footing_rows
+
+    physics = [r for r in rows if r.get("simulator") == "physics"]
+    if physics:
+        print_summary(summarize(physics), title=f"{title} in physics")
+        echo(f"{title}: the lattice simulator against physics")
+        print_footing(footing_summary(stored_footing_rows(rows)))
+    return [r for r in rows if r.get("simulator") != "physics"]
 
 
 def _require_pyarrow() -> None:
@@ -335,10 +356,7 @@ def report(
 
 @app.command()
 def animate(
-    trace: Annotated[
-        Path,
-        typer.Argument(metavar="TRACE", help="Trace file (JSON Lines) written by `run --trace`."),
-    ],
+    trace: TraceArg,
     out: Annotated[Path, typer.Option("--out", "-o", metavar="FILE", help="GIF file to write.")],
     fps: Annotated[
         int, typer.Option("--fps", metavar="N", help="Frames per second.", min=1, max=60)

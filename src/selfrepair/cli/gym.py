@@ -7,12 +7,15 @@ the command says what to install (exit code 2).
 """
 
 import math
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from selfrepair.cli._app import app, echo, echo_json
+from selfrepair.cli._app import app, echo, echo_json, limit_option
+from selfrepair.cli._inputs import Braid, Corridor, DomainOpt, Json
+from selfrepair.cli._mission import Recursion
 from selfrepair.errors import InputError
+from selfrepair.textio import JSONObject
 
 if TYPE_CHECKING:
     from selfrepair.envs.evaluate import Evaluation
@@ -36,9 +39,7 @@ def gym_eval(
     seed: Annotated[
         int, typer.Option("--seed", metavar="S", min=0, help="Seed of the episode seeds.")
     ] = 0,
-    domain: Annotated[
-        str, typer.Option("--domain", metavar="NAME", help="Robot domain name.")
-    ] = "four-wheel",
+    domain: DomainOpt = "four-wheel",
     maze: Annotated[
         list[str] | None,
         typer.Option(
@@ -53,12 +54,8 @@ def gym_eval(
             help="A fresh WIDTHxHEIGHT maze per episode (repeatable).",
         ),
     ] = None,
-    corridor: Annotated[
-        int, typer.Option("--corridor", metavar="N", help="Generated corridor width.")
-    ] = 1,
-    braid: Annotated[
-        float, typer.Option("--braid", metavar="P", help="Generated braid share.")
-    ] = 0.0,
+    corridor: Corridor = 1,
+    braid: Braid = 0.0,
     routes: Annotated[
         str, typer.Option("--routes", metavar="KIND", help="bundled or random.")
     ] = "bundled",
@@ -93,18 +90,15 @@ def gym_eval(
             "--table", metavar="TABLE", help="Table file or bundled name (default: per domain)."
         ),
     ] = None,
-    recursion: Annotated[
-        str, typer.Option("--recursion", metavar="MODE", help="flat, guarded or layered.")
-    ] = "flat",
+    recursion: Recursion = "flat",
     max_steps: Annotated[
         int | None,
         typer.Option("--max-steps", metavar="N", min=1, help="Steps per episode (default 4*w*h)."),
     ] = None,
     max_episodes: Annotated[
-        int,
-        typer.Option("--max-episodes", metavar="N", min=1, help="Refuse more episodes than this."),
+        int, limit_option("--max-episodes", "Refuse more episodes than this.")
     ] = 10_000,
-    as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
+    as_json: Json = False,
 ) -> int:
     """Evaluate a baseline policy on the Gymnasium environment.
 
@@ -193,7 +187,7 @@ def _print(result: "Evaluation", domain: str, spec: "FaultSpec") -> None:
         echo(f"gave up (no plan under the known faults) in {gave_up} episodes")
 
 
-def _as_json(result: "Evaluation", domain: str) -> dict[str, Any]:
+def _as_json(result: "Evaluation", domain: str) -> JSONObject:
     success, ret = result.success_interval(), result.return_interval()
     return {
         "policy": result.policy,

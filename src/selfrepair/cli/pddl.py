@@ -12,8 +12,16 @@ from typing import Annotated
 
 import typer
 
-from selfrepair.cli._app import app, echo
-from selfrepair.cli._inputs import DomainOpt, Faults, MazeArg, Start, domain_named, find_input
+from selfrepair.cli._app import app, echo, limit_option
+from selfrepair.cli._inputs import (
+    DomainOpt,
+    Faults,
+    GoalPose,
+    MazeArg,
+    Start,
+    domain_named,
+    find_input,
+)
 from selfrepair.errors import InputError
 
 __all__ = ["PDDL_CELLS_DEFAULT", "pddl_command"]
@@ -28,9 +36,7 @@ the exporter to start)."""
 def pddl_command(
     maze_spec: MazeArg,
     start: Start,
-    goal: Annotated[
-        str, typer.Option("--goal", metavar="X,Y[,H]", help="Goal cell, or goal pose X,Y,H.")
-    ],
+    goal: GoalPose,
     output: Annotated[
         Path, typer.Option("-o", "--output", metavar="DIR", help="Directory for the files.")
     ],
@@ -43,12 +49,7 @@ def pddl_command(
     ] = "",
     max_cells: Annotated[
         int,
-        typer.Option(
-            "--max-cells",
-            metavar="N",
-            min=1,
-            help="Largest maze (width x height) to export; raise with care.",
-        ),
+        limit_option("--max-cells", "Largest maze (width x height) to export (raise with care)."),
     ] = PDDL_CELLS_DEFAULT,
     with_plan: Annotated[
         bool, typer.Option("--plan", help="Also write the lattice planner's plan as plan.pddl.")

@@ -16,8 +16,11 @@ from typing import TYPE_CHECKING, Annotated, Any
 import typer
 
 from selfrepair.cli._app import app, command_group, echo, echo_json, number_json
-from selfrepair.cli._mission import MissionOptions, mission_options, mission_spec
+from selfrepair.cli._inputs import Json, TraceOut
+from selfrepair.cli._mission import MissionOptions, mission_options
+from selfrepair.cli._spec import mission_spec
 from selfrepair.errors import InputError
+from selfrepair.textio import JSONObject
 
 if TYPE_CHECKING:
     from selfrepair.physics.fidelity import FidelityReport
@@ -42,7 +45,7 @@ OpenLoop = Annotated[
 
 @physics_app.command("fidelity")
 def physics_fidelity(
-    as_json: Annotated[bool, typer.Option("--json", help="Print every row as JSON.")] = False,
+    as_json: Json = False,
     nominal: Annotated[
         bool, typer.Option("--nominal", help="Only the fault-free robot's 81 rows.")
     ] = False,
@@ -73,7 +76,7 @@ def physics_fidelity(
     return 0
 
 
-def _row_json(row: Any) -> dict[str, Any]:
+def _row_json(row: Any) -> JSONObject:
     return {
         "action": row.action,
         "motion": row.motion,
@@ -131,11 +134,8 @@ def physics_run(
         Path | None,
         typer.Option("--video", metavar="FILE", help="Render the mission to a .gif or .mp4."),
     ] = None,
-    trace: Annotated[
-        Path | None,
-        typer.Option("--trace", metavar="FILE", help="Write the JSON Lines trace here."),
-    ] = None,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the outcome as JSON.")] = False,
+    trace: TraceOut = None,
+    as_json: Json = False,
 ) -> int:
     """Run one mission in MuJoCo: the same planner and strategy, localised after each action.
 
@@ -161,7 +161,7 @@ def physics_run(
     return 0 if done.result.reached else 1
 
 
-def outcome_json(done: "PhysicsMission") -> dict[str, Any]:
+def outcome_json(done: "PhysicsMission") -> JSONObject:
     """A physics mission's outcome as JSON-ready values."""
     o, r = done.outcome, done.result
     return {
@@ -212,7 +212,7 @@ def physics_experiment(
     workers: Annotated[
         int, typer.Option("--workers", metavar="N", min=1, help="Processes to run missions in.")
     ] = 1,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the summary and rows.")] = False,
+    as_json: Json = False,
 ) -> int:
     """The paper's missions (bundled mazes, routes, 12 fault sets) on the lattice and in MuJoCo.
 
@@ -239,6 +239,13 @@ def physics_experiment(
     if as_json:
         echo_json({"summary": summary, "rows": [asdict(r) for r in rows]})
         return 0
+    print_footing(summary)
+    return 0
+
+
+def print_footing(summary: dict[str, dict[str, Any]]) -> None:
+    """The per-strategy footing table of :func:`~selfrepair.experiment.physics.footing_summary`
+    as Markdown (``physics experiment`` and experiments with a ``[physics]`` section)."""
     echo("| strategy | missions | lattice reached | physics reached of those | "
          "of those without wall contact |")  # fmt: skip
     echo("|---|---:|---:|---:|---:|")
@@ -249,7 +256,6 @@ def physics_experiment(
             f"| {label} | {s['missions']} | {s['lattice_reached']} | {s['both_reached']} "
             f"({_percent(share)}) | {s['both_reached_no_contact']} ({_percent(clean)}) |"
         )
-    return 0
 
 
 def _percent(share: float | None) -> str:

@@ -18,7 +18,8 @@ from selfrepair.cli._app import (
     echo_json,
     table_app,
 )
-from selfrepair.cli._inputs import domain_named, find_input
+from selfrepair.cli._inputs import DomainOpt, Json, TableArg, domain_named, find_input
+from selfrepair.cli._mission import Recursion
 from selfrepair.errors import InputError
 from selfrepair.limits import MAX_CELLS, MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES
 
@@ -39,31 +40,25 @@ def _choice(value: str, allowed: Iterable[str], option: str) -> str:
     return value
 
 
+_FaultScope = Annotated[
+    str,
+    typer.Option("--faults", metavar="SCOPE", help="Fault sets: all, singles, doubles or none."),
+]
+
+
 @table_app.command("generate")
 def table_generate(
     output: Annotated[
         Path, typer.Option("-o", "--output", metavar="FILE", help="Where to write the table.")
     ],
-    domain: Annotated[
-        str,
-        typer.Option(
-            "--domain",
-            metavar="NAME",
-            help="The robot: a registered domain name ({domains}).",
-        ),
-    ] = "four-wheel",
+    domain: DomainOpt = "four-wheel",
     max_length: Annotated[
         int, typer.Option("--max-length", metavar="N", help="Longest candidate, in actions.")
     ] = 5,
     per_action: Annotated[
         int, typer.Option("--per-action", metavar="K", help="Candidates per entry.")
     ] = 5,
-    faults: Annotated[
-        str,
-        typer.Option(
-            "--faults", metavar="SCOPE", help="Fault sets: all, singles, doubles or none."
-        ),
-    ] = "all",
+    faults: _FaultScope = "all",
     objective: Annotated[
         str,
         typer.Option("--objective", metavar="NAME", help="Cost: duration (ticks) or length."),
@@ -126,15 +121,8 @@ def _mazes(names: list[str] | None, no_walls: bool, max_cells: int) -> "list[tup
 
 @table_app.command("coverage")
 def table_coverage(
-    spec: Annotated[
-        str, typer.Argument(metavar="TABLE", help="Table file or bundled table name.")
-    ],
-    faults: Annotated[
-        str,
-        typer.Option(
-            "--faults", metavar="SCOPE", help="Fault sets: all, singles, doubles or none."
-        ),
-    ] = "all",
+    spec: TableArg,
+    faults: _FaultScope = "all",
     objective: Annotated[
         str | None,
         typer.Option(
@@ -143,14 +131,7 @@ def table_coverage(
             help="Cost for optimality: duration or length (default: the table's own).",
         ),
     ] = None,
-    recursion: Annotated[
-        str,
-        typer.Option(
-            "--recursion",
-            metavar="MODE",
-            help="Recursion mode for free-space coverage: flat, guarded or layered.",
-        ),
-    ] = "flat",
+    recursion: Recursion = "flat",
     maze: Annotated[
         list[str] | None,
         typer.Option(
@@ -167,7 +148,7 @@ def table_coverage(
         Path | None,
         typer.Option("--json-out", metavar="FILE", help="Write the full report as JSON."),
     ] = None,
-    as_json: Annotated[bool, typer.Option("--json", help="Print JSON instead of tables.")] = False,
+    as_json: Json = False,
     max_cells: MaxCells = MAX_CELLS,
     max_table_bytes: MaxTableBytes = MAX_TABLE_BYTES,
     max_table_candidates: MaxTableCandidates = MAX_TABLE_CANDIDATES,
@@ -227,7 +208,7 @@ def _longer_needed(report: "CoverageReport", table: "SomeTable") -> dict[str, An
     if not isinstance(limit, int):
         limit = max((len(c) for e in table.entries for c in e.candidates), default=0)
     uncovered = [p for p in report.pairs if p.optimum is not None and p.cost is None]
-    shortest: dict[str, dict[Any, Any]] = {}
+    shortest: dict[str, dict[object, Any]] = {}
     lengths = []
     for pair in uncovered:
         if pair.faults not in shortest:

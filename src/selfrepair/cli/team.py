@@ -15,6 +15,8 @@ import typer
 from selfrepair.cli._app import (
     MaxCells,
     MaxFileBytes,
+    MaxRobots,
+    MaxTasks,
     MaxTraceBytes,
     app,
     command_group,
@@ -22,7 +24,8 @@ from selfrepair.cli._app import (
     echo,
     echo_json,
 )
-from selfrepair.cli._inputs import find_input
+from selfrepair.cli._inputs import Backend, Json, TraceOut, find_input
+from selfrepair.cli._mission import Events, SensingOpt, check_choice
 from selfrepair.limits import (
     MAX_CELLS,
     MAX_FILE_BYTES,
@@ -33,6 +36,7 @@ from selfrepair.limits import (
 
 if TYPE_CHECKING:
     from selfrepair.team.result import TeamResult
+    from selfrepair.team.summary import TeamSummary
 
 __all__ = ["print_team_summary", "team_app"]
 
@@ -41,17 +45,8 @@ app.add_typer(team_app, name="team")
 
 _STRATEGY_HELP = "team-replacement, reallocation or alone."
 
-MaxRobots = Annotated[
-    int,
-    typer.Option(
-        "--max-robots", metavar="N", min=1, help="Refuse a scenario of more robots than this."
-    ),
-]
-MaxTasks = Annotated[
-    int,
-    typer.Option(
-        "--max-tasks", metavar="N", min=0, help="Refuse a scenario of more tasks than this."
-    ),
+_TeamTrace = Annotated[
+    Path, typer.Argument(metavar="TRACE", help="A team trace written by team run --trace.")
 ]
 
 
@@ -71,6 +66,41 @@ RobotTable = Annotated[
         "without a bundled one).",
     ),
 ]
+
+
+TeamSensingRange = Annotated[
+    int | None,
+    typer.Option(
+        "--sensing-range",
+        metavar="R",
+        min=0,
+        help="Chebyshev cells each robot sees around it (default: the scenario's).",
+    ),
+]
+
+
+def _with_world(parsed: Any, events: str, sensing: str, sensing_range: int | None) -> Any:
+    """``parsed`` with the world events and sensing of the command line (``--events`` replaces
+    the scenario's events; an empty option keeps the scenario's)."""
+    from dataclasses import replace
+
+    from selfrepair.world.events import Sensing, parse_events
+
+    world = parsed.world
+    if events:
+        world = replace(world, events=parse_events(events))
+    if sensing:
+        check_choice(sensing, tuple(Sensing), "--sensing")
+        world = replace(world, sensing=Sensing(sensing))
+    if sensing_range is not None:
+        world = replace(world, sensing_range=sensing_range)
+    if world is parsed.world:
+        return parsed
+    from selfrepair.team.check import check_scenario
+
+    changed = replace(parsed, world=world, digest="")  # no longer the file's content
+    check_scenario(changed)
+    return changed
 
 
 def _options(
@@ -101,11 +131,8 @@ def team_run(
         typer.Option("--table", metavar="TABLE", help="Team table: handwritten or generated."),
     ] = "handwritten",
     robot_table: RobotTable = None,
-    trace: Annotated[
-        Path | None,
-        typer.Option("--trace", metavar="FILE", help="Write the team trace (JSON Lines) here."),
-    ] = None,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the metrics row as JSON.")] = False,
+    trace: TraceOut = None,
+    as_json: Json = False,
     max_ticks: Annotated[
         int | None,
         typer.Option(
@@ -114,10 +141,7 @@ def team_run(
             help="End the mission after this many ticks (default: generous).",
         ),
     ] = None,
-    backend: Annotated[
-        str,
-        typer.Option("--backend", metavar="NAME", help="Planner backend: auto, python or numba."),
-    ] = "auto",
+    backend: Backend = "auto",
     detect: Annotated[
         str | None,
         typer.Option(
@@ -126,6 +150,9 @@ def team_run(
             help="How robots learn their wheel faults: now or on-use (default: the scenario's).",
         ),
     ] = None,
+    events: Events = "",
+    sensing: SensingOpt = "",
+    sensing_range: TeamSensingRange = None,
     max_robots: MaxRobots = MAX_ROBOTS,
     max_tasks: MaxTasks = MAX_TASKS,
     max_cells: MaxCells = MAX_CELLS,
@@ -133,7 +160,8 @@ def team_run(
 ) -> int:
     """Run one team mission.
 
-    Allocation, team plan, execution with faults and repairs. Exit 1 when an item is not
+    Allocation, team plan, execution with faults, world events and repairs (--events,
+    --sensing and --sensing-range replace the scenario's [world]). Exit 1 when an item is not
     delivered.
     """
     from selfrepair.team.engine import run_team
@@ -151,9 +179,11 @@ def team_run(
         from selfrepair.execution.faults import Detection
 
         parsed = replace(parsed, detection=choice(Detection, detect, "detection"))
+    parsed = _with_world(parsed, events, sensing, sensing_range)
     options = _options(strategy, table, max_ticks, backend, robot_table)
     result = run_team(parsed, options)
-    baseline = run_team(parsed.without_faults(), options).makespan if parsed.faults else None
+    disturbed = parsed.faults or parsed.world
+    baseline = run_team(parsed.without_faults(), options).makespan if disturbed else None
     if trace is not None:
         write_team_trace(result, trace, baseline)
     if as_json:
@@ -171,6 +201,8 @@ def _print_result(result: "TeamResult", baseline: Any) -> None:
     )
     for fault in scenario.faults:
         echo(f"  fault: {fault.describe()} ({fault.persistence})")
+    if scenario.world:
+        echo(f"  world: {scenario.world.describe()}")
     for d in result.discoveries:
         echo(
             f"  tick {d.at / result.scale:g}: {d.robot} learns of fault {d.index} "
@@ -213,10 +245,7 @@ def team_compare(
             max=1000,
         ),
     ] = 5,
-    backend: Annotated[
-        str,
-        typer.Option("--backend", metavar="NAME", help="Planner backend: auto, python or numba."),
-    ] = "auto",
+    backend: Backend = "auto",
     robot_table: RobotTable = None,
     max_robots: MaxRobots = MAX_ROBOTS,
     max_tasks: MaxTasks = MAX_TASKS,
@@ -277,10 +306,7 @@ def team_compare(
 
 @team_app.command("replay")
 def team_replay(
-    trace: Annotated[
-        Path,
-        typer.Argument(metavar="TRACE", help="A team trace written by team run --trace."),
-    ],
+    trace: _TeamTrace,
     max_trace_bytes: MaxTraceBytes = MAX_TRACE_BYTES,
 ) -> int:
     """Re-simulate a team trace; report what does not hold.
@@ -299,7 +325,7 @@ def team_table(
     name: Annotated[
         str, typer.Argument(metavar="TABLE", help="handwritten or generated.")
     ] = "handwritten",
-    as_json: Annotated[bool, typer.Option("--json", help="Print the table as JSON.")] = False,
+    as_json: Json = False,
 ) -> int:
     """Print a team replacement table.
 
@@ -337,10 +363,7 @@ def team_table(
 
 @team_app.command("frame")
 def team_frame(
-    trace: Annotated[
-        Path,
-        typer.Argument(metavar="TRACE", help="A team trace written by team run --trace."),
-    ],
+    trace: _TeamTrace,
     out: Annotated[Path, typer.Option("--out", "-o", metavar="FILE", help="PNG file to write.")],
     tick: Annotated[
         float | None,
@@ -363,7 +386,7 @@ def team_frame(
     return 0
 
 
-def print_team_summary(summaries: list[Any], *, title: str) -> None:
+def print_team_summary(summaries: "list[TeamSummary]", *, title: str) -> None:
     """The per-strategy team summary as a table."""
     from rich.table import Table
     from rich.text import Text

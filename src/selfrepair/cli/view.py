@@ -13,7 +13,7 @@ from typing import Annotated
 
 import typer
 
-from selfrepair.cli._app import MaxTraceBytes, app, echo
+from selfrepair.cli._app import MaxTraceBytes, app, echo, limit_option
 from selfrepair.errors import InputError
 from selfrepair.limits import MAX_TRACE_BYTES
 
@@ -48,8 +48,7 @@ def view(
         ),
     ] = None,
     max_steps: Annotated[
-        int,
-        typer.Option("--max-steps", metavar="N", min=1, help="Refuse missions with more steps."),
+        int, limit_option("--max-steps", "Refuse missions with more steps.")
     ] = VIEW_STEPS_DEFAULT,
     max_trace_bytes: MaxTraceBytes = MAX_TRACE_BYTES,
     tolerance: Annotated[

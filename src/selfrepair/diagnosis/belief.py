@@ -34,6 +34,7 @@ import numpy.typing as npt
 from selfrepair.diagnosis.hypotheses import FAILS, FaultModel, Group
 from selfrepair.diagnosis.observation import PERTURBATIONS, Observation, perturbed
 from selfrepair.geometry import FreeGrid, Heading, Pose
+from selfrepair.textio import JSONObject
 
 __all__ = ["CONFIRMATIONS", "FaultBelief", "Prediction", "predictions"]
 
@@ -278,7 +279,7 @@ class FaultBelief:
                 return left[0]
         return None
 
-    def snapshot(self) -> dict[str, Any]:
+    def snapshot(self) -> JSONObject:
         """A JSON-able summary for traces: hypotheses and classes still possible, the most
         probable class's fault set and mass."""
         best, faults = self.most_probable()

@@ -85,7 +85,7 @@ from selfrepair.repair.strategies import (
     get_strategy,
     uses_table,
 )
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.registry import get_domain
 from selfrepair.search.astar import PlanStatus
 from selfrepair.tables.fileformat import default_table, resolve_table
@@ -146,7 +146,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
     def __init__(
         self,
         *,
-        domain: str | Domain[Any, Any] = "four-wheel",
+        domain: str | SomeDomain = "four-wheel",
         mazes: MazeSpec | tuple[MazeSpec, ...] | list[MazeSpec] = BUNDLED,
         routes: str = RouteChoice.BUNDLED,
         faults: FaultSpec | None = None,
@@ -181,14 +181,14 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         self._scenario: Scenario | None = None
         self._sim: Simulator | None = None
         self.last_outcome: StepOutcome | None = None
-        self._known: frozenset[Any] = frozenset()
+        self._known: frozenset[object] = frozenset()
         self._senses = False
         self._goal: Cell = (0, 0)
         self._steps = 0
         self._elapsed = 0.0
         self._limit = 0
         self._padded: npt.NDArray[np.int8] = np.zeros((0, 0), dtype=np.int8)
-        self._fault_views: dict[frozenset[Any], tuple[npt.NDArray[np.int8], str]] = {}
+        self._fault_views: dict[frozenset[object], tuple[npt.NDArray[np.int8], str]] = {}
         self._base_frame: npt.NDArray[np.uint8] | None = None
         self._guide: Stepper | None = None
         self._guided: Entry | None = None
@@ -206,7 +206,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
 
     def _setup_spaces(self) -> None:
         domain = self.domain
-        self.actions: tuple[Any, ...] = domain.actions
+        self.actions: tuple[object, ...] = domain.actions
         self._index = {action: i for i, action in enumerate(self.actions)}
         self._durations = tuple(float(domain.duration(a)) for a in self.actions)
         self._fault_index = {fault: i for i, fault in enumerate(domain.faults)}
@@ -230,7 +230,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
         return self._simulator().pose
 
     @property
-    def known(self) -> frozenset[Any]:
+    def known(self) -> frozenset[object]:
         """The faults the robot knows now (what the ``faults`` observation shows)."""
         self._simulator()
         return self._known
@@ -245,7 +245,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
             raise ProblemError("the environment has no episode yet: call reset() first")
         return self._sim
 
-    def action_index(self, action: Any) -> int:
+    def action_index(self, action: object) -> int:
         """The index (in the action space) of one of the domain's actions."""
         return self._index[action]
 
@@ -402,7 +402,7 @@ class FaultyMazeEnv(gym.Env[Observation, np.int64]):
             observation["faults"] = self._fault_view(self._known)[0].copy()
         return observation
 
-    def _fault_view(self, known: frozenset[Any]) -> tuple[npt.NDArray[np.int8], str]:
+    def _fault_view(self, known: frozenset[object]) -> tuple[npt.NDArray[np.int8], str]:
         """The mask and text of a known-fault set (kept per episode: at most one per subset of
         the schedule's faults)."""
         view = self._fault_views.get(known)

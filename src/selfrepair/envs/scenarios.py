@@ -37,7 +37,7 @@ from selfrepair.execution.faults import (
     canonical_order,
 )
 from selfrepair.geometry import Cell, Heading, Pose, parse_cell, parse_pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.search.lattice import bfs_distances
 from selfrepair.world.bundled import bundled_routes, maze_names, resolve_maze
 from selfrepair.world.maze import Maze
@@ -228,7 +228,7 @@ class FaultSpec:
         environments' partially observable variant."""
         return self.detection == (Detection.HIDDEN,)
 
-    def fault_sets(self, domain: Domain[Any, Any]) -> tuple[frozenset[Any], ...]:
+    def fault_sets(self, domain: SomeDomain) -> tuple[frozenset[object], ...]:
         """The fault sets to draw from, parsed for ``domain``."""
         if self.sets is None:
             return domain.fault_sets
@@ -242,10 +242,10 @@ def _check_range(bounds: tuple[int, int], what: str, least: int) -> None:
 
 
 def draw_schedule(
-    domain: Domain[Any, Any],
+    domain: SomeDomain,
     spec: FaultSpec,
     rng: np.random.Generator,
-    sets: Sequence[frozenset[Any]] | None = None,
+    sets: Sequence[frozenset[object]] | None = None,
 ) -> FaultSchedule:
     """One episode's fault schedule (``sets``: ``spec.fault_sets(domain)`` parsed beforehand)."""
     choices = spec.fault_sets(domain) if sets is None else sets
@@ -290,10 +290,10 @@ class Scenario:
 def draw_scenario(
     sources: Sequence[MazeSource],
     routes: RouteChoice,
-    domain: Domain[Any, Any],
+    domain: SomeDomain,
     faults: FaultSpec,
     rng: np.random.Generator,
-    fault_sets: Sequence[frozenset[Any]] | None = None,
+    fault_sets: Sequence[frozenset[object]] | None = None,
 ) -> Scenario:
     """Draw a maze source, a route (``routes``: see :class:`RouteChoice`), a fault schedule
     and a fault seed from ``rng``, in that order."""
@@ -315,7 +315,7 @@ def draw_scenario(
 def with_options(
     scenario: Scenario,
     options: dict[str, Any],
-    domain: Domain[Any, Any],
+    domain: SomeDomain,
     rng: np.random.Generator,
     hidden: bool = False,
 ) -> Scenario:

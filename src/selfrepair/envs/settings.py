@@ -11,7 +11,7 @@ from gymnasium import spaces
 
 from selfrepair.envs.scenarios import MazeSource
 from selfrepair.errors import ProblemError
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 
 __all__ = ["MAX_VIEW_RADIUS", "check_behaviour", "check_settings", "observation_space"]
 
@@ -35,7 +35,7 @@ def check_settings(
         )
 
 
-def check_behaviour(domain: Domain[Any, Any], hidden: bool, behaviour: str | None) -> str | None:
+def check_behaviour(domain: SomeDomain, hidden: bool, behaviour: str | None) -> str | None:
     """``behaviour``, checked: a fault-behaviour model of ``domain``, given only with hidden
     faults (the default model is ``None``)."""
     if behaviour is not None:
@@ -49,7 +49,7 @@ def check_behaviour(domain: Domain[Any, Any], hidden: bool, behaviour: str | Non
 
 
 def observation_space(
-    domain: Domain[Any, Any],
+    domain: SomeDomain,
     sources: tuple[MazeSource, ...],
     view_radius: int,
     hidden: bool = False,

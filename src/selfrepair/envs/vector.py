@@ -32,7 +32,8 @@ environments do: ``outcome`` (codes into :data:`OUTCOME_NAMES`: the single envir
 robots reset in the call the single environment's episode keys (``maze``, ``start``, ``goal``,
 ``faults``, ``schedule``, ``detection``, ``fault_seed``, ``np_random_seed``, ``max_steps``). The
 known faults are the observation's ``faults`` (their text is :meth:`known_text`). There is no guide
-(it plans in Python per robot).
+(it plans in Python per robot). The info arrays are put together in
+:mod:`~selfrepair.envs.vector_info`.
 """
 
 from __future__ import annotations
@@ -60,12 +61,21 @@ from selfrepair.envs.scenarios import (
     with_options,
 )
 from selfrepair.envs.settings import check_behaviour, check_settings, observation_space
+from selfrepair.envs.vector_info import (
+    EPISODE_KEYS,
+    Array,
+    Episodes,
+    batch_seeds,
+    copy_obs,
+    final_info,
+    step_info,
+)
 from selfrepair.envs.vector_tables import FaultSets, GridStore, motion_tables
 from selfrepair.errors import ProblemError, choice
 from selfrepair.execution.faults import Clock, Detection, Persistence
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS
 from selfrepair.geometry import Heading, Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.registry import get_domain
 from selfrepair.search.astar import BACKENDS
 
@@ -83,11 +93,7 @@ _KINDS = {
     Persistence.INTERMITTENT: kernels.INTERMITTENT,
 }
 _S = kernels  # column names below
-_EPISODE_KEYS = (
-    "maze", "start", "goal", "faults", "schedule", "detection",
-    "fault_seed", "np_random_seed", "max_steps",
-)  # fmt: skip
-Array = npt.NDArray[Any]
+Bools = npt.NDArray[np.bool_]
 
 
 class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
@@ -109,7 +115,7 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         self,
         num_envs: int = 1,
         *,
-        domain: str | Domain[Any, Any] = "four-wheel",
+        domain: str | SomeDomain = "four-wheel",
         mazes: MazeSpec | Sequence[MazeSpec] = BUNDLED,
         routes: str = RouteChoice.BUNDLED,
         faults: FaultSpec | None = None,
@@ -185,7 +191,7 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         self._intermittent = np.zeros(num_envs, dtype=np.bool_)
         self._outcome = np.zeros(num_envs, dtype=np.int8)
         self._obs = self._outputs()
-        self._frames: list[Any] = [None] * num_envs
+        self._frames: list[npt.NDArray[np.uint8] | None] = [None] * num_envs
         self._no_faults = np.zeros((n, 0), dtype=np.int8)
         use_numba = self.backend == "numba"
         step = kernels.STEP_NUMBA if use_numba else kernels.STEP_PYTHON
@@ -214,10 +220,10 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         *,
         seed: int | Sequence[int | None] | None = None,
         options: dict[str, Any] | None = None,
-    ) -> tuple[dict[str, Array], dict[str, Any]]:
+    ) -> tuple[dict[str, Array], dict[str, object]]:
         """Reset every robot (or those of ``options["reset_mask"]``); ``seed``: ``None``, an int
         (robot ``i`` gets ``seed + i``) or one seed per robot."""
-        seeds = _seeds(seed, self.num_envs)
+        seeds = batch_seeds(seed, self.num_envs)
         options = dict(options or {})
         mask = options.pop("reset_mask", None)
         if mask is None:
@@ -236,11 +242,11 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         self._run(which, self._no_actions, *self._flags())
         self._started = True
         self._ended[which] = False
-        return _copy_obs(self._obs), self._info(which, infos)
+        return copy_obs(self._obs), self._info(which, infos)
 
     def step(
         self, actions: Array | Sequence[int]
-    ) -> tuple[dict[str, Array], Array, Array, Array, dict[str, Any]]:
+    ) -> tuple[dict[str, Array], Array, Array, Array, dict[str, object]]:
         """One command per robot (action indices into ``domain.actions``)."""
         if not self._started:
             raise ProblemError("the environment has no episode yet: call reset() first")
@@ -250,7 +256,7 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
             raise ProblemError(
                 f"expected {self.num_envs} action indices from 0 to {count - 1}, got {actions!r}"
             )
-        infos: dict[str, list[Any]] = {}
+        infos: Episodes = {}
         reset_now = np.zeros(0, dtype=np.int64)
         if self._ended.any():
             if self.autoreset_mode is AutoresetMode.DISABLED:
@@ -266,10 +272,10 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         self._run(self._all, acts, reward, terminated, truncated, outcome)
         done = terminated | truncated
         info_robots = self._all
-        final: dict[str, Any] = {}
+        final: dict[str, object] = {}
         if self.autoreset_mode is AutoresetMode.SAME_STEP and done.any():
             ended = np.flatnonzero(done).astype(np.int64)
-            final = self._final(ended)
+            final = final_info(self._obs, self._outcome, self._state, self._elapsed, ended)
             infos = self._reset_robots(ended, [None] * self.num_envs, {})
             self._run(ended, acts, reward, terminated, truncated, outcome)
             reset_now = ended
@@ -277,13 +283,13 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
             self._ended = done
         info = self._info(info_robots, infos, reset_now)
         info.update(final)
-        return _copy_obs(self._obs), reward, terminated, truncated, info
+        return copy_obs(self._obs), reward, terminated, truncated, info
 
-    def render(self) -> tuple[Any, ...] | None:
+    def render(self) -> tuple[str | npt.NDArray[np.uint8], ...] | None:
         """Every robot's frame of ``render_mode`` (``None`` without a render mode)."""
         if self.render_mode is None:
             return None
-        frames: list[Any] = []
+        frames: list[str | npt.NDArray[np.uint8]] = []
         for i in range(self.num_envs):
             scenario, pose = self.scenario(i), self.pose(i)
             if self.render_mode == "ansi":
@@ -292,9 +298,11 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
                     ansi_frame(scenario.maze, pose, scenario.goal, (status + self.known_text(i),))
                 )
             else:
-                if self._frames[i] is None:
-                    self._frames[i] = maze_frame(scenario.maze, scenario.goal, self.cell_pixels)
-                frames.append(rgb_frame(self._frames[i], pose, self.cell_pixels))
+                background = self._frames[i]
+                if background is None:
+                    background = maze_frame(scenario.maze, scenario.goal, self.cell_pixels)
+                    self._frames[i] = background
+                frames.append(rgb_frame(background, pose, self.cell_pixels))
         return tuple(frames)
 
     # --- robot state, read by tests and policies ----------------------------------------------
@@ -311,7 +319,7 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         row = self._state[robot]
         return Pose(int(row[_S._X]), int(row[_S._Y]), Heading(int(row[_S._HEAD])))
 
-    def known(self, robot: int) -> frozenset[Any]:
+    def known(self, robot: int) -> frozenset[object]:
         """The faults robot ``robot`` knows now."""
         return self._sets.faults_of(int(self._known[robot]))
 
@@ -322,8 +330,8 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
     # --- internals ------------------------------------------------------------------------------
 
     def _run(
-        self, which: Array, actions: Array, reward: Array, terminated: Array, truncated: Array,
-        outcome: Array,
+        self, which: Array, actions: Array, reward: Array, terminated: Bools, truncated: Bools,
+        outcome: npt.NDArray[np.int8],
     ) -> None:  # fmt: skip
         """One kernel call over robots ``which`` (intermittent draws first, when any); it
         updates the environment's own observation arrays, which the API returns copies of."""
@@ -343,7 +351,7 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         )  # fmt: skip
         self._outcome = outcome
 
-    def _flags(self) -> tuple[Array, Array, Array, Array]:
+    def _flags(self) -> tuple[Array, Bools, Bools, npt.NDArray[np.int8]]:
         n = self.num_envs
         return (
             np.zeros(n, dtype=np.float64),
@@ -365,9 +373,9 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
 
     def _reset_robots(
         self, which: Array, seeds: Sequence[int | None], options: dict[str, Any]
-    ) -> dict[str, list[Any]]:
+    ) -> Episodes:
         """Draw and load a new episode for each robot of ``which``; their episode info."""
-        infos: dict[str, list[Any]] = {key: [] for key in _EPISODE_KEYS}
+        infos: Episodes = {key: [] for key in EPISODE_KEYS}
         for robot in which.tolist():
             seed = seeds[robot]
             rng = self._rngs[robot]
@@ -387,9 +395,15 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
                 schedule.detection.value, scenario.fault_seed, self._seeds[robot],
                 int(self._state[robot, _S._LIMIT]),
             )  # fmt: skip
-            for key, value in zip(_EPISODE_KEYS, row, strict=True):
+            for key, value in zip(EPISODE_KEYS, row, strict=True):
                 infos[key].append(value)
         return infos
+
+    def _info(
+        self, which: Array, episodes: Episodes, reset: Array | None = None
+    ) -> dict[str, object]:
+        """The info of robots ``which`` and of the robots reset (see :func:`step_info`)."""
+        return step_info(self._outcome, self._state, self._elapsed, which, episodes, reset)
 
     def _load(self, robot: int, scenario: Scenario) -> None:
         """Put ``scenario`` into robot ``robot``'s rows, pending its first observation."""
@@ -441,52 +455,6 @@ class FaultyMazeVectorEnv(VectorEnv[dict[str, Array], Array, Array]):
         self._scenarios[robot] = scenario
         self._frames[robot] = None
 
-    def _info(
-        self, which: Array, episodes: dict[str, list[Any]], reset: Array | None = None
-    ) -> dict[str, Any]:
-        """The info of robots ``which`` (per-step keys) and of the robots that were reset
-        (``reset``, default ``which``: the episode keys)."""
-        n = self.num_envs
-        mask = np.zeros(n, dtype=np.bool_)
-        mask[which] = True
-        state = self._state
-        info: dict[str, Any] = {
-            "outcome": self._outcome.copy(), "_outcome": mask,
-            "pose": state[:, _S._X : _S._HEAD + 1].copy(), "_pose": mask.copy(),
-            "ticks": self._elapsed.copy(), "_ticks": mask.copy(),
-        }  # fmt: skip
-        reset = which if reset is None else reset
-        if reset.size and episodes.get("maze"):
-            reset_mask = np.zeros(n, dtype=np.bool_)
-            reset_mask[reset] = True
-            for key, values in episodes.items():
-                kind = np.int64 if isinstance(values[0], int) else object
-                array = np.zeros(n, dtype=kind) if kind is np.int64 else np.full(n, None, object)
-                array[reset] = values
-                info[key], info[f"_{key}"] = array, reset_mask.copy()
-        return info
-
-    def _final(self, ended: Array) -> dict[str, Any]:
-        """``final_obs`` and ``final_info`` of the robots ``ended`` (same-step autoreset)."""
-        n = self.num_envs
-        mask = np.zeros(n, dtype=np.bool_)
-        mask[ended] = True
-        final_obs = np.full(n, None, dtype=object)
-        obs = self._obs
-        for robot in ended.tolist():  # one robot's observation, as the single env gives it
-            final_obs[robot] = {key: value[robot].copy() for key, value in obs.items()}
-            final_obs[robot]["heading"] = int(obs["heading"][robot])
-        state = self._state
-        final_info = {
-            "outcome": self._outcome.copy(), "_outcome": mask.copy(),
-            "pose": state[:, _S._X : _S._HEAD + 1].copy(), "_pose": mask.copy(),
-            "ticks": self._elapsed.copy(), "_ticks": mask.copy(),
-        }  # fmt: skip
-        return {
-            "final_obs": final_obs, "_final_obs": mask.copy(),
-            "final_info": final_info, "_final_info": mask.copy(),
-        }  # fmt: skip
-
 
 def choice_backend(backend: str) -> str:
     """``"numba"`` or ``"python"`` for ``backend`` (one of ``auto``, ``numba``, ``python``);
@@ -506,18 +474,3 @@ def _discrete(n: int) -> Any:
     from gymnasium import spaces
 
     return spaces.Discrete(n)
-
-
-def _seeds(seed: int | Sequence[int | None] | None, n: int) -> list[int | None]:
-    if seed is None:
-        return [None] * n
-    if isinstance(seed, int | np.integer):
-        return [int(seed) + i for i in range(n)]
-    seeds = list(seed)
-    if len(seeds) != n:
-        raise ProblemError(f"expected {n} seeds (one per robot), got {len(seeds)}")
-    return seeds
-
-
-def _copy_obs(obs: dict[str, Array]) -> dict[str, Array]:
-    return {key: value.copy() for key, value in obs.items()}

@@ -13,7 +13,6 @@ mazes of all robots share one padded byte buffer (:class:`GridStore`).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -21,7 +20,7 @@ import numpy.typing as npt
 from selfrepair.errors import ProblemError
 from selfrepair.execution.moves import MoveTable, available_moves, move_table
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.world.maze import Maze
 
 __all__ = ["MAX_FAULTS", "FaultSets", "GridStore", "MotionTables", "motion_tables"]
@@ -47,7 +46,7 @@ class MotionTables:
     reach: int
 
 
-def motion_tables(domain: Domain[Any, Any]) -> MotionTables:
+def motion_tables(domain: SomeDomain) -> MotionTables:
     """The :class:`MotionTables` of ``domain``; a :class:`ProblemError` for a domain the kernel
     cannot take (a move that can end off its own footprint, or more than :data:`MAX_FAULTS`
     faults)."""
@@ -89,7 +88,7 @@ class FaultSets:
 
     def __init__(
         self,
-        domain: Domain[Any, Any],
+        domain: SomeDomain,
         table: MoveTable,
         hidden: bool = False,
         behaviour: str | None = None,
@@ -100,7 +99,7 @@ class FaultSets:
         self.behaviour = behaviour
         self.index = {action: i for i, action in enumerate(domain.actions)}
         self.bit_of = {fault: i for i, fault in enumerate(domain.faults)}
-        self._ids: dict[frozenset[Any], int] = {}
+        self._ids: dict[frozenset[object], int] = {}
         count = len(domain.actions)
         self.set_bits = np.zeros(16, dtype=np.uint64)
         self.avail = np.zeros((16, count), dtype=np.uint8)
@@ -110,15 +109,15 @@ class FaultSets:
     def __len__(self) -> int:
         return len(self._ids)
 
-    def mask(self, faults: frozenset[Any]) -> int:
+    def mask(self, faults: frozenset[object]) -> int:
         """``faults`` as a bit mask over ``domain.faults``."""
         return sum(1 << self.bit_of[f] for f in faults)
 
-    def faults_of(self, mask: int) -> frozenset[Any]:
+    def faults_of(self, mask: int) -> frozenset[object]:
         """The faults of bit mask ``mask``."""
         return frozenset(f for f, i in self.bit_of.items() if mask >> i & 1)
 
-    def id_of(self, faults: frozenset[Any]) -> int:
+    def id_of(self, faults: frozenset[object]) -> int:
         """The number of fault set ``faults`` (tabulated when first met)."""
         sid = self._ids.get(faults)
         if sid is not None:
@@ -139,7 +138,7 @@ class FaultSets:
         self._ids[faults] = sid
         return sid
 
-    def _effective(self, action: Any, faults: frozenset[Any], available: bool) -> int:
+    def _effective(self, action: object, faults: frozenset[object], available: bool) -> int:
         """With hidden faults, the index of the action the wheels perform when ``action`` is
         commanded under ``faults`` (``Domain.effective``), or -1 when the command fails (a
         forbidden action of a domain without a fault-behaviour model); else the action's own."""

@@ -50,7 +50,6 @@ from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from fractions import Fraction
-from typing import Any
 
 import numpy as np
 
@@ -67,6 +66,7 @@ from selfrepair.repair.strategies import (
     Belief,
     MissionContext,
     Repair,
+    Repairer,
     RepairStatus,
     diagnosis_report,
     get_strategy,
@@ -82,9 +82,9 @@ from selfrepair.search.problem import PlanningProblem
 from selfrepair.search.term import StepTerm
 from selfrepair.status import mission_status
 from selfrepair.tables.model import SomeTable
-from selfrepair.world.maze import Maze, clearance_penalties
+from selfrepair.world.maze import Maze, believed_maze, clearance_penalties
 
-__all__ = ["mission_context", "run_mission"]
+__all__ = ["mission_context", "run_mission", "start_repairer"]
 
 
 def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContext:
@@ -99,9 +99,16 @@ def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContex
     belief = Belief()
 
     def plan_to(
-        start: Pose, goal: Cell, heading: Heading | None, known: frozenset[Any], budget: int | None
+        start: Pose,
+        goal: Cell,
+        heading: Heading | None,
+        known: frozenset[object],
+        budget: int | None,
     ) -> PlanResult:
-        world = believed_maze(maze, belief.blocked - {start.cell}) if belief.blocked else maze
+        blocked = belief.blocked
+        if blocked and goal in blocked and goal != start.cell:  # no way in while it is blocked
+            return PlanResult(PlanStatus.UNSOLVABLE, (), (), None, Fraction(0), 0, 0)
+        world = believed_maze(maze, blocked - {start.cell}) if blocked else maze
         problem = PlanningProblem(world, start, goal, heading, known, weight, radius, domain)
         if objective is not None and not known:  # the tolerant objective: before any fault
             term = _objective_term(spec, objective, table)
@@ -113,7 +120,7 @@ def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContex
                 return found  # a hard objective without a tolerant plan: the plain optimum
         return plan(problem, heuristic=heuristic, max_expansions=budget, backend=backend)
 
-    def cost(pose: Pose, action: Any) -> Fraction:
+    def cost(pose: Pose, action: object) -> Fraction:
         return action_cost(
             maze, pose, action, clearance_weight=weight, clearance_radius=radius, domain=domain
         )
@@ -142,23 +149,14 @@ def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContex
     )
 
 
-def believed_maze(maze: Maze, blocked: frozenset[Cell]) -> Maze:
-    """``maze`` with the cells ``blocked`` (world events the robot believes in) as walls: the map
-    the robot plans on in a changing world (the last few are kept)."""
-    return _BELIEVED.get((maze, blocked), lambda: _with_walls(maze, blocked))
-
-
-def _with_walls(maze: Maze, blocked: frozenset[Cell]) -> Maze:
-    walls = maze.walls.copy()
-    for x, y in blocked:
-        if maze.in_bounds(x, y):
-            walls[y, x] = True
-    return Maze(walls, name=maze.name)
-
-
-_BELIEVED: BoundedCache[tuple[Maze, frozenset[Cell]], Maze] = BoundedCache(
-    "mazes with believed-blocked cells", 4, kind=CacheKind.PLAN
-)
+def start_repairer(spec: MissionSpec, context: MissionContext) -> Repairer:
+    """The repairer of ``spec``'s strategy started for a mission (or a team robot's drive) on
+    ``context``; in a changing world a strategy that repairs blocked actions itself prepares for
+    them (``expect_blocked``) before the clock runs."""
+    repairer = get_strategy(spec.strategy)(context)
+    if spec.world and (expect := getattr(repairer, "expect_blocked", None)) is not None:
+        expect()
+    return repairer
 
 
 def _objective_term(
@@ -212,7 +210,7 @@ def run_mission(
     """Plan, execute and repair one mission (see the module docstring). ``simulator`` makes the
     simulator that holds the truth (default: the lattice :class:`Simulator`; a physics one is
     :class:`selfrepair.physics.simulator.PhysicsSimulator`)."""
-    factory = get_strategy(spec.strategy)  # fails fast on a bad name
+    get_strategy(spec.strategy)  # fails fast on a bad name
     if simulator is not None:
         sim = simulator(spec)
     else:
@@ -245,9 +243,7 @@ def run_mission(
     planning_ns = time.perf_counter_ns() - t0
     # on-use and hidden: the known faults never clear by themselves, so waiting cannot help
     waits = None if spec.schedule.detection is Detection.NOW else 0
-    repairer = factory(context)
-    if spec.world and (expect := getattr(repairer, "expect_blocked", None)) is not None:
-        expect()  # a strategy that repairs blocked actions itself prepares before the clock runs
+    repairer = start_repairer(spec, context)
     stepper = Stepper(context, repairer, initial.actions, initial_known, sim.table, max_wait=waits)
     tally = _Tally()
     if initial.status is not PlanStatus.SOLVED:

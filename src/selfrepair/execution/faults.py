@@ -40,7 +40,7 @@ experiment's setting: every fault present from the first step and known at once.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Hashable, Iterable, Mapping
 from dataclasses import dataclass
 from enum import StrEnum
 from fractions import Fraction
@@ -49,7 +49,8 @@ from typing import Any, TypeVar
 import numpy as np
 
 from selfrepair.errors import InputError
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import A, Domain, F, SomeDomain
+from selfrepair.textio import JSONObject, JSONValue
 
 __all__ = [
     "Clock",
@@ -95,13 +96,14 @@ def _member(kind: type[_E], value: object, what: str) -> _E:
 
 
 _E = TypeVar("_E", bound=StrEnum)
+_H = TypeVar("_H", bound=Hashable)
 
 
 @dataclass(frozen=True, slots=True)
 class FaultEvent:
     """One fault and when it is active (see the module docstring)."""
 
-    fault: Any
+    fault: object
     at: int = 0
     clock: Clock = Clock.STEP
     persistence: Persistence = Persistence.PERMANENT
@@ -144,7 +146,7 @@ class FaultEvent:
         draw = float(np.random.default_rng([seed, index, step]).random())
         return draw < self.probability
 
-    def to_json(self, domain: Domain[Any, Any]) -> dict[str, Any]:
+    def to_json(self, domain: SomeDomain) -> JSONObject:
         """A JSON-able dict (the fault in ``domain``'s text); keys with default values are still
         written, for readable traces."""
         return {
@@ -158,7 +160,7 @@ class FaultEvent:
 
     @classmethod
     def from_json(
-        cls, data: Mapping[str, Any], domain: Domain[Any, Any], source: str = "<fault schedule>"
+        cls, data: Mapping[str, Any], domain: SomeDomain, source: str = "<fault schedule>"
     ) -> FaultEvent:
         """Read what :meth:`to_json` wrote."""
         try:
@@ -193,7 +195,7 @@ class FaultSchedule:
     @classmethod
     def permanent(
         cls,
-        faults: Iterable[Any],
+        faults: Iterable[object],
         *,
         at: int = 0,
         clock: Clock = Clock.STEP,
@@ -203,14 +205,14 @@ class FaultSchedule:
         events = tuple(FaultEvent(f, at=at, clock=clock) for f in canonical_order(faults))
         return cls(events, detection)
 
-    def active_faults(self, step: int, tick: Fraction, seed: int = 0) -> frozenset[Any]:
+    def active_faults(self, step: int, tick: Fraction, seed: int = 0) -> frozenset[object]:
         """The true faults at the start of step ``step`` (elapsed time ``tick``); ``seed`` drives
         intermittent faults."""
         return frozenset(
             e.fault for i, e in enumerate(self.events) if e.active(i, step, tick, seed)
         )
 
-    def all_faults(self) -> frozenset[Any]:
+    def all_faults(self) -> frozenset[object]:
         """Every fault that may ever be active."""
         return frozenset(e.fault for e in self.events)
 
@@ -228,17 +230,18 @@ class FaultSchedule:
             parts.append(f"{e.fault} {e.persistence}{extra} from {e.clock} {e.at}")
         return "; ".join(parts) + f"; detected {self.detection}"
 
-    def to_json(self, domain: Domain[Any, Any]) -> dict[str, Any]:
+    def to_json(self, domain: SomeDomain) -> JSONObject:
         """A JSON-able dict, faults in ``domain``'s text."""
+        events: list[JSONValue] = [e.to_json(domain) for e in self.events]
         return {
-            "events": [e.to_json(domain) for e in self.events],
+            "events": events,
             "detection": self.detection.value,
             "faults": domain.format_faults(self.all_faults()),
         }
 
     @classmethod
     def from_json(
-        cls, data: Mapping[str, Any], domain: Domain[Any, Any], source: str = "<fault schedule>"
+        cls, data: Mapping[str, Any], domain: SomeDomain, source: str = "<fault schedule>"
     ) -> FaultSchedule:
         """Read what :meth:`to_json` wrote."""
         events = data.get("events", [])
@@ -267,11 +270,11 @@ class FaultClock:
         self._schedule = schedule
         self._seed = seed
         self._unit = unit
-        self._faults: frozenset[Any] = frozenset()
+        self._faults: frozenset[object] = frozenset()
         self._step_until = -1  # the cached set holds for steps < _step_until ...
         self._units_until = -1  # ... and times < _units_until (in units)
 
-    def at(self, step: int, units: int) -> frozenset[Any]:
+    def at(self, step: int, units: int) -> frozenset[object]:
         """The faults active at the start of step ``step``, ``units`` time units in."""
         if step < self._step_until and units < self._units_until:
             return self._faults
@@ -305,17 +308,17 @@ _FOREVER = 1 << 62
 """A step or time no mission reaches."""
 
 
-def canonical_order(faults: Iterable[Any]) -> list[Any]:
+def canonical_order(faults: Iterable[_H]) -> list[_H]:
     """Distinct faults in a canonical order: sorted when the domain's faults are ordered (the
     four-wheel robot's are), else by their text."""
     distinct = set(faults)
     try:
-        return sorted(distinct)
+        return sorted(distinct)  # type: ignore[type-var]  # unordered faults: the TypeError below
     except TypeError:
         return sorted(distinct, key=str)
 
 
-def _one_fault(domain: Domain[Any, Any], text: str, source: str) -> Any:
+def _one_fault(domain: Domain[A, F], text: str, source: str) -> F:
     try:
         faults = domain.parse_faults(text)
     except InputError as exc:

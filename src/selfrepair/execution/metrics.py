@@ -25,7 +25,7 @@ from collections import Counter
 from collections.abc import Callable, Hashable, Iterable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.execution.faults import Detection, FaultSchedule
@@ -37,7 +37,7 @@ from selfrepair.execution.result import (
     TraceStep,
 )
 from selfrepair.repair.strategies import RepairSource, RepairStatus
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.backend import backend_ran
 from selfrepair.search.lattice import action_cost, plan
@@ -78,9 +78,9 @@ def plan_distance(first: Iterable[Hashable], second: Iterable[Hashable]) -> Plan
 
 
 def motion_distance(
-    domain_motion: Callable[[Any], str],
-    first: Iterable[tuple[Hashable, Any]],
-    second: Iterable[tuple[Hashable, Any]],
+    domain_motion: Callable[[object], str],
+    first: Iterable[tuple[Hashable, object]],
+    second: Iterable[tuple[Hashable, object]],
 ) -> PlanDistance:
     """:func:`plan_distance` with each ground action ``(start, action)`` taken as
     ``(start, motion class)``: an action swapped for another of the same motion is no change."""
@@ -229,7 +229,7 @@ def _repair_totals(repairs: Sequence[RepairRecord]) -> _RepairTotals:
             elif repair.source is RepairSource.LOOKAHEAD:
                 lookaheads += 1
             elif repair.source is RepairSource.DETOUR:
-                detours += 1
+                detours += 1 + repair.rewritten  # a rewriting repair takes several
         elif repair.source is RepairSource.REPLAN:
             failed += 1
     return _RepairTotals(
@@ -237,7 +237,7 @@ def _repair_totals(repairs: Sequence[RepairRecord]) -> _RepairTotals:
     )
 
 
-def _schedule_texts(schedule: FaultSchedule, domain: Domain[Any, Any]) -> tuple[str, str]:
+def _schedule_texts(schedule: FaultSchedule, domain: SomeDomain) -> tuple[str, str]:
     """The row's ``faults`` and ``fault_schedule`` texts (made once per schedule and domain)."""
     return _SCHEDULE_TEXTS.get(
         (schedule, domain),
@@ -248,7 +248,7 @@ def _schedule_texts(schedule: FaultSchedule, domain: Domain[Any, Any]) -> tuple[
     )
 
 
-_SCHEDULE_TEXTS: BoundedCache[tuple[FaultSchedule, Domain[Any, Any]], tuple[str, str]] = (
+_SCHEDULE_TEXTS: BoundedCache[tuple[FaultSchedule, SomeDomain], tuple[str, str]] = (
     BoundedCache("fault schedule texts", 256, kind=CacheKind.RECORD)
 )
 

@@ -20,11 +20,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.geometry import Cell, Heading, Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 
 __all__ = [
     "Move",
@@ -58,24 +58,24 @@ class MoveTable:
     ``shapes``: per action and heading, the footprint as cell offsets ``(dx, dy)`` from the start
     cell (what a caller that reports the swept cells shifts)."""
 
-    domain: Domain[Any, Any]
+    domain: SomeDomain
     stride: int
     unit: int
     reach: int
     ends_covered: bool
-    moves: dict[Any, tuple[Move, ...]]
-    shapes: dict[Any, tuple[tuple[Cell, ...], ...]]
+    moves: dict[object, tuple[Move, ...]]
+    shapes: dict[object, tuple[tuple[Cell, ...], ...]]
 
 
-def move_table(domain: Domain[Any, Any], stride: int) -> MoveTable:
+def move_table(domain: SomeDomain, stride: int) -> MoveTable:
     """The :class:`MoveTable` of ``domain`` for buffers of ``stride`` bytes per row."""
     return _TABLES.get((domain, stride), lambda: _move_table(domain, stride))
 
 
-def _move_table(domain: Domain[Any, Any], stride: int) -> MoveTable:
+def _move_table(domain: SomeDomain, stride: int) -> MoveTable:
     unit = domain.time_unit
-    moves: dict[Any, tuple[Move, ...]] = {}
-    shapes: dict[Any, tuple[tuple[Cell, ...], ...]] = {}
+    moves: dict[object, tuple[Move, ...]] = {}
+    shapes: dict[object, tuple[tuple[Cell, ...], ...]] = {}
     reach = 0
     covered = True
     for index, action in enumerate(domain.actions):
@@ -100,23 +100,23 @@ def _move_table(domain: Domain[Any, Any], stride: int) -> MoveTable:
     return MoveTable(domain, stride, unit, reach, covered, moves, shapes)
 
 
-_TABLES: BoundedCache[tuple[Domain[Any, Any], int], MoveTable] = BoundedCache(
+_TABLES: BoundedCache[tuple[SomeDomain, int], MoveTable] = BoundedCache(
     "domain move tables", 64, kind=CacheKind.SIMULATION
 )
 
 
-def available_moves(table: MoveTable, faults: frozenset[Any]) -> dict[Any, tuple[Move, ...]]:
+def available_moves(table: MoveTable, faults: frozenset[object]) -> dict[object, tuple[Move, ...]]:
     """The moves of the actions available under ``faults`` (``action in result`` is the
     availability test), computed once per table and fault set."""
     return _AVAILABLE.get((table, faults), lambda: _available(table, faults))
 
 
-def _available(table: MoveTable, faults: frozenset[Any]) -> dict[Any, tuple[Move, ...]]:
+def _available(table: MoveTable, faults: frozenset[object]) -> dict[object, tuple[Move, ...]]:
     available = table.domain.available
     return {a: m for a, m in table.moves.items() if available(a, faults)}
 
 
-_AVAILABLE: BoundedCache[tuple[MoveTable, frozenset[Any]], dict[Any, tuple[Move, ...]]] = (
+_AVAILABLE: BoundedCache[tuple[MoveTable, frozenset[object]], dict[object, tuple[Move, ...]]] = (
     BoundedCache("available moves per fault set", 4096, kind=CacheKind.SIMULATION)
 )
 

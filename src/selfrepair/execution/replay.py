@@ -11,6 +11,7 @@ from selfrepair.execution.faults import Detection
 from selfrepair.execution.result import MissionSpec, StepSource, TraceStep
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS
 from selfrepair.execution.traceformat import Trace
+from selfrepair.execution.traceobserve import check_observations
 from selfrepair.execution.traceread import read_trace, spec_from_header
 from selfrepair.geometry import Pose
 
@@ -53,6 +54,9 @@ def replay(trace: Trace | str | Path) -> ReplayReport:
     action the wheels performed, ``Domain.effective`` under the true faults and the trace's
     behaviour model). The summary, when present, must
     agree on the number of steps, the final pose, the ticks and whether the goal was reached.
+    A hidden-fault trace that records the robot's observations and belief (version 2) has them
+    checked too (:func:`~selfrepair.execution.traceobserve.check_observations`: every reading
+    possible, and the belief re-derived from the readings equal to the recorded one).
     """
     if not isinstance(trace, Trace):
         trace = read_trace(trace)
@@ -65,6 +69,10 @@ def replay(trace: Trace | str | Path) -> ReplayReport:
             return ReplayReport(False, index, step.step, line, problem)
         pose = step.end
         ticks += step.duration
+    observed = check_observations(spec, trace)
+    if observed is not None:
+        index, problem = observed
+        return ReplayReport(False, index, trace.steps[index].step, trace.step_lines[index], problem)
     return _check_summary(trace, spec, pose, ticks)
 
 

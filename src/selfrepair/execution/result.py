@@ -21,7 +21,7 @@ from selfrepair.execution.faults import FaultSchedule
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.repair.strategies import Repair, RepairSource, StrategyName, StrategyOptions
 from selfrepair.repair.tolerance import PlanObjective
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import PlanResult
 from selfrepair.search.problem import PlannerSettings
@@ -98,7 +98,7 @@ class MissionSpec:
     replan_max_expansions: int | None = None
     initial_faults_known: bool = False
     max_steps: int | None = None
-    domain: Domain[Any, Any] = FOUR_WHEEL
+    domain: SomeDomain = FOUR_WHEEL
     objective: PlanObjective | None = None
     """The tolerant planner's objective for the plan made before any fault is known (``None``:
     the plain cost, duration plus clearance term); replans, made with faults known, always
@@ -161,12 +161,12 @@ class TraceStep(NamedTuple):
     a frozen dataclass costs several times more to build)."""
 
     step: int
-    action: Any
+    action: object
     start: Pose
     end: Pose
     duration: Fraction
     source: StepSource
-    known: frozenset[Any]
+    known: frozenset[object]
 
 
 class RepairRecord(NamedTuple):
@@ -176,7 +176,7 @@ class RepairRecord(NamedTuple):
 
     step: int
     pose: Pose
-    action: Any | None
+    action: object | None
     repair: Repair
     latency_ns: int
 

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 from enum import StrEnum
 from fractions import Fraction
-from typing import Any, NamedTuple, Protocol
+from typing import NamedTuple, Protocol
 
 import numpy as np
 
@@ -44,7 +44,7 @@ from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import Detection, FaultClock, FaultSchedule
 from selfrepair.execution.moves import Move, MoveTable, available_moves, move_table
 from selfrepair.geometry import Cell, Heading, Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.search.problem import make_pose, pose_table
 from selfrepair.world.events import Sensing, WorldSchedule
 from selfrepair.world.maze import Maze
@@ -84,12 +84,12 @@ class StepOutcome(NamedTuple):
 
     status: Outcome
     step: int
-    action: Any
+    action: object
     start: Pose
     end: Pose
     swept: tuple[Cell, ...]
     duration: Fraction
-    blocking: frozenset[Any]
+    blocking: frozenset[object]
 
 
 class FaultSource(Protocol):
@@ -97,7 +97,7 @@ class FaultSource(Protocol):
     schedule (a team robot's clock, whose faults start at events no schedule knows in advance,
     is another)."""
 
-    def at(self, step: int, units: int) -> frozenset[Any]:
+    def at(self, step: int, units: int) -> frozenset[object]:
         """The faults active at the start of step ``step``, ``units`` time units in (the same
         object while they do not change)."""
         ...
@@ -124,7 +124,7 @@ class Simulator:
 
     def __init__(
         self,
-        domain: Domain[Any, Any],
+        domain: SomeDomain,
         maze: Maze,
         start: Pose,
         schedule: FaultSchedule,
@@ -150,11 +150,11 @@ class Simulator:
         self.last_move: Move | None = None
         """The move of the last command if it moved the robot, else ``None``."""
         self.last_duration = Fraction(0)
-        self.last_blocking: frozenset[Any] = frozenset()
+        self.last_blocking: frozenset[object] = frozenset()
         self._clock: FaultSource = clock or FaultClock(schedule, seed, self.unit)
         self._sense_now = schedule.detection is Detection.NOW
-        self._faults: frozenset[Any] | None = None
-        self._moves: dict[Any, tuple[Move, ...]] = {}
+        self._faults: frozenset[object] | None = None
+        self._moves: dict[object, tuple[Move, ...]] = {}
         self._failed_units = int(FAILED_ATTEMPT_TICKS * self.unit)
         self._inside = maze.in_bounds(start.x, start.y)
         self._pw = maze.width + 2
@@ -172,9 +172,9 @@ class Simulator:
         self.behaviour = behaviour
         if self._hidden and domain.behaviours:
             domain.behaviour(behaviour)  # an unknown name fails before the first step
-        self._performed: dict[Any, Any] = {}
+        self._performed: dict[object, object] = {}
         """The effective action of each commanded action under the current faults (hidden)."""
-        self.last_action: Any = None
+        self.last_action: object = None
         """The action the wheels really performed in the last command (hidden faults: the
         effective action; otherwise the command)."""
         self.bumps = 0
@@ -192,11 +192,11 @@ class Simulator:
         """The exact elapsed time."""
         return Fraction(self.units, self.unit)
 
-    def true_faults(self) -> frozenset[Any]:
+    def true_faults(self) -> frozenset[object]:
         """The faults active now (at the start of the next step)."""
         return self._clock.at(self.steps, self.units)
 
-    def sense(self) -> frozenset[Any]:
+    def sense(self) -> frozenset[object]:
         """What the robot's sensors report before the next step.
 
         Detection ``now``: the active faults. Detection ``on-use``: nothing (faults are learned only
@@ -212,7 +212,7 @@ class Simulator:
             raise ProblemError(f"time runs forwards: {units} < {self.units} units")
         self.units = units
 
-    def execute(self, action: Any) -> StepOutcome:
+    def execute(self, action: object) -> StepOutcome:
         """Command ``action`` from the current pose and advance the world."""
         start, step = self.pose, self.steps
         status = self.advance(action)
@@ -227,7 +227,7 @@ class Simulator:
             status, step, action, start, self.pose, swept, self.last_duration, self.last_blocking
         )
 
-    def advance(self, action: Any) -> Outcome:
+    def advance(self, action: object) -> Outcome:
         """Command ``action`` and advance the world; what it did is left in ``pose``,
         ``last_move``, ``last_duration`` and ``last_blocking`` (the executor's fast path:
         :meth:`execute` wraps it into a :class:`StepOutcome`). A collision changes nothing."""
@@ -278,7 +278,7 @@ class Simulator:
         self.steps += 1
         return Outcome.MOVED if moves is not None else Outcome.FAILED_ATTEMPT
 
-    def observe(self, step: int, action: Any, start: Pose, outcome: Outcome) -> Observation:
+    def observe(self, step: int, action: object, start: Pose, outcome: Outcome) -> Observation:
         """What the robot observes of its last command, ``action`` (number ``step``) from
         ``start`` with ``outcome``: a reading of its pose after it by :attr:`observation`, with
         the bump switch and the failed signal (seeded: one draw per command from the
@@ -294,7 +294,7 @@ class Simulator:
         )
 
     def witnessed(
-        self, step: int, action: Any, start: Pose, outcome: Outcome
+        self, step: int, action: object, start: Pose, outcome: Outcome
     ) -> tuple[Observation, ...]:
         """What the observing teammates saw of the last command (see :meth:`observe`): they
         follow the robot, observer ``i`` (from 1) standing where it truly was ``i`` commands
@@ -319,7 +319,7 @@ class Simulator:
             self._streams,
         )
 
-    def _advance_hidden(self, action: Any) -> Outcome:
+    def _advance_hidden(self, action: object) -> Outcome:
         """:meth:`advance` with the faults hidden from the robot (see the module docstring):
         the effective action moves, a swept wall stops the motion at the start pose (a bump)."""
         faults = self._clock.at(self.steps, self.units)
@@ -414,7 +414,7 @@ class Simulator:
             return believed
         return (believed - frozenset(removed)) | frozenset(added)
 
-    def _free(self, start: Pose, move: Move, action: Any) -> bool:
+    def _free(self, start: Pose, move: Move, action: object) -> bool:
         """Whether the footprint of ``move`` from ``start`` is free (on the grid)."""
         if not self._inside:  # a start off the grid: the general test
             return self.grid.all_free(self.domain.footprint(start, action))

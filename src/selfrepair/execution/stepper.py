@@ -80,8 +80,9 @@ from collections.abc import Callable, Container, Iterable, Iterator, Sequence
 from fractions import Fraction
 from itertools import islice, repeat
 from operator import itemgetter
-from typing import Any, overload
+from typing import overload
 
+from selfrepair.diagnosis.observation import Observation
 from selfrepair.errors import ProblemError
 from selfrepair.execution.moves import MoveTable, available_moves
 from selfrepair.execution.result import STEP_OF_REPAIR, RepairRecord, StepSource, TraceStep
@@ -104,7 +105,7 @@ MAX_REPAIRS_PER_STEP = 64
 action of a repair is available under the known faults, so a correct strategy needs one, a
 deferring recursion mode a few)."""
 
-Entry = tuple[Any, StepSource]
+Entry = tuple[object, StepSource]
 """One queued action and where it came from."""
 
 _ACTION = itemgetter(0)
@@ -114,7 +115,7 @@ _new_tuple = tuple.__new__
 frame (the same value)."""
 
 
-class _ActionView(Sequence[Any]):
+class _ActionView(Sequence[object]):
     """A read-only view of the queue's actions, so a repair request costs O(1) to build."""
 
     __slots__ = ("_queue",)
@@ -125,16 +126,16 @@ class _ActionView(Sequence[Any]):
     def __len__(self) -> int:
         return len(self._queue)
 
-    def __iter__(self) -> Iterator[Any]:
+    def __iter__(self) -> Iterator[object]:
         return map(_ACTION, self._queue)
 
     @overload
-    def __getitem__(self, index: int) -> Any: ...
+    def __getitem__(self, index: int) -> object: ...
 
     @overload
-    def __getitem__(self, index: slice) -> tuple[Any, ...]: ...
+    def __getitem__(self, index: slice) -> tuple[object, ...]: ...
 
-    def __getitem__(self, index: int | slice) -> Any:
+    def __getitem__(self, index: int | slice) -> object:
         if isinstance(index, slice):
             start, stop, stride = index.indices(len(self._queue))
             if stride == 1:  # in C: a deque is slow to index in the middle
@@ -188,8 +189,8 @@ class Stepper:
         self,
         context: MissionContext,
         repairer: Repairer,
-        actions: Iterable[Any],
-        known: frozenset[Any],
+        actions: Iterable[object],
+        known: frozenset[object],
         table: MoveTable,
         *,
         source: StepSource = StepSource.PLAN,
@@ -201,7 +202,7 @@ class Stepper:
         self.queue: deque[Entry] = deque(zip(actions, repeat(source)))
         self.known = known
         self._table = table
-        self._available: Container[Any] = available_moves(table, known)
+        self._available: Container[object] = available_moves(table, known)
         self.horizon = int(getattr(repairer, "horizon", 0))
         self._blocked_repair: Callable[[RepairRequest], Repair] | None = getattr(
             repairer, "repair_blocked", None
@@ -212,12 +213,12 @@ class Stepper:
         self._assume = getattr(repairer, "assumption", None)
         self._hears = bool(getattr(repairer, "hears_teammates", False))
         self._belief = getattr(repairer, "belief", None)
-        self.observations: list[Any] = []
+        self.observations: list[Observation] = []
         """Faults hidden: every observation perceived, per command the robot's own first."""
         self.beliefs: list[int] = []
         """Faults hidden, a repairer with a ``belief``: its bit set of the hypotheses still
         possible after each command's observations."""
-        self._unusable: frozenset[Any] = frozenset()
+        self._unusable: frozenset[object] = frozenset()
         self._perceived = False  # observations came (faults hidden): take the assumption
         self.rejoin = False
         """Whether the observing repairer asked to be asked before the next command."""
@@ -233,14 +234,18 @@ class Stepper:
         self.waits = 0
         """The wait actions answered so far (see the module docstring)."""
 
-    def learn(self, known: frozenset[Any]) -> None:
+    def learn(self, known: frozenset[object]) -> None:
         """The robot now knows exactly ``known`` (what its sensors report, detection ``now``)."""
         if known is not self.known:
             self.known = known
             self._available = available_moves(self._table, known)
 
     def perceive(
-        self, observation: Any, deviated: bool, moved: bool, seen: Sequence[Any] = ()
+        self,
+        observation: Observation,
+        deviated: bool,
+        moved: bool,
+        seen: Sequence[Observation] = (),
     ) -> None:
         """Faults hidden: give an observing repairer ``observation`` of the last command (a
         :class:`~selfrepair.diagnosis.Observation`), with whether the robot truly ``deviated``
@@ -283,7 +288,7 @@ class Stepper:
             self.blocked = blocked
             self.context.belief.blocked = blocked
 
-    def sweeps_blocked(self, pose: Pose, action: Any) -> bool:
+    def sweeps_blocked(self, pose: Pose, action: object) -> bool:
         """Whether ``action`` from ``pose`` sweeps a cell believed blocked, other than the cell
         the robot stands on."""
         blocked = self.blocked
@@ -291,7 +296,7 @@ class Stepper:
         shape = self._table.shapes[action][pose.heading]
         return any((x + dx, y + dy) in blocked for dx, dy in shape[1:])
 
-    def available(self, action: Any) -> bool:
+    def available(self, action: object) -> bool:
         """Whether ``action`` is available under the known faults."""
         return action in self._available
 
@@ -334,7 +339,7 @@ class Stepper:
             "action is still unavailable: a repair must start with an available action"
         )
 
-    def _wait(self) -> Any | None:
+    def _wait(self) -> object | None:
         """The wait action to splice in while no plan exists (counted), or ``None`` when the
         robot has no waits left or no wait action available under the known faults."""
         if self.waits >= self.max_wait:
@@ -343,10 +348,11 @@ class Stepper:
         for action in self.context.domain.waits:
             if action in available:
                 self.waits += 1
-                return action
+                wait: object = action
+                return wait
         return None
 
-    def _faulty_ahead(self) -> Any | None:
+    def _faulty_ahead(self) -> object | None:
         """The first of the ``horizon`` queued actions after the front that is unavailable under
         the known faults (``None`` when all are available)."""
         queue, available = self.queue, self._available
@@ -357,7 +363,12 @@ class Stepper:
         return None
 
     def _repair(
-        self, pose: Pose, step: int, action: Any | None, blocked: bool = False, asked: bool = False
+        self,
+        pose: Pose,
+        step: int,
+        action: object | None,
+        blocked: bool = False,
+        asked: bool = False,
     ) -> Repair:
         """Ask the strategy (or, with an empty queue or for a blocked action the strategy does not
         see, a plain replan) for a repair of ``action`` and splice it into the queue; the
@@ -405,7 +416,13 @@ class Stepper:
         )
 
     def moved(
-        self, step: int, action: Any, source: StepSource, start: Pose, end: Pose, duration: Fraction
+        self,
+        step: int,
+        action: object,
+        source: StepSource,
+        start: Pose,
+        end: Pose,
+        duration: Fraction,
     ) -> None:
         """:meth:`record` a command that moved the robot (the mission loop's hot path)."""
         queue = self.queue
@@ -421,13 +438,13 @@ class Stepper:
     def record(
         self,
         step: int,
-        action: Any,
+        action: object,
         source: StepSource,
         outcome: Outcome,
         start: Pose,
         end: Pose,
         duration: Fraction,
-        blocking: frozenset[Any] = frozenset(),
+        blocking: frozenset[object] = frozenset(),
         bumped: tuple[Cell, ...] = (),
     ) -> None:
         """Tell the stepper what command ``action`` (number ``step``, of ``source``) did: a move

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from fractions import Fraction
-from typing import Any
 
 from selfrepair.errors import ProblemError
 from selfrepair.execution.executor import mission_context
@@ -44,7 +43,7 @@ def mission_tolerance(
 
 
 def actions_tolerance(
-    spec: MissionSpec, model: FaultModel, actions: Sequence[Any]
+    spec: MissionSpec, model: FaultModel, actions: Sequence[object]
 ) -> PlanTolerance:
     """The tolerance under ``model`` of the plan ``actions`` from ``spec.start`` (say, the
     initial plan a trace records), for the mission's ``replacement`` strategy; raises as

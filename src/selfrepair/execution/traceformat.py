@@ -19,7 +19,13 @@ A trace has one JSON object per line:
    ``[x, y, "N"]``, ``duration`` (exact, as text such as ``"2/3"``), ``source`` (``plan``,
    ``replacement``, ``lookahead``, ``replan``, ``plan-repair``, ``failed-attempt`` or ``wait``) and
    ``known`` (the faults known when the command was given, as text; a failed attempt's fault is
-   known from the next step on);
+   known from the next step on); with the faults hidden (version 2), also what the robot
+   observed and believed after it: ``read`` (its pose reading), ``bumped`` (its bump switch,
+   ``null`` without one), ``seen`` (``[[observer, [x, y, "N"]], ...]``, teammates' readings, when
+   it has observers), ``surprise``, and for a strategy that keeps a belief ``belief`` (the bit set
+   of the hypotheses still possible, as hexadecimal text: bit ``i`` is hypothesis ``i`` of the
+   header's ``hidden.hypotheses``) and ``best`` (the most probable class, an index into
+   ``hidden.classes``, each a list of hypothesis indices);
 4. the mission summary (``"type": "summary"``): the row of
    :func:`selfrepair.execution.metrics.mission_row`.
 
@@ -33,14 +39,15 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal, overload
 
 from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.result import TraceStep
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.repair.strategies import RepairSource, RepairStatus
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.registry import plugin_file
+from selfrepair.textio import JSONObject
 
 __all__ = [
     "DEFAULT_DOMAIN",
@@ -54,16 +61,21 @@ __all__ = [
 ]
 
 TRACE_FORMAT = "selfrepair-trace"
-TRACE_VERSION = 1
+TRACE_VERSION = 2
+"""The version written. Version 2 adds, with the faults hidden, what the robot observed and
+believed after each step (:mod:`selfrepair.execution.traceobserve`); version-1 traces, without
+them, still read and replay."""
+TRACE_VERSIONS = (1, 2)
+"""The versions read."""
 DEFAULT_DOMAIN = "four-wheel"
 """The robot of a trace whose header names none (traces written before domains were named)."""
 
 
-def header_start(trace_format: str, version: int, domain: str) -> dict[str, Any]:
+def header_start(trace_format: str, version: int, domain: str) -> JSONObject:
     """The fields a trace header (a mission's or a team's) begins with: its type, format and
     version, the robot domain and, for a plug-in robot, the file that registered it (path and
     SHA-256, so that a replay can check it runs the same robot)."""
-    header: dict[str, Any] = {
+    header: JSONObject = {
         "type": "header", "format": trace_format, "version": version, "domain": domain
     }
     origin = plugin_file(domain)
@@ -72,7 +84,7 @@ def header_start(trace_format: str, version: int, domain: str) -> dict[str, Any]
     return header
 
 
-def pose_json(pose: Pose) -> list[Any]:
+def pose_json(pose: Pose) -> list[object]:
     """A pose as traces write it: ``[x, y, "N"]``."""
     return [pose.x, pose.y, pose.heading.name]
 
@@ -84,15 +96,33 @@ class TraceRepair:
 
     step: int
     pose: Pose
-    action: Any | None
+    action: object | None
     status: RepairStatus
     source: RepairSource
     attempts: tuple[str, ...]
-    actions: tuple[Any, ...]
+    actions: tuple[object, ...]
     consumed: int
     candidate_index: int | None
     depth: int | None
     latency_ns: int
+
+
+@dataclass(frozen=True, slots=True)
+class TraceObservation:
+    """What a step line of a hidden-fault trace (version 2) says the robot observed and believed
+    after the step: its own pose reading ``read`` and bump switch ``bumped`` (``None``: no
+    switch), the teammates' readings ``seen`` (observer name and pose read), the bit set
+    ``belief`` of the hypotheses still possible and the most probable class ``best`` (both
+    ``None`` for a strategy that keeps no belief), and whether the step was a ``surprise`` (the
+    reading is not where the command should have taken the robot, it bumped or the command
+    failed)."""
+
+    read: Pose
+    bumped: bool | None
+    seen: tuple[tuple[str, Pose], ...]
+    belief: int | None
+    best: int | None
+    surprise: bool
 
 
 @dataclass(frozen=True, slots=True)
@@ -101,7 +131,7 @@ class Trace:
     numbers) and the summary (``None`` only for a partial trace)."""
 
     source: str
-    domain: Domain[Any, Any]
+    domain: SomeDomain
     header: Mapping[str, Any]
     steps: tuple[TraceStep, ...]
     step_lines: tuple[int, ...]
@@ -109,6 +139,9 @@ class Trace:
     repair_lines: tuple[int, ...] = ()
     summary: Mapping[str, Any] | None = None
     summary_line: int | None = None
+    observations: tuple[TraceObservation | None, ...] = ()
+    """Per step, what it observed and believed (hidden faults, version 2; ``None`` for a step
+    line without them; empty for a trace that records none)."""
 
 
 class TraceFields:
@@ -127,7 +160,20 @@ class TraceFields:
             raise self.fail(f"expected a {self.data.get('type', 'line')} with key {key!r}")
         return self.data[key]
 
-    def integer(self, key: str, *, optional: bool = False, minimum: int | None = None) -> Any:
+    @overload
+    def integer(
+        self, key: str, *, optional: Literal[False] = False, minimum: int | None = None
+    ) -> int: ...
+
+    @overload
+    def integer(
+        self, key: str, *, optional: Literal[True], minimum: int | None = None
+    ) -> int | None: ...
+
+    def integer(
+        self, key: str, *, optional: bool = False, minimum: int | None = None
+    ) -> int | None:
+        """The integer at ``key`` (at least ``minimum``); ``optional``: ``None`` when absent."""
         value = self.data.get(key) if optional else self.get(key)
         if value is None and optional:
             return None
@@ -136,7 +182,14 @@ class TraceFields:
             raise self.fail(f"expected {key!r} to be an integer{bound}, got {value!r}")
         return value
 
-    def text(self, key: str, *, optional: bool = False) -> Any:
+    @overload
+    def text(self, key: str, *, optional: Literal[False] = False) -> str: ...
+
+    @overload
+    def text(self, key: str, *, optional: Literal[True]) -> str | None: ...
+
+    def text(self, key: str, *, optional: bool = False) -> str | None:
+        """The string at ``key``; ``optional``: ``None`` when absent."""
         value = self.data.get(key) if optional else self.get(key)
         if value is None and optional:
             return None
@@ -168,7 +221,7 @@ class TraceFields:
             raise self.fail(f"expected {key!r} in {', '.join(options)}, got {value!r}")
         return str(value)
 
-    def cell(self, value: Any) -> Cell:
+    def cell(self, value: object) -> Cell:
         """``value`` as a cell ``[x, y]``."""
         if not isinstance(value, list) or len(value) != 2 or not all(type(v) is int for v in value):
             raise self.fail(f"expected a cell [x, y], got {value!r}")

@@ -23,15 +23,17 @@ from selfrepair.execution.result import MissionSpec, StepSource, TraceStep
 from selfrepair.execution.traceformat import (
     DEFAULT_DOMAIN,
     TRACE_FORMAT,
-    TRACE_VERSION,
+    TRACE_VERSIONS,
     Trace,
     TraceFields,
+    TraceObservation,
     TraceRepair,
 )
+from selfrepair.execution.traceobserve import parse_observation
 from selfrepair.geometry import Heading
 from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.strategies import RepairSource, RepairStatus, StrategyName, StrategyOptions
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.registry import PluginFile, get_domain, load_recorded_plugin
 from selfrepair.tables.fileformat import default_table
 from selfrepair.tables.generate import GENERATOR_SOURCE
@@ -43,9 +45,9 @@ from selfrepair.world.maze import parse_maze
 __all__ = ["parse_trace", "read_trace", "spec_from_header"]
 
 
-def _parse_step(domain: Domain[Any, Any], f: TraceFields) -> TraceStep:
+def _parse_step(domain: SomeDomain, f: TraceFields) -> TraceStep:
     action = f.parsed("action", domain.parse_action, f.text("action"))
-    known: set[Any] = set()
+    known: set[object] = set()
     for text in f.texts("known"):
         known |= f.parsed("known fault", domain.parse_faults, text)
     duration_text = f.text("duration")
@@ -62,7 +64,7 @@ def _parse_step(domain: Domain[Any, Any], f: TraceFields) -> TraceStep:
     )
 
 
-def _parse_repair(domain: Domain[Any, Any], f: TraceFields, next_step: int) -> TraceRepair:
+def _parse_repair(domain: SomeDomain, f: TraceFields, next_step: int) -> TraceRepair:
     """A repair line, type-checked; it must come just before step line ``next_step``."""
     step = f.integer("step", minimum=0)
     if step != next_step:
@@ -83,16 +85,18 @@ def _parse_repair(domain: Domain[Any, Any], f: TraceFields, next_step: int) -> T
     )
 
 
-def _header(data: Any, source: str, number: int) -> tuple[Mapping[str, Any], Domain[Any, Any]]:
+def _header(data: Any, source: str, number: int) -> tuple[Mapping[str, Any], SomeDomain]:
     kind = data.get("type") if isinstance(data, dict) else None
     if kind != "header" or data.get("format") != TRACE_FORMAT:
         raise TraceError(
             f'expected a header line with "format": "{TRACE_FORMAT}"', source=source, line=number
         )
     version = data.get("version")
-    if type(version) is not int or version != TRACE_VERSION:
+    if type(version) is not int or version not in TRACE_VERSIONS:
         raise TraceError(
-            f"expected trace version {TRACE_VERSION}, got {version!r}", source=source, line=number
+            f"expected trace version {' or '.join(map(str, TRACE_VERSIONS))}, got {version!r}",
+            source=source,
+            line=number,
         )
     name = data.get("domain", DEFAULT_DOMAIN)
     if not isinstance(name, str):
@@ -135,13 +139,14 @@ def parse_trace(text: str, source: str = "<trace>", *, partial: bool = False) ->
     """Parse trace text; structure and type errors raise :class:`TraceError` naming the line. A
     trace without a summary line is refused as truncated unless ``partial``."""
     header: Mapping[str, Any] | None = None
-    domain: Domain[Any, Any] | None = None
+    domain: SomeDomain | None = None
     summary: Mapping[str, Any] | None = None
     summary_line: int | None = None
     steps: list[TraceStep] = []
     lines: list[int] = []
     repairs: list[TraceRepair] = []
     repair_lines: list[int] = []
+    observations: list[TraceObservation | None] = []
     for number, raw in enumerate(text.split("\n"), start=1):
         if not raw.strip():
             continue
@@ -159,7 +164,9 @@ def parse_trace(text: str, source: str = "<trace>", *, partial: bool = False) ->
         if summary is not None:
             raise TraceError("expected nothing after the summary line", source=source, line=number)
         if kind == "step":
-            steps.append(_parse_step(domain, TraceFields(data, source, number)))
+            fields = TraceFields(data, source, number)
+            steps.append(_parse_step(domain, fields))
+            observations.append(parse_observation(fields))
             lines.append(number)
         elif kind == "repair":
             next_step = len(steps)
@@ -192,6 +199,7 @@ def parse_trace(text: str, source: str = "<trace>", *, partial: bool = False) ->
         tuple(repair_lines),
         summary,
         summary_line,
+        tuple(observations) if any(o is not None for o in observations) else (),
     )
 
 
@@ -277,7 +285,7 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
         raise TraceError(f"expected a complete header: {exc!r}", source=source, line=1) from None
 
 
-def _table(label: str, domain: Domain[Any, Any]) -> str | SomeTable:
+def _table(label: str, domain: SomeDomain) -> str | SomeTable:
     """The table a trace names: a bundled name or a file path as written, and a generated table
     (recorded by its source, ``<generator>``) as the robot's default generated table, the only
     generated table the command line runs with (:func:`~selfrepair.tables.fileformat.default_table`;

@@ -13,7 +13,8 @@ from selfrepair.execution.faults import Detection
 from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
 from selfrepair.execution.traceformat import TRACE_FORMAT, TRACE_VERSION, header_start, pose_json
-from selfrepair.robots.domain import Domain
+from selfrepair.execution.traceobserve import diagnosis_header, observation_fields
+from selfrepair.robots.domain import Domain, SomeDomain
 from selfrepair.world.maze import format_maze
 
 __all__ = ["header_json", "repair_json", "step_json", "trace_lines", "write_trace"]
@@ -22,7 +23,7 @@ A = TypeVar("A")
 F = TypeVar("F")
 
 
-def header_json(spec: MissionSpec, initial_plan: Iterable[Any] = ()) -> dict[str, Any]:
+def header_json(spec: MissionSpec, initial_plan: Iterable[object] = ()) -> dict[str, Any]:
     """The header line's object for ``spec``."""
     options = spec.options
     domain = spec.domain
@@ -74,6 +75,7 @@ def _hidden_json(spec: MissionSpec) -> dict[str, Any]:
             "max_faults": options.max_faults,
             "fault_prior": options.fault_prior,
             "confidence": options.confidence,
+            **diagnosis_header(spec),
             **({"observers": [_observer(o) for o in spec.observers]} if spec.observers else {}),
         }
     }
@@ -90,7 +92,7 @@ def _fault_texts(domain: Domain[A, F], faults: Iterable[F]) -> list[str]:
     return sorted(domain.format_faults([f]) for f in faults)
 
 
-def step_json(domain: Domain[Any, Any], step: TraceStep) -> dict[str, Any]:
+def step_json(domain: SomeDomain, step: TraceStep) -> dict[str, Any]:
     """One step line's object."""
     return {
         "type": "step",
@@ -104,7 +106,7 @@ def step_json(domain: Domain[Any, Any], step: TraceStep) -> dict[str, Any]:
     }
 
 
-def repair_json(domain: Domain[Any, Any], record: RepairRecord) -> dict[str, Any]:
+def repair_json(domain: SomeDomain, record: RepairRecord) -> dict[str, Any]:
     """One repair line's object."""
     repair = record.repair
     return {
@@ -128,10 +130,14 @@ def trace_lines(result: MissionResult) -> list[str]:
     domain = result.spec.domain
     lines = [json.dumps(header_json(result.spec, result.initial_plan.actions))]
     repairs = list(result.repairs)
+    observed = observation_fields(result)
     for step in result.steps:
         while repairs and repairs[0].step <= step.step:
             lines.append(json.dumps(repair_json(domain, repairs.pop(0))))
-        lines.append(json.dumps(step_json(domain, step)))
+        line = step_json(domain, step)
+        if step.step in observed:
+            line.update(observed[step.step])
+        lines.append(json.dumps(line))
     lines.extend(json.dumps(repair_json(domain, r)) for r in repairs)
     lines.append(json.dumps({"type": "summary", **mission_row(result)}))
     return lines

@@ -37,6 +37,7 @@ The file format is described in ``docs/experiments.md``; in short::
     name = "lpg-adapt"           # needs the pddl extra
     time_limit = 5               # seconds per LPG-adapt call
     seed = 0                     # LPG's seed
+    optional = true              # left out (reason printed) where it cannot run, not refused
 
 The schema is :mod:`selfrepair.experiment.schema`, the robot and its plug-ins are found by
 :mod:`selfrepair.robots.fromfile`, and the TOML reading and error mapping are shared with team

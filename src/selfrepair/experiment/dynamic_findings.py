@@ -14,6 +14,13 @@ route, faults, world rate and sensing, replicate: the same obstacles for every s
     ``dstar-lite``).
 ``D3``
     D* Lite answers faster than A* from scratch in a changing world (its home ground).
+``D4``
+    Local detours answer faster than LPG-adapt (AI planning's plan repair, told the
+    believed-blocked cells), judged only where LPG-adapt ran (the mazes it can take).
+``D1r``, ``D2r``
+    D1 and D2 for the replacing robot that rewrites the whole plan (``rewrite``: one repair
+    replaces every blocked window ahead by its detour), judged only when there are such rows.
+    D1 and D2 leave the rewriting robot out, so the two are never mixed in one pairing.
 
 With each comparison the plan-quality price is stated: the paired difference in ticks to the
 goal (mean with its interval, over pairs where both reached it), and the missions each robot
@@ -30,6 +37,7 @@ from selfrepair.experiment.verdicts import (
     Finding,
     Outcome,
     combine,
+    is_rewrite,
     ratio_outcome,
     situation,
     succeeded,
@@ -46,6 +54,12 @@ CLAIMS = {
     "changes (paired ratio of the response time below 1)",
     "D3": "in a changing world, D* Lite kept between changes answers faster than A* "
     "replanning from scratch (paired ratio of the response time below 1)",
+    "D4": "in a changing world, local detours answer faster than LPG-adapt's plan repair "
+    "(paired ratio of the response time below 1)",
+    "D1r": "in a changing world, local detours with whole-plan rewriting answer faster than A* "
+    "replanning from scratch (paired ratio of the response time below 1)",
+    "D2r": "in a changing world, local detours with whole-plan rewriting answer faster than "
+    "D* Lite kept between changes (paired ratio of the response time below 1)",
 }
 """The claims of the changing world's findings."""
 
@@ -55,25 +69,40 @@ INTRO = (
 )
 
 
-def _is(strategy: StrategyName) -> Callable[[Row], bool]:
-    return lambda row: row.get("strategy") == strategy
+def _is(strategy: StrategyName, rewrite: bool = False) -> Callable[[Row], bool]:
+    """Rows of ``strategy`` (for the replacing robot: those that rewrite, or those that do
+    not)."""
+    if strategy is not StrategyName.REPLACEMENT:
+        return lambda row: row.get("strategy") == strategy
+    return lambda row: row.get("strategy") == strategy and is_rewrite(row) == rewrite
 
 
 def dynamic_findings(rows: Sequence[Row]) -> list[Finding]:
-    """Findings D1 to D3 when ``rows`` hold missions in a changing world (else none)."""
+    """Findings D1 to D3 (D4 when LPG-adapt ran, D1r and D2r when the replacing robot also
+    rewrites) when ``rows`` hold missions in a changing world (else none)."""
     changing = [r for r in rows if r.get("world_rate") is not None]
     if not changing:
         return []
-    replace, replan, dstar = (
+    replace, rewriting, replan, dstar, lpg = (
         _is(StrategyName.REPLACEMENT),
+        _is(StrategyName.REPLACEMENT, rewrite=True),
         _is(StrategyName.REPLAN),
         _is(StrategyName.DSTAR_LITE),
+        _is(StrategyName.LPG_ADAPT),
     )
-    return [
+    found = [
         _finding("D1", changing, replan, replace, "detours vs A*"),
         _finding("D2", changing, dstar, replace, "detours vs D* Lite"),
         _finding("D3", changing, replan, dstar, "D* Lite vs A*"),
     ]
+    if any(map(lpg, changing)):
+        found.append(_finding("D4", changing, lpg, replace, "detours vs LPG-adapt"))
+    if any(map(rewriting, changing)):
+        found += [
+            _finding("D1r", changing, replan, rewriting, "rewriting detours vs A*"),
+            _finding("D2r", changing, dstar, rewriting, "rewriting detours vs D* Lite"),
+        ]
+    return found
 
 
 def _finding(

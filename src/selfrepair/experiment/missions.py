@@ -58,7 +58,7 @@ from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, check_limit
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import StrategyOptions
 from selfrepair.repair.tolerance import OPTIMAL, parse_objective
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.robots.registry import get_domain, load_plugin
 from selfrepair.world.events import WorldSchedule
@@ -107,6 +107,8 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
     ]
     if config.world is not None:
         factors.append((len(config.world.rates) * len(config.world.sensing), "world settings"))
+    if config.physics is not None:
+        factors.append((len(config.physics.simulators), "simulators"))
     if not filtered:
         factors.append((variants, "strategy variants and weights"))
     total = 1
@@ -157,9 +159,11 @@ def expand(
         )
         for route in routes_of(entry, identity, config.seed, config.source, index, max_cells)
     )
+    fault_sets = fault_profile(config.faults.sets, domain)
+    fault_count = {text: len(domain.parse_faults(text)) for text in fault_sets}  # the robot's word
     axes = (
         Axis("route", routes, "routes"),
-        Axis("faults", fault_profile(config.faults.sets, domain), "fault sets"),
+        Axis("faults", fault_sets, "fault sets"),
         Axis("fault_at", (RANDOM,) if config.faults.at_random else config.faults.at, "fault times"),
         Axis("detection", tuple(config.faults.detection), "detections"),
         Axis("noise", tuple(config.faults.noise), "noise rates"),
@@ -167,6 +171,7 @@ def expand(
         Axis("replicate", tuple(range(config.repeats)), "repeats"),
         Axis("world", _worlds(config), "world settings"),
         Axis("variant", variants, "strategy variants and weights"),
+        Axis("simulator", _simulators(config), "simulators"),
     )
     missions: dict[str, Mission] = {}
     for point in cross(axes):
@@ -209,7 +214,10 @@ def expand(
         if plugins:
             situation["plugins"] = plugins
         seed = derive_seed(config.seed, portable(situation))
-        mission = _mission(config, situation, seed, variant, weight, label)
+        count = fault_count[point["faults"]]
+        mission = _mission(
+            config, situation, seed, variant, weight, label, count, point["simulator"]
+        )
         missions.setdefault(mission.key, mission)
     if not missions:
         raise ConfigError(
@@ -225,8 +233,12 @@ def _mission(
     variant: dict[str, Any],
     weight: str,
     label: str,
+    fault_count: int,
+    simulator: dict[str, Any] | None,
 ) -> Mission:
-    """One mission: the situation with its variant, weight and seed, keyed and labelled."""
+    """One mission: the situation with its variant, weight, seed and (with a ``[physics]``
+    section) simulator, keyed and labelled (``fault_count``: the faults of its fault set, as
+    the robot's domain reads the text)."""
     settings = {
         **situation,
         **variant,
@@ -234,6 +246,8 @@ def _mission(
         "clearance_radius": config.planner.clearance_radius,
         "seed": seed,
     }
+    if simulator is not None:  # absent without a [physics] section: older keys stay valid
+        settings["simulator"] = simulator
     text = canonical_json(settings)
     key = mission_key(canonical_json(portable(settings)))
     options = variant["options"]
@@ -241,7 +255,7 @@ def _mission(
         ("maze", label),
         ("route", situation["route"]),
         ("faults", situation["faults"]),
-        ("fault_count", len(situation["faults"].split(",")) if situation["faults"] else 0),
+        ("fault_count", fault_count),
         ("fault_at", situation["fault_at"]),
         ("detection", situation["detection"]),
         ("replicate", situation["replicate"]),
@@ -259,6 +273,8 @@ def _mission(
     world = situation.get("world")
     if world is not None:
         labels += (("world_rate", str(world["rate"])), ("sensing", world["sensing"]))
+    if simulator is not None:
+        labels += (("simulator", simulator["name"]),)
     return Mission(key, config.name, seed, text, labels)
 
 
@@ -289,6 +305,18 @@ def _worlds(config: ExperimentConfig) -> tuple[dict[str, Any] | None, ...]:
     )
 
 
+def _simulators(config: ExperimentConfig) -> tuple[dict[str, Any] | None, ...]:
+    """The values of the ``simulator`` axis: one per simulator of the ``[physics]`` section
+    (physics with its tracking), or ``None`` alone without one (the lattice simulator)."""
+    physics = config.physics
+    if physics is None:
+        return (None,)
+    return tuple(
+        {"name": name, **({"tracked": physics.tracked} if name == "physics" else {})}
+        for name in physics.simulators
+    )
+
+
 RANDOM = "random"
 """The ``fault_at`` axis value of ``at_random``: one step drawn per situation."""
 
@@ -298,7 +326,7 @@ def _fault_step(
     identity: dict[str, Any],
     route: Route,
     point: dict[str, Any],
-    domain: Domain[Any, Any],
+    domain: SomeDomain,
 ) -> int:
     """When the faults of one situation (``point``) appear: its ``fault_at``, or for
     :data:`RANDOM` one step drawn

@@ -18,7 +18,8 @@ bundled mazes are one option away.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+import json
+from collections.abc import Iterable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
 from typing import Any
@@ -29,11 +30,12 @@ from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.result import MissionSpec
 from selfrepair.experiment.faultsets import PAPER_FAULT_SETS
+from selfrepair.experiment.keys import canonical_json
 from selfrepair.physics.identified import CONFIRMED_NAME, load_identified
 from selfrepair.physics.mission import run_physics_mission
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import StrategyOptions
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.tables.fileformat import default_table
 from selfrepair.tables.model import SomeTable
@@ -46,6 +48,7 @@ __all__ = [
     "FootingRow",
     "footing_summary",
     "physics_experiment",
+    "stored_footing_rows",
 ]
 
 DEFAULT_MAZES = ("narrow-short", "wide-short")
@@ -83,22 +86,22 @@ class FootingRow:
 
 ROBOTS = ("four-wheel", CONFIRMED_NAME)
 """The robot models a run may plan with: the lattice's four-wheel robot (hand-written table), or
-the one that commands only the 49 actions physics confirms (its generated fault-agnostic table,
+the one that commands only the 65 actions physics confirms (its generated fault-agnostic table,
 made once per process)."""
 
-_ROBOTS: BoundedCache[str, tuple[Domain[Any, Any], SomeTable | None]] = BoundedCache(
+_ROBOTS: BoundedCache[str, tuple[SomeDomain, SomeTable | None]] = BoundedCache(
     "physics experiment robot models", 2, kind=CacheKind.INPUT
 )
 
 
-def _make_robot(name: str) -> tuple[Domain[Any, Any], SomeTable | None]:
+def _make_robot(name: str) -> tuple[SomeDomain, SomeTable | None]:
     if name == CONFIRMED_NAME:
         domain = load_identified(name=CONFIRMED_NAME, confirmed_only=True)
         return domain, default_table(domain)  # generated: the identified robot ships none
     return FOUR_WHEEL, None
 
 
-def _robot(name: str) -> tuple[Domain[Any, Any], SomeTable | None]:
+def _robot(name: str) -> tuple[SomeDomain, SomeTable | None]:
     """The domain and table of robot model ``name`` (made once per process and kept)."""
     return _ROBOTS.get(name, lambda: _make_robot(name))
 
@@ -168,6 +171,46 @@ def physics_experiment(
         return [_run(job) for job in jobs]
     with ProcessPoolExecutor(max_workers=workers) as pool:
         return list(pool.map(_run, jobs, chunksize=4))
+
+
+def stored_footing_rows(rows: Iterable[Mapping[str, Any]]) -> list[FootingRow]:
+    """The missions of an experiment with a ``[physics]`` section (stored rows, each with a
+    ``simulator`` column) paired across simulators: one :class:`FootingRow` per mission that ran
+    on both, its ``strategy`` the row's ``variant``, in the order of the physics rows. A mission's
+    pair is the row whose configuration is the same but for the simulator."""
+    lattice: dict[str, Mapping[str, Any]] = {}
+    physics: list[tuple[str, Mapping[str, Any]]] = []
+    for row in rows:
+        settings = json.loads(str(row["config"]))
+        simulator = settings.pop("simulator", None)
+        if simulator is None:
+            continue
+        pair = canonical_json(settings)
+        if simulator["name"] == "physics":
+            physics.append((pair, row))
+        else:
+            lattice[pair] = row
+    out = []
+    for pair, row in physics:
+        other = lattice.get(pair)
+        if other is None:
+            continue
+        out.append(
+            FootingRow(
+                maze=str(row["maze"]),
+                route=str(row["route"]),
+                faults=str(row["faults"]),
+                strategy=str(row["variant"]),
+                lattice_reached=bool(other["reached"]),
+                physics_reached=bool(row["reached"]),
+                wall_contacts=int(row["wall_contacts"]),
+                final_error=float(row["physics_final_error"]),
+                seconds=float(row["physics_seconds"]),
+                repairs=int(row["faulty_encounters"]),
+                deviations=int(row["deviations"]),
+            )
+        )
+    return out
 
 
 def footing_summary(rows: Iterable[FootingRow]) -> dict[str, dict[str, Any]]:

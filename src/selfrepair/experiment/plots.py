@@ -12,7 +12,7 @@ from collections import defaultdict
 from collections.abc import Sequence
 from fractions import Fraction
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -28,6 +28,11 @@ from selfrepair.experiment.summary import is_reference_replan
 from selfrepair.optional import matplotlib
 from selfrepair.repair.strategies import RepairSource, StrategyName
 from selfrepair.stats import lower_median, percentile
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 __all__ = [
     "figure_baselines",
@@ -209,7 +214,8 @@ def figure_heatmap(rows: Sequence[Row], path: Path, variant: str | None = None) 
     variant = variant or heatmap_variant(rows)
     chosen = [r for r in rows if str(r.get("variant")) == variant and _weight(r) == 0]
     mazes = sorted({str(r.get("maze")) for r in chosen}, key=lambda m: (_first_int(chosen, m), m))
-    faults = sorted({str(r.get("faults")) for r in chosen}, key=lambda f: (f.count(","), f))
+    sizes = {str(r.get("faults")): int(str(r.get("fault_count") or 0)) for r in chosen}
+    faults = sorted(sizes, key=lambda f: (sizes[f], f))  # singles first: the robot's count
     share = np.full((len(faults), len(mazes)), np.nan)
     extra = np.full((len(faults), len(mazes)), np.nan)
     for i, f in enumerate(faults):
@@ -270,9 +276,9 @@ def _first_int(rows: Sequence[Row], maze: str) -> int:
 
 
 def _heat(
-    fig: Any,
-    ax: Any,
-    data: Any,
+    fig: Figure,
+    ax: Axes,
+    data: npt.NDArray[np.float64],
     faults: list[str],
     mazes: list[str],
     label: str,

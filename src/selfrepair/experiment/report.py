@@ -53,6 +53,7 @@ if TYPE_CHECKING:
     from selfrepair.execution.result import MissionResult
 
 __all__ = [
+    "all_findings",
     "baselines_section",
     "choose_mission",
     "counted",
@@ -235,12 +236,7 @@ def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = N
         render_markdown(
             rows,
             summarize(rows),
-            [
-                *check_findings(rows),
-                *tolerance_findings(rows),
-                *dynamic_findings(rows),
-                *diagnosis_findings(rows),
-            ],
+            all_findings(rows),
             chosen,
             str(db),
             heatmap_variant=plots.heatmap_variant(rows),
@@ -332,6 +328,17 @@ def counted(value: object, noun: str) -> str:
     """``"1 replan"``, ``"13 replans"`` (``value`` as stored: a number, or ``None`` for 0)."""
     number = int(str(value or 0))
     return f"{number} {noun}" if number == 1 else f"{number} {noun}s"
+
+
+def all_findings(rows: Sequence[Row]) -> list[Finding]:
+    """Every finding the rows bear on, in the order report and command print them: the
+    original study's, then plan tolerance's, the changing world's and diagnosis's."""
+    return [
+        *check_findings(rows),
+        *tolerance_findings(rows),
+        *dynamic_findings(rows),
+        *diagnosis_findings(rows),
+    ]
 
 
 def baselines_section(rows: Sequence[Row], figure: str | None = None) -> str:

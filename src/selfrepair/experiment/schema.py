@@ -8,22 +8,23 @@ set by :func:`selfrepair.experiment.config.parse_config` after the plug-ins are 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from fractions import Fraction
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal, TypeVar
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.execution.faults import Clock, Detection, Persistence
+from selfrepair.experiment.schema_physics import PhysicsConfig
+from selfrepair.experiment.schema_physics import context_domain as _domain
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import DEFAULT_SENSING_RANGE, MAX_CLEARANCE_WEIGHT
 from selfrepair.repair.replacement import DEFERRING, RecursionMode
 from selfrepair.repair.strategies import MissionKind, StrategyName
 from selfrepair.repair.tolerance import OPTIMAL, parse_objective
-from selfrepair.robots.domain import Domain
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN
-from selfrepair.robots.registry import get_domain
 from selfrepair.tomlfile import Float, Frozen, Int, NonEmpty
 from selfrepair.world.events import Sensing
 from selfrepair.world.routes import MAX_ROUTES
@@ -39,6 +40,7 @@ __all__ = [
     "LpgAdaptStrategy",
     "MazeConfig",
     "MazeSource",
+    "PhysicsConfig",
     "PlannerConfig",
     "ReplacementStrategy",
     "ReplanStrategy",
@@ -248,7 +250,7 @@ class PlannerConfig(Frozen):
 
     @field_validator("clearance_weights", mode="before")
     @classmethod
-    def _weights(cls, value: Any) -> Any:
+    def _weights(cls, value: object) -> object:
         return _weights(value)
 
 
@@ -261,7 +263,7 @@ class _StrategyEntry(Frozen):
 
     @field_validator("clearance_weights", mode="before")
     @classmethod
-    def _weights(cls, value: Any) -> Any:
+    def _weights(cls, value: object) -> object:
         return _weights(value)
 
 
@@ -314,7 +316,7 @@ class ReplacementStrategy(_StrategyEntry):
 
     @field_validator("rewrite", mode="before")
     @classmethod
-    def _rewrite(cls, value: Any) -> Any:
+    def _rewrite(cls, value: object) -> object:
         if isinstance(value, bool):
             return (value,)
         if isinstance(value, list | tuple) and not value:
@@ -362,24 +364,44 @@ class DStarLiteStrategy(_StrategyEntry):
 
 class LpgAdaptStrategy(_StrategyEntry):
     """Plan repair with LPG-adapt (``pddl`` extra, four-wheel robot): ``time_limit`` seconds per
-    call, LPG's ``seed``; LPG's failures and time-outs fall back to replanning."""
+    call, LPG's ``seed``; LPG's failures and time-outs fall back to replanning. Where it cannot
+    run (extra, robot) the experiment is refused before any mission runs, unless ``optional``:
+    then the entry has no missions and :attr:`refusal` says why (the command prints it)."""
 
+    optional: bool = False  # before ``name``, whose validator reads it
     name: Literal[StrategyName.LPG_ADAPT]
     time_limit: Annotated[Float, Field(gt=0, le=3600)] = 5.0
     seed: Annotated[Int, Field(ge=0, lt=2**31)] = 0
+    refusal: str | None = None
+    """Why the strategy cannot run here (set by validation, for an ``optional`` entry)."""
 
     @field_validator("name")
     @classmethod
     def _runnable(cls, value: str, info: ValidationInfo) -> str:
-        """Refuse the strategy before any mission runs where it cannot run (extra, robot)."""
-        from selfrepair.baselines.adapt import check_lpg_adapt
-        from selfrepair.errors import ProblemError
-
-        try:
-            check_lpg_adapt(_domain(info).name)
-        except ProblemError as exc:
-            raise ValueError(str(exc)) from None
+        """Refuse the strategy before any mission runs where it cannot run (extra, robot),
+        unless the entry is optional."""
+        refusal = _lpg_refusal(info)
+        if refusal is not None and not info.data.get("optional"):
+            raise ValueError(refusal)
         return value
+
+    @model_validator(mode="after")
+    def _left_out(self, info: ValidationInfo) -> LpgAdaptStrategy:
+        """Record why an optional entry cannot run (never what the file says)."""
+        object.__setattr__(self, "refusal", _lpg_refusal(info) if self.optional else None)
+        return self
+
+
+def _lpg_refusal(info: ValidationInfo) -> str | None:
+    """Why LPG-adapt cannot run here for the experiment's robot, or ``None``."""
+    from selfrepair.baselines.adapt import check_lpg_adapt
+    from selfrepair.errors import ProblemError
+
+    try:
+        check_lpg_adapt(_domain(info).name)
+    except ProblemError as exc:
+        return str(exc)
+    return None
 
 
 class DiagnosisStrategy(_StrategyEntry):
@@ -438,6 +460,7 @@ class ExperimentConfig(Frozen):
     mazes: Annotated[tuple[MazeConfig, ...], Field(min_length=1)]
     faults: FaultsConfig = FaultsConfig()
     world: WorldConfig | None = None
+    physics: PhysicsConfig | None = None
     planner: PlannerConfig = PlannerConfig()
     strategies: Annotated[tuple[StrategyConfig, ...], Field(min_length=1)]
     source: str = "<string>"
@@ -448,7 +471,7 @@ class ExperimentConfig(Frozen):
         return Path(self.source).parent if not self.source.startswith("<") else Path.cwd()
 
 
-def _weights(value: Any) -> Any:
+def _weights(value: object) -> object:
     """Clearance weights as canonical exact strings (``0.5`` -> ``"1/2"``), each from 0 to
     :data:`~selfrepair.limits.MAX_CLEARANCE_WEIGHT`."""
     if value is None:
@@ -473,13 +496,10 @@ def _weights(value: Any) -> Any:
     return tuple(out)
 
 
-def _domain(info: ValidationInfo) -> Domain[Any, Any]:
-    context = info.context or {}
-    domain = context.get("domain")
-    return domain if isinstance(domain, Domain) else get_domain(DEFAULT_DOMAIN)
+T = TypeVar("T")
 
 
-def _reraise(parser: Any, text: str) -> Any:
+def _reraise(parser: Callable[[str], T], text: str) -> T:
     """Run a robot-model parser, turning its InputError into a plain ValueError for pydantic."""
     try:
         return parser(text)

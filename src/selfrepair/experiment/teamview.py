@@ -3,9 +3,12 @@
 :func:`team_payload` turns a parsed team trace (:mod:`selfrepair.team.traceformat`) that
 re-simulates into the page's data: the maze, every robot (colour, equipment), the tasks, and one
 frame per instant at which something happens (a move or act starts or ends, a fault starts or
-clears, an incident, a repair), each with every robot's pose, the cells it holds (its move's
-footprint while moving, its cell while resting: what the reservations gave it), what it carries
-and what it is doing, where every item lies and which team faults are active. The timeline has
+clears, a world event blocks or frees a cell, an incident, a repair), each with every robot's
+pose, the cells it holds (its move's footprint while moving, its cell while resting: what the
+reservations gave it), what it carries and what it is doing, where every item lies, which team
+faults are active and which cells are blocked then (by world events, computed from the header's
+schedule, and by blocked team faults: the page greys them out, as the mission page does). The
+timeline has
 one lane per robot (its moves coloured by source, its acts, incidents and repairs) and one per
 team fault. Every pose and footprint comes from the robot model; the page's script only draws.
 """
@@ -21,7 +24,7 @@ from selfrepair.experiment.figstyle import SOURCE_COLOURS
 from selfrepair.experiment.viewpage import check_viewable, pose_json, wall_runs, write_page
 from selfrepair.geometry import Cell, Pose
 from selfrepair.limits import MAX_TRACE_BYTES
-from selfrepair.team.model import ActionKind
+from selfrepair.team.model import ActionKind, TeamFaultKind
 from selfrepair.team.replay import replay_team
 from selfrepair.team.traceformat import TeamTrace
 from selfrepair.team.traceread import read_team_trace
@@ -57,12 +60,16 @@ def _instants(trace: TeamTrace) -> list[int]:
         times.update((a.start, a.end))
     times.update(f.at for f in trace.faults)
     times.update(int(o["at"]) for o in trace.other if isinstance(o.get("at"), int))
+    end = max(times)
+    changes = (e.at * trace.scale for e in trace.scenario.world.events)
+    times.update(u for u in changes if u <= end)  # a cell greys out (or clears) at its time
     return sorted(times)
 
 
 def _frames(trace: TeamTrace, times: list[int]) -> list[dict[str, Any]]:
     """The state of the team at each instant (see the module docstring)."""
     scenario, domain = trace.scenario, trace.scenario.domain
+    world = scenario.world
     moves = sorted(trace.moves, key=lambda m: (m.end, m.line))  # applied as they end
     acts = sorted(trace.acts, key=lambda a: (a.end, a.line))
     pose: dict[str, Pose] = {r.name: r.start for r in scenario.robots}
@@ -117,12 +124,18 @@ def _frames(trace: TeamTrace, times: list[int]) -> list[dict[str, Any]]:
             assert cell is not None
             items.append({"item": task.item, "x": cell[0], "y": cell[1], "carrier": holder,
                           "delivered": task.item in delivered})  # fmt: skip
+        on = sorted(i for i, now in active.items() if now)
+        blocked = set(world.blocked_at(Fraction(t, trace.scale))) if world else set()
+        for i in on:
+            if scenario.faults[i].kind is TeamFaultKind.BLOCKED:
+                blocked.update(scenario.faults[i].cells)
         frames.append({
             "at": t,
             "tick": _tick(t, trace.scale),
             "robots": robots,
             "items": items,
-            "faults": sorted(i for i, on in active.items() if on),
+            "faults": on,
+            "blocked": [list(c) for c in sorted(blocked)],
             "delivered": len(delivered),
         })  # fmt: skip
     return frames

@@ -15,12 +15,12 @@ from dataclasses import replace
 from selfrepair.caching import CacheKind, clear_caches
 from selfrepair.errors import ProblemError
 from selfrepair.execution.metrics import mission_row
-from selfrepair.execution.result import MissionResult
+from selfrepair.execution.result import MissionResult, MissionSpec
 from selfrepair.experiment.keys import Mission
 from selfrepair.experiment.store import Value
 from selfrepair.stats import lower_median
 
-__all__ = ["COLD_CLEARS", "DUPLICATE_COLUMNS", "execute_mission"]
+__all__ = ["COLD_CLEARS", "DUPLICATE_COLUMNS", "PHYSICS_COLUMNS", "execute_mission"]
 
 
 DUPLICATE_COLUMNS = frozenset(
@@ -84,9 +84,17 @@ def execute_mission(
     spec = to_spec(mission)
     if footing != spec.footing:  # the mission loop (not part of the mission's key)
         spec = replace(spec, footing=footing)
+    simulator = mission.settings.get("simulator")
     clear_caches(COLD_CLEARS)
-    cold = run_mission(spec)
-    warm = [run_mission(spec) for _ in range(repeats)]
+    physics: dict[str, Value] = {}
+    if simulator is not None and simulator["name"] == "physics":
+        cold, physics = _physics_run(spec, simulator["tracked"])
+        warm, repeats = [cold], 1  # MuJoCo's seconds would swamp warm repair timings
+    else:
+        cold = run_mission(spec)
+        warm = [run_mission(spec) for _ in range(repeats)]
+        if simulator is not None:
+            physics = dict.fromkeys(PHYSICS_COLUMNS)
     result = _median_timings(warm)
     row = {
         k: v
@@ -106,7 +114,40 @@ def execute_mission(
     row["cold_repair_compute_ns"] = sum(cold_latencies)
     row["cold_initial_planning_ns"] = cold.initial_planning_ns
     row["timing_repeats"] = repeats
+    row.update(physics)
     return row
+
+
+PHYSICS_COLUMNS = (
+    "wall_contacts",
+    "physics_final_error",
+    "physics_seconds",
+    "physics_max_position_error",
+    "physics_max_heading_error",
+    "deviations",
+)
+"""The columns a mission of an experiment with a ``[physics]`` section adds (empty on the
+lattice simulator's rows): :class:`~selfrepair.physics.mission.PhysicsOutcome`'s wall contacts
+(10 ms control updates touching a wall), final pose error (cells), seconds simulated, largest
+position (cells) and heading (degrees) error of a move against the lattice, and deviations."""
+
+
+def _physics_run(spec: MissionSpec, tracked: bool) -> tuple[MissionResult, dict[str, Value]]:
+    """``spec`` run in MuJoCo (:func:`~selfrepair.physics.mission.run_physics_mission`): the
+    lattice result and the :data:`PHYSICS_COLUMNS`."""
+    from selfrepair.physics.mission import run_physics_mission
+
+    done = run_physics_mission(spec, tracked=tracked)
+    o = done.outcome
+    values: tuple[Value, ...] = (
+        o.wall_contacts,
+        round(o.final_error, 4),
+        round(o.seconds, 3),
+        round(o.max_position_error, 4),
+        round(o.max_heading_error, 2),
+        o.deviations,
+    )
+    return done.result, dict(zip(PHYSICS_COLUMNS, values, strict=True))
 
 
 def _median_timings(runs: Sequence[MissionResult]) -> MissionResult:

@@ -28,10 +28,12 @@ from selfrepair.experiment.schema import (
     StrategyConfig,
 )
 from selfrepair.repair.tolerance import OPTIMAL
+from selfrepair.textio import JSONObject
 
 __all__ = [
     "BUNDLED_TABLES",
     "REWRITE_LABEL",
+    "left_out",
     "maze_filter",
     "objective_label",
     "short_table",
@@ -55,10 +57,22 @@ def strategy_variants(config: ExperimentConfig) -> Iterator[tuple[dict[str, Any]
         yield from variants_of(strategy, config)
 
 
+def left_out(config: ExperimentConfig) -> tuple[tuple[str, str], ...]:
+    """The optional strategy entries that cannot run here, as ``(name, reason)``."""
+    return tuple(
+        (str(s.name), s.refusal)
+        for s in config.strategies
+        if isinstance(s, LpgAdaptStrategy) and s.refusal is not None
+    )
+
+
 def variants_of(
     strategy: StrategyConfig, config: ExperimentConfig
 ) -> Iterator[tuple[dict[str, Any], tuple[str, ...]]]:
-    """The (strategy settings, clearance weights) pairs of one strategy entry."""
+    """The (strategy settings, clearance weights) pairs of one strategy entry (none for an
+    optional entry that cannot run here: :func:`left_out`)."""
+    if isinstance(strategy, LpgAdaptStrategy) and strategy.refusal is not None:
+        return
     weights = strategy.clearance_weights or config.planner.clearance_weights
     if isinstance(strategy, ReplacementStrategy):
         windows: tuple[tuple[int | None, int], ...] = (
@@ -71,7 +85,7 @@ def variants_of(
                 for window, before in windows:
                     for rewrite in strategy.rewrite:
                         for objective in strategy.objectives:
-                            options: dict[str, Any] = {
+                            options: JSONObject = {
                                 **_table_identity(table, config),
                                 "recursion": recursion,
                             }
@@ -103,6 +117,8 @@ _DIAGNOSIS_DEFAULTS = (("max_faults", 2), ("fault_prior", 0.05), ("confidence", 
 def variant_count(strategy: StrategyConfig, config: ExperimentConfig) -> int:
     """How many (variant, clearance weight) pairs :func:`variants_of` gives, by arithmetic
     (without reading any table file)."""
+    if isinstance(strategy, LpgAdaptStrategy) and strategy.refusal is not None:
+        return 0
     weights = len(strategy.clearance_weights or config.planner.clearance_weights)
     if isinstance(strategy, DiagnosisStrategy):
         return len(strategy.tables) * len(strategy.recursion) * weights
@@ -140,7 +156,7 @@ def maze_filter(
     return frozenset(strategy.mazes)
 
 
-def _plain_options(strategy: StrategyConfig) -> dict[str, Any]:
+def _plain_options(strategy: StrategyConfig) -> JSONObject:
     """The options of a strategy without a table, as its missions record them (defaults left
     out, so that the keys of missions made before an option existed stay valid)."""
     if isinstance(strategy, ReplanStrategy | DStarLiteStrategy) and strategy.backend != "auto":
@@ -190,14 +206,14 @@ def _check_table(path: Path) -> None:
         ) from None
 
 
-def short_table(table: Any) -> str | None:
+def short_table(table: object) -> str | None:
     """A table's readable name: a bundled name, or a table file's stem."""
     if table is None:
         return None
     return table if table in BUNDLED_TABLES else Path(str(table)).stem
 
 
-_LABEL_PARTS: tuple[tuple[str, bool, Callable[[Any], str]], ...] = (
+_LABEL_PARTS: tuple[tuple[str, bool, Callable[[object], str]], ...] = (
     ("table", True, lambda table: str(short_table(table))),
     ("recursion", True, str),
     ("window", True, "k={}".format),

@@ -19,6 +19,7 @@ from typing import Any, Protocol, TypeVar
 
 from selfrepair.errors import InputError, ProblemError, TraceError
 from selfrepair.geometry import Pose
+from selfrepair.textio import JSONObject
 from selfrepair.world.maze import Maze
 
 __all__ = [
@@ -46,6 +47,9 @@ class Page:
     timeline_label: str
     strip: str = ""
     """A fragment shown above the timeline (the mission page's plan-tolerance strip), or none."""
+    before: tuple[str, ...] = ()
+    """Scripts of the page's own panels, run after ``common.js`` and before ``script`` (the
+    mission page's diagnosis panel)."""
 
 
 PAGES = {
@@ -57,6 +61,7 @@ PAGES = {
         "Faults over the mission",
         "fault timeline",
         "mission-strip.html",
+        ("diagnosis.js",),
     ),
     "team": Page(
         "team.js",
@@ -99,7 +104,7 @@ def check_viewable(
     return check
 
 
-def pose_json(pose: Pose) -> dict[str, Any]:
+def pose_json(pose: Pose) -> JSONObject:
     """A pose for drawing: cell, heading name, unit heading vector and angle (degrees clockwise
     from north, screen up being north)."""
     dx, dy = pose.heading.vector
@@ -152,7 +157,7 @@ def render_html(payload: Mapping[str, Any], *, page: str = "mission") -> str:
     parts = {
         "TITLE": html.escape(str(payload.get("title", "mission"))),
         "STYLE": _asset("viewer.css"),
-        "SCRIPT": _asset("common.js") + "\n" + _asset(chosen.script),
+        "SCRIPT": "\n".join(_asset(name) for name in ("common.js", *chosen.before, chosen.script)),
         "DATA": _script_safe_json(payload),
         "PANEL": _asset(chosen.panel),
         "UNIT": chosen.unit,

@@ -81,6 +81,11 @@ class RobotParams:
     """Torque limit of each wheel motor, N m (100 N at the rim: twice what the wheels' grip
     can transmit, so the motor, not the tyre, never limits a wheel that grips)."""
     max_speed_factor: float = 3.0
+    wheel_accel: float = 4.0
+    """The largest change of a wheel's commanded rim speed per second (m/s^2) that its motor
+    controller passes on (a ramp, as real wheel controllers have): well under what the tyres'
+    grip can transmit (0.8 g, 7.8 m/s^2), so the wheels do not jerk the robot into pitching,
+    hopping and skidding when the tracker changes its speeds."""
     wall_height: float = 0.2
 
     def __post_init__(self) -> None:
@@ -93,6 +98,7 @@ class RobotParams:
             "motor_kv": self.motor_kv,
             "motor_torque": self.motor_torque,
             "max_speed_factor": self.max_speed_factor,
+            "wheel_accel": self.wheel_accel,
         }
         for name, value in positive.items():
             if not value > 0:
@@ -212,9 +218,9 @@ def mjcf(maze: Maze | None, params: RobotParams = DEFAULT_PARAMS, start: Pose | 
             f'      <body name="{name}" pos="{sx * p.wheel_x:.6g} {sy * p.wheel_y:.6g} 0">\n'
             f'        <joint name="{name}" type="hinge" axis="0 1 0"/>\n'
             f'        <geom name="{name}" type="sphere" size="{p.wheel_radius:.6g}" '
-            f'mass="{p.wheel_mass:.6g}" contype="3" conaffinity="3" rgba="0 0 0 0"/>\n'
+            f'mass="{p.wheel_mass:.6g}" contype="1" conaffinity="1" rgba="0 0 0 0"/>\n'
             f'        <geom name="{name}_tyre" type="cylinder" size="{p.wheel_radius:.6g} '
-            f'{p.wheel_half_width:.6g}" euler="90 0 0" contype="0" conaffinity="0" mass="0" '
+            f'{p.wheel_half_width:.6g}" euler="90 0 0" contype="2" conaffinity="2" mass="0" '
             'rgba=".1 .1 .1 1"/>\n'
             "      </body>"
         )

@@ -31,15 +31,16 @@ __all__ = [
     "ContinuousPose",
     "LatticeMotion",
     "Tracker",
+    "balanced_drive",
     "open_loop_speeds",
     "reference",
     "wrap",
 ]
 
-RAMP = 0.15
+RAMP = 0.25
 """The share of the reference's duration spent accelerating (and, at its end, braking)."""
 
-HOLD = 0.1
+HOLD = 0.2
 """The share of an action's duration at its end in which the reference holds the end pose, so
 the tracker can take out what the robot lags behind."""
 
@@ -136,7 +137,7 @@ class Tracker:
     metres.
     """
 
-    __slots__ = ("_half", "_limit", "commands", "duration", "motion", "speed", "start")
+    __slots__ = ("_drive", "_half", "_limit", "commands", "duration", "motion", "speed", "start")
 
     def __init__(
         self,
@@ -150,6 +151,7 @@ class Tracker:
     ) -> None:
         self._half = EFFECTIVE_TRACK / cell / 2
         self.commands = commands
+        self._drive = balanced_drive(commands, motion)
         self.motion = motion
         self.start = start
         self.duration = duration
@@ -175,10 +177,39 @@ class Tracker:
         w = w_ref + K_Y * v_ref * ey + K_YAW * math.sin(eyaw)
         half = self._half
         left, right = (v - w * half) / self.speed, (v + w * half) / self.speed
-        fl, fr, rl, rr = self.commands
+        fl, fr, rl, rr = self._drive
         a, c_ = _side(fl, rl, left, self._limit)
         b, d = _side(fr, rr, right, self._limit)
         return (a, b, c_, d)
+
+
+def balanced_drive(
+    commands: tuple[int, int, int, int], motion: LatticeMotion
+) -> tuple[int, int, int, int]:
+    """The wheels the tracker drives for ``commands`` (FL, FR, RL, RR), each its command or 0.
+
+    A turn in place (no translation) whose driving wheels sit unevenly front and back turns
+    about a point off the robot's centre: ``FFFB`` turns clockwise with three wheels, but only
+    the rear-right one pushes backward, so the robot swings about its front and its centre
+    drifts 0.1 to 0.3 cells. When a diagonal pair of wheels (front-left with rear-right, or
+    front-right with rear-left) can turn each side the way the turn needs, only that pair
+    drives and the other wheels are held at rest: the robot then turns about its centre, as
+    with the diagonal ``FSSB``. Holding a wheel commanded F or B at rest stays within the
+    command's sign (F: forward or not at all), so a replacement stays that action. Every other
+    motion, and a turn that has all four wheels or no diagonal pair, drives the commands as
+    they are."""
+    if motion.rotation == 0 or motion.forward or motion.lateral:
+        return commands
+    left = 1 if motion.rotation > 0 else -1  # clockwise: the left side forward, the right back
+    fl, fr, rl, rr = commands
+    wanted = (left, -left, left, -left)
+    if commands == wanted:
+        return commands
+    if fl == left and rr == -left:
+        return (fl, 0, 0, rr)
+    if fr == -left and rl == left:
+        return (0, fr, rl, 0)
+    return commands
 
 
 def _side(front: int, rear: int, speed: float, limit: float) -> tuple[float, float]:

@@ -16,7 +16,7 @@ import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
+from types import ModuleType
 
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Heading, Pose
@@ -28,7 +28,7 @@ from selfrepair.world.maze import Maze
 __all__ = ["ActionRun", "PhysicsWorld", "lattice_pose", "mujoco_module", "snap"]
 
 
-def mujoco_module() -> Any:
+def mujoco_module() -> ModuleType:
     """The ``mujoco`` package (the ``physics`` extra), or a :class:`ProblemError` naming it.
 
     On a machine without a display (no ``DISPLAY``) and without ``MUJOCO_GL`` set, MuJoCo's
@@ -139,7 +139,8 @@ class PhysicsWorld:
     ) -> ActionRun:
         """Run the four wheel commands (+1, 0, -1 each) for ``ticks`` ticks: open loop, or, when
         ``motion`` is given, tracking the lattice motion from ``reference_start`` (the robot's
-        snapped pose when not given)."""
+        snapped pose when not given). Either way each wheel's motor controller changes its
+        speed by at most ``wheel_accel`` (at the rim) per second (:class:`RobotParams`)."""
         p = self.params
         steps = p.steps(ticks)
         seconds = steps * p.timestep
@@ -150,15 +151,16 @@ class PhysicsWorld:
                               p.max_speed_factor, p.cell)  # fmt: skip
         ctrl = self.data.ctrl
         omega = p.wheel_omega
-        if tracker is None:
-            ctrl[:] = [c * omega for c in commands]
+        wanted = [c * omega for c in commands]
         done = contacts = 0
         every = p.control_every
         while done < steps:
             n = min(every, steps - done)
             if tracker is not None:
                 t = done * p.timestep
-                ctrl[:] = [s * omega for s in tracker.speeds(self.pose(), t)]
+                wanted = [s * omega for s in tracker.speeds(self.pose(), t)]
+            step = p.wheel_accel * n * p.timestep / p.wheel_radius  # rad/s this update
+            ctrl[:] = [min(max(w, c - step), c + step) for w, c in zip(wanted, ctrl, strict=True)]
             self.mj.mj_step(self.model, self.data, n)
             done += n
             if self.touching_wall():

@@ -33,7 +33,7 @@ cache), as a table's compiled look-ups are.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any, Generic, TypeVar, cast
 
 from selfrepair.caching import BoundedCache, CacheKind
@@ -42,14 +42,14 @@ from selfrepair.repair.core import walk
 from selfrepair.repair.lookups import MISSING, Missing
 from selfrepair.repair.neighbourhood import action_index, occupancy_bit, occupancy_rows
 from selfrepair.repair.replacement import FreeTest, RobotWorld
-from selfrepair.robots.domain import A, Domain, F, primitive_by_motion
+from selfrepair.robots.domain import A, F, SomeDomain, primitive_by_motion
 from selfrepair.tables.detours import DetourTable, SomeDetours, detour_table
 
 __all__ = ["BeliefCodes", "DetourAnswer", "DetourFinder", "believed_free", "find_detour"]
 
 T = TypeVar("T")
 
-DetourAnswer = Callable[[int, tuple[Any, ...], int], T]
+DetourAnswer = Callable[[int, tuple[object, ...], int], T]
 """Turns a valid detour (candidate position, actions, queued actions it replaces) into what a
 :class:`DetourFinder` stores and answers (a strategy's repair)."""
 
@@ -261,7 +261,9 @@ class DetourFinder(Generic[T]):
         "_codes",
         "_domain",
         "_flat",
+        "_height",
         "_index",
+        "_moves",
         "_slots",
         "_starts",
         "_steps",
@@ -271,7 +273,7 @@ class DetourFinder(Generic[T]):
         "table",
     )
 
-    def __init__(self, domain: Domain[Any, Any], grid: FreeGrid, answer: DetourAnswer[T]) -> None:
+    def __init__(self, domain: SomeDomain, grid: FreeGrid, answer: DetourAnswer[T]) -> None:
         self.table = detour_table(domain)
         self.answer = answer
         self.grid = grid
@@ -281,7 +283,16 @@ class DetourFinder(Generic[T]):
         self._flat = self._codes.codes  # the same list object for the finder's life
         self._width = grid.width
         self._index = action_index(domain)
+        self._height = grid.height
         self._center = 1 << occupancy_bit((0, 0), radius)
+        self._moves = tuple(  # by slot 4 * index + heading: (dx, dy, end heading, sweep bits)
+            (dx, dy, h1, sum(1 << occupancy_bit(c, radius) for c in cells[1:]))
+            for (dx, dy, h1), cells in zip(
+                self._index.slot_moves,
+                (cells for per in self._index.footprints for cells in per),
+                strict=True,
+            )
+        )
         self._steps: tuple[dict[int, _Step], ...] = tuple({} for _ in Heading)
         for action in domain.actions:
             for heading in map(int, Heading):
@@ -289,26 +300,23 @@ class DetourFinder(Generic[T]):
         self._starts = tuple(
             h * _HEADING_STEP + h * _SIDE2 + _OFF * _SIDE + _OFF for h in map(int, Heading)
         )
-        self._bound_known: frozenset[Any] | None = None
+        self._bound_known: frozenset[object] | None = None
         self._bound: tuple[Any | None, ...] = ()
         self._slots: dict[int, _Slot[T] | None] = {}
-        self._by_known: dict[frozenset[Any], dict[int, _Slot[T] | None]] = {}
-        self._bindings: dict[frozenset[Any], tuple[Any | None, ...]] = {}
+        self._by_known: dict[frozenset[object], dict[int, _Slot[T] | None]] = {}
+        self._bindings: dict[frozenset[object], tuple[Any | None, ...]] = {}
         self._rebind(frozenset())  # the fault-free binding, before any timed repair
         for key in self.table.entries:  # every candidate's bits, before any timed repair
             candidate_masks(self.table, key)
 
-    def _step(self, heading: int, action: Any) -> _Step:
+    def _step(self, heading: int, action: object) -> _Step:
         """The :data:`_Step` of ``action`` from ``heading`` (found by equality, so an equal copy
         of a domain action has one; :class:`ProblemError` for an action not of the domain)."""
-        index = self._index.of(action)
-        dx, dy, h1 = self._index.moves[index][heading]
-        cells = self._index.footprints[index][heading]
-        sweep = sum(1 << occupancy_bit(c, self.table.window) for c in cells[1:])
+        dx, dy, h1, sweep = self._moves[4 * self._index.of(action) + heading]
         delta = _WINDOW_STEP + (h1 - heading) * _SIDE2 + dx * _SIDE + dy
         return (dy * self._width + dx, sweep, delta, self._steps[h1])
 
-    def bound(self, known: frozenset[Any]) -> tuple[Any | None, ...]:
+    def bound(self, known: frozenset[object]) -> tuple[Any | None, ...]:
         """Each class of the table bound to its fastest available action under ``known``
         (computed once per fault set)."""
         found = self._bindings.get(known)
@@ -316,7 +324,7 @@ class DetourFinder(Generic[T]):
             found = self._bindings[known] = _bound(self.table, known)
         return found
 
-    def _rebind(self, known: frozenset[Any]) -> None:
+    def _rebind(self, known: frozenset[object]) -> None:
         """Switch to the answers of ``known`` (kept per fault set: they depend on it; shared by
         every finder of the same table and answer, since an answer depends only on the slot,
         the masked code and the faults)."""
@@ -327,7 +335,11 @@ class DetourFinder(Generic[T]):
         self._slots, self._bound_known, self._bound = slots, known, self.bound(known)
 
     def find(
-        self, pose: Pose, queue: Iterable[Any], known: frozenset[Any], blocked: frozenset[Cell]
+        self,
+        pose: Pose,
+        queue: Iterable[object],
+        known: frozenset[object],
+        blocked: frozenset[Cell],
     ) -> T | None:
         """The detour at ``pose`` for the ``queue`` of actions under the known faults ``known``
         with ``blocked`` believed blocked (the window rule of the module docstring).
@@ -383,6 +395,31 @@ class DetourFinder(Generic[T]):
         p += dp  # the whole queue is the window
         slot_id += delta
         return self._last(slot_id, start) if codes[p] & center else None
+
+    def next_blocked(
+        self, pose: Pose, actions: Sequence[object], begin: int, start: int
+    ) -> tuple[int, Pose] | None:
+        """Where a rewriting pass meets the next blocked window: from ``pose``, the pose the
+        plan predicts before ``actions[begin]``, the first ``k >= start`` whose action sweeps a
+        believed-blocked cell (but the one it starts from) from the pose the plan predicts
+        there, with that pose; ``None`` when none does or a predicted pose leaves the grid (a
+        plan that leaves it is not this walk's to mend). Reads the codes as the last
+        :meth:`find` left them (the belief it was given)."""
+        codes, width, height, moves = self._flat, self._width, self._height, self._moves
+        quads = self._index.quads
+        x, y, h = pose.x, pose.y, int(pose.heading)
+        for k in range(begin, len(actions)):
+            action = actions[k]
+            quad = quads.get(id(action))
+            if quad is None:
+                quad = 4 * self._index.of(action)  # an equal copy of a domain action
+            dx, dy, h1, sweep = moves[quad + h]
+            if k >= start and codes[y * width + x] & sweep != sweep:
+                return k, Pose(x, y, Heading(h))
+            x, y, h = x + dx, y + dy, h1
+            if not (0 <= x < width and 0 <= y < height):
+                return None
+        return None
 
     def _last(self, slot_id: int, start: int) -> T | None:
         """The answer of the window that takes in the whole queue (off the warm loop)."""

@@ -31,10 +31,9 @@ import sys
 from dataclasses import dataclass
 from importlib.metadata import entry_points
 from pathlib import Path
-from typing import Any
 
 from selfrepair.errors import InputError, ProblemError
-from selfrepair.robots.domain import Domain, check_domain
+from selfrepair.robots.domain import Domain, SomeDomain, check_domain
 
 __all__ = [
     "ENTRY_POINT_GROUP",
@@ -53,10 +52,10 @@ _BUILTIN = {
     "four-wheel": "selfrepair.robots.four_wheel:FOUR_WHEEL",
     "three-action": "selfrepair.robots.three_action:THREE_ACTION",
 }
-_REGISTERED: dict[str, Domain[Any, Any]] = {}
+_REGISTERED: dict[str, SomeDomain] = {}
 
 
-def register_domain(domain: Domain[Any, Any], *, replace: bool = False) -> Domain[Any, Any]:
+def register_domain(domain: SomeDomain, *, replace: bool = False) -> SomeDomain:
     """Make ``domain`` known by its name (after :func:`check_domain`); returns it.
 
     A second domain under a name already in use raises :class:`ProblemError` unless ``replace``.
@@ -72,7 +71,7 @@ def register_domain(domain: Domain[Any, Any], *, replace: bool = False) -> Domai
     return domain
 
 
-def get_domain(name: str) -> Domain[Any, Any]:
+def get_domain(name: str) -> SomeDomain:
     """The domain called ``name``; an unknown name raises :class:`InputError` listing the known
     ones."""
     domain = _REGISTERED.get(name)
@@ -98,7 +97,7 @@ def _plugins() -> dict[str, str]:
     return {ep.name: ep.value for ep in entry_points(group=ENTRY_POINT_GROUP)}
 
 
-def _load(name: str, target: str) -> Domain[Any, Any]:
+def _load(name: str, target: str) -> SomeDomain:
     module_name, _, attribute = target.partition(":")
     try:
         value = getattr(importlib.import_module(module_name), attribute)

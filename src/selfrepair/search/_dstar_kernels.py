@@ -44,7 +44,12 @@ SIZE, KM, START, EXPANSIONS = 0, 1, 2, 3
 GOAL_CELL, GOAL_HEAD, RNUM, RDEN, WMUL, PW, NODES = 4, 5, 6, 7, 8, 9, 10
 N_SCALARS = 11
 
-_Fn = TypeVar("_Fn", bound=Callable[..., Any])
+I64 = npt.NDArray[np.int64]
+"""The kernels' integer arrays: costs, steps, sweeps, the search state and the scalars ``sc``."""
+U8 = npt.NDArray[np.uint8]
+"""The free-cell bytes of the padded grid (and the fault sweep's marks)."""
+
+_Fn = TypeVar("_Fn", bound=Callable[..., object])
 
 
 def _kernel(fn: _Fn) -> _Fn:
@@ -67,7 +72,7 @@ def _allocating(fn: _Fn) -> _Fn:
 
 
 @_inline
-def _cost(free: Any, pen: Any, dur: Any, nsw: Any, sw: Any, wmul: int, u: int, k: int) -> int:
+def _cost(free: U8, pen: I64, dur: I64, nsw: I64, sw: I64, wmul: int, u: int, k: int) -> int:
     """Scaled cost of class ``k`` from node ``u`` (INF: no action, or a footprint cell blocked)."""
     d = dur[k]
     if d < 0:
@@ -87,7 +92,7 @@ def _cost(free: Any, pen: Any, dur: Any, nsw: Any, sw: Any, wmul: int, u: int, k
 
 
 @_inline
-def _at_goal(sc: Any, free: Any, u: int) -> bool:
+def _at_goal(sc: I64, free: U8, u: int) -> bool:
     gh = sc[GOAL_HEAD]
     return bool(
         (u >> 2) == sc[GOAL_CELL] and (gh < 0 or (u & 3) == gh) and free[sc[GOAL_CELL]] != 0
@@ -95,7 +100,7 @@ def _at_goal(sc: Any, free: Any, u: int) -> bool:
 
 
 @_inline
-def _h(sc: Any, u: int) -> int:
+def _h(sc: I64, u: int) -> int:
     if u == sc[NODES]:
         return 0
     pw = sc[PW]
@@ -114,22 +119,27 @@ def _less(a1: int, a2: int, an: int, b1: int, b2: int, bn: int) -> bool:
     return an < bn
 
 
-@_kernel
-def _sift_up(hk1: Any, hk2: Any, hn: Any, pos: Any, i: int) -> None:
-    k1, k2, n = hk1[i], hk2[i], hn[i]
-    while i > 0:
-        up = (i - 1) >> 1
-        if not _less(k1, k2, n, hk1[up], hk2[up], hn[up]):
-            break
-        hk1[i], hk2[i], hn[i] = hk1[up], hk2[up], hn[up]
-        pos[hn[i]] = i
-        i = up
+@_inline
+def _put(hk1: Any, hk2: Any, hn: Any, pos: Any, i: int, k1: int, k2: int, n: int) -> None:
+    """Put node ``n`` with key ``(k1, k2)`` in heap slot ``i`` and record the slot."""
     hk1[i], hk2[i], hn[i] = k1, k2, n
     pos[n] = i
 
 
 @_kernel
-def _sift_down(hk1: Any, hk2: Any, hn: Any, pos: Any, i: int, size: int) -> None:
+def _sift_up(hk1: I64, hk2: I64, hn: I64, pos: I64, i: int) -> None:
+    k1, k2, n = hk1[i], hk2[i], hn[i]
+    while i > 0:
+        up = (i - 1) >> 1
+        if not _less(k1, k2, n, hk1[up], hk2[up], hn[up]):
+            break
+        _put(hk1, hk2, hn, pos, i, hk1[up], hk2[up], hn[up])
+        i = up
+    _put(hk1, hk2, hn, pos, i, k1, k2, n)
+
+
+@_kernel
+def _sift_down(hk1: I64, hk2: I64, hn: I64, pos: I64, i: int, size: int) -> None:
     k1, k2, n = hk1[i], hk2[i], hn[i]
     while True:
         c = 2 * i + 1
@@ -139,15 +149,13 @@ def _sift_down(hk1: Any, hk2: Any, hn: Any, pos: Any, i: int, size: int) -> None
             c += 1
         if not _less(hk1[c], hk2[c], hn[c], k1, k2, n):
             break
-        hk1[i], hk2[i], hn[i] = hk1[c], hk2[c], hn[c]
-        pos[hn[i]] = i
+        _put(hk1, hk2, hn, pos, i, hk1[c], hk2[c], hn[c])
         i = c
-    hk1[i], hk2[i], hn[i] = k1, k2, n
-    pos[n] = i
+    _put(hk1, hk2, hn, pos, i, k1, k2, n)
 
 
 @_kernel
-def _remove(hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, u: int) -> None:
+def _remove(hk1: I64, hk2: I64, hn: I64, pos: I64, sc: I64, u: int) -> None:
     i = pos[u]
     if i < 0:
         return
@@ -156,8 +164,7 @@ def _remove(hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, u: int) -> None:
     sc[SIZE] = size
     if i == size:
         return
-    hk1[i], hk2[i], hn[i] = hk1[size], hk2[size], hn[size]
-    pos[hn[i]] = i
+    _put(hk1, hk2, hn, pos, i, hk1[size], hk2[size], hn[size])
     if i > 0 and _less(
         hk1[i], hk2[i], hn[i], hk1[(i - 1) >> 1], hk2[(i - 1) >> 1], hn[(i - 1) >> 1]
     ):
@@ -167,7 +174,7 @@ def _remove(hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, u: int) -> None:
 
 
 @_kernel
-def _requeue(g: Any, rhs: Any, hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, u: int) -> None:
+def _requeue(g: I64, rhs: I64, hk1: I64, hk2: I64, hn: I64, pos: I64, sc: I64, u: int) -> None:
     """Queue ``u`` with its current key when it is inconsistent, else take it off the queue."""
     gu, ru = g[u], rhs[u]
     if gu == ru:
@@ -192,8 +199,8 @@ def _requeue(g: Any, rhs: Any, hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, u
 
 @_kernel
 def _update(
-    free: Any, pen: Any, dur: Any, step: Any, nsw: Any, sw: Any,
-    g: Any, rhs: Any, hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, u: int,
+    free: U8, pen: I64, dur: I64, step: I64, nsw: I64, sw: I64,
+    g: I64, rhs: I64, hk1: I64, hk2: I64, hn: I64, pos: I64, sc: I64, u: int,
 ) -> None:  # fmt: skip
     """Recompute ``rhs(u)`` from its successors, then requeue it."""
     goal = sc[NODES]
@@ -215,8 +222,8 @@ def _update(
 
 @_kernel
 def update_nodes(
-    free: Any, pen: Any, dur: Any, step: Any, nsw: Any, sw: Any,
-    g: Any, rhs: Any, hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, nodes: Any,
+    free: U8, pen: I64, dur: I64, step: I64, nsw: I64, sw: I64,
+    g: I64, rhs: I64, hk1: I64, hk2: I64, hn: I64, pos: I64, sc: I64, nodes: I64,
 ) -> None:  # fmt: skip
     """:func:`_update` every node of ``nodes`` (edges out of them changed cost)."""
     for i in range(nodes.shape[0]):
@@ -225,9 +232,9 @@ def update_nodes(
 
 @_kernel
 def faults_sweep(
-    free: Any, pen: Any, dur: Any, step: Any, nsw: Any, sw: Any,
-    backk: Any, backo: Any, nback: Any,
-    g: Any, rhs: Any, hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, mark: Any,
+    free: U8, pen: I64, dur: I64, step: I64, nsw: I64, sw: I64,
+    backk: I64, backo: I64, nback: I64,
+    g: I64, rhs: I64, hk1: I64, hk2: I64, hn: I64, pos: I64, sc: I64, mark: U8,
 ) -> int:  # fmt: skip
     """After the chosen actions changed (``dur``): update every node the search has touched and
     every predecessor of a node with a finite ``g`` (an edge that was impassable may have become
@@ -259,9 +266,9 @@ def faults_sweep(
 
 @_kernel
 def compute(
-    free: Any, pen: Any, dur: Any, step: Any, nsw: Any, sw: Any,
-    backk: Any, backo: Any, nback: Any,
-    g: Any, rhs: Any, hk1: Any, hk2: Any, hn: Any, pos: Any, sc: Any, budget: int,
+    free: U8, pen: I64, dur: I64, step: I64, nsw: I64, sw: I64,
+    backk: I64, backo: I64, nback: I64,
+    g: I64, rhs: I64, hk1: I64, hk2: I64, hn: I64, pos: I64, sc: I64, budget: int,
 ) -> int:  # fmt: skip
     """D* Lite's ComputeShortestPath: run until the start is consistent and no queued key is
     below its key (returns 1), or until ``sc[EXPANSIONS]`` reaches ``budget`` (returns 0)."""
@@ -332,8 +339,8 @@ def compute(
 
 @_allocating
 def walk(
-    free: Any, pen: Any, dur: Any, step: Any, nsw: Any, sw: Any, g: Any, sc: Any
-) -> Any:  # fmt: skip
+    free: U8, pen: I64, dur: I64, step: I64, nsw: I64, sw: I64, g: I64, sc: I64
+) -> I64:  # fmt: skip
     """The classes of the plan from the start, following ``argmin(c + g)`` (ties: the lowest
     class), then its scaled cost as the last element; an empty array when there is none."""
     goal = sc[NODES]
@@ -431,14 +438,14 @@ class CompiledCore:
     def set_cells(self, cells: Sequence[int]) -> None:
         pass  # the kernels read the owner's arrays
 
-    def _graph(self) -> tuple[Any, Any, Any, Any, Any, Any]:
+    def _graph(self) -> tuple[U8, I64, I64, I64, I64, I64]:
         d = self.d  # arrays changed in place, never replaced
         return (d.free, d.pen, d.dur, self.step, self.nsw, self.sw)
 
-    def _back(self) -> tuple[Any, Any, Any]:
+    def _back(self) -> tuple[I64, I64, I64]:
         return (self.backk, self.backo, self.nback)
 
-    def _state(self) -> tuple[Any, Any, Any, Any, Any, Any, Any]:
+    def _state(self) -> tuple[I64, I64, I64, I64, I64, I64, I64]:
         return (self.g, self.rhs, self.hk1, self.hk2, self.hn, self.pos, self.sc)
 
     def update_nodes(self, nodes: Sequence[int]) -> None:

@@ -14,12 +14,10 @@ with the reason rather than silently run on the reference.
 
 from __future__ import annotations
 
-from typing import Any
-
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Heading, Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.search.astar import BACKENDS
 
 __all__ = ["BACKENDS", "backend_ran", "kernel_refusal", "numba_available", "use_numba"]
@@ -36,20 +34,20 @@ def numba_available() -> bool:
     return jit.NUMBA
 
 
-_REFUSALS: BoundedCache[Domain[Any, Any], str | None] = BoundedCache(
+_REFUSALS: BoundedCache[SomeDomain, str | None] = BoundedCache(
     "kernel refusals", 16, kind=CacheKind.PLAN
 )
 """:func:`kernel_refusal` by domain (a process knows a few domains)."""
 
 
-def kernel_refusal(domain: Domain[Any, Any]) -> str | None:
+def kernel_refusal(domain: SomeDomain) -> str | None:
     """Why the compiled lattice kernels cannot plan for ``domain`` (one line), or ``None`` when
     they can: an action that ends or sweeps outside the 3x3 cells around the robot from some
     heading, or more than :data:`MAX_KERNEL_CLASSES` motion classes. Checked once per domain."""
     return _REFUSALS.get(domain, lambda: _refusal(domain))
 
 
-def _refusal(domain: Domain[Any, Any]) -> str | None:
+def _refusal(domain: SomeDomain) -> str | None:
     classes = len({domain.motion_class(a) for a in domain.actions})
     if classes > MAX_KERNEL_CLASSES:
         return f"it has {classes} motion classes, more than the kernels' {MAX_KERNEL_CLASSES}"
@@ -66,7 +64,7 @@ def _refusal(domain: Domain[Any, Any]) -> str | None:
     return None
 
 
-def use_numba(backend: str, domain: Domain[Any, Any] | None = None) -> bool:
+def use_numba(backend: str, domain: SomeDomain | None = None) -> bool:
     """Whether ``backend`` (already checked to be one of :data:`BACKENDS`) means the kernels, for
     the robot ``domain`` when one is given (searches over cells alone give none).
 
@@ -90,7 +88,7 @@ def use_numba(backend: str, domain: Domain[Any, Any] | None = None) -> bool:
     return numba_available() and (domain is None or kernel_refusal(domain) is None)
 
 
-def backend_ran(backend: str, domain: Domain[Any, Any]) -> str:
+def backend_ran(backend: str, domain: SomeDomain) -> str:
     """The backend that plans for ``domain`` when ``backend`` is asked for: ``"numba"`` or
     ``"python"`` (raises as :func:`use_numba` does)."""
     return "numba" if use_numba(backend, domain) else "python"

@@ -5,11 +5,10 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from fractions import Fraction
-from typing import Any
 
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.problem import PlanningProblem, StepTerm
 from selfrepair.world.maze import Maze, clearance_map
@@ -20,11 +19,11 @@ __all__ = ["action_cost", "plan_cost"]
 def action_cost(
     maze: Maze,
     pose: Pose,
-    action: Any,
+    action: object,
     *,
     clearance_weight: Fraction,
     clearance_radius: int,
-    domain: Domain[Any, Any] = FOUR_WHEEL,
+    domain: SomeDomain = FOUR_WHEEL,
 ) -> Fraction:
     """The exact cost of ``action`` at ``pose`` (see the module docstring for the formula), for
     the four-wheel robot unless ``domain`` is given.
@@ -44,7 +43,7 @@ def action_cost(
     return cost
 
 
-def plan_cost(problem: PlanningProblem, actions: Sequence[Any]) -> Fraction:
+def plan_cost(problem: PlanningProblem, actions: Sequence[object]) -> Fraction:
     """Re-simulate ``actions`` from ``problem.start`` and return their total cost.
 
     Raises :class:`ProblemError` if an action is unavailable under ``problem.faults``, sweeps a wall
@@ -77,7 +76,9 @@ def plan_cost(problem: PlanningProblem, actions: Sequence[Any]) -> Fraction:
     return total
 
 
-def _term_cost(term: StepTerm | None, pose: Pose, action: Any, index: int, name: str) -> Fraction:
+def _term_cost(
+    term: StepTerm | None, pose: Pose, action: object, index: int, name: str
+) -> Fraction:
     """The step term's cost of ``action`` at ``pose`` (0 without a term); a step a hard term
     forbids, or an action it has no count for, raises :class:`ProblemError`."""
     if term is None:

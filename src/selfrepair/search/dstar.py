@@ -61,14 +61,14 @@ import time
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
 
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
-from selfrepair.robots.domain import Domain, primitive_by_motion, progress_rate
+from selfrepair.robots.domain import SomeDomain, primitive_by_motion, progress_rate
 from selfrepair.search._dstar_reference import INF, Core, PythonCore, geometry, reach
 from selfrepair.search.astar import BACKENDS, PlanStatus
 from selfrepair.search.backend import use_numba
@@ -108,7 +108,7 @@ class DStarPlan:
     ``expansions`` since the previous plan, and the wall time of the call."""
 
     status: PlanStatus
-    actions: tuple[Any, ...]
+    actions: tuple[object, ...]
     cost: Fraction | None
     scaled_cost: int
     expansions: int
@@ -140,11 +140,11 @@ class DStarLite:
 
     def __init__(
         self,
-        domain: Domain[Any, Any],
+        domain: SomeDomain,
         walls: npt.NDArray[np.bool_],
         start: Pose,
         goal: Cell,
-        faults: frozenset[Any],
+        faults: frozenset[object],
         goal_heading: Heading | None,
         clearance_weight: Fraction,
         clearance_radius: int,
@@ -177,8 +177,8 @@ class DStarLite:
         self.goal_heading = goal_heading
         self.goal_cell = self._cell(*goal)
         self.goal_head = -1 if goal_heading is None else int(goal_heading)
-        self.faults: frozenset[Any] = frozenset()
-        self.chosen: tuple[Any, ...] = ()
+        self.faults: frozenset[object] = frozenset()
+        self.chosen: tuple[object, ...] = ()
         self.dur = np.full(len(self.geometry.classes), -1, dtype=np.int64)
         self._choose(frozenset(faults))
         self.backend = "numba" if numba else "python"
@@ -190,11 +190,11 @@ class DStarLite:
     @classmethod
     def create(
         cls,
-        domain: Domain[Any, Any],
+        domain: SomeDomain,
         maze: WallMap | npt.NDArray[np.bool_],
         start: Pose,
         goal: Cell,
-        faults: frozenset[Any] = frozenset(),
+        faults: frozenset[object] = frozenset(),
         *,
         goal_heading: Heading | None = None,
         clearance_weight: Fraction | int = 0,
@@ -228,7 +228,7 @@ class DStarLite:
 
     # --- changes -------------------------------------------------------------------------------
 
-    def _choose(self, faults: frozenset[Any]) -> bool:
+    def _choose(self, faults: frozenset[object]) -> bool:
         fastest = primitive_by_motion(self.domain, faults)
         chosen = tuple(fastest.get(m) for m in self.geometry.classes)
         changed = chosen != self.chosen
@@ -239,7 +239,7 @@ class DStarLite:
             )
         return changed
 
-    def update_faults(self, faults: frozenset[Any]) -> int:
+    def update_faults(self, faults: frozenset[object]) -> int:
         """The known faults are now ``faults``; returns the number of vertex updates made (0 when
         no motion class changed its action)."""
         faults = frozenset(faults)

@@ -22,14 +22,14 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.geometry import Cell
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.domain import progress_rate as domain_progress_rate
 from selfrepair.search.backend import use_numba
 from selfrepair.search.problem import CellBound, PlanningProblem, with_border
@@ -52,25 +52,25 @@ class HeuristicFn(Protocol):
         self,
         maze: Maze,
         goal: Cell,
-        domain: Domain[Any, Any],
-        actions: Sequence[Any],
+        domain: SomeDomain,
+        actions: Sequence[object],
         *,
         backend: str = "auto",
     ) -> CellBound: ...
 
 
-def progress_rate(domain: Domain[Any, Any], actions: Sequence[Any]) -> Fraction:
+def progress_rate(domain: SomeDomain, actions: Sequence[object]) -> Fraction:
     """Least ticks per cell of Manhattan displacement over ``actions`` from any heading (0 if none
     moves)."""
     return _RATES.get((domain, tuple(actions)), lambda: _progress_rate(domain, actions))
 
 
-_RATES: BoundedCache[tuple[Domain[Any, Any], tuple[Any, ...]], Fraction] = BoundedCache(
+_RATES: BoundedCache[tuple[SomeDomain, tuple[object, ...]], Fraction] = BoundedCache(
     "planner progress rates", 1024, kind=CacheKind.PLAN
 )
 
 
-def _progress_rate(domain: Domain[Any, Any], actions: Sequence[Any]) -> Fraction:
+def _progress_rate(domain: SomeDomain, actions: Sequence[object]) -> Fraction:
     return domain_progress_rate(domain, actions)
 
 
@@ -163,8 +163,8 @@ class _BuiltIn:
         self,
         maze: Maze,
         goal: Cell,
-        domain: Domain[Any, Any],
-        actions: Sequence[Any],
+        domain: SomeDomain,
+        actions: Sequence[object],
         *,
         backend: str = "auto",
     ) -> CellBound:
@@ -184,7 +184,7 @@ CellBound``."""
 def heuristic_bound(
     problem: PlanningProblem,
     heuristic: str,
-    actions: Sequence[Any],
+    actions: Sequence[object],
     rate: Fraction,
     backend: str,
 ) -> tuple[CellBound, int | None]:

@@ -17,7 +17,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -25,13 +24,20 @@ import numpy.typing as npt
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, FreeGrid
 
-__all__ = ["MAX_PATTERN_CELLS", "PatternSource", "PatternTable", "StepTerm", "pattern_slot"]
+__all__ = [
+    "MAX_PATTERN_CELLS",
+    "PATTERN_MIX",
+    "PatternSource",
+    "PatternTable",
+    "StepTerm",
+    "pattern_slot",
+]
 
 MAX_PATTERN_CELLS = 63
 """Cells a pattern may have for the search to read it per expanded cell (one ``int64`` code,
 never negative); a wider pattern makes the planner read the dense counts instead."""
 
-_MIX = 0x2545F4914F6CDD1D
+PATTERN_MIX = 0x2545F4914F6CDD1D
 """Odd multiplier of :func:`pattern_slot` (below ``2**63``, so the kernel's ``int64`` product
 wraps to the same low bits as Python's exact one)."""
 
@@ -41,7 +47,7 @@ def pattern_slot(code: int, mask: int) -> int:
     slots (a power of two). The compiled search computes the same with wrapping ``int64``
     arithmetic, whose low bits equal these."""
     mixed = code ^ (code >> 7) ^ (code >> 19)
-    return (mixed * _MIX) & mask
+    return (mixed * PATTERN_MIX) & mask
 
 
 class PatternTable:
@@ -144,7 +150,7 @@ class StepTerm:
     planner knows); the planner refuses a term made for others. Equality is identity (arrays).
     """
 
-    actions: tuple[Any, ...]
+    actions: tuple[object, ...]
     counts: npt.NDArray[np.int32] | None
     penalty: Fraction | None = None
     label: str = "tolerant"

@@ -4,7 +4,8 @@
 and (given the file's text) the line, everything that cannot run: a robot or task on a wall or off
 the maze, two robots on one cell or of one name, more robots than free cells, a task no robot with
 a gripper can reach (or whose drop-off cannot be reached from its pickup), an unknown robot in a
-fault, a blocked cell off the maze, more robots or tasks than the :class:`Limits`.
+fault, a blocked cell or a world event's cell off the maze, more robots or tasks than the
+:class:`Limits`.
 """
 
 from __future__ import annotations
@@ -57,6 +58,14 @@ def check_scenario(scenario: TeamScenario, *, text: str = "", limits: Limits | N
     _check_robots(scenario, maze, fail)
     _check_tasks(scenario, maze, fail)
     _check_faults(scenario, maze, fail)
+    for event in scenario.world.events:
+        x, y = event.cell
+        if not maze.in_bounds(x, y):
+            raise fail(
+                f"the world event at tick {event.at} on cell {x},{y}: the cell is off the maze",
+                "world",
+                "events",
+            )
 
 
 def _check_robots(scenario: TeamScenario, maze: Maze, fail: Fail) -> None:

@@ -25,15 +25,11 @@ from collections.abc import Mapping
 from enum import StrEnum
 from types import MappingProxyType
 
-from selfrepair.execution.executor import mission_context
+from selfrepair.execution.executor import mission_context, start_repairer
 from selfrepair.execution.result import MissionSpec, StepSource
 from selfrepair.execution.stepper import Stepper, splice
 from selfrepair.geometry import Cell
-from selfrepair.repair.strategies import (
-    StrategyOptions,
-    get_strategy,
-    uses_table,
-)
+from selfrepair.repair.strategies import StrategyOptions, uses_table
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.lattice import bfs_distances, planning_actions
 from selfrepair.team.model import IncidentKind
@@ -110,7 +106,7 @@ def begin_drive(world: TeamWorld, robot: RobotState, entry: Entry, at: int) -> D
     ):
         return DriveStart.BLOCKED
     spec = MissionSpec(
-        known,
+        world.known_map(robot.name, events=False),  # world events: the robot's belief
         robot.pose,
         target,
         strategy=options.robot_strategy,
@@ -119,15 +115,17 @@ def begin_drive(world: TeamWorld, robot: RobotState, entry: Entry, at: int) -> D
         ),
         backend=options.backend,
         domain=domain,
+        world=world.scenario.world,
     )
     table = spec.options.resolved_table() if uses_table(options.robot_strategy) else None
     context = mission_context(spec, table)
+    context.belief.blocked = world.seen
     result = context.plan(robot.pose, target, None, robot.faults, context.replan_budget)
     world.plans += 1
     world.expansions += result.expansions
     if result.status is not PlanStatus.SOLVED:
         return DriveStart.STUCK
-    repairer = get_strategy(options.robot_strategy)(context)
+    repairer = start_repairer(spec, context)
     stepper = Stepper(context, repairer, result.actions, robot.faults, robot.sim.table)
     robot.drive = Drive(entry, target, stepper, [])
     return DriveStart.PLACED if place(world, robot, at) else DriveStart.WAITING
@@ -141,7 +139,7 @@ def place(world: TeamWorld, robot: RobotState, at: int) -> bool:
     robot.stale = False
     res, domain, scale = world.reservations, world.scenario.domain, world.scale
     res.release_from(robot.name, at)
-    known = world.known_map(robot.name)
+    known = world.known_map(robot.name, events=False)  # the stepper avoids what it sees
     actions = drive.actions()
     steps = schedule_path(
         res, robot.name, domain, scale, known, robot.pose, at, actions,

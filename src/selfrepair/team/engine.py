@@ -34,7 +34,15 @@ options give the same result (the timings aside).
    next drive placed in time (garbage collection is held off during it; each mission starts
    without kept cost-to-go maps, so a repair's cost does not depend on the missions run before
    it in the process).
-5. **End.** When every item is delivered; when nothing more can happen (``stalled``: no robot
+5. **A changing world.** The scenario's world events (:mod:`selfrepair.world.events`) are
+   applied by every robot's simulator (the one schedule); each robot senses them as a single
+   robot does (by range: before it plans a drive, before every command and when the world
+   changes while it rests; or by bumping into them) and the team shares what they see
+   (:func:`~selfrepair.team.moves.tell`). A next primitive that sweeps a cell believed blocked
+   goes to the robot's stepper (its strategy's detour or replan); when that fails, a
+   ``blocked`` incident goes to the team strategy, which plans on a known map with the cells.
+   A mission does not stall while a world event is still to come.
+6. **End.** When every item is delivered; when nothing more can happen (``stalled``: no robot
    with work can act, no fault will clear, nothing moved for :data:`STALL_TICKS`); or at
    ``max_ticks``.
 """
@@ -55,7 +63,7 @@ from selfrepair.team.allocation import Job, Worker, allocate, distance_maps, job
 from selfrepair.team.driving import cancel_drive
 from selfrepair.team.faults import fault_times, faults_due
 from selfrepair.team.model import ActionKind, TeamScenario, Trigger
-from selfrepair.team.moves import drive_once
+from selfrepair.team.moves import drive_once, look
 from selfrepair.team.reservations import FOREVER
 from selfrepair.team.result import TeamOptions, TeamResult, TeamStatus
 from selfrepair.team.robottable import robot_table
@@ -150,7 +158,10 @@ def _world(scenario: TeamScenario, options: TeamOptions) -> TeamWorld:
     robots = {}
     for r in scenario.robots:
         clock = RobotFaultClock(scenario.domain, states, r.name, options.seed)
-        sim = Simulator(scenario.domain, scenario.maze, r.start, detection, options.seed, clock)
+        sim = Simulator(
+            scenario.domain, scenario.maze, r.start, detection, options.seed, clock,
+            world=scenario.world or None,
+        )  # fmt: skip
         robots[r.name] = RobotState(r, r.start, deque(), sim, clock)
     items = {t.item: ItemState(t.pickup) for t in scenario.tasks}
     world = TeamWorld(scenario, options, scale, robots, items, faults=states)
@@ -185,11 +196,17 @@ def _loop(world: TeamWorld, repairer: TeamRepairer) -> tuple[TeamStatus, str]:
     scenario, scale = world.scenario, world.scale
     limit = (world.options.max_ticks or default_max_ticks(scenario)) * scale
     clocks = world.faults
+    changed = {e.at * scale for e in scenario.world.events}  # the world changes then
+    changes = sorted(changed)
     wake = {name: 0 for name in world.robots}
     t = forgotten = 0
     while True:
         world.now = t
         faults_due(world, clocks, t)
+        if t in changed:  # the world changes: every robot at rest sees it (range sensing)
+            for robot in world.robots.values():
+                if robot.sim.units <= t:
+                    look(world, robot, t)
         pending = list(world.robots)
         for _ in range(_ROUNDS):
             world.dirty.clear()
@@ -206,6 +223,7 @@ def _loop(world: TeamWorld, repairer: TeamRepairer) -> tuple[TeamStatus, str]:
         if t >= limit:
             return TeamStatus.TIME_LIMIT, f"{limit // scale} ticks passed (max_ticks)"
         upcoming = [c for c in fault_times(clocks) if c > t]
+        upcoming += [u for u in changes if u > t]
         if t - world.last_progress > STALL_TICKS * scale and not upcoming:
             return TeamStatus.STALLED, _stall_reason(world)
         candidates = [w for w in wake.values() if w > t] + upcoming

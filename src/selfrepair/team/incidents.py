@@ -30,6 +30,13 @@ def incident(
     if robot.deferred == (entry.action, kind.value):
         robot.retry_at = t + 2 * world.scale
         return
+    if robot.last_incident == (t, entry.action, kind):
+        # the strategy's answer gave the robot the same incident at the same instant (a carrier
+        # whose drop-off is walled off for now): it waits that incident out, as ``alone`` does
+        robot.deferred = (entry.action, kind.value)
+        robot.retry_at = t + 2 * world.scale
+        return
+    robot.last_incident = (t, entry.action, kind)
     item = entry.action.item or item_task_of(robot)
     load = Load.CARRYING if robot.load else Load.EMPTY
     world.incidents.append(IncidentRecord(t, robot.name, entry.action, kind, load))

@@ -31,13 +31,13 @@ import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 from enum import StrEnum
-from typing import Any
 
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.execution.faults import Detection, Persistence
 from selfrepair.geometry import Cell, Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.world.events import WorldSchedule
 from selfrepair.world.maze import Maze
 
 __all__ = [
@@ -222,19 +222,22 @@ class TeamScenario:
     and ``digest`` is the SHA-256 of that file's text (``""`` for a scenario built in code).
     ``detection`` is how every robot learns of its wheel faults (as in a single robot's
     :class:`~selfrepair.execution.faults.FaultSchedule`: ``now``, sensed before every command,
-    or ``on-use``, learned when a command fails).
-    Checked by :func:`selfrepair.team.check.check_scenario`."""
+    or ``on-use``, learned when a command fails). ``world`` holds the world events (cells that
+    become blocked or free at given ticks, :mod:`selfrepair.world.events`) and how the robots
+    sense them; every robot's simulator applies the one schedule (docs/team.md, "A changing
+    world"). Checked by :func:`selfrepair.team.check.check_scenario`."""
 
     maze: Maze
     robots: tuple[RobotSpec, ...]
     tasks: tuple[Task, ...]
     faults: tuple[TeamFault, ...] = ()
-    domain: Domain[Any, Any] = FOUR_WHEEL
+    domain: SomeDomain = FOUR_WHEEL
     name: str = ""
     source: str = "<scenario>"
     table: str = ""
     digest: str = ""
     detection: Detection = Detection.NOW
+    world: WorldSchedule = field(default_factory=WorldSchedule)
     _index: dict[str, int] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -256,9 +259,9 @@ class TeamScenario:
         raise ProblemError(f"no task delivers item {item!r}")
 
     def without_faults(self) -> TeamScenario:
-        """The same scenario with no team fault (the fault-free baseline; no longer the file's
-        content, so without its digest)."""
-        return replace(self, faults=(), digest="")
+        """The same scenario with no team fault and no world event (the undisturbed baseline;
+        no longer the file's content, so without its digest)."""
+        return replace(self, faults=(), digest="", world=replace(self.world, events=()))
 
 
 # --- higher-level actions ----------------------------------------------------------------------

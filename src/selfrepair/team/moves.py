@@ -1,6 +1,6 @@
-"""One go at a team robot's drive: place it, sense and repair faults, keep other robots' cells
-free, and send the next primitive action to the robot's simulator (part of
-:mod:`selfrepair.team.engine`'s steps 3 and 4)."""
+"""One go at a team robot's drive: place it, sense and repair faults and cells blocked by world
+events, keep other robots' cells free, and send the next primitive action to the robot's
+simulator (part of :mod:`selfrepair.team.engine`'s steps 3 and 4)."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from selfrepair.team.driving import (
     own_repair,
     place,
 )
-from selfrepair.team.faults import know
+from selfrepair.team.faults import know, reoffer
 from selfrepair.team.incidents import incident
 from selfrepair.team.model import IncidentKind, TeamFaultKind
 from selfrepair.team.reservations import TimedStep
@@ -26,7 +26,7 @@ from selfrepair.team.result import MoveRecord
 from selfrepair.team.state import Entry, RobotState, TeamWorld
 from selfrepair.team.strategies import TeamRepairer
 
-__all__ = ["command", "drive_once", "hold", "learn_blocked", "safe"]
+__all__ = ["command", "drive_once", "hold", "learn_blocked", "look", "safe", "tell"]
 
 
 def drive_once(
@@ -38,6 +38,8 @@ def drive_once(
         cancel_drive(world, robot, t)
         drive = None
     if drive is None:
+        if robot.sim.world is not None:
+            look(world, robot, t)  # it plans its drive around what it sees
         start = begin_drive(world, robot, head, t)
         if start is DriveStart.ARRIVED:
             robot.queue.popleft()
@@ -68,9 +70,13 @@ def drive_once(
         sensed = sim.sense()  # the robot senses its faults before every command
         if sensed is not robot.faults and sensed != robot.faults:
             know(world, robot, sensed, t)
-    if not stepper.available(step.action):
+    if sim.world is not None:
+        look(world, robot, t)  # its range sensors, before every command
+    faulty = not stepper.available(step.action)
+    if faulty or (stepper.blocked and stepper.sweeps_blocked(robot.pose, step.action)):
         if not own_repair(world, robot, t):
-            incident(world, repairer, robot, head, IncidentKind.STUCK, t)
+            kind = IncidentKind.STUCK if faulty else IncidentKind.BLOCKED
+            incident(world, repairer, robot, head, kind, t)
         return None
     if any(c in world.blocked for c in step.cells[1:]):
         learn_blocked(world, robot, step.cells)
@@ -86,7 +92,8 @@ def drive_once(
 def command(world: TeamWorld, robot: RobotState, step: TimedStep, t: int) -> int:
     """Send the placed primitive ``step`` to the robot's simulator at ``t``; returns when the
     robot is free again. A failed attempt (a fault the robot did not know) teaches it the
-    faults that blocked the command; its drive is placed again after the attempt."""
+    faults that blocked the command, a bump (a cell blocked by a world event that it had not
+    seen) the cells it touched; its drive is placed again after the attempt."""
     drive, sim = robot.drive, robot.sim
     assert drive is not None
     stepper, pose = drive.stepper, robot.pose
@@ -96,15 +103,18 @@ def command(world: TeamWorld, robot: RobotState, step: TimedStep, t: int) -> int
     outcome = sim.advance(step.action)
     stepper.record(
         number, step.action, source, outcome, pose, sim.pose, sim.last_duration,
-        sim.last_blocking,
+        sim.last_blocking, sim.last_bumped,
     )  # fmt: skip
-    if outcome is Outcome.FAILED_ATTEMPT:
+    if outcome is Outcome.FAILED_ATTEMPT or outcome is Outcome.BUMPED:
         end = sim.units
         robot.busy_until, robot.footprint = end, (pose.cell,)
-        world.moves.append(
-            MoveRecord(robot.name, t, end, step.action, pose, pose, StepSource.FAILED_ATTEMPT)
-        )
-        know(world, robot, stepper.known, t)
+        failed = outcome is Outcome.FAILED_ATTEMPT
+        source = StepSource.FAILED_ATTEMPT if failed else StepSource.BUMPED
+        world.moves.append(MoveRecord(robot.name, t, end, step.action, pose, pose, source))
+        if failed:
+            know(world, robot, stepper.known, t)
+        else:  # it touched blocked cells: its stepper learned them, the team hears of them
+            tell(world, robot, stepper.blocked)
         hold(world, robot, t)
         return end
     if outcome is not Outcome.MOVED or sim.pose != step.after or sim.units != step.end:
@@ -135,6 +145,31 @@ def safe(world: TeamWorld, robot: RobotState, cells: tuple[Cell, ...], t: int) -
         for other in world.robots.values()
         if other is not robot
     )
+
+
+def look(world: TeamWorld, robot: RobotState, t: int) -> None:
+    """``robot``'s range sensors at ``t`` (its simulator's
+    :meth:`~selfrepair.execution.simulator.Simulator.sense_cells`: nothing with bump sensing)
+    update what the team believes blocked by world events (:func:`tell`)."""
+    robot.sim.wait_until(t)
+    tell(world, robot, robot.sim.sense_cells(world.seen))
+
+
+def tell(world: TeamWorld, robot: RobotState, believed: frozenset[Cell]) -> None:
+    """``robot`` now believes ``believed`` blocked by world events: when that changes what the
+    team believes, it tells the team (one broadcast), every robot's drive sees the new belief,
+    and when cells opened the team's orphaned items are offered again (as when a blocked team
+    fault clears, :func:`~selfrepair.team.faults.reoffer`)."""
+    if believed is world.seen or believed == world.seen:
+        return
+    opened = bool(world.seen - believed)
+    world.seen = believed
+    world.broadcast(robot.name)
+    for other in world.robots.values():
+        if other.drive is not None:
+            other.drive.stepper.see(believed)
+    if opened:
+        world.dirty.update(reoffer(world))
 
 
 def learn_blocked(world: TeamWorld, robot: RobotState, cells: tuple[Cell, ...]) -> None:

@@ -9,7 +9,10 @@
   robot's first pick), its clearing line when a transient fault ends within the mission;
 - the moves: a robot that *teleports* (a move that does not start where its previous move ended,
   or overlaps it in time), a move the robot model does not produce (wrong end pose or
-  duration), a move through a wall or a blocked cell, a move its true faults forbid;
+  duration), a move through a wall or through a cell blocked at its start (a blocked team
+  fault, or a world event of the header's ``world``: no executed motion sweeps a cell blocked
+  at that time but the robot's own), a bump that sweeps no blocked cell, a move its true
+  faults forbid;
 - the acts: a pick, drop or handover that does not last its ticks or whose conditions do not hold
   (gripper, load, place, adjacency; a delivered item stays delivered, so picking it again is
   refused);
@@ -24,7 +27,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
-from typing import Any
 
 from selfrepair.errors import InputError
 from selfrepair.execution.faults import FaultEvent, Persistence
@@ -155,6 +157,7 @@ def _scenario_mismatch(file: TeamScenario, header: TeamScenario) -> str:
         ("robots", file.robots, header.robots),
         ("tasks", file.tasks, header.tasks),
         ("faults", file.faults, header.faults),
+        ("world events", file.world, header.world),
     ):
         if mine != theirs:
             return what
@@ -228,10 +231,19 @@ def _check_moves(trace: TeamTrace, spans: list[tuple[int, int | None, TeamFault]
         faults, blocked = _truth(trace, spans, m.robot, m.start, steps[m.robot])
         steps[m.robot] += 1
         name = domain.format_action(m.action)
-        if m.source is StepSource.FAILED_ATTEMPT:
+        if m.source is StepSource.FAILED_ATTEMPT or m.source is StepSource.BUMPED:
+            what = "failed attempt" if m.source is StepSource.FAILED_ATTEMPT else "bump"
             if m.after != m.before or m.end - m.start != scale:
-                raise _Problem(f"{m.robot}'s failed attempt moves or lasts not one tick", m.line)
-            if domain.available(m.action, faults):
+                raise _Problem(f"{m.robot}'s {what} moves or lasts not one tick", m.line)
+            if m.source is StepSource.BUMPED:
+                swept = domain.footprint(m.before, m.action)[1:]
+                if not any(c in blocked for c in swept):
+                    raise _Problem(
+                        f"{m.robot}'s {name} is logged as a bump, but it sweeps no cell blocked "
+                        f"at unit {m.start}",
+                        m.line,
+                    )
+            elif domain.available(m.action, faults):
                 raise _Problem(
                     f"{m.robot}'s {name} is logged as failed, but its true faults allow it", m.line
                 )
@@ -246,8 +258,11 @@ def _check_moves(trace: TeamTrace, spans: list[tuple[int, int | None, TeamFault]
         cells = domain.footprint(m.before, m.action)
         if not maze.all_free(cells):
             raise _Problem(f"{m.robot}'s move sweeps a wall", m.line)
-        if any(c in blocked for c in cells[1:]):
-            raise _Problem(f"{m.robot}'s move sweeps a blocked cell", m.line)
+        if hit := [c for c in cells[1:] if c in blocked]:
+            x, y = hit[0]
+            raise _Problem(
+                f"{m.robot}'s move sweeps cell {x},{y}, blocked at unit {m.start}", m.line
+            )
         if not domain.available(m.action, faults):
             raise _Problem(f"{m.robot} moves with {name}, which its faults forbid", m.line)
         last[m.robot] = (m.after, m.end)
@@ -259,13 +274,16 @@ def _truth(
     robot: str,
     t: int,
     step: int,
-) -> tuple[frozenset[Any], set[Cell]]:
+) -> tuple[frozenset[object], set[Cell]]:
     """The true domain faults of ``robot`` at ``t`` (its command number ``step``: an
     intermittent fault is drawn as :class:`~selfrepair.team.state.RobotFaultClock` draws it,
-    from the options' seed) and the blocked cells."""
+    from the options' seed) and the blocked cells (by blocked team faults and by the world
+    events due by then, :meth:`WorldSchedule.blocked_at
+    <selfrepair.world.events.WorldSchedule.blocked_at>`, computed from the header alone)."""
     domain = trace.scenario.domain
-    faults: set[Any] = set()
-    blocked: set[Cell] = set()
+    faults: set[object] = set()
+    world = trace.scenario.world
+    blocked: set[Cell] = set(world.blocked_at(Fraction(t, trace.scale))) if world else set()
     for f in _faults_at(spans, t):
         if f.kind is TeamFaultKind.BLOCKED:
             blocked.update(f.cells)
@@ -366,9 +384,9 @@ def _check_conflicts(trace: TeamTrace) -> None:
             by_cell.setdefault(pose.cell, []).append((since, m.start, robot.name, line))
             held = (
                 (m.before.cell,)
-                if m.source is StepSource.FAILED_ATTEMPT
+                if m.source in (StepSource.FAILED_ATTEMPT, StepSource.BUMPED)
                 else domain.footprint(m.before, m.action)
-            )  # a failed attempt holds the robot's cell
+            )  # a failed attempt or a bump holds the robot's cell
             for cell in held:
                 by_cell.setdefault(cell, []).append((m.start, m.end, robot.name, m.line))
             pose, since, line = m.after, m.end, m.line

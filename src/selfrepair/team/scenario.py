@@ -28,6 +28,11 @@ A scenario file (format in docs/team.md)::
     persistence = "permanent"    # permanent | transient (then duration = ticks) | intermittent
                                  # (wheels and immobilised; then probability = per robot step)
 
+    [world]                      # a changing world (docs/dynamic.md): world events
+    events = "5,3@10; 7,2@4..20" # the text of --events: X,Y@T | X,Y@T..U | -X,Y@T
+    sensing = "range"            # range (cells within 'range' seen) | bump
+    range = 2
+
 ``robots = 4`` and ``tasks = 6`` (counts) draw robots and tasks from ``seed`` instead
 (:mod:`selfrepair.team.randomteam`); ``grippers = "mixed"`` then leaves every third robot
 without a gripper.
@@ -43,7 +48,7 @@ from __future__ import annotations
 
 import hashlib
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import numpy as np
 from pydantic import AfterValidator, Field, ValidationInfo, field_validator, model_validator
@@ -51,7 +56,8 @@ from pydantic import AfterValidator, Field, ValidationInfo, field_validator, mod
 from selfrepair.errors import ConfigError, InputError, ProblemError
 from selfrepair.execution.faults import Detection, Persistence
 from selfrepair.geometry import parse_cell, parse_pose
-from selfrepair.robots.domain import Domain
+from selfrepair.limits import DEFAULT_SENSING_RANGE
+from selfrepair.robots.domain import Domain, SomeDomain
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN, file_domain, load_plugins
 from selfrepair.robots.registry import get_domain
 from selfrepair.team.check import check_scenario
@@ -76,6 +82,7 @@ from selfrepair.team.result import TeamOptions
 from selfrepair.team.robottable import robot_table
 from selfrepair.textio import read_text, strip_bom
 from selfrepair.tomlfile import Frozen, Int, find_line, read_toml, validate
+from selfrepair.world.events import Sensing, WorldSchedule, parse_events
 from selfrepair.world.maze import Maze
 
 __all__ = [
@@ -197,6 +204,29 @@ class FaultEntry(Frozen):
         )
 
 
+class WorldEntry(Frozen):
+    """The ``[world]`` table: world events in the text form of ``--events``
+    (:func:`~selfrepair.world.events.parse_events`) and how the robots sense them (the
+    ``sensing`` and ``range`` keys of an experiment file's ``[world]``, one value each)."""
+
+    events: str = ""
+    sensing: Sensing = Sensing.RANGE
+    range: Annotated[Int, Field(ge=0, le=64)] = DEFAULT_SENSING_RANGE
+
+    def schedule(self, text: str, source: str) -> WorldSchedule:
+        """The world schedule; a bad event is one :class:`ConfigError` at the line of
+        ``events`` naming the event."""
+        try:
+            events = parse_events(self.events, source="events")
+        except InputError as exc:
+            raise ConfigError(
+                f"key 'world.events' ({exc.source}): {exc.reason}",
+                source=source,
+                line=find_line(text, ("world", "events")),
+            ) from None
+        return WorldSchedule(events, self.sensing, self.range)
+
+
 class ScenarioFile(Frozen):
     """A whole scenario file (see the module docstring); ``robots`` and ``tasks`` are lists of
     tables or counts to draw from ``seed``."""
@@ -212,9 +242,10 @@ class ScenarioFile(Frozen):
     robots: Count | tuple[RobotEntry, ...] = ()
     tasks: Count | tuple[TaskEntry, ...] = ()
     faults: tuple[FaultEntry, ...] = ()
+    world: WorldEntry | None = None
 
 
-def _domain(info: ValidationInfo) -> Domain[Any, Any]:
+def _domain(info: ValidationInfo) -> SomeDomain:
     domain = (info.context or {}).get("domain")
     return domain if isinstance(domain, Domain) else get_domain(DEFAULT_DOMAIN)
 
@@ -299,9 +330,10 @@ def parse_scenario(
             tasks = tuple(t.task() for t in entry.tasks)
     name = entry.name or (Path(source).stem if not source.startswith("<") else "scenario")
     table = "" if entry.table is None else _table(entry.table, base_dir)
+    world = WorldSchedule() if entry.world is None else entry.world.schedule(text, source)
     scenario = TeamScenario(
         maze, robots, tasks, tuple(f.fault() for f in entry.faults), domain, name, source,
-        table=table, digest=scenario_digest(text), detection=entry.detection,
+        table=table, digest=scenario_digest(text), detection=entry.detection, world=world,
     )  # fmt: skip
     check_scenario(scenario, text=text, limits=limits)
     if table:

@@ -4,9 +4,9 @@ records kept for the result.
 Only the engine (:mod:`selfrepair.team.engine`) and the team strategies
 (:mod:`selfrepair.team.strategies`) touch it, within one call of
 :func:`selfrepair.team.engine.run_team`; nothing of it outlives the mission. What the team
-*knows* (the known map: walls, blocked cells met so far, robots believed unable to move, each
-robot's known faults) is kept apart from what is *true* (every active blocked cell, and each
-robot's true faults, held by the robot's own
+*knows* (the known map: walls, blocked cells met so far, cells seen blocked by world events,
+robots believed unable to move, each robot's known faults) is kept apart from what is *true*
+(every active blocked cell, and each robot's true faults, held by the robot's own
 :class:`~selfrepair.execution.simulator.Simulator` with a :class:`RobotFaultClock`), as a single
 robot's simulator keeps the true faults apart from what the robot knows.
 """
@@ -17,7 +17,6 @@ from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any
 
 import numpy as np
 
@@ -26,9 +25,10 @@ from selfrepair.execution.faults import FaultEvent, Persistence
 from selfrepair.execution.simulator import Simulator
 from selfrepair.execution.stepper import Stepper
 from selfrepair.geometry import Cell, Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.team.model import (
     ActionKind,
+    IncidentKind,
     RobotSpec,
     TeamAction,
     TeamFault,
@@ -89,7 +89,7 @@ class RobotFaultClock:
     __slots__ = ("_draws", "_effects", "_seed", "_sets", "_states")
 
     def __init__(
-        self, domain: Domain[Any, Any], states: list[FaultState], robot: str, seed: int
+        self, domain: SomeDomain, states: list[FaultState], robot: str, seed: int
     ) -> None:
         self._states = [s for s in states if s.fault.robot == robot and _effect(domain, s.fault)]
         self._effects = {s.index: _effect(domain, s.fault) for s in self._states}
@@ -100,9 +100,9 @@ class RobotFaultClock:
             if s.fault.persistence is Persistence.INTERMITTENT
         }  # fmt: skip
         self._seed = seed
-        self._sets: dict[tuple[int, ...], frozenset[Any]] = {(): frozenset()}
+        self._sets: dict[tuple[int, ...], frozenset[object]] = {(): frozenset()}
 
-    def at(self, step: int, units: int) -> frozenset[Any]:
+    def at(self, step: int, units: int) -> frozenset[object]:
         """The robot's true faults at its step ``step`` (``units``: the time, unused: the engine
         keeps the team faults' stretches)."""
         present = tuple(
@@ -118,7 +118,7 @@ class RobotFaultClock:
             self._sets[present] = found
         return found
 
-    def effect(self, index: int) -> frozenset[Any]:
+    def effect(self, index: int) -> frozenset[object]:
         """The domain faults of the robot's team fault ``index`` (empty for another one)."""
         return self._effects.get(index, frozenset())
 
@@ -127,7 +127,7 @@ class RobotFaultClock:
         return self._states
 
 
-def _effect(domain: Domain[Any, Any], fault: TeamFault) -> frozenset[Any]:
+def _effect(domain: SomeDomain, fault: TeamFault) -> frozenset[object]:
     """The domain faults a team fault gives its robot."""
     if fault.kind is TeamFaultKind.IMMOBILISED:
         return frozenset(domain.faults)
@@ -157,7 +157,7 @@ class Drive:
     stepper: Stepper
     steps: list[TimedStep]
 
-    def actions(self) -> list[Any]:
+    def actions(self) -> list[object]:
         """The primitive actions still to run."""
         return [a for a, _ in self.stepper.queue]
 
@@ -174,7 +174,8 @@ class RobotState:
     noticed. ``stuck`` says whether the team believes it cannot drive (set by a ``stuck``
     incident, cleared when it can move again). ``retry_at`` is when a robot that could not plan
     tries again; ``deferred`` the incident it is waiting out (the same incident is not reported
-    again).
+    again); ``last_incident`` its last incident and when (the same one again at the same instant
+    is waited out).
     """
 
     spec: RobotSpec
@@ -187,13 +188,14 @@ class RobotState:
     footprint: tuple[Cell, ...] = ()
     pending: TeamAction | None = None
     drive: Drive | None = None
-    faults: frozenset[Any] = frozenset()
+    faults: frozenset[object] = frozenset()
     gripper_ok: bool = True
     stuck: bool = False
     retry_at: int = 0
     stale: bool = False
     first_pick: int | None = None
     deferred: tuple[TeamAction, str] | None = None
+    last_incident: tuple[int, TeamAction, IncidentKind] | None = None
     failures: int = 0
     discovered: set[int] = field(default_factory=set)
 
@@ -250,6 +252,10 @@ class TeamWorld:
     now: int = 0
     blocked: set[Cell] = field(default_factory=set)
     known_blocked: set[Cell] = field(default_factory=set)
+    seen: frozenset[Cell] = frozenset()
+    """The cells the team believes blocked by world events: what the robots' sensors report
+    (range sensing: the true state of the cells around each robot, shared with the team; bump
+    sensing: the cells robots bumped into, for good). Every robot's stepper sees it."""
     moves: list[MoveRecord] = field(default_factory=list)
     acts: list[ActRecord] = field(default_factory=list)
     fault_log: list[FaultRecord] = field(default_factory=list)
@@ -269,16 +275,24 @@ class TeamWorld:
         """The robots in priority order (scenario order)."""
         return iter(self.robots.values())
 
-    def known_extra(self, exclude: str = "") -> frozenset[Cell]:
-        """Free cells of the maze the team treats as walls: known blocked cells and cells of
-        robots believed stuck (but robot ``exclude``, which plans for itself)."""
-        return frozenset(self.known_blocked) | frozenset(
+    def known_extra(self, exclude: str = "", events: bool = True) -> frozenset[Cell]:
+        """Free cells of the maze the team treats as walls: known blocked cells, cells of
+        robots believed stuck (but robot ``exclude``, which plans for itself) and, with
+        ``events``, the cells :attr:`seen` blocked by world events (but the cell ``exclude``
+        stands on: an obstacle on a robot's own cell never traps it)."""
+        extra = frozenset(self.known_blocked) | frozenset(
             r.pose.cell for r in self.robots.values() if r.stuck and r.name != exclude
         )
+        if events and self.seen:
+            own = self.robots[exclude].pose.cell if exclude else None
+            extra |= frozenset(c for c in self.seen if c != own)
+        return extra
 
-    def known_map(self, exclude: str = "") -> Maze:
-        """The map the team plans on: the maze with :meth:`known_extra` as walls."""
-        return known_maze(self.scenario.maze, self.known_extra(exclude))
+    def known_map(self, exclude: str = "", events: bool = True) -> Maze:
+        """The map the team plans on: the maze with :meth:`known_extra` as walls (``events``
+        false: without the world-event cells, which a robot's own planner and stepper take
+        from their belief, as a single robot's do)."""
+        return known_maze(self.scenario.maze, self.known_extra(exclude, events))
 
     def item_cell(self, item: str) -> Cell:
         """Where ``item`` is now: its floor cell or its carrier's cell."""

@@ -9,15 +9,18 @@ A team trace has one JSON object per line, like a single-robot trace
    the scenario's name and file
    (``scenario_file``: ``path`` and ``sha256`` of its text, so that the header can be checked
    against the file), the maze (name, rows and ``sha256`` of the rows, one a line), the robots
-   (name, start pose, gripper), the tasks, the team faults, the options, the robots' own table as
-   used (``robot_table``) and the initial team plan (each robot's actions as text);
+   (name, start pose, gripper), the tasks, the team faults, the world events and sensing
+   (``world``, as a single-robot trace writes them; absent when the world never changes), the
+   options, the robots' own table as used (``robot_table``) and the initial team plan (each
+   robot's actions as text);
 2. event lines in time order (times in units): ``fault`` (fault ``index`` became ``active`` or
    cleared), ``incident`` (robot, action, kind, load), ``repair`` (what the team strategy did:
    outcome, source, candidate, helper, pre-emption, disturbed robots, messages, plans, latency,
    the actions inserted per robot, items given up), ``own-repair`` (a robot's own single-robot
    repair), ``act`` (a pick, drop or handover with the cells its robots stood on) and ``move``
    (one primitive action of one robot: ``robot``, ``start``, ``end``, ``action``, ``from``,
-   ``to`` as ``[x, y, "N"]``, ``source``);
+   ``to`` as ``[x, y, "N"]``, ``source``: a ``failed-attempt`` or a ``bumped`` command moves
+   nothing and lasts one tick);
 3. the summary (``"type": "summary"``): the row of :func:`selfrepair.team.metrics.team_row`.
 
 Written by :mod:`selfrepair.team.tracewrite`, read by :mod:`selfrepair.team.traceread`,
@@ -76,7 +79,7 @@ class TraceMove:
     robot: str
     start: int
     end: int
-    action: Any
+    action: object
     before: Pose
     after: Pose
     source: StepSource

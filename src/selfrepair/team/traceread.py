@@ -15,7 +15,7 @@ from selfrepair.execution.result import StepSource
 from selfrepair.execution.traceformat import TraceFields
 from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.replacement import RecursionMode
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.registry import PluginFile, get_domain, load_recorded_plugin
 from selfrepair.team.model import (
     RobotSpec,
@@ -36,6 +36,7 @@ from selfrepair.team.traceformat import (
     TraceMove,
 )
 from selfrepair.textio import read_text
+from selfrepair.world.events import WorldSchedule
 from selfrepair.world.maze import parse_maze
 
 __all__ = ["is_team_trace", "parse_team_trace", "read_team_trace"]
@@ -125,7 +126,7 @@ def parse_team_trace(text: str, *, source: str = "<trace>", partial: bool = Fals
     )  # fmt: skip
 
 
-def _move(f: TraceFields, domain: Domain[Any, Any]) -> TraceMove:
+def _move(f: TraceFields, domain: SomeDomain) -> TraceMove:
     source = f.text("source")
     if source not in {s.value for s in StepSource}:
         raise f.fail(
@@ -185,9 +186,13 @@ def _header(f: TraceFields) -> tuple[TeamScenario, TeamOptions, int]:
         raise f.fail(
             f"expected 'detection' now or on-use, got {f.data.get('detection')!r}"
         ) from None
+    world_data = f.data.get("world", {})
+    if not isinstance(world_data, dict):
+        raise f.fail(f"expected 'world' to be an object, got {world_data!r}")
     scenario = TeamScenario(
         maze, tuple(robots), tuple(tasks), tuple(faults), domain,
         str(f.data.get("scenario", "")), f.source, detection=detection,
+        world=WorldSchedule.from_json(world_data, f.source),
     )  # fmt: skip
     scale = f.integer("scale", minimum=1)
     if scale != domain.time_unit:

@@ -25,7 +25,15 @@ from selfrepair.geometry import Cell, FreeGrid
 from selfrepair.limits import MAX_CELLS, check_limit
 from selfrepair.textio import strip_bom, text_lines
 
-__all__ = ["Maze", "clearance_map", "clearance_penalties", "format_maze", "parse_maze", "save_maze"]
+__all__ = [
+    "Maze",
+    "believed_maze",
+    "clearance_map",
+    "clearance_penalties",
+    "format_maze",
+    "parse_maze",
+    "save_maze",
+]
 
 WALL_CHAR = "#"
 FREE_CHAR = "."
@@ -211,3 +219,22 @@ def _clearance(maze: Maze) -> npt.NDArray[np.int32]:
 def clearance_penalties(maze: Maze, radius: int) -> npt.NDArray[np.int64]:
     """``max(0, radius - clearance)`` per cell, as an ``int64`` array ``[y, x]``."""
     return np.maximum(0, radius - clearance_map(maze).astype(np.int64))
+
+
+def believed_maze(maze: Maze, blocked: frozenset[Cell]) -> Maze:
+    """``maze`` with the cells ``blocked`` (world events the robot believes in) as walls: the map
+    the robot plans on in a changing world (the last few are kept)."""
+    return _BELIEVED.get((maze, blocked), lambda: _with_walls(maze, blocked))
+
+
+def _with_walls(maze: Maze, blocked: frozenset[Cell]) -> Maze:
+    walls = maze.walls.copy()
+    for x, y in blocked:
+        if maze.in_bounds(x, y):
+            walls[y, x] = True
+    return Maze(walls, name=maze.name)
+
+
+_BELIEVED: BoundedCache[tuple[Maze, frozenset[Cell]], Maze] = BoundedCache(
+    "mazes with believed-blocked cells", 4, kind=CacheKind.PLAN
+)

@@ -60,6 +60,18 @@ const viewer = (function () {
   }
 
   // The mission summary row in the #summary table, one row per column but the line's type.
+  // Cells blocked by world events (and blocked team faults) at a frame's time: grey squares
+  // (a changing world); the mission and the team page draw them alike.
+  function drawBlocked(layer, cells) {
+    while (layer.firstChild) layer.removeChild(layer.firstChild);
+    for (const c of cells) {
+      svg("rect", {
+        x: c[0] * CELL, y: c[1] * CELL, width: CELL, height: CELL, fill: "#9a9a9a",
+        class: "blocked-cell", "data-cell": c[0] + "," + c[1],
+      }, layer);
+    }
+  }
+
   function buildSummary(summary) {
     const table = document.getElementById("summary");
     for (const key of Object.keys(summary)) {
@@ -131,5 +143,7 @@ const viewer = (function () {
     return { stop: stop, play: play, jump: jump };
   }
 
-  return { NS, CELL, data, svg, html, centre, placeRobot, drawMaze, buildSummary, controls };
+  return {
+    NS, CELL, data, svg, html, centre, placeRobot, drawMaze, drawBlocked, buildSummary, controls,
+  };
 })();

@@ -12,7 +12,7 @@
 
   // --- the map ----------------------------------------------------------------------------------
 
-  const layers = viewer.drawMaze(data.maze, ["held", "tasks", "items", "robots"]);
+  const layers = viewer.drawMaze(data.maze, ["blocked", "held", "tasks", "items", "robots"]);
 
   // Drop-off cells: an outlined square per task, labelled with its item.
   for (const t of data.tasks) {
@@ -197,6 +197,7 @@
     document.getElementById("slider").value = k;
     document.getElementById("step-label").textContent =
       "instant " + k + " / " + last + ", tick " + frame.tick;
+    viewer.drawBlocked(layers.blocked, frame.blocked);
     layers.held.textContent = "";
     for (const r of frame.robots) {
       for (const c of r.held) {
@@ -227,6 +228,8 @@
       ["delivered", frame.delivered + " / " + data.tasks.length],
       ["team faults", frame.faults.length
         ? frame.faults.map((i) => data.fault_lanes[i].text).join("; ") : "none"],
+      ["blocked cells", frame.blocked.length
+        ? frame.blocked.map((c) => c[0] + "," + c[1]).join(" ") : "none"],
     ];
     for (const [name, value] of facts) {
       html("dt", name, null, now);

@@ -452,18 +452,6 @@
   const slider = document.getElementById("slider");
   const label = document.getElementById("step-label");
 
-  // Cells blocked by world events at the frame's tick: grey squares (a changing world).
-  function drawBlocked(cells) {
-    const layer = layers.blocked;
-    while (layer.firstChild) layer.removeChild(layer.firstChild);
-    for (const c of cells) {
-      svg("rect", {
-        x: c[0] * CELL, y: c[1] * CELL, width: CELL, height: CELL, fill: "#9a9a9a",
-        class: "blocked-cell", "data-cell": c[0] + "," + c[1],
-      }, layer);
-    }
-  }
-
   function setFrame(k) {
     k = Math.min(Math.max(Math.round(k), 0), last);
     if (k === state.frame) return;
@@ -473,7 +461,7 @@
     state.frame = k;
     const pose = frames[k].pose;
     viewer.placeRobot(robot, pose, k);
-    drawBlocked(frames[k].blocked || []);
+    viewer.drawBlocked(layers.blocked, frames[k].blocked || []);
     slider.value = String(k);
     label.textContent = "step " + k + " / " + last + " \u00b7 " + poseText(pose);
     const x = tlX(k);
@@ -483,6 +471,7 @@
     highlight(selected);
     updateNow(k);
     updateFaults(k);
+    diagnosisView.update(k);
     updateRepairs(k, selected);
     for (const [frame, item] of eventItems) {
       item.classList.toggle("future", frame > k);

@@ -19,7 +19,7 @@ emptied by a cold run, like the look-ups they copy).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -31,7 +31,7 @@ from selfrepair.geometry import FreeGrid
 from selfrepair.repair.lookups import MISSING, GridLookups, action_index, occupancy_rows
 from selfrepair.repair.strategies import MissionContext, Repair
 from selfrepair.repair.strategies.replacement import strategy_lookups
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 
 __all__ = [
     "MAX_CODE_RADIUS",
@@ -78,7 +78,7 @@ _MOVES: BoundedCache[MoveTable, Int64s] = BoundedCache(
 
 
 def fault_arrays(
-    domain: Domain[Any, Any], faults: tuple[Any, ...]
+    domain: SomeDomain, faults: tuple[object, ...]
 ) -> tuple[npt.NDArray[np.uint8], Int64s]:
     """For every subset ``m`` (a bit mask over ``faults``): ``avail[m, a]``, whether action ``a``
     is available under it, and ``block[m, a]``, the mask of the faults of ``m`` that block it
@@ -87,7 +87,7 @@ def fault_arrays(
 
 
 def _faults(
-    domain: Domain[Any, Any], faults: tuple[Any, ...]
+    domain: SomeDomain, faults: tuple[object, ...]
 ) -> tuple[npt.NDArray[np.uint8], Int64s]:
     n = len(faults)
     actions = domain.actions
@@ -106,7 +106,9 @@ def _faults(
     return avail, block
 
 
-_FAULTS: BoundedCache[tuple[Domain[Any, Any], tuple[Any, ...]], tuple[Any, Any]] = BoundedCache(
+_FAULTS: BoundedCache[
+    tuple[SomeDomain, tuple[object, ...]], tuple[npt.NDArray[np.uint8], Int64s]
+] = BoundedCache(
     "compiled availability per fault subset", 256, kind=CacheKind.SIMULATION
 )
 
@@ -122,8 +124,8 @@ class CompiledLookups:
         self.context = context
         self.grid: FreeGrid = context.grid
         self.n_slots = 4 * n_actions
-        self.sets: dict[frozenset[Any], int] = {}
-        self._set_of: dict[tuple[Any, ...], npt.NDArray[np.int64]] = {}
+        self.sets: dict[frozenset[object], int] = {}
+        self._set_of: dict[tuple[object, ...], npt.NDArray[np.int64]] = {}
         self.on_grid: list[GridLookups[Repair]] = []
         self.lk_mask = np.full((4, self.n_slots), k.UNLOADED, dtype=np.int64)
         self.lk_r = np.zeros((4, self.n_slots), dtype=np.int64)
@@ -140,7 +142,7 @@ class CompiledLookups:
         self.ans_act = np.zeros(256, dtype=np.int32)
         self._n_act = 0
 
-    def set_of(self, faults: tuple[Any, ...]) -> npt.NDArray[np.int64]:
+    def set_of(self, faults: tuple[object, ...]) -> npt.NDArray[np.int64]:
         """Per bit mask over ``faults`` (a schedule's), the id of its look-ups (-1: not met
         yet); one array per tuple of faults, kept, so a later mission over the same faults
         starts with every set it needs known."""
@@ -149,7 +151,7 @@ class CompiledLookups:
             found = self._set_of[faults] = np.full(1 << len(faults), -1, dtype=np.int64)
         return found
 
-    def set_id(self, known: frozenset[Any]) -> int:
+    def set_id(self, known: frozenset[object]) -> int:
         """The id of the look-ups under ``known`` (made on first use)."""
         sid = self.sets.get(known)
         if sid is None:
@@ -232,7 +234,10 @@ class CompiledLookups:
             k.hash_put(self.hk1, self.hk2, self.hv, int(old[0][i]), int(old[1][i]), int(old[2][i]))
 
 
-def _grown(array: npt.NDArray[Any], fill: int) -> npt.NDArray[Any]:
+_G = TypeVar("_G", bound=np.generic)
+
+
+def _grown(array: npt.NDArray[_G], fill: int) -> npt.NDArray[_G]:
     """``array`` twice as long (first axis), the new rows ``fill``."""
     out = np.full((2 * array.shape[0], *array.shape[1:]), fill, dtype=array.dtype)
     out[: array.shape[0]] = array
@@ -253,6 +258,6 @@ def compiled_lookups(context: MissionContext, n_actions: int) -> CompiledLookups
     return _LOOKUPS.get(key, lambda: CompiledLookups(context, n_actions))
 
 
-_LOOKUPS: BoundedCache[tuple[Any, ...], CompiledLookups] = BoundedCache(
+_LOOKUPS: BoundedCache[tuple[object, ...], CompiledLookups] = BoundedCache(
     "compiled look-ups as arrays", 64, kind=CacheKind.REPAIR
 )

@@ -48,6 +48,7 @@ from selfrepair.repair.strategies import (
     StrategyName,
     chained,
 )
+from selfrepair.search.astar import PlanResult
 from selfrepair.search.problem import make_pose
 from selfrepair.status import REPAIR_OF_PLAN, MissionStatus, mission_status
 
@@ -190,10 +191,10 @@ class _Mission:
         st[k.S_KNOWN] = self.mask(stepper.known)
         st[k.S_QLEN] = n
         self.st = st
-        self.plans: list[Any] = []
-        self._known: dict[int, frozenset[Any]] = {}
+        self.plans: list[PlanResult] = []
+        self._known: dict[int, frozenset[object]] = {}
         st[k.S_PL_MASK] = -1
-        self.planner: tuple[Any, ...] = _NO_PLANNER
+        self.planner: tuple[Any, ...] = _NO_PLANNER  # the compiled planner's arrays
         self.search: tuple[Any, ...] = _NO_SEARCH
         self._holder: list[tuple[Any, ...]] = [_NO_SEARCH]
         budget = context.replan_budget
@@ -203,11 +204,11 @@ class _Mission:
         if ready is not None:
             self._load_planner(full, ready)
 
-    def mask(self, faults: frozenset[Any]) -> int:
+    def mask(self, faults: frozenset[object]) -> int:
         """The bit mask of ``faults`` (each one of the schedule's)."""
         return sum(1 << self.bits[f] for f in faults)
 
-    def known(self, mask: int) -> frozenset[Any]:
+    def known(self, mask: int) -> frozenset[object]:
         """The fault set of ``mask`` (one value per mask)."""
         found = self._known.get(mask)
         if found is None:
@@ -234,7 +235,7 @@ class _Mission:
         while True:
             lk = self.lookups
             if lk is None:
-                lk_arrays: tuple[Any, ...] = _NO_LOOKUPS
+                lk_arrays: tuple[Any, ...] = _NO_LOOKUPS  # int64 arrays, ans_act int32
             else:
                 lk_arrays = (lk.lk_mask, lk.lk_r, lk.codes, lk.hk1, lk.hk2, lk.hv,
                              lk.ans_off, lk.ans_len, lk.ans_act)  # fmt: skip
@@ -324,7 +325,7 @@ for _array in _NO_PLANNER:
 _NO_SEARCH = (np.zeros((1, 3), dtype=np.int64), np.zeros(1, dtype=np.int64),
               np.zeros((8, 2), dtype=np.int64), np.zeros(4, dtype=np.int64),
               np.zeros(9, dtype=np.int64), np.zeros(1, dtype=np.int64))  # fmt: skip
-_RECORDS: BoundedCache[int, list[tuple[Any, ...]]] = BoundedCache(
+_RECORDS: BoundedCache[int, list[tuple[object, ...]]] = BoundedCache(
     "compiled-loop search records", 4, kind=CacheKind.PLAN
 )
 _NO_LOOKUPS = (

@@ -34,7 +34,7 @@ surprise came, how many commands it took to isolate the class (and which), the p
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from enum import StrEnum
 from typing import Any
 
@@ -116,7 +116,7 @@ class DiagnosingRepairer:
         self._table = start_replacement(context)
         self._error = options.confidence
         self._margin = 0.0  # the mass left out of what is possible: 0 while readings are exact
-        self._known: frozenset[Any] = frozenset()
+        self._known: frozenset[object] = frozenset()
         self._probing = 0  # probe commands still at the front of the queue
         self._rejoining = 0  # rejoin commands still at the front of the queue
         self._anchor: Pose | None = None  # where the queue after those blocks starts
@@ -216,12 +216,12 @@ class DiagnosingRepairer:
         if found is not None:
             self.isolated_class, self.isolation_actions = found, self._after
 
-    def _assume(self) -> frozenset[Any]:
+    def _assume(self) -> frozenset[object]:
         """The faults assumed now (see the module docstring)."""
         faults = self.belief.most_probable()[1]
         if not faults or self._policy is Policy.MOST_PROBABLE or self._relaxed:
             return faults
-        out: set[Any] = set()
+        out: set[object] = set()
         for hypothesis in self.model.faults_of(self.belief.credible(self._margin)):
             out |= hypothesis
         return frozenset(out)
@@ -379,7 +379,7 @@ def diagnosis_report(repairer: object) -> dict[str, Any] | None:
     return None if report is None else dict(report())
 
 
-def _starter(policy: Policy) -> Any:
+def _starter(policy: Policy) -> Callable[[MissionContext], Repairer]:
     def start(context: MissionContext) -> Repairer:
         return DiagnosingRepairer(context, policy)
 

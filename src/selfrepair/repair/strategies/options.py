@@ -26,8 +26,10 @@ class StrategyOptions:
     ``lookahead_expansions`` the budget of one window search; ``rewrite``: the ``replacement``
     strategy substitutes, when it first meets a faulty action under the faults known, every
     faulty action of the rest of the plan that has a valid replacement at its predicted pose
-    (whole-plan rewriting; other strategies ignore it; not in a deferring recursion mode such as
-    ``primitive``, whose replacements may keep faulty actions for later);
+    (whole-plan rewriting; in a changing world the detour of a blocked action likewise
+    replaces every later blocked window by its detour; other strategies ignore it; not in a
+    deferring recursion mode such as ``primitive``, whose replacements may keep faulty actions
+    for later);
     ``max_lookup_patterns`` the patterns one compiled look-up stores at most
     (:data:`~selfrepair.limits.MAX_LOOKUP_PATTERNS`). ``lpg_time_limit_s`` and ``lpg_seed`` are
     the wall-clock limit (seconds) and the seed of each LPG-adapt call of the ``lpg-adapt``
