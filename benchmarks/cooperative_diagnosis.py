@@ -16,10 +16,12 @@ four-wheel robot, the default ``stall`` behaviour, seeds ``0 .. --seeds - 1``):
   in range;
 - *passive*: the robot commands the fault-free plan of the route (A*, no faults known), open loop
   (no replanning: this isolates what the readings tell, not how the repair goes); *active*: after
-  the first surprise, while no class is isolated, the probes of ``best_probe`` over the credible
-  hypotheses (the plan's next action when no probe splits them);
-- the true outcome: ``Domain.effective`` of the command under the fault; a motion whose footprint
-  meets a wall stops at the start (a bump), as in the simulator;
+  the first surprise, while no class is isolated, the probes of active diagnosis
+  (``isolating_probe`` over the hypotheses still in the running, ``FaultBelief.contenders``; the
+  plan's next action when no probe splits them);
+- the true outcome and the robot's own reading: the mission's ``Simulator`` with the fault hidden
+  (it performs ``Domain.effective`` of the command, stops a motion that sweeps a wall at the start:
+  a bump, and reads the odometry from its own stream);
 - a *surprise*: the robot's own reading differs from the commanded motion's end, or it bumped;
   *actions to isolate*: commands after the surprise command until ``FaultBelief.isolated(0.01)``
   names a class (the definition of the mission rows' ``isolation_actions``), infinite when the
@@ -43,13 +45,21 @@ from typing import Any
 
 import numpy as np
 
-from selfrepair.diagnosis import FaultBelief, ObservationModel, best_probe, fault_model
+from selfrepair.diagnosis import (
+    FaultBelief,
+    ObservationModel,
+    ProbePlanner,
+    fault_model,
+    isolating_probe,
+)
 from selfrepair.diagnosis.cooperative import (
     Observer,
     SensingRange,
     observer_streams,
     team_observations,
 )
+from selfrepair.execution.faults import Detection, FaultSchedule
+from selfrepair.execution.simulator import Outcome, Simulator
 from selfrepair.geometry import Pose
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.lattice import plan
@@ -71,19 +81,22 @@ def _mission(
     ``None`` when no command surprised the robot."""
     model = fault_model(FOUR_WHEEL)
     truth = model.class_of[model.sets.index(faults)]
-    grid = maze.free_grid(2)
-    belief = FaultBelief(model, grid)
-    own = ObservationModel(noise, bumps=True)
-    rng = np.random.default_rng([seed, 24])
+    schedule = FaultSchedule.permanent(faults, detection=Detection.HIDDEN)
+    sim = Simulator(FOUR_WHEEL, maze, start, schedule, seed,
+                    observation=ObservationModel(noise, bumps=True))  # fmt: skip
+    belief = FaultBelief(model, maze.free_grid(2))
+    planner = ProbePlanner(model, belief.grid)
     streams = observer_streams(seed, observers)
-    pose, history = start, [start]
+    history = [start]
     surprise: int | None = None
     after = 0
     queue = list(actions)
     probing: list[Any] = []
     for step in range(MAX_COMMANDS):
+        pose = sim.pose
         if active and surprise is not None and not probing:
-            probe = best_probe(belief, pose, belief.credible(CONFIDENCE))
+            mask = belief.contenders(CONFIDENCE)
+            probe = isolating_probe(belief, pose, mask, planner=planner)
             probing = list(probe.actions) if probe is not None else []
         if probing:
             action = probing.pop(0)
@@ -91,20 +104,16 @@ def _mission(
             action = queue.pop(0)
         else:
             break
-        performed = FOUR_WHEEL.effective(action, faults)
-        end = FOUR_WHEEL.apply(pose, performed)
-        bumped = not grid.all_free(FOUR_WHEEL.footprint(pose, performed))
-        if bumped:
-            end = pose
-        mine = own.read(step, action, pose, end, bumped, False, rng)
+        outcome = sim.advance(action)
+        mine = sim.observe(step, action, pose, outcome)
         belief.update(mine)
+        end = sim.pose
         behind = tuple(history[max(0, len(history) - 1 - i)] for i in range(1, len(observers) + 1))
         for seen in team_observations(step, action, pose, end, False, observers, behind, streams):
             belief.update(seen)
         history.append(end)
-        pose = end
         if surprise is None:
-            if mine.end == FOUR_WHEEL.apply(mine.start, action) and not bumped:
+            if mine.end == FOUR_WHEEL.apply(mine.start, action) and outcome is Outcome.MOVED:
                 continue
             surprise = step
         else:

@@ -52,7 +52,7 @@ class Frozen(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid", strict=False)
 
 
-def _non_empty(value: tuple[Any, ...]) -> tuple[Any, ...]:
+def _non_empty(value: tuple[T, ...]) -> tuple[T, ...]:
     if not value:
         raise ValueError("expected a non-empty list")
     return value
@@ -63,6 +63,7 @@ NonEmpty = AfterValidator(_non_empty)
 (an empty list in a file is an error naming the key, not an empty sweep)."""
 
 Model = TypeVar("Model", bound=BaseModel)
+T = TypeVar("T")
 
 
 def read_toml(text: str, *, source: str = "<string>") -> dict[str, Any]:

@@ -36,7 +36,7 @@ one-line reason.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import ClassVar, cast
 
 from selfrepair.baselines.lpg import (
     LPG_MAX_OBJECTS,
@@ -58,7 +58,7 @@ from selfrepair.repair.strategies import (
     register_strategy,
     replan,
 )
-from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.robots.four_wheel import FOUR_WHEEL, Action
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.world.maze import Maze, believed_maze
 
@@ -103,7 +103,7 @@ class LpgAdaptRepairer:
         options = context.options
         result = lpg_adapt_repair(
             problem,
-            tuple(request.queue),
+            cast("tuple[Action, ...]", tuple(request.queue)),  # a four-wheel robot's queue
             time_limit_s=options.lpg_time_limit_s,
             seed=options.lpg_seed,
         )

@@ -50,6 +50,7 @@ from selfrepair.robots.four_wheel import Action, FaultSet, MotionKind
 from selfrepair.search.lattice import plan_cost
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.status import LpgStatus
+from selfrepair.textio import JSONObject
 
 __all__ = [
     "LPG_MAX_OBJECTS",
@@ -277,7 +278,7 @@ def _call(
         with bridge.quiet(env):
             if repair:
                 up_plan = bridge.to_up_plan(up_problem, problem.start, steps)
-                params: dict[str, Any] = {"timeout": call.time_limit_s, **options}
+                params: JSONObject = {"timeout": call.time_limit_s, **options}
                 with env.factory.PlanRepairer(name=bridge.LPG_ADAPT_ENGINE, params=params) as lpg:
                     generated = lpg.repair(up_problem, up_plan)
             else:

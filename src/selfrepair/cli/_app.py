@@ -32,7 +32,7 @@ from typer.core import TyperArgument, TyperCommand, TyperGroup
 if TYPE_CHECKING:
     from rich.console import Console
 
-_F = TypeVar("_F", bound=Callable[..., Any])
+_F = TypeVar("_F", bound=Callable[..., object])
 
 
 def _no_type_label(ctx: Any) -> None:
@@ -194,7 +194,7 @@ def echo(text: str = "") -> None:
     sys.stdout.write(text + "\n")
 
 
-def echo_json(data: Any) -> None:
+def echo_json(data: object) -> None:
     """Print ``data`` as indented, valid JSON to stdout (never ``NaN`` or ``Infinity``: a
     non-finite number is a bug and raises ``ValueError`` instead of printing invalid JSON)."""
     sys.stdout.write(json.dumps(data, indent=2, allow_nan=False) + "\n")

@@ -13,14 +13,15 @@ from __future__ import annotations
 
 from fractions import Fraction
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from selfrepair.errors import InputError
 
 if TYPE_CHECKING:
-    from selfrepair.robots.domain import Domain
+    from selfrepair.robots.domain import A, Domain, F, SomeDomain
+    pass
 
 __all__ = [
     "Backend",
@@ -171,7 +172,7 @@ def parse_weight(text: str, option: str = "--clearance-weight") -> Fraction:
     return weight
 
 
-def domain_named(name: str) -> Domain[Any, Any]:
+def domain_named(name: str) -> SomeDomain:
     """The registered domain ``name`` (bad names are an error on ``--domain``)."""
     from selfrepair.robots.registry import get_domain
 
@@ -181,7 +182,7 @@ def domain_named(name: str) -> Domain[Any, Any]:
         raise InputError(exc.reason, source="--domain") from None
 
 
-def parse_faults(domain: Domain[Any, Any], text: str) -> frozenset[Any]:
+def parse_faults(domain: Domain[A, F], text: str) -> frozenset[F]:
     """The fault set ``text`` names for ``domain`` (bad text is an error on ``--faults``)."""
     try:
         return domain.parse_faults(text)

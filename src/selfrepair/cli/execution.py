@@ -11,7 +11,7 @@ planning time or a repair latency), and by default the mission runs once untimed
 """
 
 
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -32,6 +32,7 @@ from selfrepair.cli._rowjson import row_json
 from selfrepair.cli._spec import mission_spec, table_note
 from selfrepair.cli.planning import kernel_load_ns
 from selfrepair.limits import MAX_TABLE_BYTES, MAX_TABLE_CANDIDATES, MAX_TRACE_BYTES
+from selfrepair.textio import JSONObject
 
 if TYPE_CHECKING:
     from selfrepair.execution.result import MissionResult
@@ -206,7 +207,7 @@ def run(
     return 0 if result.reached else 1
 
 
-def _cell(value: Any) -> str:
+def _cell(value: object) -> str:
     if value is None:
         return ""
     if isinstance(value, dict):
@@ -313,7 +314,7 @@ def _print_comparison(comparison: "Comparison", title: str, load_ns: int) -> Non
     echo(_timing_note(load_ns, comparison.warmed_up))
 
 
-def _comparison_json(comparison: "Comparison", load_ns: int) -> dict[str, Any]:
+def _comparison_json(comparison: "Comparison", load_ns: int) -> JSONObject:
     return {
         "runs": [
             {

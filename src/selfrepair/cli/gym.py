@@ -7,7 +7,7 @@ the command says what to install (exit code 2).
 """
 
 import math
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -15,6 +15,7 @@ from selfrepair.cli._app import app, echo, echo_json, limit_option
 from selfrepair.cli._inputs import Braid, Corridor, DomainOpt, Json
 from selfrepair.cli._mission import Recursion
 from selfrepair.errors import InputError
+from selfrepair.textio import JSONObject
 
 if TYPE_CHECKING:
     from selfrepair.envs.evaluate import Evaluation
@@ -186,7 +187,7 @@ def _print(result: "Evaluation", domain: str, spec: "FaultSpec") -> None:
         echo(f"gave up (no plan under the known faults) in {gave_up} episodes")
 
 
-def _as_json(result: "Evaluation", domain: str) -> dict[str, Any]:
+def _as_json(result: "Evaluation", domain: str) -> JSONObject:
     success, ret = result.success_interval(), result.return_interval()
     return {
         "policy": result.policy,

@@ -20,6 +20,7 @@ from selfrepair.cli._inputs import Json, TraceOut
 from selfrepair.cli._mission import MissionOptions, mission_options
 from selfrepair.cli._spec import mission_spec
 from selfrepair.errors import InputError
+from selfrepair.textio import JSONObject
 
 if TYPE_CHECKING:
     from selfrepair.physics.fidelity import FidelityReport
@@ -75,7 +76,7 @@ def physics_fidelity(
     return 0
 
 
-def _row_json(row: Any) -> dict[str, Any]:
+def _row_json(row: Any) -> JSONObject:
     return {
         "action": row.action,
         "motion": row.motion,
@@ -160,7 +161,7 @@ def physics_run(
     return 0 if done.result.reached else 1
 
 
-def outcome_json(done: "PhysicsMission") -> dict[str, Any]:
+def outcome_json(done: "PhysicsMission") -> JSONObject:
     """A physics mission's outcome as JSON-ready values."""
     o, r = done.outcome, done.result
     return {

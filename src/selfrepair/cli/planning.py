@@ -10,7 +10,7 @@ reported on its own line (``kernels loaded in ... ms``); the search time is the 
 
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -43,10 +43,13 @@ from selfrepair.cli._inputs import (
 from selfrepair.cli._mission import Recursion, TableOpt
 from selfrepair.errors import InputError
 from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES
+from selfrepair.textio import JSONObject
 
 if TYPE_CHECKING:
+    from collections.abc import Iterable
+
     from selfrepair.geometry import Cell, Heading
-    from selfrepair.robots.domain import Domain
+    from selfrepair.robots.domain import SomeDomain
     from selfrepair.search.astar import PlanResult
     from selfrepair.search.problem import GridResult, PlanningProblem
     from selfrepair.world.maze import Maze
@@ -70,7 +73,7 @@ def parse_goal(text: str) -> "tuple[Cell, Heading | None]":
 
 def planning_problem(
     maze: "Maze",
-    domain: "Domain[Any, Any]",
+    domain: "SomeDomain",
     start: str,
     goal: str,
     faults: str,
@@ -96,7 +99,7 @@ def planning_problem(
     )
 
 
-def kernel_load_ns(backend: str, *kinds: str, domain: "Domain[Any, Any] | None" = None) -> int:
+def kernel_load_ns(backend: str, *kinds: str, domain: "SomeDomain | None" = None) -> int:
     """Load the compiled kernels of ``kinds`` (default: all; see
     :data:`selfrepair.search.warmup.KERNELS`) if ``backend`` uses them (for the robot ``domain``
     when given: an explicit ``numba`` it does not fit is refused); the nanoseconds it took (0
@@ -120,8 +123,8 @@ def _ms(ns: int) -> float:
 
 
 def plan_json(
-    result: "PlanResult", load_ns: int = 0, domain: "Domain[Any, Any] | None" = None
-) -> dict[str, Any]:
+    result: "PlanResult", load_ns: int = 0, domain: "SomeDomain | None" = None
+) -> JSONObject:
     """The ``plan --json`` object: ``cost`` and ``duration`` as numbers with exact ``_exact``
     strings; ``actions`` in the text form of ``domain`` (default: the four-wheel robot);
     ``search_ms`` is the search alone, ``kernel_load_ms`` the one-off kernel load."""
@@ -143,7 +146,7 @@ def plan_json(
     }
 
 
-def path_json(result: "GridResult", load_ns: int = 0) -> dict[str, Any]:
+def path_json(result: "GridResult", load_ns: int = 0) -> JSONObject:
     """The ``path --json`` object; ``cost`` is a float, ``cost_exact`` its exact form."""
     cost = result.cost
     return {
@@ -326,7 +329,9 @@ def path_command(
     return 0 if result.status is PlanStatus.SOLVED else 1
 
 
-def _print_path_picture(maze: "Maze", path: Any, start: "Cell", goal: "Cell") -> None:
+def _print_path_picture(
+    maze: "Maze", path: "Iterable[Cell]", start: "Cell", goal: "Cell"
+) -> None:
     from selfrepair.world.render import GOAL_CHAR, path_layer, render_ascii
 
     layers = [path_layer(path), {goal: GOAL_CHAR, start: "S"}]

@@ -208,7 +208,7 @@ def _longer_needed(report: "CoverageReport", table: "SomeTable") -> dict[str, An
     if not isinstance(limit, int):
         limit = max((len(c) for e in table.entries for c in e.candidates), default=0)
     uncovered = [p for p in report.pairs if p.optimum is not None and p.cost is None]
-    shortest: dict[str, dict[Any, Any]] = {}
+    shortest: dict[str, dict[object, Any]] = {}
     lengths = []
     for pair in uncovered:
         if pair.faults not in shortest:

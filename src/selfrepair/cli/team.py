@@ -36,6 +36,7 @@ from selfrepair.limits import (
 
 if TYPE_CHECKING:
     from selfrepair.team.result import TeamResult
+    from selfrepair.team.summary import TeamSummary
 
 __all__ = ["print_team_summary", "team_app"]
 
@@ -385,7 +386,7 @@ def team_frame(
     return 0
 
 
-def print_team_summary(summaries: list[Any], *, title: str) -> None:
+def print_team_summary(summaries: "list[TeamSummary]", *, title: str) -> None:
     """The per-strategy team summary as a table."""
     from rich.table import Table
     from rich.text import Text

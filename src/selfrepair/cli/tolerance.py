@@ -24,10 +24,11 @@ from selfrepair.cli._inputs import (
 from selfrepair.cli._mission import Goal, MaxDepth, Recursion, Rewrite, TableOpt, check_choice
 from selfrepair.errors import InputError
 from selfrepair.limits import MAX_CELLS
+from selfrepair.textio import JSONObject
 
 if TYPE_CHECKING:
     from selfrepair.repair.tolerance import FaultModel, PlanTolerance
-    from selfrepair.robots.domain import Domain
+    from selfrepair.robots.domain import SomeDomain
     from selfrepair.search.astar import PlanResult
 
 __all__ = [
@@ -57,7 +58,7 @@ share of the model's fault sets uncovered there (``@``: all)."""
 
 
 def model_from_options(
-    domain: "Domain[Any, Any]", k: int, sets: "list[str] | None"
+    domain: "SomeDomain", k: int, sets: "list[str] | None"
 ) -> "FaultModel":
     """The fault model of ``--k`` or of the ``--fault-set`` options."""
     from selfrepair.repair.tolerance import FaultModel, fault_model
@@ -88,7 +89,7 @@ def heat_strip(tolerance: "PlanTolerance") -> str:
     )
 
 
-def print_tolerance(domain: "Domain[Any, Any]", tolerance: "PlanTolerance", per_step: bool) -> None:
+def print_tolerance(domain: "SomeDomain", tolerance: "PlanTolerance", per_step: bool) -> None:
     """The tolerance as text: per step (when ``per_step``), the heat strip and the summary."""
     n = len(tolerance.model.fault_sets)
     if per_step:
@@ -112,7 +113,7 @@ def print_tolerance(domain: "Domain[Any, Any]", tolerance: "PlanTolerance", per_
         echo("(deferring recursion: pairs decided by running the strategy from each step)")
 
 
-def tolerance_json(domain: "Domain[Any, Any]", tolerance: "PlanTolerance") -> dict[str, Any]:
+def tolerance_json(domain: "SomeDomain", tolerance: "PlanTolerance") -> JSONObject:
     """The tolerance as JSON (:meth:`~selfrepair.repair.tolerance.PlanTolerance.to_json`, the
     share rounded as every JSON number of the CLI): the summary and, per step, the uncovered
     fault sets (what the viewer draws as a heat strip along the route)."""
@@ -225,7 +226,7 @@ def plan_tolerance_of(
     return mission_tolerance(spec, fault_model(problem.domain, k), result)[1]
 
 
-def _table(domain: "Domain[Any, Any]", table: str | None) -> Any:
+def _table(domain: "SomeDomain", table: str | None) -> Any:
     """The ``--table`` named, or the robot's own (see ``default_table``)."""
     from selfrepair.tables.fileformat import default_table, resolve_table
 

@@ -28,7 +28,7 @@ from selfrepair.diagnosis.observation import (
     ObservationModel,
     perturbed,
 )
-from selfrepair.diagnosis.probes import Probe, best_probe
+from selfrepair.diagnosis.probes import Probe, ProbePlanner, best_probe, isolating_probe
 
 __all__ = [
     "PERTURBATIONS",
@@ -37,7 +37,9 @@ __all__ = [
     "Observation",
     "ObservationModel",
     "Probe",
+    "ProbePlanner",
     "best_probe",
     "fault_model",
+    "isolating_probe",
     "perturbed",
 ]

@@ -34,8 +34,17 @@ import numpy.typing as npt
 from selfrepair.diagnosis.hypotheses import FAILS, FaultModel, Group
 from selfrepair.diagnosis.observation import PERTURBATIONS, Observation, perturbed
 from selfrepair.geometry import FreeGrid, Heading, Pose
+from selfrepair.textio import JSONObject
 
-__all__ = ["FaultBelief", "Prediction", "predictions"]
+__all__ = ["CONFIRMATIONS", "FaultBelief", "Prediction", "predictions"]
+
+CONFIRMATIONS = 2
+"""How many more noisy readings must contradict every rival of a class than its own best
+hypothesis before the class counts as isolated under noise (:meth:`FaultBelief.isolated`)."""
+
+_Entry = tuple[int, "npt.NDArray[np.float64] | None", "npt.NDArray[np.float64] | None"]
+"""A kept reading: its support bit set, its likelihood vector and its contradiction indicator
+(the last two only for a noisy reading)."""
 
 _RENORMALISE = 32
 """Noisy updates between two renormalisations of the weights (against underflow)."""
@@ -80,6 +89,7 @@ class FaultBelief:
         "alive",
         "grid",
         "inexplicable",
+        "misses",
         "model",
         "observations",
         "weights",
@@ -95,8 +105,11 @@ class FaultBelief:
         """Observations taken in so far."""
         self.inexplicable = 0
         """Observations no hypothesis still possible explained (ignored)."""
+        self.misses: npt.NDArray[np.float64] = np.zeros(model.size)
+        """Per hypothesis, the noisy readings it explains only as a sensor error (a reading
+        other than the one it predicts)."""
         self._count = 0
-        self._cache: dict[tuple[Any, ...], tuple[int, npt.NDArray[np.float64] | None]] = {}
+        self._cache: dict[tuple[Any, ...], _Entry] = {}
         self._unions: dict[tuple[int, int], tuple[int, ...]] = {}
         self._blocks: dict[tuple[int, int, int, int], tuple[bool, ...] | None] = {}
 
@@ -121,15 +134,16 @@ class FaultBelief:
         entry = self._cache.get(key)
         if entry is None:
             entry = self._cache[key] = self._likelihood(a, heading, blocked, key, noise)
-        support, likelihood = entry
+        support, likelihood, missed = entry
         self.observations += 1
         alive = self.alive & support
         if not alive:
             self.inexplicable += 1
             return self.alive
         self.alive = alive
-        if likelihood is not None:
+        if likelihood is not None and missed is not None:
             self.weights *= likelihood
+            self.misses += missed
             self._count += 1
             if self._count % _RENORMALISE == 0:
                 self.weights /= self.weights.sum()
@@ -164,11 +178,13 @@ class FaultBelief:
         blocked: tuple[bool, ...] | None,
         key: tuple[Any, ...],
         noise: float,
-    ) -> tuple[int, npt.NDArray[np.float64] | None]:
-        """The support bit set and (noisy readings only) the likelihood vector of ``key``."""
+    ) -> _Entry:
+        """The support bit set and (noisy readings only) the likelihood vector of ``key`` and
+        the indicator of the hypotheses it contradicts (their predicted reading is another)."""
         reading = Pose(key[3], key[4], key[5])
         bumped, failed = key[6], key[7]
         likelihood = np.zeros(self.model.size) if noise > 0 else None
+        missed = np.zeros(self.model.size) if noise > 0 else None
         support = 0
         groups = self.model.groups[action][heading]
         for group, stopped in zip(groups, blocked or repeat(False), strict=False):
@@ -179,12 +195,14 @@ class FaultBelief:
                 value = 1.0 - noise
             elif noise > 0 and reading in perturbed(end):
                 value = noise / PERTURBATIONS
+                if missed is not None:
+                    missed[list(group.members)] = 1.0
             else:
                 continue
             support |= group.mask
             if likelihood is not None:
                 likelihood[list(group.members)] = value
-        return support, likelihood
+        return support, likelihood, missed
 
     # --- what the belief says --------------------------------------------------------------
 
@@ -230,21 +248,38 @@ class FaultBelief:
         """The classes that still hold a possible hypothesis."""
         return self.model.classes_in(self.alive)
 
+    def contenders(self, error: float) -> int:
+        """The bit set of the hypotheses still in the running: those of the credible classes
+        (:meth:`credible`) and every hypothesis still possible that fewer than
+        :data:`CONFIRMATIONS` noisy readings more than the credible classes' best one
+        contradict. With exact readings only: every hypothesis still possible."""
+        credible = self.credible(error)
+        if not credible:
+            return self.alive
+        misses = self.misses
+        floor = min(misses[i] for i in self.model.members(credible))
+        alive, out = self.alive, credible
+        for i in self.model.members(alive & ~credible):
+            if misses[i] < floor + CONFIRMATIONS:
+                out |= 1 << i
+        return out & alive
+
     def isolated(self, error: float = 0.0) -> int | None:
-        """The class the belief has isolated, or ``None``: with exact observations only (or
-        ``error == 0``), the one class left; else the class of posterior mass at least ``1 -
-        error``."""
+        """The class the belief has isolated, or ``None``: the one class left of the
+        hypotheses still possible, or (``error > 0``) the one class of the :meth:`contenders`:
+        it holds posterior mass at least ``1 - error`` and every rival is contradicted by
+        :data:`CONFIRMATIONS` noisy readings more than it (one wrong reading never isolates a
+        class: a second must confirm it)."""
         alive = self.classes_alive()
         if len(alive) == 1:
             return alive[0]
         if error > 0:
-            mass = self.class_posterior()
-            best = int(np.argmax(mass))
-            if mass[best] >= 1.0 - error:
-                return best
+            left = self.model.classes_in(self.contenders(error))
+            if len(left) == 1:
+                return left[0]
         return None
 
-    def snapshot(self) -> dict[str, Any]:
+    def snapshot(self) -> JSONObject:
         """A JSON-able summary for traces: hypotheses and classes still possible, the most
         probable class's fault set and mass."""
         best, faults = self.most_probable()

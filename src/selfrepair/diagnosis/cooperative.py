@@ -31,7 +31,6 @@ from __future__ import annotations
 import enum
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -115,7 +114,7 @@ def observer_streams(seed: int, observers: Sequence[Observer]) -> tuple[np.rando
 
 def team_observations(
     step: int,
-    action: Any,
+    action: object,
     start: Pose,
     end: Pose,
     failed: bool,

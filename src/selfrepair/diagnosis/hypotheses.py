@@ -22,7 +22,6 @@ Everything is computed once per (domain, behaviour, k, prior) and kept (:func:`f
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -30,7 +29,7 @@ import numpy.typing as npt
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 
 __all__ = ["FAILS", "FaultModel", "Group", "fault_model"]
 
@@ -59,11 +58,11 @@ class FaultModel:
     """The hypotheses of one domain and what they do (see the module docstring). Build one with
     :func:`fault_model`."""
 
-    domain: Domain[Any, Any]
+    domain: SomeDomain
     behaviour: str | None
     k: int
     prior_rate: float
-    sets: tuple[frozenset[Any], ...]
+    sets: tuple[frozenset[object], ...]
     performed: tuple[tuple[int, ...], ...]
     """``performed[h][a]``: the index of the action hypothesis ``h`` performs for action ``a``."""
     groups: tuple[tuple[tuple[Group, ...], ...], ...]
@@ -73,7 +72,7 @@ class FaultModel:
     """The class bit sets, in order of their first hypothesis (class 0 holds "none")."""
     class_of: tuple[int, ...]
     """``class_of[h]``: the index of hypothesis ``h``'s class."""
-    index: dict[Any, int] = field(repr=False)
+    index: dict[object, int] = field(repr=False)
     """Action -> its index in ``Domain.actions``."""
 
     @property
@@ -90,7 +89,7 @@ class FaultModel:
         """The hypotheses of bit set ``mask``, in order."""
         return tuple(i for i in range(len(self.sets)) if mask >> i & 1)
 
-    def faults_of(self, mask: int) -> tuple[frozenset[Any], ...]:
+    def faults_of(self, mask: int) -> tuple[frozenset[object], ...]:
         """The fault sets of the hypotheses of ``mask``, in order."""
         return tuple(self.sets[i] for i in self.members(mask))
 
@@ -105,7 +104,7 @@ class FaultModel:
 
 
 def fault_model(
-    domain: Domain[Any, Any], behaviour: str | None = None, k: int = 2, prior: float = 0.05
+    domain: SomeDomain, behaviour: str | None = None, k: int = 2, prior: float = 0.05
 ) -> FaultModel:
     """The :class:`FaultModel` of ``domain`` with fault-behaviour model ``behaviour`` (``None``:
     the default; a domain without one: failing commands), hypotheses of up to ``k`` faults and
@@ -122,12 +121,12 @@ def fault_model(
     return _MODELS.get(key, lambda: _build(domain, behaviour, k, prior))
 
 
-_MODELS: BoundedCache[tuple[Domain[Any, Any], str | None, int, float], FaultModel] = BoundedCache(
+_MODELS: BoundedCache[tuple[SomeDomain, str | None, int, float], FaultModel] = BoundedCache(
     "diagnosis fault models", 16, kind=CacheKind.PREFILLED
 )
 
 
-def _build(domain: Domain[Any, Any], behaviour: str | None, k: int, prior: float) -> FaultModel:
+def _build(domain: SomeDomain, behaviour: str | None, k: int, prior: float) -> FaultModel:
     actions = domain.actions
     index = {a: i for i, a in enumerate(actions)}
     sets = (frozenset(), *(s for s in domain.fault_sets if len(s) <= k))
@@ -185,13 +184,13 @@ def _build(domain: Domain[Any, Any], behaviour: str | None, k: int, prior: float
 
 
 def _classes(
-    sets: tuple[frozenset[Any], ...],
+    sets: tuple[frozenset[object], ...],
     performed: tuple[tuple[int, ...], ...],
     motions: list[list[tuple[int, int, Heading, tuple[Cell, ...]]]],
 ) -> tuple[tuple[int, ...], tuple[int, ...]]:
     """The classes of hypotheses with the same motion (end pose and swept cells, or failure) for
     every action from every heading, in order of their first hypothesis."""
-    signature_class: dict[tuple[Any, ...], int] = {}
+    signature_class: dict[tuple[object, ...], int] = {}
     class_of: list[int] = []
     masks: list[int] = []
     for hyp in range(len(sets)):

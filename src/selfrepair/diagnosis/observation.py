@@ -21,7 +21,7 @@ not this question); what is noisy is the reading of each command's motion that d
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
@@ -56,7 +56,7 @@ class Observation(NamedTuple):
     made it. An immutable ``NamedTuple`` (one per command)."""
 
     step: int
-    action: Any
+    action: object
     start: Pose
     end: Pose
     bumped: bool | None = None
@@ -82,7 +82,7 @@ class ObservationModel:
     def read(
         self,
         step: int,
-        action: Any,
+        action: object,
         start: Pose,
         end: Pose,
         bumped: bool,

@@ -23,11 +23,12 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.diagnosis.belief import FaultBelief, predictions
-from selfrepair.diagnosis.hypotheses import FAILS
-from selfrepair.geometry import Pose
+from selfrepair.diagnosis.hypotheses import FAILS, FaultModel
+from selfrepair.geometry import FreeGrid, Pose
 
-__all__ = ["Probe", "best_probe"]
+__all__ = ["BUMP_COST", "TICK_COST", "Probe", "ProbePlanner", "best_probe", "isolating_probe"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -126,3 +127,248 @@ def best_probe(
     return best
 
 
+BUMP_COST = 0.5
+"""What a bump costs a probe plan, in commands: a wall contact is taken only when it saves a
+whole command of isolation."""
+
+TICK_COST = 0.01
+"""What a tick costs a probe plan, in commands (a tie-break between plans of equal commands)."""
+
+_WORST = 100.0
+"""The weight of a plan's worst case over the parsimonious classes in its value (commands, each
+far above any expected cost: the worst case decides first)."""
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class _Tables:
+    """Per fault model: for each action and heading, the index of the motion group each class
+    falls in (classes behave alike on every action, so the first hypothesis speaks for its
+    class), and each group's ticks."""
+
+    group: tuple[tuple[npt.NDArray[np.intp], ...], ...]
+    ticks: tuple[tuple[tuple[float, ...], ...], ...]
+
+
+def _tables(model: FaultModel) -> _Tables:
+    firsts = [(bits & -bits).bit_length() - 1 for bits in model.classes]
+    domain = model.domain
+    group, ticks = [], []
+    for per_heading in model.groups:
+        group.append(
+            tuple(
+                np.array(
+                    [next(g for g, gr in enumerate(groups) if gr.mask >> h & 1) for h in firsts],
+                    dtype=np.intp,
+                )
+                for groups in per_heading
+            )
+        )
+        ticks.append(
+            tuple(
+                tuple(
+                    1.0
+                    if gr.performed == FAILS
+                    else float(Fraction(domain.duration(domain.actions[gr.performed])))
+                    for gr in groups
+                )
+                for groups in per_heading
+            )
+        )
+    return _Tables(tuple(group), tuple(ticks))
+
+
+_TABLES: BoundedCache[FaultModel, _Tables] = BoundedCache(
+    "diagnosis probe tables", 16, kind=CacheKind.PREFILLED
+)
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class _At:
+    """What every command does to every class from one pose: ``onehot[a, c, l]`` whether class
+    ``c`` reads outcome ``l`` after action ``a``; the outcome's end pose ``ends[l]``; per action
+    and class the bump indicator and the ticks."""
+
+    label: npt.NDArray[np.intp]
+    onehot: npt.NDArray[np.float64]
+    ends: tuple[Pose, ...]
+    bumps: npt.NDArray[np.float64]
+    ticks: npt.NDArray[np.float64]
+
+
+class ProbePlanner:
+    """Plans probes that isolate a fault class in few commands (see :meth:`plan`). Mutable: it
+    keeps, for one robot's mission, what each command does from each pose met (the known map
+    ``grid``, ``None``: an open plane; ``switch``: whether the robot reads a bump switch; without
+    one a bump reads as staying put)."""
+
+    __slots__ = ("_at", "_memo", "_tables", "grid", "model", "switch")
+
+    def __init__(self, model: FaultModel, grid: FreeGrid | None, switch: bool = True) -> None:
+        self.model = model
+        self.grid = grid
+        self.switch = switch
+        self._tables = _TABLES.get(model, lambda: _tables(model))
+        self._at: dict[Pose, _At] = {}
+        self._memo: dict[tuple[bytes, Pose, int], float] = {}
+
+    def at(self, pose: Pose) -> _At:
+        """The outcomes of every command from ``pose`` (kept)."""
+        found = self._at.get(pose)
+        if found is not None:
+            return found
+        model, tables = self.model, self._tables
+        n_actions, n_classes = len(model.domain.actions), len(model.classes)
+        keys: dict[tuple[Any, ...], int] = {}
+        ends: list[Pose] = []
+        label = np.empty((n_actions, n_classes), dtype=np.intp)
+        bumps = np.empty((n_actions, n_classes))
+        ticks = np.empty((n_actions, n_classes))
+        h = pose.heading
+        for a in range(n_actions):
+            labels, bumped, durations = [], [], []
+            for g, (_, (end, bump, fails)) in enumerate(predictions(model, a, pose, self.grid)):
+                key = (end, bump, fails) if self.switch else (end, fails)
+                number = keys.setdefault(key, len(keys))
+                if number == len(ends):
+                    ends.append(Pose(pose.x + end.x, pose.y + end.y, end.heading))
+                labels.append(number)
+                bumped.append(float(bump))
+                durations.append(1.0 if bump else tables.ticks[a][h][g])
+            index = tables.group[a][h]
+            label[a] = np.asarray(labels, dtype=np.intp)[index]
+            bumps[a] = np.asarray(bumped)[index]
+            ticks[a] = np.asarray(durations)[index]
+        onehot = np.zeros((n_actions, n_classes, len(ends)))
+        onehot[np.arange(n_actions)[:, None], np.arange(n_classes)[None, :], label] = 1.0
+        found = self._at[pose] = _At(label, onehot, tuple(ends), bumps, ticks)
+        return found
+
+    def plan(
+        self, belief: FaultBelief, pose: Pose, mask: int | None = None, depth: int = 3
+    ) -> Any | None:
+        """The first command of the adaptive probe plan that isolates the classes of ``mask``
+        (default: the hypotheses still possible) from ``pose``, or ``None`` when one class is
+        left or no command splits them.
+
+        The plan is a tree of up to ``depth`` commands, each chosen after reading the outcome of
+        the one before; the robot re-plans after every reading, so only the first command is
+        returned. Plans are compared first by the *worst case* over the parsimonious classes
+        (those of the fewest faults still possible, the minimal diagnoses): the commands until
+        each of them is isolated; then by the expected cost under the posterior: the commands
+        until one class is left, plus :data:`BUMP_COST` per expected bump and
+        :data:`TICK_COST` per expected tick. Beyond ``depth``, estimates: one more command for
+        a parsimonious class not isolated yet, ``1 + log2(classes) / 3`` expected. Depth-first
+        branch and bound: commands are tried in the order of a lower bound, ties to the first
+        in the domain's order."""
+        model = self.model
+        alive = belief.alive if mask is None else mask & belief.alive
+        classes = np.asarray(model.classes_in(alive), dtype=np.intp)
+        if len(classes) < 2:
+            return None
+        mass = belief.class_posterior()[classes]
+        if float(mass.sum()) <= 0:
+            mass = np.ones(len(classes))
+        sizes = [min(len(model.sets[h]) for h in model.members(model.classes[c])) for c in classes]
+        fewest = min(sizes)
+        primary = np.zeros(len(model.classes))
+        primary[classes[np.asarray(sizes) == fewest]] = 1.0
+        self._memo.clear()  # the weights and the parsimonious classes change with the belief
+        found = self._search(classes, mass / mass.sum(), primary, pose, depth, root=True)
+        return None if found is None else model.domain.actions[int(found)]
+
+    def _search(
+        self,
+        idx: npt.NDArray[np.intp],
+        w: npt.NDArray[np.float64],
+        primary: npt.NDArray[np.float64],
+        pose: Pose,
+        depth: int,
+        root: bool = False,
+    ) -> Any:
+        """The value ``_WORST * worst + expected`` of the best plan isolating classes ``idx``
+        (weights ``w``, summing to 1) from ``pose`` in ``depth`` commands (see :meth:`plan`); at
+        the root, the best action's index instead (``None``: no command splits them)."""
+        n = len(idx)
+        first = primary[idx].sum() > 0
+        if n <= 1:
+            return 0.0
+        if depth == 0:
+            return _WORST * first + 1.0 + math.log2(n) / 3.0
+        key = (idx.tobytes(), pose, depth)
+        if not root and key in self._memo:
+            return self._memo[key]
+        at = self.at(pose)
+        onehot = at.onehot[:, idx, :]
+        parts = np.einsum("acl,c->al", onehot, w)
+        counts = onehot.sum(axis=1)
+        ambiguous_first = (np.einsum("acl,c->al", onehot, primary[idx]) > 0) & (counts > 1)
+        splits = (counts > 0).sum(axis=1) >= 2
+        own = 1.0 + BUMP_COST * (at.bumps[:, idx] @ w) + TICK_COST * (at.ticks[:, idx] @ w)
+        own = own + _WORST * first
+        if not splits.any():
+            value: float = _WORST * (depth + 1) * first + 2.0 + math.log2(n)
+            if not root:
+                self._memo[key] = value
+            return None if root else value
+        if depth == 1:
+            leaf = np.where(counts > 1, 1.0 + np.log2(np.maximum(counts, 1)) / 3.0, 0.0)
+            worst = _WORST * ambiguous_first.any(axis=1)
+            costs = np.where(splits, own + worst + (parts * leaf).sum(axis=1), np.inf)
+            best = int(np.argmin(costs))
+            if root:
+                return best
+            self._memo[key] = float(costs[best])
+            return float(costs[best])
+        bounds = own + _WORST * ambiguous_first.any(axis=1) + (parts * (counts > 1)).sum(axis=1)
+        bounds = np.where(splits, bounds, np.inf)
+        order = np.argsort(bounds, kind="stable")
+        best_value, best_action = math.inf, -1
+        for a in order:
+            if bounds[a] >= best_value - 1e-12:
+                break
+            expected, worst = float(own[a]), 0.0
+            labels = at.label[a, idx]
+            for part in np.flatnonzero(counts[a] > 1):
+                inside = labels == part
+                sub = w[inside]
+                got = self._search(idx[inside], sub / sub.sum(), primary, at.ends[part], depth - 1)
+                high = _WORST * math.floor(got / _WORST)
+                worst = max(worst, high)
+                expected += float(parts[a, part]) * (got - high)
+                if expected + worst >= best_value - 1e-12:
+                    break
+            value = expected + worst
+            if value < best_value - 1e-12:
+                best_value, best_action = value, int(a)
+        if root:
+            return best_action
+        self._memo[key] = best_value
+        return best_value
+
+
+def isolating_probe(
+    belief: FaultBelief,
+    pose: Pose,
+    mask: int | None = None,
+    *,
+    depth: int = 3,
+    switch: bool = True,
+    planner: ProbePlanner | None = None,
+) -> Probe | None:
+    """The probe :meth:`ProbePlanner.plan` chooses (one command; ``planner``: one kept for the
+    mission, else a new one), or, when no single command splits the hypotheses, the two-command
+    sequence of :func:`best_probe`; ``None`` when nothing splits them. ``information`` is the
+    entropy of the first command's split (bits), ``ticks`` its expected ticks."""
+    model = belief.model
+    alive = belief.alive if mask is None else mask & belief.alive
+    if len(model.classes_in(alive)) < 2:
+        return None
+    if planner is None:
+        planner = ProbePlanner(model, belief.grid, switch)
+    action = planner.plan(belief, pose, alive, depth)
+    if action is None:
+        return best_probe(belief, pose, alive)  # only a sequence splits them (walls)
+    post = belief.posterior()
+    post = post / float(sum(post[i] for i in model.members(alive)))
+    split, ticks = _split(belief, model.index[action], pose, post, alive)
+    return Probe((action,), _entropy(m for _, m in split.values()), ticks)

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -121,7 +120,7 @@ def run_episode(
     env: FaultyMazeEnv,
     policy: Policy,
     seed: int,
-    options: Mapping[str, Any] | None = None,
+    options: Mapping[str, object] | None = None,
 ) -> Episode:
     """Reset ``env`` with ``seed`` (and ``options``), start ``policy`` and run to the end."""
     observation, info = env.reset(seed=seed, options=dict(options) if options else None)

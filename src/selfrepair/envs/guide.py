@@ -4,8 +4,6 @@ loop: what the environment's guide and the stepper-driven policies
 
 from __future__ import annotations
 
-from typing import Any
-
 from selfrepair.execution.result import RepairRecord, StepSource
 from selfrepair.execution.stepper import Entry, Stepper
 from selfrepair.geometry import Pose
@@ -27,7 +25,7 @@ def ask(
     return entry, stepper.repairs[-1] if len(stepper.repairs) > before else None
 
 
-def followed(entry: Entry | None, command: Any) -> StepSource:
+def followed(entry: Entry | None, command: object) -> StepSource:
     """The source of ``command``: that of the stepper's answer when the agent followed it."""
     if entry is not None and entry[0] == command:
         return entry[1]

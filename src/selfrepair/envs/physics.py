@@ -19,6 +19,7 @@ import numpy as np
 from gymnasium import spaces
 
 from selfrepair.envs.env import FaultyMazeEnv, Observation
+from selfrepair.envs.scenarios import Scenario
 from selfrepair.geometry import Pose
 from selfrepair.physics.model import DEFAULT_PARAMS, RobotParams
 from selfrepair.physics.simulator import PhysicsSimulator
@@ -44,7 +45,7 @@ class PhysicsMazeEnv(FaultyMazeEnv):
             -np.inf, np.inf, shape=(3,), dtype=np.float64
         )
 
-    def _begin(self, scenario: Any) -> None:
+    def _begin(self, scenario: Scenario) -> None:
         super()._begin(scenario)
         self._sim = PhysicsSimulator(
             self.domain,

@@ -25,7 +25,7 @@ from collections import Counter
 from collections.abc import Callable, Hashable, Iterable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any, NamedTuple
+from typing import NamedTuple
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.execution.faults import Detection, FaultSchedule
@@ -79,8 +79,8 @@ def plan_distance(first: Iterable[Hashable], second: Iterable[Hashable]) -> Plan
 
 def motion_distance(
     domain_motion: Callable[[object], str],
-    first: Iterable[tuple[Hashable, Any]],
-    second: Iterable[tuple[Hashable, Any]],
+    first: Iterable[tuple[Hashable, object]],
+    second: Iterable[tuple[Hashable, object]],
 ) -> PlanDistance:
     """:func:`plan_distance` with each ground action ``(start, action)`` taken as
     ``(start, motion class)``: an action swapped for another of the same motion is no change."""

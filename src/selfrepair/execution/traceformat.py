@@ -39,7 +39,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal, overload
 
 from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.result import TraceStep
@@ -47,6 +47,7 @@ from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.repair.strategies import RepairSource, RepairStatus
 from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.registry import plugin_file
+from selfrepair.textio import JSONObject
 
 __all__ = [
     "DEFAULT_DOMAIN",
@@ -70,11 +71,11 @@ DEFAULT_DOMAIN = "four-wheel"
 """The robot of a trace whose header names none (traces written before domains were named)."""
 
 
-def header_start(trace_format: str, version: int, domain: str) -> dict[str, Any]:
+def header_start(trace_format: str, version: int, domain: str) -> JSONObject:
     """The fields a trace header (a mission's or a team's) begins with: its type, format and
     version, the robot domain and, for a plug-in robot, the file that registered it (path and
     SHA-256, so that a replay can check it runs the same robot)."""
-    header: dict[str, Any] = {
+    header: JSONObject = {
         "type": "header", "format": trace_format, "version": version, "domain": domain
     }
     origin = plugin_file(domain)
@@ -159,7 +160,20 @@ class TraceFields:
             raise self.fail(f"expected a {self.data.get('type', 'line')} with key {key!r}")
         return self.data[key]
 
-    def integer(self, key: str, *, optional: bool = False, minimum: int | None = None) -> Any:
+    @overload
+    def integer(
+        self, key: str, *, optional: Literal[False] = False, minimum: int | None = None
+    ) -> int: ...
+
+    @overload
+    def integer(
+        self, key: str, *, optional: Literal[True], minimum: int | None = None
+    ) -> int | None: ...
+
+    def integer(
+        self, key: str, *, optional: bool = False, minimum: int | None = None
+    ) -> int | None:
+        """The integer at ``key`` (at least ``minimum``); ``optional``: ``None`` when absent."""
         value = self.data.get(key) if optional else self.get(key)
         if value is None and optional:
             return None
@@ -168,7 +182,14 @@ class TraceFields:
             raise self.fail(f"expected {key!r} to be an integer{bound}, got {value!r}")
         return value
 
-    def text(self, key: str, *, optional: bool = False) -> Any:
+    @overload
+    def text(self, key: str, *, optional: Literal[False] = False) -> str: ...
+
+    @overload
+    def text(self, key: str, *, optional: Literal[True]) -> str | None: ...
+
+    def text(self, key: str, *, optional: bool = False) -> str | None:
+        """The string at ``key``; ``optional``: ``None`` when absent."""
         value = self.data.get(key) if optional else self.get(key)
         if value is None and optional:
             return None
@@ -200,7 +221,7 @@ class TraceFields:
             raise self.fail(f"expected {key!r} in {', '.join(options)}, got {value!r}")
         return str(value)
 
-    def cell(self, value: Any) -> Cell:
+    def cell(self, value: object) -> Cell:
         """``value`` as a cell ``[x, y]``."""
         if not isinstance(value, list) or len(value) != 2 or not all(type(v) is int for v in value):
             raise self.fail(f"expected a cell [x, y], got {value!r}")

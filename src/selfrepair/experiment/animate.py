@@ -99,7 +99,7 @@ def animate_trace(
         fig.set_layout_engine("none")
         drawn = [0]
 
-        def draw(upto: int) -> list[Any]:
+        def draw(upto: int) -> list[Any]:  # matplotlib artists (matplotlib is untyped)
             missionplot.draw_steps(ax, picture, drawn[0], upto)
             drawn[0] = max(drawn[0], upto)
             if upto > 0:

@@ -24,7 +24,7 @@ class Axis:
     ``values`` in order, and ``what`` they are, in the plural, for messages ("fault sets")."""
 
     name: str
-    values: tuple[Any, ...]
+    values: tuple[object, ...]
     what: str
 
 

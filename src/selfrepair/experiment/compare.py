@@ -17,7 +17,6 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
-from typing import Any
 
 from selfrepair.errors import ProblemError
 from selfrepair.execution.executor import run_mission
@@ -31,7 +30,7 @@ from selfrepair.repair.strategies import (
     strategy_entries,
     uses_table,
 )
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 
 __all__ = [
     "Comparison",
@@ -124,7 +123,7 @@ class StrategyRun:
         return motion_distance(motion, planned, executed).total
 
 
-def strategy_refusal(name: str, domain: Domain[Any, Any]) -> str | None:
+def strategy_refusal(name: str, domain: SomeDomain) -> str | None:
     """Why strategy ``name`` cannot run for robot ``domain`` in this installation (one line), or
     ``None`` when it can. Only ``lpg-adapt`` has conditions: the ``pddl`` extra and the
     four-wheel robot (:func:`selfrepair.baselines.adapt.check_lpg_adapt`, which an experiment
@@ -141,7 +140,7 @@ def strategy_refusal(name: str, domain: Domain[Any, Any]) -> str | None:
 
 
 def runnable_strategies(
-    domain: Domain[Any, Any], names: Sequence[str] | None = None, *, hidden: bool = False
+    domain: SomeDomain, names: Sequence[str] | None = None, *, hidden: bool = False
 ) -> tuple[tuple[str, ...], tuple[tuple[str, str], ...]]:
     """The strategies of ``names`` (default: every registered one, in registry order, that is
     for faults the robot is not told when ``hidden``, else every other one) that can run for

@@ -361,17 +361,7 @@ def _g4(rows: Sequence[Row]) -> Finding:
         if noise != WRONG_NOISE:
             lines.append(f"For comparison, {text}{_share(interval)}.")
             continue
-        outcome = _share_at_most(interval, WRONG)
+        outcome = ratio_outcome(interval, WRONG)
         outcomes.append(outcome)
         lines.append(f"{text}{_share(interval)}: {outcome.value}.")
     return Finding("G4", CLAIMS["G4"], combine(outcomes), tuple(lines))
-
-
-def _share_at_most(interval: Interval | None, target: float) -> Outcome:
-    if interval is None or interval.n < MIN_PAIRS:
-        return Outcome.INCONCLUSIVE
-    if interval.high <= target:
-        return Outcome.HELD
-    if interval.low > target:
-        return Outcome.NOT_HELD
-    return Outcome.INCONCLUSIVE

@@ -7,10 +7,9 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Iterable, Sequence
-from typing import Any
 
 from selfrepair.errors import ConfigError
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 
 __all__ = ["PAPER_FAULT_SETS", "biting_fault_sets", "fault_profile"]
@@ -37,7 +36,7 @@ docs/experiments.md (a test checks that the rule gives exactly these)."""
 
 
 def biting_fault_sets(
-    domain: Domain[Any, Any], plans: Iterable[Sequence[Any]], count: int
+    domain: SomeDomain, plans: Iterable[Sequence[object]], count: int
 ) -> tuple[str, ...]:
     """The rule behind :data:`PAPER_FAULT_SETS`: among ``domain.fault_sets``, those that disable
     at least one action of **every** plan of ``plans`` (so every mission meets a faulty action
@@ -53,7 +52,7 @@ def biting_fault_sets(
     ]
     used: Counter[str] = Counter()
 
-    def parts(faults: frozenset[Any]) -> list[str]:
+    def parts(faults: frozenset[object]) -> list[str]:
         return [part for f in domain.faults if f in faults for part in domain.parts_of(f)]
 
     chosen: list[str] = []
@@ -66,7 +65,7 @@ def biting_fault_sets(
 
 
 def fault_profile(
-    sets: str | tuple[str, ...], domain: Domain[Any, Any] = FOUR_WHEEL
+    sets: str | tuple[str, ...], domain: SomeDomain = FOUR_WHEEL
 ) -> tuple[str, ...]:
     """The fault sets of a profile name or an explicit list, each in ``domain``'s canonical text.
 

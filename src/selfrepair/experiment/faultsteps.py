@@ -9,12 +9,10 @@ step and comparisons stay paired.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from selfrepair.caching import BoundedCache, CacheKind
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.search.lattice import plan
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.world.maze import Maze
@@ -23,7 +21,7 @@ from selfrepair.world.routes import Route
 __all__ = ["optimum_steps", "random_fault_step"]
 
 
-def optimum_steps(maze: Maze, route: Route, domain: Domain[Any, Any]) -> int:
+def optimum_steps(maze: Maze, route: Route, domain: SomeDomain) -> int:
     """The steps of the fault-free optimal plan of ``route`` (clearance weight 0; 0 when no plan
     exists), computed once per maze, route and robot."""
 
@@ -34,12 +32,12 @@ def optimum_steps(maze: Maze, route: Route, domain: Domain[Any, Any]) -> int:
     return _STEPS.get((maze, route, domain), steps)
 
 
-_STEPS: BoundedCache[tuple[Maze, Route, Domain[Any, Any]], int] = BoundedCache(
+_STEPS: BoundedCache[tuple[Maze, Route, SomeDomain], int] = BoundedCache(
     "optimal plan steps per route", 256, kind=CacheKind.REFERENCE
 )
 
 
-def random_fault_step(maze: Maze, route: Route, domain: Domain[Any, Any], seed: int) -> int:
+def random_fault_step(maze: Maze, route: Route, domain: SomeDomain, seed: int) -> int:
     """A step drawn uniformly from ``0 .. n - 1`` for the ``n`` steps of the route's optimal
     plan (0 for an empty plan), by ``numpy.random.default_rng(seed)``."""
     steps = optimum_steps(maze, route, domain)

@@ -13,10 +13,15 @@ from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any
+from typing import TYPE_CHECKING
 
 from selfrepair.execution.result import StepSource
 from selfrepair.optional import matplotlib
+
+if TYPE_CHECKING:
+    import numpy as np
+    import numpy.typing as npt
+    from matplotlib.figure import Figure
 
 __all__ = ["OKABE_ITO", "SOURCE_COLOURS", "STYLE", "WALL", "colour_of", "figure", "save"]
 
@@ -78,7 +83,9 @@ STYLE = {
 
 
 @contextmanager
-def figure(width: float, height: float, ncols: int = 1) -> Iterator[tuple[Any, Any]]:
+def figure(
+    width: float, height: float, ncols: int = 1
+) -> Iterator[tuple[Figure, npt.NDArray[np.object_]]]:
     """A white figure with ``ncols`` axes in the report's style."""
     mpl = matplotlib()
     from matplotlib.figure import Figure
@@ -89,7 +96,7 @@ def figure(width: float, height: float, ncols: int = 1) -> Iterator[tuple[Any, A
         yield fig, axes
 
 
-def save(fig: Any, path: Path) -> Path:
+def save(fig: Figure, path: Path) -> Path:
     """Write ``fig`` as a PNG on white to ``path``; returns ``path``."""
     fig.savefig(path, format="png", facecolor="white", transparent=False)
     return path

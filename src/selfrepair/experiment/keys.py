@@ -60,7 +60,7 @@ class Mission:
         return dict(json.loads(self.config))
 
 
-def canonical_json(data: Any) -> str:
+def canonical_json(data: object) -> str:
     """Sorted-key, compact JSON: the exact text a mission key hashes."""
     return json.dumps(data, sort_keys=True, separators=(",", ":"), ensure_ascii=True)
 

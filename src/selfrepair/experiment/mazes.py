@@ -19,6 +19,7 @@ from selfrepair.experiment.keys import canonical_json, derive_seed, portable
 from selfrepair.experiment.schema import MazeConfig, MazeSource
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import MAX_CELLS, check_limit, maze_file_bytes
+from selfrepair.textio import JSONObject
 from selfrepair.world.maze import Maze
 from selfrepair.world.routes import Route, random_routes
 
@@ -27,7 +28,7 @@ __all__ = ["entry_label", "maze_identity", "maze_label", "maze_of", "route_count
 
 def maze_identity(
     entry: MazeSource, base_dir: Path, source: str, index: int, max_cells: int | None = MAX_CELLS
-) -> dict[str, Any]:
+) -> JSONObject:
     """What identifies a maze in a mission key (a file is identified by path and content hash).
 
     A maze file too big to hold ``max_cells`` cells is refused before it is hashed."""

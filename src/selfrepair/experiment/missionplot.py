@@ -14,7 +14,7 @@ import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path, PurePath
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,6 +23,13 @@ from selfrepair.geometry import Cell, Pose, turn_corner
 from selfrepair.optional import matplotlib
 from selfrepair.repair.strategies import StrategyName
 from selfrepair.world.maze import Maze
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+    from matplotlib.text import Text
+
+    from selfrepair.execution.traceformat import Trace
 
 __all__ = [
     "MissionPicture",
@@ -57,7 +64,7 @@ class MissionPicture:
     repairs: tuple[tuple[int, Pose, str], ...] = ()
 
 
-def picture_from_trace(trace: Any) -> MissionPicture:
+def picture_from_trace(trace: Trace) -> MissionPicture:
     """A :class:`MissionPicture` from a parsed :class:`selfrepair.execution.trace.Trace`."""
     from selfrepair.execution.trace import spec_from_header
 
@@ -128,7 +135,7 @@ def path_points(poses: Sequence[Pose]) -> list[tuple[float, float]]:
     return points
 
 
-def draw_background(ax: Any, picture: MissionPicture) -> None:
+def draw_background(ax: Axes, picture: MissionPicture) -> None:
     """The parts of a mission drawing that never change: maze, initial plan, start and goal."""
     maze = picture.maze
     mpl = matplotlib()
@@ -173,7 +180,7 @@ PLAN_ZORDER = 5
 REPAIR_ZORDER = 6
 
 
-def draw_steps(ax: Any, picture: MissionPicture, first: int, stop: int) -> None:
+def draw_steps(ax: Axes, picture: MissionPicture, first: int, stop: int) -> None:
     """Executed steps ``first .. stop - 1``, coloured by source, and one X per repair made
     before them (coloured by what resolved it; red when it failed)."""
     if first >= stop and first > 0:
@@ -228,13 +235,13 @@ def robot_marker(pose: Pose) -> tuple[int, int, int]:
     return (3, 0, -90 * pose.heading.value)
 
 
-def draw_mission(ax: Any, picture: MissionPicture) -> None:
+def draw_mission(ax: Axes, picture: MissionPicture) -> None:
     """The whole mission: maze, initial plan, every executed step, start and goal."""
     draw_background(ax, picture)
     draw_steps(ax, picture, 0, len(picture.steps))
 
 
-def mission_legend(fig: Any, picture: MissionPicture, *, with_robot: bool = False) -> None:
+def mission_legend(fig: Figure, picture: MissionPicture, *, with_robot: bool = False) -> None:
     """A legend for :func:`draw_mission` listing only the sources that occur."""
     from matplotlib.lines import Line2D
 
@@ -305,7 +312,9 @@ def mission_legend(fig: Any, picture: MissionPicture, *, with_robot: bool = Fals
     fig.legend(handles=handles, loc="outside right upper", fontsize=8)
 
 
-def fit_title(fig: Any, ax: Any, text: str, *, fontsize: float = 9, smallest: float = 6.5) -> Any:
+def fit_title(
+    fig: Figure, ax: Axes, text: str, *, fontsize: float = 9, smallest: float = 6.5
+) -> Text:
     """Set ``text`` as the title of ``ax`` so that it fits: centred on the axes, between the
     figure's left edge and its legend (or right edge). The font shrinks from ``fontsize`` to
     ``smallest`` as needed; a title still too wide is wrapped at spaces. Measured with
@@ -323,7 +332,7 @@ def fit_title(fig: Any, ax: Any, text: str, *, fontsize: float = 9, smallest: fl
         if box.width <= room and box.y1 <= fig.bbox.y1:
             break
         ratio = room / box.width
-        size = title.get_fontsize()
+        size = float(title.get_fontsize())  # points (matplotlib types it float | str)
         if size > smallest:
             title.set_fontsize(max(smallest, size * min(ratio, 0.95)))
         else:

@@ -58,7 +58,7 @@ from selfrepair.limits import MAX_CELLS, MAX_MISSIONS, check_limit
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import StrategyOptions
 from selfrepair.repair.tolerance import OPTIMAL, parse_objective
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.robots.registry import get_domain, load_plugin
 from selfrepair.world.events import WorldSchedule
@@ -326,7 +326,7 @@ def _fault_step(
     identity: dict[str, Any],
     route: Route,
     point: dict[str, Any],
-    domain: Domain[Any, Any],
+    domain: SomeDomain,
 ) -> int:
     """When the faults of one situation (``point``) appear: its ``fault_at``, or for
     :data:`RANDOM` one step drawn

@@ -35,7 +35,7 @@ from selfrepair.physics.identified import CONFIRMED_NAME, load_identified
 from selfrepair.physics.mission import run_physics_mission
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import StrategyOptions
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.tables.fileformat import default_table
 from selfrepair.tables.model import SomeTable
@@ -89,19 +89,19 @@ ROBOTS = ("four-wheel", CONFIRMED_NAME)
 the one that commands only the 65 actions physics confirms (its generated fault-agnostic table,
 made once per process)."""
 
-_ROBOTS: BoundedCache[str, tuple[Domain[Any, Any], SomeTable | None]] = BoundedCache(
+_ROBOTS: BoundedCache[str, tuple[SomeDomain, SomeTable | None]] = BoundedCache(
     "physics experiment robot models", 2, kind=CacheKind.INPUT
 )
 
 
-def _make_robot(name: str) -> tuple[Domain[Any, Any], SomeTable | None]:
+def _make_robot(name: str) -> tuple[SomeDomain, SomeTable | None]:
     if name == CONFIRMED_NAME:
         domain = load_identified(name=CONFIRMED_NAME, confirmed_only=True)
         return domain, default_table(domain)  # generated: the identified robot ships none
     return FOUR_WHEEL, None
 
 
-def _robot(name: str) -> tuple[Domain[Any, Any], SomeTable | None]:
+def _robot(name: str) -> tuple[SomeDomain, SomeTable | None]:
     """The domain and table of robot model ``name`` (made once per process and kept)."""
     return _ROBOTS.get(name, lambda: _make_robot(name))
 

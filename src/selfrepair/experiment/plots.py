@@ -12,7 +12,7 @@ from collections import defaultdict
 from collections.abc import Sequence
 from fractions import Fraction
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -28,6 +28,11 @@ from selfrepair.experiment.summary import is_reference_replan
 from selfrepair.optional import matplotlib
 from selfrepair.repair.strategies import RepairSource, StrategyName
 from selfrepair.stats import lower_median, percentile
+
+if TYPE_CHECKING:
+    import numpy.typing as npt
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 __all__ = [
     "figure_baselines",
@@ -271,9 +276,9 @@ def _first_int(rows: Sequence[Row], maze: str) -> int:
 
 
 def _heat(
-    fig: Any,
-    ax: Any,
-    data: Any,
+    fig: Figure,
+    ax: Axes,
+    data: npt.NDArray[np.float64],
     faults: list[str],
     mazes: list[str],
     label: str,

@@ -8,9 +8,10 @@ set by :func:`selfrepair.experiment.config.parse_config` after the plug-ins are 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from fractions import Fraction
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal, TypeVar
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
@@ -249,7 +250,7 @@ class PlannerConfig(Frozen):
 
     @field_validator("clearance_weights", mode="before")
     @classmethod
-    def _weights(cls, value: Any) -> Any:
+    def _weights(cls, value: object) -> object:
         return _weights(value)
 
 
@@ -262,7 +263,7 @@ class _StrategyEntry(Frozen):
 
     @field_validator("clearance_weights", mode="before")
     @classmethod
-    def _weights(cls, value: Any) -> Any:
+    def _weights(cls, value: object) -> object:
         return _weights(value)
 
 
@@ -315,7 +316,7 @@ class ReplacementStrategy(_StrategyEntry):
 
     @field_validator("rewrite", mode="before")
     @classmethod
-    def _rewrite(cls, value: Any) -> Any:
+    def _rewrite(cls, value: object) -> object:
         if isinstance(value, bool):
             return (value,)
         if isinstance(value, list | tuple) and not value:
@@ -470,7 +471,7 @@ class ExperimentConfig(Frozen):
         return Path(self.source).parent if not self.source.startswith("<") else Path.cwd()
 
 
-def _weights(value: Any) -> Any:
+def _weights(value: object) -> object:
     """Clearance weights as canonical exact strings (``0.5`` -> ``"1/2"``), each from 0 to
     :data:`~selfrepair.limits.MAX_CLEARANCE_WEIGHT`."""
     if value is None:
@@ -495,7 +496,10 @@ def _weights(value: Any) -> Any:
     return tuple(out)
 
 
-def _reraise(parser: Any, text: str) -> Any:
+T = TypeVar("T")
+
+
+def _reraise(parser: Callable[[str], T], text: str) -> T:
     """Run a robot-model parser, turning its InputError into a plain ValueError for pydantic."""
     try:
         return parser(text)

@@ -4,11 +4,11 @@ model that validators read from the validation context (:func:`context_domain`),
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
 from pydantic import ValidationInfo, field_validator, model_validator
 
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import Domain, SomeDomain
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN
 from selfrepair.robots.registry import get_domain
 from selfrepair.tomlfile import Frozen, NonEmpty
@@ -16,7 +16,7 @@ from selfrepair.tomlfile import Frozen, NonEmpty
 __all__ = ["PhysicsConfig", "context_domain"]
 
 
-def context_domain(info: ValidationInfo) -> Domain[Any, Any]:
+def context_domain(info: ValidationInfo) -> SomeDomain:
     """The robot model a validator checks against: the validation context's ``domain`` (set by
     :func:`selfrepair.experiment.config.parse_config`), else the default robot."""
     context = info.context or {}

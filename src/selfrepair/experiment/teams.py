@@ -71,6 +71,7 @@ from selfrepair.team.grid import components
 from selfrepair.team.model import TeamTableName
 from selfrepair.team.randomteam import GripperMix
 from selfrepair.team.result import TeamOptions, TeamResult
+from selfrepair.textio import JSONObject
 from selfrepair.tomlfile import Frozen, NonEmpty, find_line, read_toml, validate
 
 __all__ = [
@@ -256,7 +257,7 @@ def expand_team(
     for point in cross(axes):
         identity, size, load, mix = point["maze"], point["size"], point["load"], point["mix"]
         (case, persistence), (name, table) = point["fault"], point["variant"]
-        base: dict[str, Any] = {
+        base: JSONObject = {
             "schema": SCHEMA,
             "kind": TEAM_KIND,
             "maze": identity,

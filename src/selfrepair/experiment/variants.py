@@ -28,6 +28,7 @@ from selfrepair.experiment.schema import (
     StrategyConfig,
 )
 from selfrepair.repair.tolerance import OPTIMAL
+from selfrepair.textio import JSONObject
 
 __all__ = [
     "BUNDLED_TABLES",
@@ -84,7 +85,7 @@ def variants_of(
                 for window, before in windows:
                     for rewrite in strategy.rewrite:
                         for objective in strategy.objectives:
-                            options: dict[str, Any] = {
+                            options: JSONObject = {
                                 **_table_identity(table, config),
                                 "recursion": recursion,
                             }
@@ -155,7 +156,7 @@ def maze_filter(
     return frozenset(strategy.mazes)
 
 
-def _plain_options(strategy: StrategyConfig) -> dict[str, Any]:
+def _plain_options(strategy: StrategyConfig) -> JSONObject:
     """The options of a strategy without a table, as its missions record them (defaults left
     out, so that the keys of missions made before an option existed stay valid)."""
     if isinstance(strategy, ReplanStrategy | DStarLiteStrategy) and strategy.backend != "auto":
@@ -205,14 +206,14 @@ def _check_table(path: Path) -> None:
         ) from None
 
 
-def short_table(table: Any) -> str | None:
+def short_table(table: object) -> str | None:
     """A table's readable name: a bundled name, or a table file's stem."""
     if table is None:
         return None
     return table if table in BUNDLED_TABLES else Path(str(table)).stem
 
 
-_LABEL_PARTS: tuple[tuple[str, bool, Callable[[Any], str]], ...] = (
+_LABEL_PARTS: tuple[tuple[str, bool, Callable[[object], str]], ...] = (
     ("table", True, lambda table: str(short_table(table))),
     ("recursion", True, str),
     ("window", True, "k={}".format),

@@ -219,8 +219,9 @@ def is_rewrite(row: Row) -> bool:
 
 
 def ratio_outcome(interval: Interval | None, threshold: float) -> Outcome:
-    """A ratio claim "at most ``threshold``": HELD when the interval lies at or below it, NOT HELD
-    when it lies above, INCONCLUSIVE when it straddles it or the pairs are too few."""
+    """A claim "at most ``threshold``" on a ratio or a share: HELD when the interval lies at or
+    below it, NOT HELD when it lies above, INCONCLUSIVE when it straddles it or the pairs are too
+    few."""
     if interval is None or interval.n < MIN_PAIRS:
         return Outcome.INCONCLUSIVE
     if interval.high <= threshold:

@@ -24,7 +24,7 @@ import math
 from collections.abc import Iterable, Mapping, Sequence
 from fractions import Fraction
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.faults import Detection, canonical_order
@@ -42,7 +42,7 @@ from selfrepair.experiment.viewpage import (
 from selfrepair.geometry import Cell, Pose, turn_corner
 from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.strategies import RepairSource, StrategyName, uses_table
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 
 __all__ = [
     "MAX_VIEW_STEPS",
@@ -75,7 +75,7 @@ REPAIR_SOURCE_NAMES = {
 # --- payload ------------------------------------------------------------------------------------
 
 
-def segment_json(domain: Domain[Any, Any], start: Pose, action: Any) -> dict[str, Any]:
+def segment_json(domain: SomeDomain, start: Pose, action: object) -> dict[str, Any]:
     """What ``action`` does from ``start`` according to the robot's domain, for drawing: end
     pose, the kind of move (from the geometry: ``wait``, ``turn``, ``straight`` or ``arc``),
     footprint cells and, for an arc, the cell it passes first (the curve's corner)."""
@@ -103,7 +103,7 @@ def _shape(start: Pose, end: Pose, swept: Sequence[Cell]) -> tuple[str, Cell | N
     return "arc", corner if corner is not None and corner in swept else None
 
 
-def _faults(domain: Domain[Any, Any], faults: Iterable[Any]) -> list[str]:
+def _faults(domain: SomeDomain, faults: Iterable[object]) -> list[str]:
     return sorted(domain.format_faults([f]) for f in faults)
 
 
@@ -115,14 +115,14 @@ def _frame_ticks(steps: Sequence[TraceStep]) -> list[Fraction]:
     return ticks
 
 
-def true_faults(spec: MissionSpec, ticks: Sequence[Fraction]) -> list[frozenset[Any]]:
+def true_faults(spec: MissionSpec, ticks: Sequence[Fraction]) -> list[frozenset[object]]:
     """The true faults at the start of each step (and after the last): the schedule's."""
     return [spec.schedule.active_faults(k, t, spec.seed) for k, t in enumerate(ticks)]
 
 
 def known_faults(
-    spec: MissionSpec, steps: Sequence[TraceStep], true: Sequence[frozenset[Any]]
-) -> list[frozenset[Any]]:
+    spec: MissionSpec, steps: Sequence[TraceStep], true: Sequence[frozenset[object]]
+) -> list[frozenset[object]]:
     """The faults known at the start of each step: those the step line records. After the last
     step: what the sensors report (detection ``now``), or the last step's known faults plus
     those a final failed attempt revealed (detection ``on-use``)."""
@@ -134,7 +134,7 @@ def known_faults(
         known.append(frozenset())
     else:
         last = steps[-1]
-        revealed: frozenset[Any] = frozenset()
+        revealed: frozenset[object] = frozenset()
         if last.source is StepSource.FAILED_ATTEMPT:
             revealed = spec.domain.blocking(last.action, true[n - 1])
         known.append(last.known | revealed)
@@ -142,12 +142,12 @@ def known_faults(
 
 
 def fault_events(
-    domain: Domain[Any, Any], true: Sequence[frozenset[Any]], known: Sequence[frozenset[Any]]
+    domain: SomeDomain, true: Sequence[frozenset[object]], known: Sequence[frozenset[object]]
 ) -> list[dict[str, Any]]:
     """When each fault appears, clears, becomes known or stops being known (frame numbers)."""
     events: list[dict[str, Any]] = []
-    before_true: frozenset[Any] = frozenset()
-    before_known: frozenset[Any] = frozenset()
+    before_true: frozenset[object] = frozenset()
+    before_known: frozenset[object] = frozenset()
     for frame, (now_true, now_known) in enumerate(zip(true, known, strict=True)):
         for kind, faults in (
             ("appears", now_true - before_true),
@@ -174,10 +174,10 @@ def _runs(flags: Sequence[bool]) -> list[list[int]]:
 
 
 def fault_timeline(
-    domain: Domain[Any, Any], true: Sequence[frozenset[Any]], known: Sequence[frozenset[Any]]
+    domain: SomeDomain, true: Sequence[frozenset[object]], known: Sequence[frozenset[object]]
 ) -> list[dict[str, Any]]:
     """Per fault that is ever true or known: the frame runs in which it is true and known."""
-    every: frozenset[Any] = frozenset().union(*true, *known)
+    every: frozenset[object] = frozenset().union(*true, *known)
     return [
         {
             "fault": domain.format_faults([f]),
@@ -211,11 +211,11 @@ def _latency(ns: int) -> str:
 
 
 def repair_json(
-    domain: Domain[Any, Any],
+    domain: SomeDomain,
     index: int,
     repair: TraceRepair,
     steps: Sequence[TraceStep],
-    known: frozenset[Any],
+    known: frozenset[object],
 ) -> dict[str, Any]:
     """A repair for the page: its line's fields, the path its actions take from its pose, the
     executed steps that carried them out, and text saying where it came from."""
@@ -251,7 +251,7 @@ def repair_json(
     }
 
 
-def _step_json(domain: Domain[Any, Any], step: TraceStep, ticks: Fraction) -> dict[str, Any]:
+def _step_json(domain: SomeDomain, step: TraceStep, ticks: Fraction) -> dict[str, Any]:
     if step.source is StepSource.FAILED_ATTEMPT:
         segment = {
             "action": domain.format_action(step.action),
@@ -272,7 +272,10 @@ def _step_json(domain: Domain[Any, Any], step: TraceStep, ticks: Fraction) -> di
     }
 
 
-def _finite(value: Any) -> Any:
+T = TypeVar("T")
+
+
+def _finite(value: T) -> T | str:
     """``value`` with a non-finite float (which a hand-edited trace may hold) as text: the page's
     JSON has no NaN or Infinity."""
     return str(value) if isinstance(value, float) and not math.isfinite(value) else value
@@ -286,7 +289,7 @@ def _title(spec: MissionSpec, status: str) -> str:
     return f"{spec.maze.name or 'maze'}: {spec.start} to {goal}, {strategy}: {status}"
 
 
-def tolerance_json(spec: MissionSpec, actions: Sequence[Any], k: int) -> dict[str, Any] | None:
+def tolerance_json(spec: MissionSpec, actions: Sequence[object], k: int) -> dict[str, Any] | None:
     """The tolerance of the initial plan ``actions`` for every set of 1 to ``k`` faults
     (:meth:`~selfrepair.repair.tolerance.PlanTolerance.to_json`: per step, the fault sets
     uncovered from there), what the page draws as a heat strip along the route; ``None`` for

@@ -19,6 +19,7 @@ from typing import Any, Protocol, TypeVar
 
 from selfrepair.errors import InputError, ProblemError, TraceError
 from selfrepair.geometry import Pose
+from selfrepair.textio import JSONObject
 from selfrepair.world.maze import Maze
 
 __all__ = [
@@ -103,7 +104,7 @@ def check_viewable(
     return check
 
 
-def pose_json(pose: Pose) -> dict[str, Any]:
+def pose_json(pose: Pose) -> JSONObject:
     """A pose for drawing: cell, heading name, unit heading vector and angle (degrees clockwise
     from north, screen up being north)."""
     dx, dy = pose.heading.vector

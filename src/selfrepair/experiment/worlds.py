@@ -17,7 +17,7 @@ from typing import Any
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.geometry import Cell, Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.search.lattice import plan
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.world.events import WorldSchedule, random_world
@@ -27,7 +27,7 @@ __all__ = ["mission_world", "route_plan"]
 
 
 def route_plan(
-    maze: Maze, start: Pose, goal: Cell, domain: Domain[Any, Any]
+    maze: Maze, start: Pose, goal: Cell, domain: SomeDomain
 ) -> tuple[tuple[Cell, ...], float]:
     """The cells of the fault-free optimal plan from ``start`` to ``goal`` (the start cell
     first) and its duration in ticks (no cells but the start when no plan exists); computed
@@ -41,7 +41,7 @@ def route_plan(
     return _PLANS.get((maze, start, goal, domain), made)
 
 
-_PLANS: BoundedCache[tuple[Maze, Pose, Cell, Domain[Any, Any]], tuple[tuple[Cell, ...], float]] = (
+_PLANS: BoundedCache[tuple[Maze, Pose, Cell, SomeDomain], tuple[tuple[Cell, ...], float]] = (
     BoundedCache("route plans for world events", 256, kind=CacheKind.REFERENCE)
 )
 
@@ -51,7 +51,7 @@ def mission_world(
     maze: Maze,
     start: Pose,
     goal: Cell,
-    domain: Domain[Any, Any],
+    domain: SomeDomain,
     seed: int,
 ) -> WorldSchedule:
     """The world events of one mission from its canonical ``world`` settings (``rate``,

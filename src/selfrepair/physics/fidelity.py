@@ -23,7 +23,7 @@ from selfrepair.physics.model import DEFAULT_PARAMS, RobotParams
 from selfrepair.physics.simulator import lattice_motion, wheel_commands
 from selfrepair.physics.tracker import ContinuousPose, wrap
 from selfrepair.physics.world import PhysicsWorld, pose_error, snap
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 
 __all__ = [
@@ -171,9 +171,9 @@ def _snap(
 
 
 def measure(
-    domain: Domain[Any, Any] = FOUR_WHEEL,
+    domain: SomeDomain = FOUR_WHEEL,
     params: RobotParams = DEFAULT_PARAMS,
-    actions: Iterable[Any] | None = None,
+    actions: Iterable[object] | None = None,
     *,
     faulty: bool = True,
 ) -> FidelityReport:
@@ -233,7 +233,7 @@ def measure(
     return FidelityReport(tuple(rows), params)
 
 
-def faulty_rows(domain: Domain[Any, Any], nominal: list[FidelityRow]) -> list[FidelityRow]:
+def faulty_rows(domain: SomeDomain, nominal: list[FidelityRow]) -> list[FidelityRow]:
     """The rows of every action under every single fault that forbids it, per fault-behaviour
     model of ``domain`` (behaviour by behaviour, fault by fault, action by action).
 

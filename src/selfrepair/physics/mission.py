@@ -17,7 +17,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from selfrepair.execution.executor import run_mission
 from selfrepair.execution.result import MissionResult, MissionSpec
@@ -75,7 +74,7 @@ class _Recorder:
         self.renderer = mj.Renderer(world.model, video.height, video.width)
         self.every = every
         self.count = 0
-        self.frames: list[Any] = []
+        self.frames: list[object] = []
 
     def __call__(self, world: PhysicsWorld) -> None:
         if self.count % self.every == 0:
@@ -140,7 +139,7 @@ def run_physics_mission(
     return PhysicsMission(result, outcome, steps)
 
 
-def _write(frames: list[Any], video: VideoSpec) -> None:
+def _write(frames: list[object], video: VideoSpec) -> None:
     """Write the frames with imageio (the ``physics`` extra)."""
     iio = import_extra("imageio.v2", "physics", need="physics videos")
     if video.path.suffix.lower() == ".gif":

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
 
 from selfrepair.execution.faults import Detection, FaultSchedule
 from selfrepair.execution.simulator import Outcome, Simulator
@@ -25,7 +24,7 @@ from selfrepair.geometry import Pose
 from selfrepair.physics.model import DEFAULT_PARAMS, RobotParams
 from selfrepair.physics.tracker import ContinuousPose, LatticeMotion
 from selfrepair.physics.world import PhysicsWorld, pose_error, snap
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.search.problem import make_pose
 from selfrepair.world.events import WorldSchedule
 from selfrepair.world.maze import Maze
@@ -40,7 +39,7 @@ class PhysicsStep:
     continuous end against the lattice's end, and the control updates that touched a wall."""
 
     step: int
-    action: Any
+    action: object
     start: Pose
     lattice_end: Pose
     end: ContinuousPose
@@ -51,7 +50,7 @@ class PhysicsStep:
     seconds: float
 
 
-def wheel_commands(domain: Domain[Any, Any], action: Any) -> tuple[int, int, int, int]:
+def wheel_commands(domain: SomeDomain, action: object) -> tuple[int, int, int, int]:
     """The four wheel commands (+1, 0, -1; FL, FR, RL, RR) of a four-wheel action."""
     wheels = getattr(action, "wheels", None)
     if wheels is None or len(wheels) != 4:
@@ -65,7 +64,7 @@ def wheel_commands(domain: Domain[Any, Any], action: Any) -> tuple[int, int, int
     return (a, b, c, d)
 
 
-def lattice_motion(domain: Domain[Any, Any], action: Any) -> LatticeMotion:
+def lattice_motion(domain: SomeDomain, action: object) -> LatticeMotion:
     """The lattice motion of ``action`` in the robot's frame, read off the domain (from a
     north-facing start: forward is -y, right is +x)."""
     start = Pose(0, 0, domain.canonical.heading)
@@ -79,7 +78,7 @@ class PhysicsSimulator(Simulator):
 
     def __init__(
         self,
-        domain: Domain[Any, Any],
+        domain: SomeDomain,
         maze: Maze,
         start: Pose,
         schedule: FaultSchedule,
@@ -99,10 +98,10 @@ class PhysicsSimulator(Simulator):
         self.physics.place(start)
         self.physics_steps: list[PhysicsStep] = []
         self.deviated = False
-        self._motions: dict[Any, LatticeMotion] = {}
+        self._motions: dict[object, LatticeMotion] = {}
         self._hidden_faults = schedule.detection is Detection.HIDDEN
 
-    def advance(self, action: Any) -> Outcome:
+    def advance(self, action: object) -> Outcome:
         """The lattice simulator's step, then, for a move, the physics run and localisation.
         With hidden faults the wheels run the action the fault behaviour says they perform
         (:attr:`last_action`); a failed attempt or a bump leaves the robot where it is while

@@ -16,7 +16,7 @@ import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
+from types import ModuleType
 
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Heading, Pose
@@ -28,7 +28,7 @@ from selfrepair.world.maze import Maze
 __all__ = ["ActionRun", "PhysicsWorld", "lattice_pose", "mujoco_module", "snap"]
 
 
-def mujoco_module() -> Any:
+def mujoco_module() -> ModuleType:
     """The ``mujoco`` package (the ``physics`` extra), or a :class:`ProblemError` naming it.
 
     On a machine without a display (no ``DISPLAY``) and without ``MUJOCO_GL`` set, MuJoCo's

@@ -93,9 +93,9 @@ class Replacement(NamedTuple, Generic[End]):
     frozen dataclass on the hot path).
     """
 
-    action: Any
-    candidate: tuple[Any, ...]
-    actions: tuple[Any, ...]
+    action: object
+    candidate: tuple[object, ...]
+    actions: tuple[object, ...]
     position: int
     depth: int
     examined: int
@@ -104,7 +104,7 @@ class Replacement(NamedTuple, Generic[End]):
 
 
 def walk(
-    world: LiftedWorld[Step, State], steps: Iterable[Step], state: State, replacing: Set[Any]
+    world: LiftedWorld[Step, State], steps: Iterable[Step], state: State, replacing: Set[object]
 ) -> tuple[tuple[Hashable, ...], State] | None:
     """The validity test of one candidate, without recursion: ``None`` when a step is not
     healthy, not executable from where the steps before it lead, or binds to an action in
@@ -120,7 +120,7 @@ def walk(
 
 
 def _executable(
-    world: LiftedWorld[Step, State], step: Step, state: State, replacing: Set[Any]
+    world: LiftedWorld[Step, State], step: Step, state: State, replacing: Set[object]
 ) -> tuple[tuple[Hashable, ...], State] | None:
     """Conditions 2 and 3 for a healthy ``step``: its actions and the state after it, or
     ``None`` when it cannot be done from ``state`` or binds to an action being replaced."""
@@ -130,7 +130,7 @@ def _executable(
     return moved
 
 
-Expanded = tuple[tuple[Any, ...], Any, int, tuple[int, ...]]
+Expanded = tuple[tuple[object, ...], Any, int, tuple[int, ...]]
 """A valid candidate's actions (nested replacements expanded), end state, nested depth and
 deferred positions."""
 
@@ -147,17 +147,17 @@ class CoreSearch(Generic[Step, State]):
     healthy is its own action (only a robot's primitive steps recurse)."""
 
     world: LiftedWorld[Step, State]
-    candidates: Callable[[Any], Sequence[Sequence[Step]]]
+    candidates: Callable[[Step], Sequence[Sequence[Step]]]
     may_recurse: RecurseRule
-    deferrable: frozenset[Any] = frozenset()
-    follow: Callable[[State, Any], State] | None = None
+    deferrable: frozenset[Step] = frozenset()
+    follow: Callable[[State, Step], State] | None = None
     examined: int = 0
-    memo: dict[tuple[Any, State, frozenset[Any], int, bool], Replacement[State] | None] = field(
+    memo: dict[tuple[Step, State, frozenset[Step], int, bool], Replacement[State] | None] = field(
         default_factory=dict
     )
 
     def replace(
-        self, action: Any, state: State, replacing: frozenset[Any], depth: int, first: bool = True
+        self, action: Step, state: State, replacing: frozenset[Step], depth: int, first: bool = True
     ) -> Replacement[State] | None:
         """The first valid replacement; nested results are memoised per (action, state, guard set,
         depth, whether it runs first), so a sub-problem met again in another candidate is not
@@ -170,7 +170,7 @@ class CoreSearch(Generic[Step, State]):
         return found
 
     def _first(
-        self, action: Any, state: State, replacing: frozenset[Any], depth: int, first: bool
+        self, action: Step, state: State, replacing: frozenset[Step], depth: int, first: bool
     ) -> Replacement[State] | None:
         for position, candidate in enumerate(self.candidates(action)):
             self.examined += 1
@@ -185,17 +185,17 @@ class CoreSearch(Generic[Step, State]):
 
     def _expand(
         self,
-        action: Any,
+        action: Step,
         candidate: Sequence[Step],
         state: State,
-        replacing: frozenset[Any],
+        replacing: frozenset[Step],
         depth: int,
         first: bool,
     ) -> Expanded | None:
         """:func:`walk` with recursion: a step that is not healthy is replaced in turn (guard
         set extended, one level deeper) or deferred, as the mode allows."""
         world = self.world
-        out: list[Any] = []
+        out: list[object] = []
         deferred: list[int] = []
         nested = 0
         for b in candidate:

@@ -243,7 +243,8 @@ def free_space(
                     f"table replaces {name} under {fault_text!r}, which the ground truth "
                     "calls impossible"
                 )
-            cost = candidate_cost(dom, found.actions, objective)
+            actions = cast("tuple[A, ...]", found.actions)  # the table's own actions
+            cost = candidate_cost(dom, actions, objective)
             pairs.append(
                 PairResult(
                     fault_text,
@@ -252,7 +253,7 @@ def free_space(
                     cost,
                     found.position,
                     found.depth,
-                    tuple(dom.format_action(a) for a in found.actions),
+                    tuple(dom.format_action(a) for a in actions),
                 )
             )
             covered += 1

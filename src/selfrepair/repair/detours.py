@@ -42,14 +42,14 @@ from selfrepair.repair.core import walk
 from selfrepair.repair.lookups import MISSING, Missing
 from selfrepair.repair.neighbourhood import action_index, occupancy_bit, occupancy_rows
 from selfrepair.repair.replacement import FreeTest, RobotWorld
-from selfrepair.robots.domain import A, Domain, F, primitive_by_motion
+from selfrepair.robots.domain import A, F, SomeDomain, primitive_by_motion
 from selfrepair.tables.detours import DetourTable, SomeDetours, detour_table
 
 __all__ = ["BeliefCodes", "DetourAnswer", "DetourFinder", "believed_free", "find_detour"]
 
 T = TypeVar("T")
 
-DetourAnswer = Callable[[int, tuple[Any, ...], int], T]
+DetourAnswer = Callable[[int, tuple[object, ...], int], T]
 """Turns a valid detour (candidate position, actions, queued actions it replaces) into what a
 :class:`DetourFinder` stores and answers (a strategy's repair)."""
 
@@ -273,7 +273,7 @@ class DetourFinder(Generic[T]):
         "table",
     )
 
-    def __init__(self, domain: Domain[Any, Any], grid: FreeGrid, answer: DetourAnswer[T]) -> None:
+    def __init__(self, domain: SomeDomain, grid: FreeGrid, answer: DetourAnswer[T]) -> None:
         self.table = detour_table(domain)
         self.answer = answer
         self.grid = grid
@@ -300,23 +300,23 @@ class DetourFinder(Generic[T]):
         self._starts = tuple(
             h * _HEADING_STEP + h * _SIDE2 + _OFF * _SIDE + _OFF for h in map(int, Heading)
         )
-        self._bound_known: frozenset[Any] | None = None
+        self._bound_known: frozenset[object] | None = None
         self._bound: tuple[Any | None, ...] = ()
         self._slots: dict[int, _Slot[T] | None] = {}
-        self._by_known: dict[frozenset[Any], dict[int, _Slot[T] | None]] = {}
-        self._bindings: dict[frozenset[Any], tuple[Any | None, ...]] = {}
+        self._by_known: dict[frozenset[object], dict[int, _Slot[T] | None]] = {}
+        self._bindings: dict[frozenset[object], tuple[Any | None, ...]] = {}
         self._rebind(frozenset())  # the fault-free binding, before any timed repair
         for key in self.table.entries:  # every candidate's bits, before any timed repair
             candidate_masks(self.table, key)
 
-    def _step(self, heading: int, action: Any) -> _Step:
+    def _step(self, heading: int, action: object) -> _Step:
         """The :data:`_Step` of ``action`` from ``heading`` (found by equality, so an equal copy
         of a domain action has one; :class:`ProblemError` for an action not of the domain)."""
         dx, dy, h1, sweep = self._moves[4 * self._index.of(action) + heading]
         delta = _WINDOW_STEP + (h1 - heading) * _SIDE2 + dx * _SIDE + dy
         return (dy * self._width + dx, sweep, delta, self._steps[h1])
 
-    def bound(self, known: frozenset[Any]) -> tuple[Any | None, ...]:
+    def bound(self, known: frozenset[object]) -> tuple[Any | None, ...]:
         """Each class of the table bound to its fastest available action under ``known``
         (computed once per fault set)."""
         found = self._bindings.get(known)
@@ -324,7 +324,7 @@ class DetourFinder(Generic[T]):
             found = self._bindings[known] = _bound(self.table, known)
         return found
 
-    def _rebind(self, known: frozenset[Any]) -> None:
+    def _rebind(self, known: frozenset[object]) -> None:
         """Switch to the answers of ``known`` (kept per fault set: they depend on it; shared by
         every finder of the same table and answer, since an answer depends only on the slot,
         the masked code and the faults)."""
@@ -335,7 +335,11 @@ class DetourFinder(Generic[T]):
         self._slots, self._bound_known, self._bound = slots, known, self.bound(known)
 
     def find(
-        self, pose: Pose, queue: Iterable[Any], known: frozenset[Any], blocked: frozenset[Cell]
+        self,
+        pose: Pose,
+        queue: Iterable[object],
+        known: frozenset[object],
+        blocked: frozenset[Cell],
     ) -> T | None:
         """The detour at ``pose`` for the ``queue`` of actions under the known faults ``known``
         with ``blocked`` believed blocked (the window rule of the module docstring).
@@ -393,7 +397,7 @@ class DetourFinder(Generic[T]):
         return self._last(slot_id, start) if codes[p] & center else None
 
     def next_blocked(
-        self, pose: Pose, actions: Sequence[Any], begin: int, start: int
+        self, pose: Pose, actions: Sequence[object], begin: int, start: int
     ) -> tuple[int, Pose] | None:
         """Where a rewriting pass meets the next blocked window: from ``pose``, the pose the
         plan predicts before ``actions[begin]``, the first ``k >= start`` whose action sweeps a

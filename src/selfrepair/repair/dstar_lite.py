@@ -21,7 +21,7 @@ maze and no particular robot.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
@@ -45,7 +45,7 @@ DSTAR_LITE = StrategyName.DSTAR_LITE
 """The strategy's name in the registry."""
 
 
-def _search(context: MissionContext, pose: Pose, known: frozenset[Any]) -> DStarLite:
+def _search(context: MissionContext, pose: Pose, known: frozenset[object]) -> DStarLite:
     grid = context.grid
     m = grid.margin
     padded = np.frombuffer(grid.data, dtype=np.uint8).reshape(grid.height + 2 * m, grid.stride)

@@ -382,13 +382,10 @@ def fault_lookups(
         raise ProblemError(f"max_depth must be at least 0, got {max_depth}")
     faults = known if type(known) is frozenset else frozenset(known)
     depth = _key(recursion, max_depth)
-
-    def make() -> FaultLookups[T]:
-        return FaultLookups(table, faults, recursion, max_depth, answer, guard, max_patterns)
-
-    # the key holds ``answer``: the value's answers are what it makes
     key = (table, faults, recursion, depth, answer, guard, max_patterns)
-    return cast("FaultLookups[T]", _LOOKUPS.get(key, make))
+    args = (table, faults, recursion, max_depth, answer, guard, max_patterns)
+    # the key holds ``answer``, so the value's answers are of its type T
+    return cast("FaultLookups[T]", _LOOKUPS.get(key, lambda: FaultLookups(*args)))
 
 
 def _same(found: Replacement) -> Replacement:

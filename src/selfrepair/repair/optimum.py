@@ -33,10 +33,9 @@ import heapq
 import itertools
 from collections.abc import Iterable, Sequence
 from fractions import Fraction
-from typing import Any
 
 from selfrepair.geometry import Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import A, Domain, F
 from selfrepair.tables.enumerate import class_costs, class_of, cost_scale, motion_classes
 
 __all__ = [
@@ -232,8 +231,8 @@ def _positive_functional(
 
 
 def optimal_replacements(
-    domain: Domain[Any, Any], faults: frozenset[Any], objective: str = "duration"
-) -> dict[Any, Fraction | None]:
+    domain: Domain[A, F], faults: frozenset[F], objective: str = "duration"
+) -> dict[A, Fraction | None]:
     """For every action that ``faults`` disables, the exact cost of its cheapest replacement in
     free space with the available actions (``None``: no replacement exists at any length)."""
     classes = motion_classes(domain)
@@ -245,7 +244,7 @@ def optimal_replacements(
     targets = {s for s in wanted if reachable(gens, effect(start, s))}
     found = _dijkstra(domain, costs, start, targets)
     unit = cost_scale(domain) if objective == "duration" else 1
-    result: dict[Any, Fraction | None] = {}
+    result: dict[A, Fraction | None] = {}
     for a in disabled:
         end = class_of(domain, a).end
         result[a] = Fraction(found[end], unit) if end in found else None
@@ -253,17 +252,17 @@ def optimal_replacements(
 
 
 def _dijkstra(
-    domain: Domain[Any, Any], costs: dict[int, tuple[int, int, Any]], start: Pose, targets: set[Any]
-) -> dict[Any, int]:
+    domain: Domain[A, F], costs: dict[int, tuple[int, int, A]], start: Pose, targets: set[Pose]
+) -> dict[Pose, int]:
     """Cheapest non-empty sequence cost to each target (all must be reachable)."""
-    found: dict[Any, int] = {}
+    found: dict[Pose, int] = {}
     if not targets:
         return found
     counter = itertools.count()
-    heap: list[tuple[int, int, Any]] = []
+    heap: list[tuple[int, int, Pose]] = []
     for obj, _, action in (costs[ci] for ci in sorted(costs)):
         heapq.heappush(heap, (obj, next(counter), domain.apply(start, action)))
-    done: set[Any] = set()
+    done: set[Pose] = set()
     while heap and len(found) < len(targets):
         cost, _, state = heapq.heappop(heap)
         if state in done:

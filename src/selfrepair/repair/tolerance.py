@@ -42,7 +42,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
 from itertools import combinations, repeat
-from typing import Any
 
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
@@ -56,8 +55,9 @@ from selfrepair.repair.strategies import (
     StrategyName,
     get_strategy,
 )
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.search.astar import PlanResult, PlanStatus
+from selfrepair.textio import JSONObject
 
 __all__ = [
     "OPTIMAL",
@@ -79,7 +79,7 @@ class FaultModel:
     """The fault sets a plan should tolerate, in a fixed order (bit ``b`` of a tolerance mask is
     ``fault_sets[b]``). ``label`` names the model in tables (``"k=1"``, ``"k=2"`` or the sets)."""
 
-    fault_sets: tuple[frozenset[Any], ...]
+    fault_sets: tuple[frozenset[object], ...]
     label: str
 
     def __post_init__(self) -> None:
@@ -96,7 +96,7 @@ class FaultModel:
         return max(len(f) for f in self.fault_sets)
 
 
-def fault_model(domain: Domain[Any, Any], k: int) -> FaultModel:
+def fault_model(domain: SomeDomain, k: int) -> FaultModel:
     """Every fault set of the domain with 1 to ``k`` faults: ``domain.fault_sets`` (singles,
     then pairs) for ``k <= 2``, combinations of ``domain.faults`` (in their order) beyond."""
     if k < 1:
@@ -169,9 +169,9 @@ class StepTolerance:
 
     step: int
     pose: Pose
-    action: Any
-    needs_replan: tuple[frozenset[Any], ...]
-    uncovered: tuple[frozenset[Any], ...]
+    action: object
+    needs_replan: tuple[frozenset[object], ...]
+    uncovered: tuple[frozenset[object], ...]
 
 
 @dataclass(frozen=True, slots=True)
@@ -207,7 +207,7 @@ class PlanTolerance:
         tolerant planner's soft mode counts."""
         return sum(len(s.needs_replan) for s in self.steps)
 
-    def to_json(self, domain: Domain[Any, Any]) -> dict[str, Any]:
+    def to_json(self, domain: SomeDomain) -> JSONObject:
         """The tolerance as JSON (faults and actions in ``domain``'s text form): the summary and,
         per step, the uncovered fault sets and those under which the step needs a replan (what
         ``selfrepair tolerance --json`` prints and the viewer draws as a heat strip)."""
@@ -237,7 +237,7 @@ class PlanTolerance:
 
 
 def _no_plan(
-    start: Pose, goal: Cell, heading: Heading | None, known: frozenset[Any], budget: int | None
+    start: Pose, goal: Cell, heading: Heading | None, known: frozenset[object], budget: int | None
 ) -> PlanResult:
     """A planner that finds nothing: a repair that falls back to replanning is seen at once."""
     return PlanResult(PlanStatus.UNSOLVABLE, (), (), None, Fraction(0), 0, 0)
@@ -256,7 +256,7 @@ def _repairer(context: MissionContext) -> Repairer:
 
 
 def needs_replan(
-    context: MissionContext, pose: Pose, action: Any, faults: frozenset[Any],
+    context: MissionContext, pose: Pose, action: object, faults: frozenset[object],
     repairer: Repairer | None = None,
 ) -> bool:  # fmt: skip
     """Whether the ``replacement`` strategy of ``context`` would replan when it meets ``action``
@@ -272,8 +272,8 @@ def needs_replan(
 def runs_without_replan(
     context: MissionContext,
     pose: Pose,
-    actions: Sequence[Any],
-    faults: frozenset[Any],
+    actions: Sequence[object],
+    faults: frozenset[object],
     max_steps: int | None = None,
 ) -> bool:
     """Whether the ``replacement`` strategy of ``context``, started at ``pose`` with ``actions``
@@ -282,7 +282,7 @@ def runs_without_replan(
     executed steps (default: ``20 * len(actions) + 100``)."""
     domain = context.domain
     repairer = _repairer(context)
-    queue: deque[tuple[Any, None]] = deque(zip(actions, repeat(None)))
+    queue: deque[tuple[object, None]] = deque(zip(actions, repeat(None)))
     limit = 20 * len(actions) + 100 if max_steps is None else max_steps
     executed = 0
     while queue:
@@ -305,7 +305,7 @@ def runs_without_replan(
 def plan_tolerance(
     context: MissionContext,
     poses: Sequence[Pose],
-    actions: Sequence[Any],
+    actions: Sequence[object],
     model: FaultModel,
 ) -> PlanTolerance:
     """The tolerance of the plan ``actions`` (from ``poses[0]``; ``poses[j]`` is the pose before
@@ -321,8 +321,8 @@ def plan_tolerance(
         tuple(f for f in model.fault_sets if needs_replan(context, poses[j], a, f, repairer))
         for j, a in enumerate(actions)
     ]
-    bad_from: list[tuple[frozenset[Any], ...]] = [()] * n
-    later: dict[frozenset[Any], None] = {}  # insertion-ordered: fault sets failing at j or later
+    bad_from: list[tuple[frozenset[object], ...]] = [()] * n
+    later: dict[frozenset[object], None] = {}  # insertion-ordered: fault sets failing at j or later
     for j in range(n - 1, -1, -1):
         later.update(dict.fromkeys(local[j]))
         bad_from[j] = tuple(f for f in model.fault_sets if f in later)
@@ -330,7 +330,7 @@ def plan_tolerance(
 
 
 def _by_runs(
-    context: MissionContext, poses: Sequence[Pose], actions: Sequence[Any], model: FaultModel
+    context: MissionContext, poses: Sequence[Pose], actions: Sequence[object], model: FaultModel
 ) -> PlanTolerance:
     """Deferring recursion modes: the strategy run from the first faulty step of each suffix."""
     domain = context.domain
@@ -339,8 +339,8 @@ def _by_runs(
         tuple(f for f in model.fault_sets if needs_replan(context, poses[j], actions[j], f))
         for j in range(n)
     ]
-    verdict: dict[tuple[int, frozenset[Any]], bool] = {}
-    bad_from: list[tuple[frozenset[Any], ...]] = []
+    verdict: dict[tuple[int, frozenset[object]], bool] = {}
+    bad_from: list[tuple[frozenset[object], ...]] = []
     for i in range(n):
         bad = []
         for f in model.fault_sets:
@@ -357,19 +357,19 @@ def _by_runs(
 
 
 def _summary(
-    domain: Domain[Any, Any],
+    domain: SomeDomain,
     poses: Sequence[Pose],
-    actions: Sequence[Any],
+    actions: Sequence[object],
     model: FaultModel,
-    local: list[tuple[frozenset[Any], ...]],
-    bad_from: list[tuple[frozenset[Any], ...]],
+    local: list[tuple[frozenset[object], ...]],
+    bad_from: list[tuple[frozenset[object], ...]],
     *,
     exact_local: bool,
 ) -> PlanTolerance:
     n = len(actions)
     steps = tuple(StepTolerance(j, poses[j], actions[j], local[j], bad_from[j]) for j in range(n))
     met = 0
-    faulty_later: set[frozenset[Any]] = set()
+    faulty_later: set[frozenset[object]] = set()
     for j in range(n - 1, -1, -1):
         faulty_later.update(f for f in model.fault_sets if not domain.available(actions[j], f))
         met += len(faulty_later)

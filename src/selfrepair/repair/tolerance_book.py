@@ -22,7 +22,6 @@ starts afresh.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -53,7 +52,7 @@ class ToleranceMasks:
     cell ``(x, y)`` (-1 on walls) and ``words[row, heading, k, w]`` holds bits ``64 w ..`` of the
     fault sets (``model`` order) of that row; :attr:`masks` spreads them to every cell."""
 
-    actions: tuple[Any, ...]
+    actions: tuple[object, ...]
     model: FaultModel
     counts: npt.NDArray[np.int32]
     rows: npt.NDArray[np.int32]
@@ -69,7 +68,7 @@ class ToleranceMasks:
         out[ys, xs] = self.words[self.rows[ys, xs]]
         return out
 
-    def fault_sets_at(self, pose: Pose, k: int) -> tuple[frozenset[Any], ...]:
+    def fault_sets_at(self, pose: Pose, k: int) -> tuple[frozenset[object], ...]:
         """The fault sets whose bit is set for ``actions[k]`` at ``pose`` (model order)."""
         row = int(self.rows[pose.y, pose.x])
         if row < 0:
@@ -239,7 +238,7 @@ class MaskBook:
         if nbytes <= 8:
             wide = np.zeros((len(at), 8), dtype=np.uint8)
             wide[:, :nbytes] = packed
-            keys: npt.NDArray[Any] = wide.view("<u8").ravel()
+            keys: npt.NDArray[np.uint64] = wide.view("<u8").ravel()
             distinct, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
             codes = [int(v) for v in distinct.tolist()]
         else:  # a union wider than 64 cells: compare the bytes

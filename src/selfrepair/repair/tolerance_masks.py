@@ -37,7 +37,6 @@ per (book, grid) in bounded caches.
 from __future__ import annotations
 
 from fractions import Fraction
-from typing import Any
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
@@ -91,7 +90,7 @@ _MASKS: BoundedCache[tuple[MaskBook, FreeGrid], ToleranceMasks] = BoundedCache(
     "tolerance masks", 16, kind=CacheKind.REPAIR
 )
 
-_BOOKS: BoundedCache[tuple[Any, ...], MaskBook] = BoundedCache(
+_BOOKS: BoundedCache[tuple[object, ...], MaskBook] = BoundedCache(
     "tolerance mask books", 16, kind=CacheKind.REPAIR
 )
 

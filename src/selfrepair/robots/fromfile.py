@@ -11,7 +11,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Any
 
 from selfrepair.errors import ConfigError, InputError
 from selfrepair.robots.domain import SomeDomain
@@ -24,7 +23,7 @@ DEFAULT_DOMAIN = "four-wheel"
 """The robot of a file that names none."""
 
 
-def load_plugins(data: Mapping[str, Any], text: str, source: str) -> None:
+def load_plugins(data: Mapping[str, object], text: str, source: str) -> None:
     """Run the plug-in files the file names (key ``plugins``, paths relative to the file) so
     that the domain it names can be found."""
     plugins = data.get("plugins", [])
@@ -43,7 +42,7 @@ def load_plugins(data: Mapping[str, Any], text: str, source: str) -> None:
             raise ConfigError(f"key 'plugins': {exc}", source=source, line=line) from None
 
 
-def file_domain(data: Mapping[str, Any], text: str, source: str) -> SomeDomain:
+def file_domain(data: Mapping[str, object], text: str, source: str) -> SomeDomain:
     """The robot the file names (key ``domain``, default four-wheel), looked up in the registry."""
     name = data.get("domain", DEFAULT_DOMAIN)
     line = find_line(text, ("domain",))

@@ -12,13 +12,13 @@ from __future__ import annotations
 import heapq
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
 
 from selfrepair.geometry import Heading, Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import A, Domain, F
 
 __all__ = ["INF", "Core", "Geometry", "Graph", "PythonCore", "geometry", "reach"]
 
@@ -41,7 +41,7 @@ class Geometry:
     """Per end heading: ``(class, node offset)`` of every move that arrives facing it."""
 
 
-def reach(domain: Domain[Any, Any]) -> int:
+def reach(domain: Domain[A, F]) -> int:
     reach = 0
     for action in domain.actions:
         for heading in Heading:
@@ -52,8 +52,8 @@ def reach(domain: Domain[Any, Any]) -> int:
     return reach
 
 
-def geometry(domain: Domain[Any, Any], pw: int, margin: int, rows: int) -> Geometry:
-    members: dict[str, Any] = {}
+def geometry(domain: Domain[A, F], pw: int, margin: int, rows: int) -> Geometry:
+    members: dict[str, A] = {}  # motion class -> its first moving action
     for action in domain.actions:
         if any(domain.apply(Pose(0, 0, h), action) != Pose(0, 0, h) for h in Heading):
             members.setdefault(domain.motion_class(action), action)

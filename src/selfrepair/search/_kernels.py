@@ -64,7 +64,7 @@ from selfrepair.jit import NUMBA, njit
 from selfrepair.robots.domain import Domain
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.problem import CellBound, PlanningProblem, make_pose, pose_table
-from selfrepair.search.term import PatternTable, StepTerm
+from selfrepair.search.term import PATTERN_MIX, PatternTable, StepTerm
 from selfrepair.world.maze import Maze
 
 _Fn = TypeVar("_Fn", bound=Callable[..., Any])
@@ -89,7 +89,6 @@ _WITH, _HARD, _PER, _PW, _FSTRIDE, _FBASE = 0, 1, 2, 3, 4, 5
 """The lattice kernel's step-term parameters: whether there is a term, whether it is hard, the
 scaled cost per count (soft), the kernel's padded width, and the stride and base offset of the
 term's grid (see :func:`_pattern_row`)."""
-_MIX = 0x2545F4914F6CDD1D  # selfrepair.search.term's pattern_slot multiplier (a test checks)
 _F, _H, _C, _NODE = 0, 1, 2, 3  # heap record columns
 _MOVE_BITS = 10
 """Lattice words: the parent's heading (2 bits) and the move index (8 bits) below the stamp."""
@@ -443,7 +442,7 @@ def _pattern_row(cell: int, pw: int, term: Any, free: Any, offs: Any, keys: Any,
     for j in range(offs.shape[0]):
         code |= np.int64(free[q + offs[j]]) << j
     mask = keys.shape[0] - 1
-    slot = ((code ^ (code >> 7) ^ (code >> 19)) * _MIX) & mask
+    slot = ((code ^ (code >> 7) ^ (code >> 19)) * PATTERN_MIX) & mask
     while True:
         key = keys[slot]
         if key == code:
@@ -828,11 +827,11 @@ def plan_lattice(
     scal = np.array([1, 0, 0, -1], dtype=np.int64)
     par = np.array([rnum, rden, wmul, goal_cell, goal_head, 0, opened, shift], dtype=np.int64)
     nbr = _neighbourhoods(maze)
-    ts = None if term is None else _term_state(term, pw)
+    ts = None
     tpar = _NO_TERM
-    if ts is not None:
-        tpar = np.array([1, int(term is not None and term.hard), per_count, pw, ts.stride,
-                         ts.base], dtype=np.int64)  # fmt: skip
+    if term is not None:
+        ts = _term_state(term, pw)
+        tpar = np.array([1, int(term.hard), per_count, pw, ts.stride, ts.base], dtype=np.int64)
     missed = -1
 
     def run(limit: int) -> int:

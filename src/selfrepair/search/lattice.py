@@ -43,7 +43,6 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from fractions import Fraction
-from typing import Any
 
 import numpy as np
 
@@ -51,7 +50,7 @@ from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Heading, Pose
 from selfrepair.limits import MAX_CLEARANCE_WEIGHT
-from selfrepair.robots.domain import Domain, primitive_by_motion
+from selfrepair.robots.domain import SomeDomain, primitive_by_motion
 from selfrepair.search.astar import PlanResult, PlanStatus, astar, deadline_from
 from selfrepair.search.backend import BACKENDS, numba_available, use_numba
 from selfrepair.search.cost import action_cost, plan_cost
@@ -89,7 +88,7 @@ __all__ = [
 ]
 
 
-def planning_actions(domain: Domain[Any, Any], faults: frozenset[Any]) -> tuple[Any, ...]:
+def planning_actions(domain: SomeDomain, faults: frozenset[object]) -> tuple[object, ...]:
     """The actions the planner expands under ``faults``: the fastest available one of each motion
     class (:func:`~selfrepair.robots.domain.primitive_by_motion` order), without actions that
     leave the pose unchanged (computed once per domain and fault set)."""
@@ -101,31 +100,31 @@ class _Setup:
     """What the planner derives from (domain, faults) once: the planning actions and their
     :func:`progress_rate`."""
 
-    actions: tuple[Any, ...]
+    actions: tuple[object, ...]
     rate: Fraction
 
 
-def _setup(domain: Domain[Any, Any], faults: frozenset[Any]) -> _Setup:
+def _setup(domain: SomeDomain, faults: frozenset[object]) -> _Setup:
     return _SETUPS.get((domain, faults), lambda: _make_setup(domain, faults))
 
 
-def _make_setup(domain: Domain[Any, Any], faults: frozenset[Any]) -> _Setup:
+def _make_setup(domain: SomeDomain, faults: frozenset[object]) -> _Setup:
     actions = tuple(
         a for a in primitive_by_motion(domain, faults).values() if not _no_op(domain, a)
     )
     return _Setup(actions, progress_rate(domain, actions))
 
 
-_SETUPS: BoundedCache[tuple[Domain[Any, Any], frozenset[Any]], _Setup] = BoundedCache(
+_SETUPS: BoundedCache[tuple[SomeDomain, frozenset[object]], _Setup] = BoundedCache(
     "planner actions per fault set", 1024, kind=CacheKind.PLAN
 )
 
 
-def _no_op(domain: Domain[Any, Any], action: Any) -> bool:
+def _no_op(domain: SomeDomain, action: object) -> bool:
     return all(domain.apply(Pose(0, 0, h), action) == Pose(0, 0, h) for h in Heading)
 
 
-def cost_scale(domain: Domain[Any, Any], weight: Fraction) -> int:
+def cost_scale(domain: SomeDomain, weight: Fraction) -> int:
     """The factor that makes every edge cost an integer: the domain's time unit
     (:attr:`~selfrepair.robots.domain.Domain.time_unit`) times the clearance weight's
     denominator."""
@@ -205,7 +204,7 @@ def plan(
     )
 
 
-def _load(backend: str, domain: Domain[Any, Any] | None = None) -> tuple[bool, int]:
+def _load(backend: str, domain: SomeDomain | None = None) -> tuple[bool, int]:
     """Whether ``backend`` means the compiled kernels for ``domain`` (see
     :func:`~selfrepair.search.backend.use_numba`: an explicit ``numba`` for a robot the kernels
     cannot take is refused), and the nanoseconds spent now importing numba and loading them (0
@@ -227,13 +226,13 @@ _KERNELS_LOADED = False
 """Whether this process has loaded the lattice kernels (see :func:`_load`)."""
 
 
-_Found = tuple[PlanStatus, tuple[Any, ...], tuple[Pose, ...], int, int, int]
+_Found = tuple[PlanStatus, tuple[object, ...], tuple[Pose, ...], int, int, int]
 """Status, actions, poses, scaled cost, scaled duration, expansions."""
 
 
 def _plan_python(
     problem: PlanningProblem,
-    actions: Sequence[Any],
+    actions: Sequence[object],
     bound: CellBound,
     scale: int,
     max_expansions: int | None,
@@ -255,7 +254,7 @@ def _plan_python(
         d = distance[pose.y][pose.x]
         return None if d < 0 else d * rate.numerator // rate.denominator
 
-    def successors(pose: Pose) -> list[tuple[Pose, int, Any]]:
+    def successors(pose: Pose) -> list[tuple[Pose, int, object]]:
         out = []
         here = counts[pose.y, pose.x, pose.heading].tolist() if counts is not None else None
         for k, action in enumerate(actions):
@@ -290,7 +289,7 @@ MAX_CLEARANCE_RADIUS = 1_000_000
 # MAX_CLEARANCE_WEIGHT lives in selfrepair.limits (the experiment schema and the CLI use it too).
 
 
-def _check_term(problem: PlanningProblem, term: StepTerm, actions: tuple[Any, ...]) -> None:
+def _check_term(problem: PlanningProblem, term: StepTerm, actions: tuple[object, ...]) -> None:
     """Refuse a step term made for other planning actions or another maze size."""
     if term.actions != actions:
         raise ProblemError(

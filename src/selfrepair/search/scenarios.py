@@ -12,7 +12,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -20,6 +19,7 @@ from selfrepair.errors import InputError
 from selfrepair.geometry import Cell
 from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES
 from selfrepair.search.grid import grid_astar
+from selfrepair.textio import JSONObject
 from selfrepair.world.maze import Maze
 from selfrepair.world.movingai import ScenarioQuery, load_map, load_scenario
 
@@ -48,7 +48,7 @@ class ScenarioCheck:
     got: float | None
     ok: bool
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self) -> JSONObject:
         """A JSON object with the same fields (cells as ``[x, y]``)."""
         return {
             "line": self.line,

@@ -24,13 +24,20 @@ import numpy.typing as npt
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, FreeGrid
 
-__all__ = ["MAX_PATTERN_CELLS", "PatternSource", "PatternTable", "StepTerm", "pattern_slot"]
+__all__ = [
+    "MAX_PATTERN_CELLS",
+    "PATTERN_MIX",
+    "PatternSource",
+    "PatternTable",
+    "StepTerm",
+    "pattern_slot",
+]
 
 MAX_PATTERN_CELLS = 63
 """Cells a pattern may have for the search to read it per expanded cell (one ``int64`` code,
 never negative); a wider pattern makes the planner read the dense counts instead."""
 
-_MIX = 0x2545F4914F6CDD1D
+PATTERN_MIX = 0x2545F4914F6CDD1D
 """Odd multiplier of :func:`pattern_slot` (below ``2**63``, so the kernel's ``int64`` product
 wraps to the same low bits as Python's exact one)."""
 
@@ -40,7 +47,7 @@ def pattern_slot(code: int, mask: int) -> int:
     slots (a power of two). The compiled search computes the same with wrapping ``int64``
     arithmetic, whose low bits equal these."""
     mixed = code ^ (code >> 7) ^ (code >> 19)
-    return (mixed * _MIX) & mask
+    return (mixed * PATTERN_MIX) & mask
 
 
 class PatternTable:

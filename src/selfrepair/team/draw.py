@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from selfrepair.errors import TraceError
 from selfrepair.geometry import Cell, Heading, Pose
@@ -24,6 +24,9 @@ from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.optional import matplotlib
 from selfrepair.team.model import ActionKind, TeamFaultKind
 from selfrepair.team.trace import TeamTrace, read_team_trace, replay_team
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 __all__ = ["ROBOT_COLOURS", "animate_team_trace", "draw_team_frame"]
 
@@ -144,7 +147,7 @@ def _caption(trace: TeamTrace, t: int) -> str:
     return latest
 
 
-def _draw(ax: Any, trace: TeamTrace, moment: _Moment, t: int) -> None:
+def _draw(ax: Axes, trace: TeamTrace, moment: _Moment, t: int) -> None:
     import numpy as np
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Rectangle
@@ -263,7 +266,7 @@ def animate_team_trace(
         fig = Figure(figsize=(5.6, 5.6 * maze.height / maze.width + 0.5), dpi=80)
         ax = fig.subplots()
 
-        def draw(t: int) -> list[Any]:
+        def draw(t: int) -> list[Any]:  # matplotlib artists (none: blit is off)
             _draw(ax, trace, _moment(trace, t), t)
             return []
 

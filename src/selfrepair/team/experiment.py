@@ -26,7 +26,7 @@ from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.execution.faults import Persistence
 from selfrepair.geometry import Cell
 from selfrepair.repair.strategies import StrategyName
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.team.allocation import Job, Worker, allocate, distance_maps
 from selfrepair.team.engine import run_team
@@ -70,7 +70,7 @@ class TeamCase:
 
 
 def build_scenario(
-    maze: Maze, case: TeamCase, *, domain: Domain[Any, Any] = FOUR_WHEEL, name: str = ""
+    maze: Maze, case: TeamCase, *, domain: SomeDomain = FOUR_WHEEL, name: str = ""
 ) -> TeamScenario:
     """The scenario of ``case`` on ``maze``: seeded robots and tasks, then the seeded fault."""
     rng = np.random.default_rng(case.seed)

@@ -18,8 +18,6 @@ robots with work are ready only when it is done), and the items go at the end of
 
 from __future__ import annotations
 
-from typing import Any
-
 from selfrepair.execution.faults import Detection, Persistence
 from selfrepair.geometry import Cell
 from selfrepair.search.lattice import planning_actions
@@ -97,7 +95,7 @@ def _apply(world: TeamWorld, active: list[TeamFault]) -> None:
         world.dirty.update(reoffer(world))
 
 
-def know(world: TeamWorld, robot: RobotState, known: frozenset[Any], t: int) -> None:
+def know(world: TeamWorld, robot: RobotState, known: frozenset[object], t: int) -> None:
     """``robot`` now knows exactly the domain faults ``known`` (its drive's stepper too); a team
     fault of its own that it had not noticed and that ``known`` shows is discovered at ``t``."""
     robot.faults = known

@@ -31,12 +31,11 @@ import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 from enum import StrEnum
-from typing import Any
 
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.execution.faults import Detection, Persistence
 from selfrepair.geometry import Cell, Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.world.events import WorldSchedule
 from selfrepair.world.maze import Maze
@@ -232,7 +231,7 @@ class TeamScenario:
     robots: tuple[RobotSpec, ...]
     tasks: tuple[Task, ...]
     faults: tuple[TeamFault, ...] = ()
-    domain: Domain[Any, Any] = FOUR_WHEEL
+    domain: SomeDomain = FOUR_WHEEL
     name: str = ""
     source: str = "<scenario>"
     table: str = ""

@@ -9,14 +9,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from enum import StrEnum
-from typing import Any
 
 import numpy as np
 
 from selfrepair.errors import InputError
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.limits import MAX_CELLS, MAX_FILE_BYTES, MAX_ROBOTS, MAX_TASKS, check_limit
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.team.grid import grid_distances, largest_area
 from selfrepair.team.model import RobotSpec, Task, TeamScenario
 from selfrepair.world.maze import Maze
@@ -60,7 +59,7 @@ def random_scenario(
     rng: np.random.Generator,
     *,
     grippers: GripperMix = GripperMix.ALL,
-    domain: Domain[Any, Any] | None = None,
+    domain: SomeDomain | None = None,
     name: str = "random",
     limits: Limits = DEFAULT_LIMITS,
 ) -> TeamScenario:

@@ -27,7 +27,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 from pathlib import Path
-from typing import Any
 
 from selfrepair.errors import InputError
 from selfrepair.execution.faults import FaultEvent, Persistence
@@ -275,14 +274,14 @@ def _truth(
     robot: str,
     t: int,
     step: int,
-) -> tuple[frozenset[Any], set[Cell]]:
+) -> tuple[frozenset[object], set[Cell]]:
     """The true domain faults of ``robot`` at ``t`` (its command number ``step``: an
     intermittent fault is drawn as :class:`~selfrepair.team.state.RobotFaultClock` draws it,
     from the options' seed) and the blocked cells (by blocked team faults and by the world
     events due by then, :meth:`WorldSchedule.blocked_at
     <selfrepair.world.events.WorldSchedule.blocked_at>`, computed from the header alone)."""
     domain = trace.scenario.domain
-    faults: set[Any] = set()
+    faults: set[object] = set()
     world = trace.scenario.world
     blocked: set[Cell] = set(world.blocked_at(Fraction(t, trace.scale))) if world else set()
     for f in _faults_at(spans, t):

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
 
 from selfrepair.geometry import Cell, Pose
 
@@ -35,7 +34,7 @@ class TimedStep:
 
     start: int
     end: int
-    action: Any
+    action: object
     before: Pose
     after: Pose
     cells: tuple[Cell, ...]

@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import StrEnum
 from fractions import Fraction
-from typing import Any
 
 from selfrepair.errors import ProblemError, choice
 from selfrepair.execution.result import StepSource
@@ -113,7 +112,7 @@ class MoveRecord:
     robot: str
     start: int
     end: int
-    action: Any
+    action: object
     before: Pose
     after: Pose
     source: StepSource
@@ -168,10 +167,10 @@ class OwnRepairRecord:
     at: int
     robot: str
     pose: Pose
-    action: Any
+    action: object
     status: RepairStatus
     source: RepairSource
-    actions: tuple[Any, ...]
+    actions: tuple[object, ...]
     latency_ns: int
 
 

@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import hashlib
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated
 
 import numpy as np
 from pydantic import AfterValidator, Field, ValidationInfo, field_validator, model_validator
@@ -57,7 +57,7 @@ from selfrepair.errors import ConfigError, InputError, ProblemError
 from selfrepair.execution.faults import Detection, Persistence
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import DEFAULT_SENSING_RANGE
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import Domain, SomeDomain
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN, file_domain, load_plugins
 from selfrepair.robots.registry import get_domain
 from selfrepair.team.check import check_scenario
@@ -245,7 +245,7 @@ class ScenarioFile(Frozen):
     world: WorldEntry | None = None
 
 
-def _domain(info: ValidationInfo) -> Domain[Any, Any]:
+def _domain(info: ValidationInfo) -> SomeDomain:
     domain = (info.context or {}).get("domain")
     return domain if isinstance(domain, Domain) else get_domain(DEFAULT_DOMAIN)
 

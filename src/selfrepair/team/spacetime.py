@@ -27,14 +27,13 @@ import heapq
 from collections.abc import Sequence
 from dataclasses import dataclass
 from fractions import Fraction
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.geometry import Cell, Heading, Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.team.reservations import FOREVER, Reservations, TimedStep
 from selfrepair.world.maze import Maze
 
@@ -53,7 +52,7 @@ SpaceTimeResult = tuple[tuple[TimedStep, ...] | None, int]
 """A space-time plan (``None``: none found) and the number of nodes expanded."""
 
 
-def units(domain: Domain[Any, Any], action: Any, scale: int) -> int:
+def units(domain: SomeDomain, action: object, scale: int) -> int:
     """The duration of ``action`` in units of ``1 / scale`` ticks."""
     value = Fraction(domain.duration(action)) * scale
     if value.denominator != 1:
@@ -64,12 +63,12 @@ def units(domain: Domain[Any, Any], action: Any, scale: int) -> int:
 def schedule_path(
     reservations: Reservations,
     robot: str,
-    domain: Domain[Any, Any],
+    domain: SomeDomain,
     scale: int,
     maze: Maze,
     start: Pose,
     t0: int,
-    actions: Sequence[Any],
+    actions: Sequence[object],
     *,
     max_wait: int,
 ) -> tuple[TimedStep, ...] | None:
@@ -197,7 +196,7 @@ def _walk_back(
 
 # --- the lattice and the heuristic ----------------------------------------------------------------
 
-_Edge = tuple[Any, int, tuple[Cell, ...], int]
+_Edge = tuple[object, int, tuple[Cell, ...], int]
 
 
 @dataclass(frozen=True, slots=True, eq=False)
@@ -227,14 +226,14 @@ class Lattice:
 
 
 def lattice_of(
-    maze: Maze, domain: Domain[Any, Any], actions: tuple[Any, ...], scale: int
+    maze: Maze, domain: SomeDomain, actions: tuple[object, ...], scale: int
 ) -> Lattice:
     """The (kept) :class:`Lattice` of ``actions`` on ``maze``."""
     key = (maze, domain, actions, scale)
     return _LATTICES.get(key, lambda: _build_lattice(maze, domain, actions, scale))
 
 
-_LATTICES: BoundedCache[tuple[Maze, Domain[Any, Any], tuple[Any, ...], int], Lattice] = (
+_LATTICES: BoundedCache[tuple[Maze, SomeDomain, tuple[object, ...], int], Lattice] = (
     BoundedCache("team lattices", 32, kind=CacheKind.PLAN)
 )
 _COST_TO_GO: BoundedCache[tuple[Lattice, frozenset[Cell], Cell], list[int]] = BoundedCache(
@@ -243,7 +242,7 @@ _COST_TO_GO: BoundedCache[tuple[Lattice, frozenset[Cell], Cell], list[int]] = Bo
 
 
 def _build_lattice(
-    maze: Maze, domain: Domain[Any, Any], actions: tuple[Any, ...], scale: int
+    maze: Maze, domain: SomeDomain, actions: tuple[object, ...], scale: int
 ) -> Lattice:
     grid = maze.free_grid(2)
     moves = [(a, units(domain, a, scale)) for a in actions]

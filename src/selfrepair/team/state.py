@@ -17,7 +17,6 @@ from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any
 
 import numpy as np
 
@@ -26,7 +25,7 @@ from selfrepair.execution.faults import FaultEvent, Persistence
 from selfrepair.execution.simulator import Simulator
 from selfrepair.execution.stepper import Stepper
 from selfrepair.geometry import Cell, Pose
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.team.model import (
     ActionKind,
     IncidentKind,
@@ -90,7 +89,7 @@ class RobotFaultClock:
     __slots__ = ("_draws", "_effects", "_seed", "_sets", "_states")
 
     def __init__(
-        self, domain: Domain[Any, Any], states: list[FaultState], robot: str, seed: int
+        self, domain: SomeDomain, states: list[FaultState], robot: str, seed: int
     ) -> None:
         self._states = [s for s in states if s.fault.robot == robot and _effect(domain, s.fault)]
         self._effects = {s.index: _effect(domain, s.fault) for s in self._states}
@@ -101,9 +100,9 @@ class RobotFaultClock:
             if s.fault.persistence is Persistence.INTERMITTENT
         }  # fmt: skip
         self._seed = seed
-        self._sets: dict[tuple[int, ...], frozenset[Any]] = {(): frozenset()}
+        self._sets: dict[tuple[int, ...], frozenset[object]] = {(): frozenset()}
 
-    def at(self, step: int, units: int) -> frozenset[Any]:
+    def at(self, step: int, units: int) -> frozenset[object]:
         """The robot's true faults at its step ``step`` (``units``: the time, unused: the engine
         keeps the team faults' stretches)."""
         present = tuple(
@@ -119,7 +118,7 @@ class RobotFaultClock:
             self._sets[present] = found
         return found
 
-    def effect(self, index: int) -> frozenset[Any]:
+    def effect(self, index: int) -> frozenset[object]:
         """The domain faults of the robot's team fault ``index`` (empty for another one)."""
         return self._effects.get(index, frozenset())
 
@@ -128,7 +127,7 @@ class RobotFaultClock:
         return self._states
 
 
-def _effect(domain: Domain[Any, Any], fault: TeamFault) -> frozenset[Any]:
+def _effect(domain: SomeDomain, fault: TeamFault) -> frozenset[object]:
     """The domain faults a team fault gives its robot."""
     if fault.kind is TeamFaultKind.IMMOBILISED:
         return frozenset(domain.faults)
@@ -158,7 +157,7 @@ class Drive:
     stepper: Stepper
     steps: list[TimedStep]
 
-    def actions(self) -> list[Any]:
+    def actions(self) -> list[object]:
         """The primitive actions still to run."""
         return [a for a, _ in self.stepper.queue]
 
@@ -189,7 +188,7 @@ class RobotState:
     footprint: tuple[Cell, ...] = ()
     pending: TeamAction | None = None
     drive: Drive | None = None
-    faults: frozenset[Any] = frozenset()
+    faults: frozenset[object] = frozenset()
     gripper_ok: bool = True
     stuck: bool = False
     retry_at: int = 0

@@ -79,7 +79,7 @@ class TraceMove:
     robot: str
     start: int
     end: int
-    action: Any
+    action: object
     before: Pose
     after: Pose
     source: StepSource

@@ -15,7 +15,7 @@ from selfrepair.execution.result import StepSource
 from selfrepair.execution.traceformat import TraceFields
 from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.replacement import RecursionMode
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.registry import PluginFile, get_domain, load_recorded_plugin
 from selfrepair.team.model import (
     RobotSpec,
@@ -126,7 +126,7 @@ def parse_team_trace(text: str, *, source: str = "<trace>", partial: bool = Fals
     )  # fmt: skip
 
 
-def _move(f: TraceFields, domain: Domain[Any, Any]) -> TraceMove:
+def _move(f: TraceFields, domain: SomeDomain) -> TraceMove:
     source = f.text("source")
     if source not in {s.value for s in StepSource}:
         raise f.fail(

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Any
 
 from selfrepair.execution.traceformat import header_start
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.team.metrics import team_row
 from selfrepair.team.result import MoveRecord, TeamResult
 from selfrepair.team.robottable import robot_table_label
@@ -139,7 +139,7 @@ def _repair_json(r: Any) -> dict[str, Any]:
     }
 
 
-def _move_json(domain: Domain[Any, Any], m: MoveRecord) -> dict[str, Any]:
+def _move_json(domain: SomeDomain, m: MoveRecord) -> dict[str, Any]:
     return {
         "type": "move",
         "robot": m.robot,

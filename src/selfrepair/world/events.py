@@ -46,6 +46,7 @@ import numpy as np
 from selfrepair.errors import InputError
 from selfrepair.geometry import Cell
 from selfrepair.limits import DEFAULT_SENSING_RANGE
+from selfrepair.textio import JSONObject
 
 __all__ = [
     "DEFAULT_SENSING_RANGE",
@@ -79,7 +80,7 @@ class WorldEvent:
         if x < 0 or y < 0:
             raise InputError(f"expected a cell on the grid, got {self.cell}", source="<events>")
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self) -> JSONObject:
         """A JSON-able dict."""
         return {"cell": [self.cell[0], self.cell[1]], "blocked": self.blocked, "at": self.at}
 
@@ -148,7 +149,7 @@ class WorldSchedule:
         how = f"range {self.sensing_range}" if self.sensing is Sensing.RANGE else "bump"
         return f"{len(self.events)} world events, sensing {how}"
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self) -> JSONObject:
         """A JSON-able dict (for traces and rows)."""
         return {
             "events": [e.to_json() for e in self.events],

@@ -19,7 +19,7 @@ emptied by a cold run, like the look-ups they copy).
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -106,7 +106,9 @@ def _faults(
     return avail, block
 
 
-_FAULTS: BoundedCache[tuple[SomeDomain, tuple[object, ...]], tuple[Any, Any]] = BoundedCache(
+_FAULTS: BoundedCache[
+    tuple[SomeDomain, tuple[object, ...]], tuple[npt.NDArray[np.uint8], Int64s]
+] = BoundedCache(
     "compiled availability per fault subset", 256, kind=CacheKind.SIMULATION
 )
 
@@ -232,7 +234,10 @@ class CompiledLookups:
             k.hash_put(self.hk1, self.hk2, self.hv, int(old[0][i]), int(old[1][i]), int(old[2][i]))
 
 
-def _grown(array: npt.NDArray[Any], fill: int) -> npt.NDArray[Any]:
+_G = TypeVar("_G", bound=np.generic)
+
+
+def _grown(array: npt.NDArray[_G], fill: int) -> npt.NDArray[_G]:
     """``array`` twice as long (first axis), the new rows ``fill``."""
     out = np.full((2 * array.shape[0], *array.shape[1:]), fill, dtype=array.dtype)
     out[: array.shape[0]] = array

@@ -235,7 +235,7 @@ class _Mission:
         while True:
             lk = self.lookups
             if lk is None:
-                lk_arrays: tuple[object, ...] = _NO_LOOKUPS
+                lk_arrays: tuple[Any, ...] = _NO_LOOKUPS  # int64 arrays, ans_act int32
             else:
                 lk_arrays = (lk.lk_mask, lk.lk_r, lk.codes, lk.hk1, lk.hk2, lk.hv,
                              lk.ans_off, lk.ans_len, lk.ans_act)  # fmt: skip

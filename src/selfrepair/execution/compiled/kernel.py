@@ -43,9 +43,20 @@ from collections.abc import Callable
 from typing import Any, cast
 
 import numpy as np
+import numpy.typing as npt
 
 from selfrepair.execution.compiled.planner import plan_in_kernel
 from selfrepair.jit import NUMBA, njit, no_refcount
+
+I64 = npt.NDArray[np.int64]
+"""The loop's integer arrays: parameters, state, queues, trace and repair records, tables."""
+U8 = npt.NDArray[np.uint8]
+"""The free-cell bytes of the padded grid and the available-action flags."""
+I32 = npt.NDArray[np.int32]
+"""The compiled look-ups' answer actions."""
+Kernels = tuple[npt.NDArray[np.generic], ...]
+"""The arrays a compiled planner or search works in (int64 mostly; the planner also has int32
+and uint16 ones), passed through as one tuple."""
 
 __all__ = ["NUMBA", "clock_ns", "hash_get", "hash_put", "run_kernel", "warm_hits"]
 
@@ -206,13 +217,13 @@ def _hash(k1: int, k2: int, cap: int) -> int:
 
 
 @njit(cache=True)
-def hash_get(hk1: Any, hk2: Any, hv: Any, k1: int, k2: int) -> int:
+def hash_get(hk1: I64, hk2: I64, hv: I64, k1: int, k2: int) -> int:
     """The value under ``(k1, k2)``, or ``EMPTY``."""
     return _hash_get(hk1, hk2, hv, k1, k2)
 
 
 @njit(cache=True, inline="always")
-def _hash_get(hk1: Any, hk2: Any, hv: Any, k1: int, k2: int) -> int:
+def _hash_get(hk1: I64, hk2: I64, hv: I64, k1: int, k2: int) -> int:
     """:func:`hash_get`, inlined into the kernels (no call, no reference counting)."""
     cap = hk1.shape[0]
     i = _hash(k1, k2, cap)
@@ -225,7 +236,7 @@ def _hash_get(hk1: Any, hk2: Any, hv: Any, k1: int, k2: int) -> int:
 
 
 @njit(cache=True)
-def hash_put(hk1: Any, hk2: Any, hv: Any, k1: int, k2: int, value: int) -> None:
+def hash_put(hk1: I64, hk2: I64, hv: I64, k1: int, k2: int, value: int) -> None:
     """Store ``value`` under ``(k1, k2)`` (the caller keeps the table at most half full)."""
     cap = hk1.shape[0]
     i = _hash(k1, k2, cap)
@@ -237,7 +248,7 @@ def hash_put(hk1: Any, hk2: Any, hv: Any, k1: int, k2: int, value: int) -> None:
 
 
 @njit(cache=True, inline="always")
-def _true_mask(ev: Any, step: int, units: int) -> int:
+def _true_mask(ev: I64, step: int, units: int) -> int:
     mask = 0
     for e in range(ev.shape[0]):
         now = step if ev[e, 1] == 0 else units
@@ -248,8 +259,8 @@ def _true_mask(ev: Any, step: int, units: int) -> int:
 
 @njit(cache=True, inline="always")
 def _lookup(
-    st: Any, par: Any, set_of: Any, lk_mask: Any, lk_r: Any, codes: Any,
-    hk1: Any, hk2: Any, hv: Any, known: int, a: int, x: int, y: int, h: int,
+    st: I64, par: I64, set_of: I64, lk_mask: I64, lk_r: I64, codes: I64,
+    hk1: I64, hk2: I64, hv: I64, known: int, a: int, x: int, y: int, h: int,
 ) -> int:  # fmt: skip
     """The answer id of action ``a`` from pose ``(x, y, h)`` under the known mask, ``NO_ANSWER``,
     or ``EMPTY`` after setting an exit in ``st[S_END + 1 ...]`` (returned as ``-10 - code``)."""
@@ -273,8 +284,8 @@ def _lookup(
 
 @no_refcount
 def warm_hits(
-    n: int, st: Any, par: Any, set_of: Any, lk_mask: Any, lk_r: Any, codes: Any,
-    hk1: Any, hk2: Any, hv: Any, known: int, a: int, xs: Any, ys: Any, hs: Any,
+    n: int, st: I64, par: I64, set_of: I64, lk_mask: I64, lk_r: I64, codes: I64,
+    hk1: I64, hk2: I64, hv: I64, known: int, a: int, xs: I64, ys: I64, hs: I64,
 ) -> int:  # fmt: skip
     """``n`` look-ups of action ``a`` at the poses ``(xs, ys, hs)`` in turn, as the mission
     kernel makes them (for the benchmark of a warm hit); the sum of the answer ids."""
@@ -289,10 +300,10 @@ def warm_hits(
 
 @no_refcount
 def run_kernel(
-    par: Any, st: Any, mv: Any, grid: Any, avail: Any, block: Any, waits: Any, ev: Any,
-    set_of: Any, lk_mask: Any, lk_r: Any, codes: Any, hk1: Any, hk2: Any, hv: Any,
-    ans_off: Any, ans_len: Any, ans_act: Any, pen: Any, pb: Any,
-    qa: Any, qs: Any, tr: Any, rp: Any, rp_act: Any, planner: Any, search: Any,
+    par: I64, st: I64, mv: I64, grid: U8, avail: U8, block: I64, waits: I64, ev: I64,
+    set_of: I64, lk_mask: I64, lk_r: I64, codes: I64, hk1: I64, hk2: I64, hv: I64,
+    ans_off: I64, ans_len: I64, ans_act: I32, pen: I64, pb: I64,
+    qa: I64, qs: I64, tr: I64, rp: I64, rp_act: I64, planner: Kernels, search: Kernels,
 ) -> int:  # fmt: skip
     """Run (or resume) the mission; the exit code (see the module docstring). ``planner`` is
     the loaded kernel planner's arrays and ``search`` its records, generation and heap
@@ -392,9 +403,9 @@ def run_kernel(
 
 @njit(cache=True, inline="always")
 def _repair(
-    par: Any, st: Any, mv: Any, avail: Any, ev: Any, set_of: Any, lk_mask: Any, lk_r: Any,
-    codes: Any, hk1: Any, hk2: Any, hv: Any, ans_off: Any, ans_len: Any, ans_act: Any,
-    pb: Any, qa: Any, qs: Any, rp: Any, rp_act: Any, planner: Any, search: Any,
+    par: I64, st: I64, mv: I64, avail: U8, ev: I64, set_of: I64, lk_mask: I64, lk_r: I64,
+    codes: I64, hk1: I64, hk2: I64, hv: I64, ans_off: I64, ans_len: I64, ans_act: I32,
+    pb: I64, qa: I64, qs: I64, rp: I64, rp_act: I64, planner: Kernels, search: Kernels,
 ) -> int:  # fmt: skip
     """One repair of the queue (``st[S_RACTION]``: the faulty front action, -1 for the
     defensive replan), recorded in ``rp``; an exit code when it needs Python first."""
@@ -513,7 +524,7 @@ def _repair(
 
 
 @njit(cache=True, inline="always")
-def _push(qa: Any, qs: Any, st: Any, acts: Any, off: int, n: int, source: int) -> None:
+def _push(qa: I64, qs: I64, st: I64, acts: I64, off: int, n: int, source: int) -> None:
     """Put ``acts[off : off + n]`` at the front of the queue (kept reversed: front last)."""
     q = st[S_QLEN]
     for i in range(n):

@@ -34,11 +34,17 @@ surprise came, how many commands it took to isolate the class (and which), the p
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from enum import StrEnum
 from typing import Any
 
-from selfrepair.diagnosis import FaultBelief, Observation, best_probe, fault_model
+from selfrepair.diagnosis import (
+    FaultBelief,
+    Observation,
+    ProbePlanner,
+    fault_model,
+    isolating_probe,
+)
 from selfrepair.geometry import Pose
 from selfrepair.repair.strategies.names import RepairSource, StrategyName
 from selfrepair.repair.strategies.protocol import (
@@ -83,10 +89,12 @@ class DiagnosingRepairer:
         "_error",
         "_known",
         "_margin",
+        "_planner",
         "_policy",
         "_probing",
         "_rejoining",
         "_relaxed",
+        "_switch",
         "_table",
         "_wanted",
         "belief",
@@ -108,7 +116,7 @@ class DiagnosingRepairer:
         self._table = start_replacement(context)
         self._error = options.confidence
         self._margin = 0.0  # the mass left out of what is possible: 0 while readings are exact
-        self._known: frozenset[Any] = frozenset()
+        self._known: frozenset[object] = frozenset()
         self._probing = 0  # probe commands still at the front of the queue
         self._rejoining = 0  # rejoin commands still at the front of the queue
         self._anchor: Pose | None = None  # where the queue after those blocks starts
@@ -116,6 +124,8 @@ class DiagnosingRepairer:
         self._wanted = False  # the stepper will ask for a rejoin
         self._relaxed = False  # no conformant repair: the most probable class until news
         self._after = 0
+        self._switch = True  # the robot reads a bump switch (its observations say)
+        self._planner: ProbePlanner | None = None  # made at the first probe
         self.surprise_step: int | None = None
         """The step of the first surprise (a command that went elsewhere, bumped or failed)."""
         self.isolation_actions: int | None = None
@@ -149,6 +159,7 @@ class DiagnosingRepairer:
         before = self.belief.alive
         belief = self.belief
         belief.update(observation)
+        self._switch = observation.bumped is not None
         noisy = observation.noise > 0
         for reading in seen:
             belief.update(reading)
@@ -183,8 +194,8 @@ class DiagnosingRepairer:
         return rejoin
 
     def _should_probe(self) -> bool:
-        """Active diagnosis after a surprise: whether more than one class is still credible
-        (the robot does not know what its commands do) and probes are left."""
+        """Active diagnosis after a surprise: whether no class is isolated yet (the robot does
+        not know what its commands do) and probes are left."""
         return (
             self._policy is Policy.ACTIVE
             and self.surprise_step is not None
@@ -205,18 +216,25 @@ class DiagnosingRepairer:
         if found is not None:
             self.isolated_class, self.isolation_actions = found, self._after
 
-    def _assume(self) -> frozenset[Any]:
+    def _assume(self) -> frozenset[object]:
         """The faults assumed now (see the module docstring)."""
         faults = self.belief.most_probable()[1]
         if not faults or self._policy is Policy.MOST_PROBABLE or self._relaxed:
             return faults
-        out: set[Any] = set()
+        out: set[object] = set()
         for hypothesis in self.model.faults_of(self.belief.credible(self._margin)):
             out |= hypothesis
         return frozenset(out)
 
     def _ambiguous(self) -> bool:
-        return len(self.model.classes_in(self.belief.credible(self._margin))) > 1
+        """Whether more than one class is still in the running (not yet isolated)."""
+        return self.belief.isolated(self._margin) is None
+
+    def _contenders(self) -> int:
+        """What a probe must split: every hypothesis still in the running."""
+        if self._margin > 0:
+            return self.belief.contenders(self._margin)
+        return self.belief.alive
 
     # --- repairs -----------------------------------------------------------------------------
 
@@ -265,11 +283,10 @@ class DiagnosingRepairer:
         replaced), or ``None`` when none splits the classes or the budget is spent."""
         if self.probes >= MAX_PROBES:
             return None
-        found = best_probe(
-            self.belief,
-            request.pose,
-            self.belief.credible(self._margin),
-            per_tick=False,
+        if self._planner is None or self._planner.switch != self._switch:
+            self._planner = ProbePlanner(self.model, self.belief.grid, self._switch)
+        found = isolating_probe(
+            self.belief, request.pose, self._contenders(), planner=self._planner
         )
         if found is None:
             return None
@@ -362,7 +379,7 @@ def diagnosis_report(repairer: object) -> dict[str, Any] | None:
     return None if report is None else dict(report())
 
 
-def _starter(policy: Policy) -> Any:
+def _starter(policy: Policy) -> Callable[[MissionContext], Repairer]:
     def start(context: MissionContext) -> Repairer:
         return DiagnosingRepairer(context, policy)
 
@@ -370,9 +387,7 @@ def _starter(policy: Policy) -> Any:
     return start
 
 
-register_strategy(
-    StrategyName.ORACLE, start_replacement, uses_table=True, told=True, hidden=True
-)
+register_strategy(StrategyName.ORACLE, start_replacement, uses_table=True, told=True, hidden=True)
 for _name, _policy in (
     (StrategyName.DIAGNOSE, Policy.MOST_PROBABLE),
     (StrategyName.CONFORMANT, Policy.CONFORMANT),

@@ -7,7 +7,6 @@ faults and at most ``lookahead_expansions`` expansions; fall back to ``replaceme
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
 
 from selfrepair.repair.strategies.names import RepairSource, StrategyName
 from selfrepair.repair.strategies.protocol import (
@@ -20,7 +19,7 @@ from selfrepair.repair.strategies.protocol import (
 )
 from selfrepair.repair.strategies.registry import register_strategy
 from selfrepair.repair.strategies.replacement import replacement
-from selfrepair.robots.domain import Domain, run_open
+from selfrepair.robots.domain import SomeDomain, run_open
 from selfrepair.status import PlanStatus, RepairStatus
 
 __all__ = ["lookahead", "start_lookahead"]
@@ -70,7 +69,7 @@ def lookahead(context: MissionContext, request: RepairRequest) -> Repair:
 
 
 def _first_faulty(
-    domain: Domain[Any, Any], queue: Sequence[Any], known: frozenset[Any], before: int
+    domain: SomeDomain, queue: Sequence[object], known: frozenset[object], before: int
 ) -> int:
     """The index of the first queued action unavailable under ``known``, among the first
     ``before + 1`` (0 when none is: the front is then repaired as it is)."""

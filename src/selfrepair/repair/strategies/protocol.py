@@ -29,7 +29,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
-from typing import Any, Generic, NamedTuple, Protocol
+from typing import Generic, NamedTuple, Protocol
 
 from typing_extensions import TypeVar
 
@@ -37,7 +37,7 @@ from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.repair.replacement import FreeTest
 from selfrepair.repair.strategies.names import RepairSource
 from selfrepair.repair.strategies.options import StrategyOptions
-from selfrepair.robots.domain import Domain
+from selfrepair.robots.domain import SomeDomain
 from selfrepair.search.astar import PlanResult
 from selfrepair.status import RepairStatus
 from selfrepair.tables.model import SomeTable
@@ -57,7 +57,7 @@ __all__ = [
 ]
 
 
-PlanFn = Callable[[Pose, Cell, Heading | None, frozenset[Any], int | None], PlanResult]
+PlanFn = Callable[[Pose, Cell, Heading | None, frozenset[object], int | None], PlanResult]
 """``plan(start, goal, goal_heading, known_faults, max_expansions)``: an exact plan on the
 mission's map with the mission's planner settings."""
 
@@ -91,7 +91,7 @@ class MissionContext:
     searches with its own planner (D* Lite).
     """
 
-    domain: Domain[Any, Any]
+    domain: SomeDomain
     goal: Cell
     goal_heading: Heading | None
     options: StrategyOptions
@@ -100,7 +100,7 @@ class MissionContext:
     replan_budget: int | None
     free: FreeTest
     grid: FreeGrid
-    cost: Callable[[Pose, Any], Fraction]
+    cost: Callable[[Pose, object], Fraction]
     world: object = None
     cost_scale: int = 1
     start: Pose | None = None
@@ -129,8 +129,8 @@ class RepairRequest(NamedTuple):
     """
 
     pose: Pose
-    queue: Sequence[Any]
-    known: frozenset[Any]
+    queue: Sequence[object]
+    known: frozenset[object]
     step: int = 0
 
 
@@ -150,7 +150,7 @@ class Repair(NamedTuple):
 
     status: RepairStatus
     source: RepairSource
-    actions: tuple[Any, ...] = ()
+    actions: tuple[object, ...] = ()
     consumed: int = 0
     replans: int = 0
     candidate_length: int | None = None
@@ -178,8 +178,8 @@ class Assumption(NamedTuple):
     and the actions it takes to be unusable whatever the faults (``unusable``: a strategy
     without a fault model that saw them misbehave)."""
 
-    known: frozenset[Any]
-    unusable: frozenset[Any] = frozenset()
+    known: frozenset[object]
+    unusable: frozenset[object] = frozenset()
 
 
 class Repairer(Protocol[RequestT, AnswerT]):

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from itertools import chain, islice
-from typing import Any
 
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import FreeGrid
@@ -74,7 +73,7 @@ DETOUR = RepairSource.DETOUR.value
 """The name of a detour attempt in ``Repair.attempts``."""
 
 
-def _detour(position: int, actions: tuple[Any, ...], consumed: int) -> Repair:
+def _detour(position: int, actions: tuple[object, ...], consumed: int) -> Repair:
     """The repair of a detour (pose-independent, so the detour look-ups store it)."""
     return Repair(
         RepairStatus.REPAIRED,
@@ -95,7 +94,7 @@ def _table(context: MissionContext) -> SomeTable:
     return context.table
 
 
-def _lookups(context: MissionContext, known: frozenset[Any]) -> FaultLookups[Repair]:
+def _lookups(context: MissionContext, known: frozenset[object]) -> FaultLookups[Repair]:
     options = context.options
     return fault_lookups(
         _table(context),
@@ -108,14 +107,14 @@ def _lookups(context: MissionContext, known: frozenset[Any]) -> FaultLookups[Rep
 
 
 def strategy_lookups(
-    context: MissionContext, known: frozenset[Any], grid: FreeGrid
+    context: MissionContext, known: frozenset[object], grid: FreeGrid
 ) -> GridLookups[Repair]:
     """The look-ups the strategy reads under ``known`` on ``grid`` (the compiled mission loop
     copies their answers: :mod:`selfrepair.execution.compiled`)."""
     return grid_lookups(_lookups(context, known), grid)
 
 
-def _miss(context: MissionContext, request: RepairRequest, action: Any) -> Repair:
+def _miss(context: MissionContext, request: RepairRequest, action: object) -> Repair:
     """No valid candidate: :func:`replan`, with the candidates looked at counted."""
     examined = len(_table(context).candidates(action, request.known))
     return chained(replan(context, request), (StrategyName.REPLACEMENT,), examined=examined)
@@ -190,8 +189,8 @@ class ReplacementRepairer:
         self._size = (grid.width, grid.height)
         self._quads = self._index.quads
         self._moves = self._index.slot_moves
-        self._known: frozenset[Any] | None = None
-        self._last: tuple[Any, int] = (None, -1)
+        self._known: frozenset[object] | None = None
+        self._last: tuple[object, int] = (None, -1)
         lookups = _lookups(context, frozenset())
         self._on_grid: GridLookups[Repair] = grid_lookups(lookups, grid)
         self._slots = self._on_grid.slots
@@ -233,7 +232,7 @@ class ReplacementRepairer:
         fault repairs (as they are when the robot meets them)."""
         actions = tuple(request.queue)
         known, blocked = request.known, self._belief.blocked
-        parts: list[Sequence[Any]] = [head.actions]
+        parts: list[Sequence[object]] = [head.actions]
         done, begin, pose, rewritten = head.consumed, 0, request.pose, 0
         while (met := finder.next_blocked(pose, actions, begin, done)) is not None:
             k, pose = met
@@ -250,7 +249,7 @@ class ReplacementRepairer:
             actions=tuple(chain.from_iterable(parts)), consumed=done, rewritten=rewritten
         )
 
-    def _use(self, known: frozenset[Any]) -> None:
+    def _use(self, known: frozenset[object]) -> None:
         """Switch to the look-ups of ``known`` (a new frozenset of the same faults keeps them)."""
         if self._known is None or known != self._known:
             lookups = _lookups(self._context, known)
@@ -259,7 +258,7 @@ class ReplacementRepairer:
             self._faulty = lookups.faulty_slots
         self._known = known
 
-    def _quad(self, action: Any) -> int:
+    def _quad(self, action: object) -> int:
         """``4 *`` the index of ``action`` (by identity, else by equality)."""
         quad = self._quads.get(id(action))
         return 4 * self._index.of(action) if quad is None else quad
@@ -304,7 +303,7 @@ class ReplacementRepairer:
         quads = list(map(self._quads.get, map(id, rest)))  # in C; by identity (see _quad)
         dx, dy, h = moves[slot]
         x, y = request.pose.x + dx, request.pose.y + dy
-        parts: list[Sequence[Any]] = [head.actions]
+        parts: list[Sequence[object]] = [head.actions]
         done = substituted = 0
         for k, quad in enumerate(quads):
             if quad is None:
@@ -363,7 +362,7 @@ class DeferringRepairer:
 
     def __init__(self, context: MissionContext) -> None:
         self._context = context
-        self._pending: dict[int, tuple[Any, frozenset[Any]]] = {}
+        self._pending: dict[int, tuple[object, frozenset[object]]] = {}
 
     def repair(self, request: RepairRequest) -> Repair:
         """The first valid candidate (deferred actions kept), else :func:`replan`."""

@@ -21,6 +21,7 @@ command went astray.
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Callable
 from fractions import Fraction
 from typing import Any, cast
 
@@ -37,7 +38,7 @@ from selfrepair.repair.strategies.protocol import (
     RepairRequest,
 )
 from selfrepair.repair.strategies.registry import register_strategy
-from selfrepair.robots.domain import A, Domain, F
+from selfrepair.robots.domain import A, F, SomeDomain
 from selfrepair.status import RepairStatus
 from selfrepair.tables.model import ReplacementTable
 
@@ -48,7 +49,7 @@ SEARCH_DEPTH = 8
 SEARCH_NODES = 4000
 """Poses the fallback search may visit."""
 
-Candidate = tuple[Any, ...]
+Candidate = tuple[object, ...]
 
 
 def learned_order(table: ReplacementTable[A, F]) -> dict[A, tuple[tuple[A, ...], ...]]:
@@ -108,18 +109,18 @@ class TrialRepairer:
             raise ProblemError("the trial-and-error strategy needs a table")
         self._context = context
         self._order = learned_order(context.table)
-        self.unusable: frozenset[Any] = frozenset()
+        self.unusable: frozenset[object] = frozenset()
         """The actions seen to misbehave."""
-        self.kept: dict[Any, Candidate] = {}
+        self.kept: dict[object, Candidate] = {}
         """Per action, the candidate that last worked for it."""
-        self.dropped: set[tuple[Any, Candidate]] = set()
+        self.dropped: set[tuple[object, Candidate]] = set()
         """(action, candidate) pairs that went wrong."""
-        self._trying: tuple[Any, Candidate, int] | None = None
+        self._trying: tuple[object, Candidate, int] | None = None
         self._anchor: Pose | None = None
         self._rejoining = 0
         self._drop = 0
         self._wanted = False
-        self._fastest: tuple[Any, ...] = ()
+        self._fastest: tuple[object, ...] = ()
         self.surprise_step: int | None = None
 
     def assumption(self) -> Assumption:
@@ -247,14 +248,16 @@ class TrialRepairer:
             attempts=(StrategyName.TRIAL_AND_ERROR, "search"),
         )
 
-    def _bfs(self, start: Pose, done: Any, nodes: int) -> tuple[Any, ...] | None:
+    def _bfs(
+        self, start: Pose, done: Callable[[Pose], bool], nodes: int
+    ) -> tuple[object, ...] | None:
         """The fewest usable commands (the fastest of each motion class) from ``start`` to a
         pose for which ``done`` holds, footprints free, at most :data:`SEARCH_DEPTH` of them
         unless ``nodes`` is unbounded (then any length); ``None`` when there is none."""
         context = self._context
-        domain: Domain[Any, Any] = context.domain
+        domain: SomeDomain = context.domain
         if not self._fastest:
-            best: dict[str, Any] = {}
+            best: dict[str, object] = {}
             for action in domain.actions:
                 if action in self.unusable:
                     continue
@@ -265,7 +268,7 @@ class TrialRepairer:
         depth_limit = SEARCH_DEPTH if nodes < 10**6 else 10**6
         if done(start):
             return ()
-        parents: dict[Pose, tuple[Pose, Any] | None] = {start: None}
+        parents: dict[Pose, tuple[Pose, object] | None] = {start: None}
         frontier: deque[tuple[Pose, int]] = deque([(start, 0)])
         while frontier and len(parents) < nodes:
             pose, depth = frontier.popleft()
