@@ -45,7 +45,7 @@ from typing import Any
 from _common import write_report
 from selfrepair.execution.executor import mission_context, run_mission
 from selfrepair.execution.result import MissionSpec
-from selfrepair.execution.stepper import _ActionView  # the queue view the stepper asks with
+from selfrepair.execution.stepper import ActionView  # the queue view the stepper asks with
 from selfrepair.repair.strategies import RepairRequest, ReplacementRepairer, get_strategy, replan
 from selfrepair.world.bundled import bundled_routes, load_bundled
 from selfrepair.world.maze import Maze
@@ -96,7 +96,7 @@ def measure(maze: Maze, routes: list[Route], args: argparse.Namespace) -> dict[s
             missing += 1
             continue
         cold.append(float(cold_ns))
-        view = RepairRequest(pose, _ActionView(deque((a, None) for a in queue)), request.known, i)
+        view = RepairRequest(pose, ActionView(deque((a, None) for a in queue)), request.known, i)
         if repairer.repair_blocked(view) is not found:
             raise AssertionError("the stepper's view of the queue got another answer")
         best = through_view = ref = float("inf")

@@ -98,7 +98,7 @@ from selfrepair.repair.strategies import (
     replan,
 )
 
-__all__ = ["MAX_REPAIRS_PER_STEP", "Entry", "Stepper", "splice"]
+__all__ = ["MAX_REPAIRS_PER_STEP", "ActionView", "Entry", "Stepper", "splice"]
 
 MAX_REPAIRS_PER_STEP = 64
 """Repairs one question may ask for before the strategy is taken to break its contract (every
@@ -115,7 +115,7 @@ _new_tuple = tuple.__new__
 frame (the same value)."""
 
 
-class _ActionView(Sequence[object]):
+class ActionView(Sequence[object]):
     """A read-only view of the queue's actions, so a repair request costs O(1) to build."""
 
     __slots__ = ("_queue",)
@@ -375,7 +375,7 @@ class Stepper:
         latency covers both."""
         t0 = time.perf_counter_ns()
         queue = self.queue
-        request = RepairRequest(pose, _ActionView(queue), self.known, step)
+        request = RepairRequest(pose, ActionView(queue), self.known, step)
         blocked_repair = self._blocked_repair
         if (action is None and not (asked or self._perceived)) or (
             blocked and blocked_repair is None

@@ -17,7 +17,7 @@ def pick_or_drop(
 ) -> int | None:
     action = head.action
     state = world.items[action.item]
-    if state.delivered_at is not None or state.lost:
+    if state.settled:
         robot.queue.popleft()
         return None
     if action.kind is ActionKind.DROP and robot.holding != action.item:
@@ -40,7 +40,7 @@ def handover(
 ) -> int | None:
     action = head.action
     state = world.items[action.item]
-    if state.delivered_at is not None or state.lost:
+    if state.settled:
         robot.queue.popleft()
         return None
     giver, taker = world.robots[action.robot], world.robots[action.taker]

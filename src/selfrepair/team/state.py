@@ -238,6 +238,11 @@ class ItemState:
     delivered_at: int | None = None
     lost: bool = False
 
+    @property
+    def settled(self) -> bool:
+        """Whether the item needs nothing more: delivered, or given up."""
+        return self.delivered_at is not None or self.lost
+
 
 @dataclass(slots=True)
 class TeamWorld:
