@@ -34,6 +34,7 @@ from selfrepair.cli._inputs import (
     MazeArg,
     Start,
 )
+from selfrepair.diagnosis import DEFAULT_CONFIDENCE, DEFAULT_FAULT_PRIOR, DEFAULT_MAX_FAULTS
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.limits import (
     DEFAULT_MAX_WAIT,
@@ -235,9 +236,9 @@ class MissionOptions:
     fault_behaviour: FaultBehaviourOpt = None
     noise: Noise = 0.0
     bump_switch: BumpSwitch = True
-    max_faults: MaxFaults = 2
-    fault_prior: FaultPrior = 0.05
-    confidence: Confidence = 0.01
+    max_faults: MaxFaults = DEFAULT_MAX_FAULTS
+    fault_prior: FaultPrior = DEFAULT_FAULT_PRIOR
+    confidence: Confidence = DEFAULT_CONFIDENCE
     transient: Transient = None
     intermittent: Intermittent = None
     events: Events = ""

@@ -20,8 +20,13 @@ See docs/diagnosis.md.
 
 from __future__ import annotations
 
-from selfrepair.diagnosis.belief import FaultBelief
-from selfrepair.diagnosis.hypotheses import FaultModel, fault_model
+from selfrepair.diagnosis.belief import DEFAULT_CONFIDENCE, FaultBelief
+from selfrepair.diagnosis.hypotheses import (
+    DEFAULT_FAULT_PRIOR,
+    DEFAULT_MAX_FAULTS,
+    FaultModel,
+    fault_model,
+)
 from selfrepair.diagnosis.observation import (
     PERTURBATIONS,
     Observation,
@@ -31,6 +36,9 @@ from selfrepair.diagnosis.observation import (
 from selfrepair.diagnosis.probes import Probe, ProbePlanner, best_probe, isolating_probe
 
 __all__ = [
+    "DEFAULT_CONFIDENCE",
+    "DEFAULT_FAULT_PRIOR",
+    "DEFAULT_MAX_FAULTS",
     "PERTURBATIONS",
     "FaultBelief",
     "FaultModel",

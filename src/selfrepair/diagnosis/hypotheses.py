@@ -31,7 +31,14 @@ from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.robots.domain import SomeDomain
 
-__all__ = ["FAILS", "FaultModel", "Group", "fault_model"]
+__all__ = [
+    "DEFAULT_FAULT_PRIOR",
+    "DEFAULT_MAX_FAULTS",
+    "FAILS",
+    "FaultModel",
+    "Group",
+    "fault_model",
+]
 
 FAILS = -1
 """The performed-action index of a command that fails (a domain without a behaviour model)."""
@@ -103,8 +110,20 @@ class FaultModel:
         return " | ".join(fmt(s) or "none" for s in self.faults_of(mask))
 
 
+DEFAULT_MAX_FAULTS = 2
+"""The one default of the most faults a hypothesis holds (``StrategyOptions.max_faults``,
+``--max-faults``, experiment files, traces): the four-wheel robot's singles and doubles."""
+
+DEFAULT_FAULT_PRIOR = 0.05
+"""The one default a priori probability of each fault (``StrategyOptions.fault_prior``,
+``--fault-prior``, experiment files, traces)."""
+
+
 def fault_model(
-    domain: SomeDomain, behaviour: str | None = None, k: int = 2, prior: float = 0.05
+    domain: SomeDomain,
+    behaviour: str | None = None,
+    k: int = DEFAULT_MAX_FAULTS,
+    prior: float = DEFAULT_FAULT_PRIOR,
 ) -> FaultModel:
     """The :class:`FaultModel` of ``domain`` with fault-behaviour model ``behaviour`` (``None``:
     the default; a domain without one: failing commands), hypotheses of up to ``k`` faults and

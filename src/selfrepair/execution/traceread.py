@@ -15,7 +15,12 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from selfrepair.diagnosis import ObservationModel
+from selfrepair.diagnosis import (
+    DEFAULT_CONFIDENCE,
+    DEFAULT_FAULT_PRIOR,
+    DEFAULT_MAX_FAULTS,
+    ObservationModel,
+)
 from selfrepair.diagnosis.cooperative import Metric, Observer, SensingRange
 from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.faults import FaultSchedule
@@ -252,9 +257,9 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
                 lpg_time_limit_s=float(options.get("lpg_time_limit_s", 5.0)),
                 lpg_seed=int(options.get("lpg_seed", 0)),
                 max_wait=int(options.get("max_wait", 0)),  # older traces: made without waits
-                max_faults=int(hidden.get("max_faults", 2)),
-                fault_prior=float(hidden.get("fault_prior", 0.05)),
-                confidence=float(hidden.get("confidence", 0.01)),
+                max_faults=int(hidden.get("max_faults", DEFAULT_MAX_FAULTS)),
+                fault_prior=float(hidden.get("fault_prior", DEFAULT_FAULT_PRIOR)),
+                confidence=float(hidden.get("confidence", DEFAULT_CONFIDENCE)),
             ),
             behaviour=hidden.get("behaviour"),
             observation=ObservationModel(

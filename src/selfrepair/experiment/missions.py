@@ -18,7 +18,12 @@ from __future__ import annotations
 from fractions import Fraction
 from typing import Any
 
-from selfrepair.diagnosis import ObservationModel
+from selfrepair.diagnosis import (
+    DEFAULT_CONFIDENCE,
+    DEFAULT_FAULT_PRIOR,
+    DEFAULT_MAX_FAULTS,
+    ObservationModel,
+)
 from selfrepair.diagnosis.cooperative import Observer, SensingRange
 from selfrepair.errors import ConfigError
 from selfrepair.execution.faults import Detection, FaultEvent, FaultSchedule, canonical_order
@@ -395,9 +400,9 @@ def to_spec(mission: Mission) -> MissionSpec:
             lpg_time_limit_s=options.get("lpg_time_limit_s", 5.0),
             lpg_seed=options.get("lpg_seed", 0),
             rewrite=options.get("rewrite", False),
-            max_faults=options.get("max_faults", 2),
-            fault_prior=options.get("fault_prior", 0.05),
-            confidence=options.get("confidence", 0.01),
+            max_faults=options.get("max_faults", DEFAULT_MAX_FAULTS),
+            fault_prior=options.get("fault_prior", DEFAULT_FAULT_PRIOR),
+            confidence=options.get("confidence", DEFAULT_CONFIDENCE),
             **({} if world is None else {"max_wait": world["max_wait"]}),
         ),
         behaviour=s.get("behaviour"),

@@ -15,6 +15,7 @@ from typing import Annotated, Literal, TypeVar
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
+from selfrepair.diagnosis import DEFAULT_CONFIDENCE, DEFAULT_FAULT_PRIOR, DEFAULT_MAX_FAULTS
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.execution.faults import Clock, Detection, Persistence
 from selfrepair.experiment.schema_physics import PhysicsConfig
@@ -420,9 +421,9 @@ class DiagnosisStrategy(_StrategyEntry):
     ]
     tables: Annotated[tuple[str, ...], NonEmpty] = ("handwritten",)
     recursion: Annotated[tuple[RecursionMode, ...], NonEmpty] = (RecursionMode.FLAT,)
-    max_faults: Annotated[Int, Field(ge=0, le=4)] = 2
-    fault_prior: Annotated[Float, Field(gt=0.0, lt=1.0)] = 0.05
-    confidence: Annotated[Float, Field(ge=0.0, lt=1.0)] = 0.01
+    max_faults: Annotated[Int, Field(ge=0, le=4)] = DEFAULT_MAX_FAULTS
+    fault_prior: Annotated[Float, Field(gt=0.0, lt=1.0)] = DEFAULT_FAULT_PRIOR
+    confidence: Annotated[Float, Field(ge=0.0, lt=1.0)] = DEFAULT_CONFIDENCE
 
 
 STRATEGY_TAGS: tuple[StrategyName, ...] = StrategyName.of_kind(MissionKind.ROBOT)

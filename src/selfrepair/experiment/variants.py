@@ -16,6 +16,7 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
+from selfrepair.diagnosis import DEFAULT_CONFIDENCE, DEFAULT_FAULT_PRIOR, DEFAULT_MAX_FAULTS
 from selfrepair.errors import ConfigError, LimitError
 from selfrepair.experiment.schema import (
     DiagnosisStrategy,
@@ -110,7 +111,11 @@ def variants_of(
         yield {"strategy": strategy.name, "options": _plain_options(strategy)}, weights
 
 
-_DIAGNOSIS_DEFAULTS = (("max_faults", 2), ("fault_prior", 0.05), ("confidence", 0.01))
+_DIAGNOSIS_DEFAULTS = (
+    ("max_faults", DEFAULT_MAX_FAULTS),
+    ("fault_prior", DEFAULT_FAULT_PRIOR),
+    ("confidence", DEFAULT_CONFIDENCE),
+)
 """The diagnosis options of a strategy entry and their defaults (as ``StrategyOptions``)."""
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from selfrepair.diagnosis import DEFAULT_CONFIDENCE, DEFAULT_FAULT_PRIOR, DEFAULT_MAX_FAULTS
 from selfrepair.errors import ProblemError, choice
 from selfrepair.limits import DEFAULT_MAX_WAIT, MAX_LOOKUP_PATTERNS
 from selfrepair.repair.replacement import DEFAULT_MAX_DEPTH, DEFERRING, RecursionMode
@@ -39,7 +40,9 @@ class StrategyOptions:
     :mod:`selfrepair.execution.stepper`). The diagnosing strategies (faults hidden; see
     docs/diagnosis.md) take hypotheses of up to ``max_faults`` faults, each fault present a
     priori with probability ``fault_prior``, and need posterior mass ``1 - confidence`` to take a
-    class as isolated or a set of classes as all that is possible.
+    class as isolated or a set of classes as all that is possible (the defaults are the
+    diagnosis package's one constants, ``DEFAULT_MAX_FAULTS``, ``DEFAULT_FAULT_PRIOR`` and
+    ``DEFAULT_CONFIDENCE``, the same on the command line and in experiment files).
     """
 
     table: str | SomeTable = "handwritten"
@@ -53,9 +56,9 @@ class StrategyOptions:
     rewrite: bool = False
     max_lookup_patterns: int = MAX_LOOKUP_PATTERNS
     max_wait: int = DEFAULT_MAX_WAIT
-    max_faults: int = 2
-    fault_prior: float = 0.05
-    confidence: float = 0.05
+    max_faults: int = DEFAULT_MAX_FAULTS
+    fault_prior: float = DEFAULT_FAULT_PRIOR
+    confidence: float = DEFAULT_CONFIDENCE
 
     def __post_init__(self) -> None:
         object.__setattr__(
