@@ -29,7 +29,9 @@ writes them to ``benchmarks/results/tolerant_planner.json``.
 
 Target (issue 26): the tolerant planner costs at most 2 times the plain planner's time, the
 masks included: the median over the queries of ``first`` over ``plain``, for each mode, model
-and backend. Usage: ``python benchmarks/tolerant_planner.py [--repeats N]``.
+and backend, and of ``unseen first`` and ``unseen once`` over ``plain`` (the coldest case: the
+target is met only when every one of these is).
+Usage: ``python benchmarks/tolerant_planner.py [--repeats N]``.
 """
 
 from __future__ import annotations
@@ -223,9 +225,12 @@ def main() -> None:
             print(f"  {key + ' masks':19} {s['median_us']:>9} us {s['median_over_plain']:>6}x")
         for key, what in (("first", "as above"), ("once", "its very first, book misses")):
             s = out[f"unseen {key} hard"] = _summary(unseen, key, "plain")
+            ok = s["median_over_plain"] <= TARGET  # the coldest cases count for the target too
+            met &= ok
             print(f"  {'unseen ' + key + ' hard':19} {s['median_us']:>9} us "
                   f"{s['median_over_plain']:>6}x {s['worst_over_plain']:>6}x "
-                  f"{s['within_2x']:>3}/{len(unseen)} (numba, {what})")  # fmt: skip
+                  f"{s['within_2x']:>3}/{len(unseen)} {'MET' if ok else 'NOT MET'} "
+                  f"(numba, {what})")  # fmt: skip
         out["hard_solved"] = sum(r["hard solved"] for r in rows)
         report[f"k={k}"] = out
     print(f"target: first tolerant plan at most {TARGET:g}x the plain one (median): "
