@@ -19,6 +19,9 @@ from __future__ import annotations
 from selfrepair.errors import LimitError
 
 __all__ = [
+    "DEFAULT_CONFIDENCE",
+    "DEFAULT_FAULT_PRIOR",
+    "DEFAULT_MAX_FAULTS",
     "DEFAULT_MAX_WAIT",
     "DEFAULT_SENSING_RANGE",
     "MAX_CELLS",
@@ -100,6 +103,26 @@ DEFAULT_SENSING_RANGE = 2
 """Chebyshev cells a robot sees around its own cell in ``range`` sensing of world events
 (:mod:`selfrepair.world.events`; ``--sensing-range``): the four-wheel robot's reach, so that with
 the default it sees every cell its next motion sweeps."""
+
+DEFAULT_MAX_FAULTS = 2
+"""The one default of the most faults a diagnosing robot's hypothesis holds
+(``StrategyOptions.max_faults``, ``--max-faults``, experiment files, traces): the four-wheel
+robot's singles and doubles (:mod:`selfrepair.diagnosis.hypotheses`)."""
+
+DEFAULT_FAULT_PRIOR = 0.05
+"""The one default a priori probability of each fault (``StrategyOptions.fault_prior``,
+``--fault-prior``, experiment files, traces)."""
+
+DEFAULT_CONFIDENCE = 0.01
+"""The one default of the error ``e`` a diagnosing robot accepts (``StrategyOptions.confidence``,
+``--confidence``, the experiment files' ``confidence``, traces without one): a class is isolated
+at posterior mass ``1 - e`` (with its confirmation), and the classes a conformant robot assumes
+hold that mass. 1%, the wrong-isolation rate the diagnosis targets allow at 1% noise
+(:mod:`selfrepair.diagnosis.belief`).
+
+The three diagnosis defaults live here, at the bottom of the package, rather than in
+:mod:`selfrepair.diagnosis`, so that the command line can show them in ``--help`` without loading
+NumPy (``tests/test_cli_shape.py``); :mod:`selfrepair.diagnosis` re-exports them."""
 
 MAX_LOOKUP_PATTERNS = 4096
 """Occupancy patterns stored by one compiled replacement look-up (one table, fault set and

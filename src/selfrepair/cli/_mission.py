@@ -34,9 +34,11 @@ from selfrepair.cli._inputs import (
     MazeArg,
     Start,
 )
-from selfrepair.diagnosis import DEFAULT_CONFIDENCE, DEFAULT_FAULT_PRIOR, DEFAULT_MAX_FAULTS
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.limits import (
+    DEFAULT_CONFIDENCE,
+    DEFAULT_FAULT_PRIOR,
+    DEFAULT_MAX_FAULTS,
     DEFAULT_MAX_WAIT,
     DEFAULT_SENSING_RANGE,
     MAX_CELLS,

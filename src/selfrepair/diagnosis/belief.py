@@ -34,6 +34,7 @@ import numpy.typing as npt
 from selfrepair.diagnosis.hypotheses import FAILS, FaultModel, Group
 from selfrepair.diagnosis.observation import PERTURBATIONS, Observation, perturbed
 from selfrepair.geometry import FreeGrid, Heading, Pose
+from selfrepair.limits import DEFAULT_CONFIDENCE
 from selfrepair.textio import JSONObject
 
 __all__ = ["CONFIRMATIONS", "DEFAULT_CONFIDENCE", "FaultBelief", "Prediction", "predictions"]
@@ -42,11 +43,6 @@ CONFIRMATIONS = 2
 """How many more noisy readings must contradict every rival of a class than its own best
 hypothesis before the class counts as isolated under noise (:meth:`FaultBelief.isolated`)."""
 
-DEFAULT_CONFIDENCE = 0.01
-"""The one default of the error ``e`` a diagnosing robot accepts (``StrategyOptions.confidence``,
-``--confidence``, the experiment files' ``confidence``, traces without one): a class is isolated
-at posterior mass ``1 - e`` (with its confirmation), and the classes a conformant robot assumes
-hold that mass. 1%, the wrong-isolation rate the diagnosis targets allow at 1% noise."""
 
 _Entry = tuple[int, "npt.NDArray[np.float64] | None", "npt.NDArray[np.float64] | None"]
 """A kept reading: its support bit set, its likelihood vector and its contradiction indicator

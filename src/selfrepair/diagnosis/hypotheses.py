@@ -29,6 +29,7 @@ import numpy.typing as npt
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Heading, Pose
+from selfrepair.limits import DEFAULT_FAULT_PRIOR, DEFAULT_MAX_FAULTS
 from selfrepair.robots.domain import SomeDomain
 
 __all__ = [
@@ -108,15 +109,6 @@ class FaultModel:
         """The fault sets of ``mask`` in the domain's text (``none`` for the empty set)."""
         fmt = self.domain.format_faults
         return " | ".join(fmt(s) or "none" for s in self.faults_of(mask))
-
-
-DEFAULT_MAX_FAULTS = 2
-"""The one default of the most faults a hypothesis holds (``StrategyOptions.max_faults``,
-``--max-faults``, experiment files, traces): the four-wheel robot's singles and doubles."""
-
-DEFAULT_FAULT_PRIOR = 0.05
-"""The one default a priori probability of each fault (``StrategyOptions.fault_prior``,
-``--fault-prior``, experiment files, traces)."""
 
 
 def fault_model(

@@ -15,13 +15,18 @@ from typing import Annotated, Literal, TypeVar
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
-from selfrepair.diagnosis import DEFAULT_CONFIDENCE, DEFAULT_FAULT_PRIOR, DEFAULT_MAX_FAULTS
 from selfrepair.errors import InputError, ProblemError
 from selfrepair.execution.faults import Clock, Detection, Persistence
 from selfrepair.experiment.schema_physics import PhysicsConfig
 from selfrepair.experiment.schema_physics import context_domain as _domain
 from selfrepair.geometry import parse_cell, parse_pose
-from selfrepair.limits import DEFAULT_SENSING_RANGE, MAX_CLEARANCE_WEIGHT
+from selfrepair.limits import (
+    DEFAULT_CONFIDENCE,
+    DEFAULT_FAULT_PRIOR,
+    DEFAULT_MAX_FAULTS,
+    DEFAULT_SENSING_RANGE,
+    MAX_CLEARANCE_WEIGHT,
+)
 from selfrepair.repair.replacement import DEFERRING, RecursionMode
 from selfrepair.repair.strategies import MissionKind, StrategyName
 from selfrepair.repair.tolerance import OPTIMAL, parse_objective

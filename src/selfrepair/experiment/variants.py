@@ -16,7 +16,6 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from selfrepair.diagnosis import DEFAULT_CONFIDENCE, DEFAULT_FAULT_PRIOR, DEFAULT_MAX_FAULTS
 from selfrepair.errors import ConfigError, LimitError
 from selfrepair.experiment.schema import (
     DiagnosisStrategy,
@@ -28,6 +27,7 @@ from selfrepair.experiment.schema import (
     ReplanStrategy,
     StrategyConfig,
 )
+from selfrepair.limits import DEFAULT_CONFIDENCE, DEFAULT_FAULT_PRIOR, DEFAULT_MAX_FAULTS
 from selfrepair.repair.tolerance import OPTIMAL
 from selfrepair.textio import JSONObject
 

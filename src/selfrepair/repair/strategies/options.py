@@ -5,9 +5,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from selfrepair.diagnosis import DEFAULT_CONFIDENCE, DEFAULT_FAULT_PRIOR, DEFAULT_MAX_FAULTS
 from selfrepair.errors import ProblemError, choice
-from selfrepair.limits import DEFAULT_MAX_WAIT, MAX_LOOKUP_PATTERNS
+from selfrepair.limits import (
+    DEFAULT_CONFIDENCE,
+    DEFAULT_FAULT_PRIOR,
+    DEFAULT_MAX_FAULTS,
+    DEFAULT_MAX_WAIT,
+    MAX_LOOKUP_PATTERNS,
+)
 from selfrepair.repair.replacement import DEFAULT_MAX_DEPTH, DEFERRING, RecursionMode
 from selfrepair.tables.fileformat import resolve_table
 from selfrepair.tables.model import ReplacementTable, SomeTable
@@ -40,9 +45,9 @@ class StrategyOptions:
     :mod:`selfrepair.execution.stepper`). The diagnosing strategies (faults hidden; see
     docs/diagnosis.md) take hypotheses of up to ``max_faults`` faults, each fault present a
     priori with probability ``fault_prior``, and need posterior mass ``1 - confidence`` to take a
-    class as isolated or a set of classes as all that is possible (the defaults are the
-    diagnosis package's one constants, ``DEFAULT_MAX_FAULTS``, ``DEFAULT_FAULT_PRIOR`` and
-    ``DEFAULT_CONFIDENCE``, the same on the command line and in experiment files).
+    class as isolated or a set of classes as all that is possible (the defaults are the one
+    constants ``DEFAULT_MAX_FAULTS``, ``DEFAULT_FAULT_PRIOR`` and ``DEFAULT_CONFIDENCE`` of
+    :mod:`selfrepair.limits`, the same on the command line and in experiment files).
     """
 
     table: str | SomeTable = "handwritten"
