@@ -23,15 +23,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from selfrepair.errors import InputError
-from selfrepair.experiment.comparison import (
-    FIRST_REPAIR,
-    REPAIR_COMPUTE,
-    BaselineLine,
-    common_rows,
-    compare_baselines,
-    has_baselines,
-    maze_table,
-)
+from selfrepair.experiment.comparison import baseline_tables, has_baselines
 from selfrepair.experiment.diagnosis_findings import diagnosis_findings
 from selfrepair.experiment.dynamic_findings import dynamic_findings
 from selfrepair.experiment.findings import (
@@ -139,27 +131,26 @@ def baselines_section(rows: Sequence[Row], figure: str | None = None) -> str:
     """The section on the baselines from neighbouring fields (:mod:`.comparison`): the table on
     the missions every strategy ran, repair time by maze, and the figure (``figure``: its file
     name, when drawn)."""
-    lines = compare_baselines(rows)
-    mazes = sorted({str(r.get("maze")) for r in common_rows(rows)})
+    tables = baseline_tables(rows)
     parts = [
         "",
         "## Baselines: D* Lite, LPG-adapt and A* replanning",
         "",
-        f"The same missions for every strategy ({lines[0].missions if lines else 0} each, on "
-        f"{', '.join(mazes) or 'no maze'}). Medians with 95% bootstrap intervals over missions; "
-        "*ticks over A\\**: mean of the differences paired with the A* replanner. Definitions in "
-        "docs/baselines.md.",
+        f"The same missions for every strategy ({tables.missions} each, on "
+        f"{', '.join(tables.mazes) or 'no maze'}). Medians with 95% bootstrap intervals over "
+        "missions; *ticks over A\\**: mean of the differences paired with the A* replanner. "
+        "Definitions in docs/baselines.md.",
         "",
-        markdown_table(BaselineLine.HEADERS, [line.cells() for line in lines]),
+        markdown_table(*tables.comparison),
         "",
         "Repair latency at the first faulty action (ms) by maze, over every mission that met a "
         "fault:",
         "",
-        markdown_table(*maze_table(rows, FIRST_REPAIR)),
+        markdown_table(*tables.first_repair),
         "",
         "Repair time per mission (ms, all its repairs added up) by maze:",
         "",
-        markdown_table(*maze_table(rows, REPAIR_COMPUTE)),
+        markdown_table(*tables.repair_compute),
         "",
     ]
     if figure is not None:
