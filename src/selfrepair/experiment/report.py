@@ -43,6 +43,7 @@ from selfrepair.experiment.reportmission import (
 from selfrepair.experiment.reportrows import check_rows, load_rows, read_results
 from selfrepair.experiment.summary import fault_set_bite
 from selfrepair.experiment.tolerance_findings import tolerance_findings
+from selfrepair.textio import markdown_table
 
 __all__ = [
     "all_findings",
@@ -162,14 +163,6 @@ def baselines_section(rows: Sequence[Row], figure: str | None = None) -> str:
             "",
         ]
     return "\n".join(parts)
-
-
-def markdown_table(headers: Sequence[str], body: Sequence[Sequence[str]]) -> str:
-    """A GitHub-flavoured Markdown table (first column left-aligned, the rest right-aligned)."""
-    lines = ["| " + " | ".join(headers) + " |"]
-    lines.append("|" + "|".join([":---"] + ["---:"] * (len(headers) - 1)) + "|")
-    lines += ["| " + " | ".join(cells) + " |" for cells in body]
-    return "\n".join(lines)
 
 
 def render_markdown(

@@ -34,6 +34,7 @@ from selfrepair.experiment.schema_strategies import (
 from selfrepair.geometry import parse_cell, parse_pose
 from selfrepair.limits import DEFAULT_SENSING_RANGE
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN
+from selfrepair.textio import source_dir
 from selfrepair.tomlfile import Float, Frozen, Int, NonEmpty
 from selfrepair.world.events import Sensing
 from selfrepair.world.routes import MAX_ROUTES
@@ -276,7 +277,7 @@ class ExperimentConfig(Frozen):
     @property
     def base_dir(self) -> Path:
         """The directory relative paths in the file are resolved against."""
-        return Path(self.source).parent if not self.source.startswith("<") else Path.cwd()
+        return source_dir(self.source)
 
 
 T = TypeVar("T")
