@@ -16,7 +16,10 @@ from selfrepair.cli import main
 from selfrepair.cli.experiments import resolve_experiment
 from selfrepair.errors import ConfigError
 from selfrepair.experiment.comparison import (
+    FIRST_REPAIR,
     REPAIR_COMPUTE,
+    BaselineLine,
+    baseline_tables,
     common_rows,
     compare_baselines,
     has_baselines,
@@ -260,6 +263,26 @@ def test_per_maze_and_maze_table_order_by_size() -> None:
     headers, body = maze_table(rows, REPAIR_COMPUTE)
     assert headers == ("strategy", "m (97 free cells)", "big (2721 free cells)")
     assert body[1] == ("dstar-lite", "-", "5.00 [5.00, 5.00]")
+
+
+def test_baseline_tables_are_the_same_missions_and_both_maze_tables() -> None:
+    rows = [
+        row("replan"),
+        row("replan", maze="big", maze_free_cells=2721),
+        row("replan", maze="a", route="r2"),
+        row("dstar-lite", repair_compute_ns=30_000_000),
+        row("dstar-lite", maze="a", route="r2", first_repair_ns=2_000_000),
+    ]
+    tables = baseline_tables(rows)
+    assert tables.missions == 2 and tables.mazes == ("a", "m")  # "big": replan only
+    headers, body = tables.comparison
+    assert headers == BaselineLine.HEADERS
+    assert [cells[0] for cells in body] == ["replan", "dstar-lite"]
+    assert body[1][1] == "2/2"
+    assert tables.first_repair == maze_table(rows, FIRST_REPAIR)
+    assert tables.repair_compute == maze_table(rows, REPAIR_COMPUTE)
+    assert tables.first_repair != tables.repair_compute
+    assert baseline_tables([]).missions == 0
 
 
 def test_only_default_replan_is_the_findings_reference() -> None:

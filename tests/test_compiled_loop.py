@@ -18,6 +18,7 @@ from extras import NUMBA
 from golden import rows_of
 from selfrepair.caching import clear_caches
 from selfrepair.errors import ProblemError
+from selfrepair.execution.compiled.draws import MAX_SEED, MAX_WORD, draw53, threshold, uniform
 from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import Clock, Detection, FaultEvent, FaultSchedule, Persistence
 from selfrepair.execution.metrics import mission_row
@@ -73,12 +74,16 @@ def _both(spec: MissionSpec, *, cold: bool = False) -> tuple[MissionResult, Miss
 FAULTS = [f for f in FOUR_WHEEL.faults]
 
 
+PROBABILITIES = st.sampled_from([0.0, 0.1, 0.5, 0.9, 1.0]) | st.floats(0.0, 1.0)
+
+
 @st.composite
 def schedules(draw: st.DrawFn) -> FaultSchedule:
-    """Permanent and transient faults, on either clock, detected now or on use."""
+    """Permanent, transient and intermittent faults, on either clock, detected now or on use."""
     events = []
     for _ in range(draw(st.integers(0, 3))):
-        persistence = draw(st.sampled_from([Persistence.PERMANENT, Persistence.TRANSIENT]))
+        persistence = draw(st.sampled_from(list(Persistence)))
+        intermittent = persistence is Persistence.INTERMITTENT
         events.append(
             FaultEvent(
                 draw(st.sampled_from(FAULTS)),
@@ -86,9 +91,52 @@ def schedules(draw: st.DrawFn) -> FaultSchedule:
                 clock=draw(st.sampled_from(list(Clock))),
                 persistence=persistence,
                 duration=draw(st.integers(1, 12)) if persistence is Persistence.TRANSIENT else None,
+                probability=draw(PROBABILITIES) if intermittent else None,
             )
         )
     return FaultSchedule(tuple(events), draw(st.sampled_from(["now", "on-use"])))
+
+
+@NUMBA
+@settings(max_examples=400, deadline=None)
+@given(
+    st.integers(0, 2**16) | st.integers(0, MAX_SEED),
+    st.integers(0, 20) | st.integers(0, MAX_WORD),
+    st.integers(0, 5000) | st.integers(0, MAX_WORD),
+)
+def test_compiled_intermittent_draw_is_numpys(seed: int, event: int, step: int) -> None:
+    """The kernel's draw is bit for bit the Python simulator's
+    ``default_rng([seed, event, step]).random()``."""
+    import numpy as np
+
+    expected = float(np.random.default_rng([seed, event, step]).random())
+    assert uniform(seed, event, step) == expected
+    bits = draw53(seed, event, step)
+    for p in (expected, np.nextafter(expected, 2.0), np.nextafter(expected, -1.0), 0.0, 1.0):
+        assert (bits < threshold(float(p))) == (expected < p)
+
+
+@NUMBA
+def test_intermittent_faults_run_compiled_and_the_same_as_python() -> None:
+    """A paper route with two intermittent faults (and a permanent one), on both clocks and
+    both detections: the compiled loop runs it and gives the Python loop's trace."""
+    maze = load_bundled("narrow-short")
+    route = bundled_routes("narrow-short")[1]
+    fl, rr, rl = sorted(FOUR_WHEEL.parse_faults("FL:F,RR:B,RL:F"))
+    for detection, clock in (("now", Clock.STEP), ("on-use", Clock.TICK)):
+        events = (
+            FaultEvent(fl, persistence=Persistence.INTERMITTENT, probability=0.4, clock=clock),
+            FaultEvent(rr, at=3, persistence=Persistence.INTERMITTENT, probability=0.7),
+            FaultEvent(rl, at=5, clock=clock),
+        )
+        for strategy, rewrite in (("replan", False), ("replacement", False), ("replacement", True)):
+            spec = MissionSpec(
+                maze, route.start, route.goal, schedule=FaultSchedule(events, detection),
+                strategy=strategy, seed=7, options=StrategyOptions(rewrite=rewrite, max_wait=3),
+            )  # fmt: skip
+            python, compiled = _both(spec, cold=True)
+            _same(python, compiled)
+            assert len({step.known for step in compiled.steps}) > 2  # the faults came and went
 
 
 STRATEGIES = st.sampled_from(
@@ -193,7 +241,8 @@ def test_footings_that_the_compiled_loop_cannot_take_run_in_python() -> None:
     assert run_mission(primitive).footing == "python"
     event = FaultEvent(FAULTS[0], persistence=Persistence.INTERMITTENT, probability=0.5)
     intermittent = _spec(schedule=FaultSchedule((event,)))
-    assert run_mission(intermittent).footing == "python"
+    assert run_mission(intermittent).footing == "compiled"
+    assert run_mission(dataclasses.replace(intermittent, seed=MAX_SEED + 1)).footing == "python"
     hidden = _spec(schedule=FaultSchedule.permanent(FAULTS[:1], detection=Detection.HIDDEN))
     assert run_mission(hidden).footing == "python"
     changing = _spec(world=WorldSchedule((WorldEvent((3, 3), at=2),)))

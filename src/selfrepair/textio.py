@@ -6,17 +6,29 @@ kind of one-line error, naming the file, the line and the column of the first ba
 readers split with :func:`text_lines`: only ``\\n`` and ``\\r\\n`` end a line, so a form feed or a
 Unicode line separator stays in its line, where the reader refuses it as a character with its
 column (``str.splitlines`` would silently split there). A leading byte-order mark is the reader's
-business: every reader of selfrepair accepts and ignores one (:func:`strip_bom`).
+business: every reader of selfrepair accepts and ignores one (:func:`strip_bom`). Paths a file
+names are relative to the file's directory (:func:`source_dir`). The writers of Markdown reports
+lay their tables out with :func:`markdown_table`.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TypeAlias
 
 from selfrepair.errors import InputError, LimitError
 
-__all__ = ["BOM", "JSONObject", "JSONValue", "read_text", "strip_bom", "text_lines"]
+__all__ = [
+    "BOM",
+    "JSONObject",
+    "JSONValue",
+    "markdown_table",
+    "read_text",
+    "source_dir",
+    "strip_bom",
+    "text_lines",
+]
 
 JSONValue: TypeAlias = "str | int | float | bool | list[JSONValue] | dict[str, JSONValue] | None"
 """A value as :func:`json.loads` returns it (or :func:`json.dumps` takes it): what a JSON file
@@ -94,3 +106,17 @@ def text_lines(text: str) -> list[str]:
     if lines[-1] == "":
         lines.pop()
     return [line[:-1] if line.endswith("\r") else line for line in lines]
+
+
+def source_dir(source: str) -> Path:
+    """The directory that relative paths in the file ``source`` resolve against: the file's own,
+    or the working directory for text that came from no file (a source such as ``<string>``)."""
+    return Path(source).parent if not source.startswith("<") else Path.cwd()
+
+
+def markdown_table(headers: Sequence[str], body: Sequence[Sequence[str]]) -> str:
+    """A GitHub-flavoured Markdown table (first column left-aligned, the rest right-aligned)."""
+    lines = ["| " + " | ".join(headers) + " |"]
+    lines.append("|" + "|".join([":---"] + ["---:"] * (len(headers) - 1)) + "|")
+    lines += ["| " + " | ".join(cells) + " |" for cells in body]
+    return "\n".join(lines)

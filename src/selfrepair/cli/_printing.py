@@ -147,28 +147,18 @@ def print_crossover(rows: "list[dict[str, Value]]", figure: Path) -> None:
 def print_baselines(rows: "list[dict[str, Value]]") -> None:
     """When the rows hold D* Lite or LPG-adapt missions: the comparison on the missions every
     strategy ran, with 95% intervals, and repair time by maze (see docs/baselines.md)."""
-    from selfrepair.experiment.comparison import (
-        FIRST_REPAIR,
-        REPAIR_COMPUTE,
-        BaselineLine,
-        common_rows,
-        compare_baselines,
-        has_baselines,
-        maze_table,
-    )
+    from selfrepair.experiment.comparison import baseline_tables, has_baselines
 
     if not has_baselines(rows):
         return
-    lines = compare_baselines(rows)
-    mazes = ", ".join(sorted({str(r.get("maze")) for r in common_rows(rows)}))
-    title = f"Baselines on the same missions ({mazes}): medians [95% intervals]"
+    tables = baseline_tables(rows)
     out = console()  # piped: as wide as the table needs (see console())
-    headers = BaselineLine.HEADERS
-    body = [line.cells() for line in lines]
-    out.print(_table(title, headers, body, range(1, len(headers)), short=False))
-    for column, what in ((FIRST_REPAIR, "First repair ms"), (REPAIR_COMPUTE, "Repair ms/mission")):
-        headers, body = maze_table(rows, column)
-        title = f"{what} by maze: medians [95% intervals]"
+    for title, (headers, body) in (
+        (f"Baselines on the same missions ({', '.join(tables.mazes)})", tables.comparison),
+        ("First repair ms by maze", tables.first_repair),
+        ("Repair ms/mission by maze", tables.repair_compute),
+    ):
+        title += ": medians [95% intervals]"
         out.print(_table(title, headers, body, range(1, len(headers)), short=False))
 
 

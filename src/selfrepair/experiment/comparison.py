@@ -53,7 +53,9 @@ __all__ = [
     "REFERENCE",
     "REPAIR_COMPUTE",
     "BaselineLine",
+    "BaselineTables",
     "MazeLatency",
+    "baseline_tables",
     "common_rows",
     "compare_baselines",
     "has_baselines",
@@ -248,3 +250,32 @@ def maze_table(
     headers = ("strategy", *(f"{maze} ({free} free cells)" for maze, free in mazes))
     body = [(label, *(_text(found.get((label, maze)), 2) for maze, _ in mazes)) for label in labels]
     return headers, body
+
+
+TextTable = tuple[tuple[str, ...], list[tuple[str, ...]]]
+"""A table's headers and body, as display strings."""
+
+
+@dataclass(frozen=True, slots=True)
+class BaselineTables:
+    """What the baselines section shows, whichever way it is printed (a Markdown report or a
+    terminal): the comparison on the ``missions`` every variant ran, on ``mazes``; then
+    :data:`FIRST_REPAIR` and :data:`REPAIR_COMPUTE` in ms by maze."""
+
+    missions: int
+    mazes: tuple[str, ...]
+    comparison: TextTable
+    first_repair: TextTable
+    repair_compute: TextTable
+
+
+def baseline_tables(rows: Sequence[Row]) -> BaselineTables:
+    """The three tables of the baselines section over ``rows`` (see :class:`BaselineTables`)."""
+    lines = compare_baselines(rows)
+    return BaselineTables(
+        missions=lines[0].missions if lines else 0,
+        mazes=tuple(sorted({str(r.get("maze")) for r in common_rows(rows)})),
+        comparison=(BaselineLine.HEADERS, [line.cells() for line in lines]),
+        first_repair=maze_table(rows, FIRST_REPAIR),
+        repair_compute=maze_table(rows, REPAIR_COMPUTE),
+    )

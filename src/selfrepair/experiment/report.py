@@ -9,31 +9,21 @@
   stored configuration (results are deterministic), with its trace, picture and animation.
 
 A database of a team experiment gets the team report instead
-(:func:`selfrepair.experiment.teams.write_team_report`).
+(:func:`selfrepair.experiment.teams.write_team_report`). The rows are read and checked by
+:mod:`.reportrows`, the mission is chosen and run again by :mod:`.reportmission` (this module
+re-exports their public names).
 """
 
 from __future__ import annotations
 
 import json
-import math
-import re
 import time
 from collections import Counter
-from collections.abc import Callable, Sequence
-from fractions import Fraction
+from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
 
-from selfrepair.errors import InputError, SelfRepairError
-from selfrepair.experiment.comparison import (
-    FIRST_REPAIR,
-    REPAIR_COMPUTE,
-    BaselineLine,
-    common_rows,
-    compare_baselines,
-    has_baselines,
-    maze_table,
-)
+from selfrepair.errors import InputError
+from selfrepair.experiment.comparison import baseline_tables, has_baselines
 from selfrepair.experiment.diagnosis_findings import diagnosis_findings
 from selfrepair.experiment.dynamic_findings import dynamic_findings
 from selfrepair.experiment.findings import (
@@ -44,13 +34,16 @@ from selfrepair.experiment.findings import (
     reference_note,
     summarize,
 )
-from selfrepair.experiment.keys import Mission
-from selfrepair.experiment.store import ResultStore
+from selfrepair.experiment.reportmission import (
+    choose_mission,
+    mission_files,
+    pick_mission,
+    rerun_mission,
+)
+from selfrepair.experiment.reportrows import check_rows, load_rows, read_results
 from selfrepair.experiment.summary import fault_set_bite
 from selfrepair.experiment.tolerance_findings import tolerance_findings
-
-if TYPE_CHECKING:
-    from selfrepair.execution.result import MissionResult
+from selfrepair.textio import markdown_table
 
 __all__ = [
     "all_findings",
@@ -63,135 +56,6 @@ __all__ = [
     "rerun_mission",
     "write_report",
 ]
-
-_TEXT = ("key", "experiment", "version", "config", "maze", "route", "faults", "variant", "strategy")
-"""Columns the report reads as text: each must be there, and hold text in every row."""
-_OPTIONAL_TEXT = ("table", "recursion", "finished_at")
-_NUMBERS = (
-    "worker_seconds",
-    "reached",
-    "replacements",
-    "replans",
-    "lookaheads",
-    "faulty_encounters",
-    "repair_count",
-    "compute_per_action_ns",
-    "extra_ticks",
-    "maze_free_cells",
-    "maze_width",
-    "plan_distance",
-)
-"""Columns the report reads as numbers: numbers of magnitude at most :data:`_LARGEST` or empty,
-when the column is there."""
-_LARGEST = 1e18
-"""Larger than any count or time in nanoseconds a mission can have; sums of such numbers over
-any number of rows stay finite."""
-_EXACT = re.compile(r"^-?[0-9]{1,18}(?:/[1-9][0-9]{0,17}|\.[0-9]{1,18})?$")
-"""A clearance weight as stored: an integer, a decimal or a fraction (``1/2``)."""
-_NUMBER_LISTS = ("repair_latencies_ns",)
-_TEXT_LISTS = ("repair_sources",)
-
-
-def read_results(db: str | Path) -> list[Row]:
-    """Every row of the results database ``db``, checked for what the report reads from it.
-
-    A file that is not a readable results database, a missing column, or a value of the wrong
-    kind (text where a number belongs, a ``config`` that is not a JSON object, ...) is an
-    :class:`~selfrepair.errors.InputError` naming the file and, for a value, the mission's key
-    and the column. The database is never changed (it may lie in a read-only directory).
-    """
-    columns, rows = _load(db)
-    return _checked(columns, rows, str(db))
-
-
-def _load(db: str | Path) -> tuple[set[str], list[Row]]:
-    with ResultStore(db, read_only=True) as store:  # a report never changes its input
-        return set(store.columns), store.rows()
-
-
-def _checked(columns: set[str], rows: list[Row], source: str) -> list[Row]:
-    missing = [c for c in (*_TEXT, "seed", "clearance_weight") if c not in columns]
-    if missing:
-        raise InputError(
-            "expected a results database of `selfrepair experiment`: table 'missions' has no "
-            "column " + ", ".join(repr(c) for c in missing),
-            source=source,
-        )
-    if not rows:
-        raise InputError("expected a results database with at least one mission", source=source)
-    for row in rows:
-        _check_row(row, source)
-    return rows
-
-
-def _check_row(row: Row, source: str) -> None:
-    key = row.get("key")
-    where = f"mission {str(key)[:12]!r}" if isinstance(key, str) else "a mission"
-
-    def bad(column: str, expected: str) -> InputError:
-        value = repr(row.get(column))
-        shown = value if len(value) <= 40 else value[:37] + "..."
-        return InputError(
-            f"{where}: column {column!r}: expected {expected}, got {shown}", source=source
-        )
-
-    for column in _TEXT:
-        if not isinstance(row.get(column), str):
-            raise bad(column, "text")
-    for column in _OPTIONAL_TEXT:
-        if row.get(column) is not None and not isinstance(row.get(column), str):
-            raise bad(column, "text")
-    if not isinstance(row.get("seed"), int):
-        raise bad("seed", "an integer")
-    for column in _NUMBERS:
-        if not _is_number_or_none(row.get(column)):
-            raise bad(column, f"a number of magnitude at most {_LARGEST:g}")
-    if not _is_fraction(row.get("clearance_weight")):
-        raise bad("clearance_weight", "an exact number such as 1/2")
-    for column in _NUMBER_LISTS:
-        if not _is_json_list(row.get(column), _is_number):
-            raise bad(column, "a JSON list of numbers")
-    for column in _TEXT_LISTS:
-        if not _is_json_list(row.get(column), lambda v: isinstance(v, str)):
-            raise bad(column, "a JSON list of texts")
-    try:
-        config = json.loads(str(row["config"]))
-    except ValueError:
-        config = None
-    if not isinstance(config, dict) or not isinstance(config.get("faults"), str):
-        raise bad("config", "the mission's configuration as a JSON object")
-
-
-def _is_number(value: object) -> bool:
-    return (
-        isinstance(value, int | float)
-        and not isinstance(value, bool)
-        and math.isfinite(value)
-        and abs(value) <= _LARGEST
-    )
-
-
-def _is_number_or_none(value: object) -> bool:
-    return value is None or _is_number(value)
-
-
-def _is_fraction(value: object) -> bool:
-    if value is None or value == "" or _is_number(value):
-        return True
-    # exact decimals or fractions of bounded length only: Fraction("1e999999999") would build
-    # a billion-digit integer
-    text = str(value)
-    return bool(_EXACT.match(text))
-
-
-def _is_json_list(value: object, item: Callable[[object], bool]) -> bool:
-    if value is None or value == "":
-        return True
-    try:
-        data = json.loads(str(value))
-    except (ValueError, RecursionError):
-        return False
-    return isinstance(data, list) and all(item(v) for v in data)
 
 
 def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = None) -> list[Path]:
@@ -206,12 +70,12 @@ def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = N
         raise InputError("expected a directory to write the report into, got an empty path")
     from selfrepair.experiment.teams import is_team_rows, write_team_report
 
-    columns, rows = _load(db)
+    columns, rows = load_rows(db)
     out_dir = Path(out)
     if is_team_rows(rows):
         out_dir.mkdir(parents=True, exist_ok=True)
         return write_team_report(rows, out_dir, str(db), mission_key=mission_key)
-    rows = _checked(columns, rows, str(db))
+    rows = check_rows(columns, rows, str(db))
     out_dir.mkdir(parents=True, exist_ok=True)
     clearance = plots.figure_clearance(rows, out_dir / "clearance.png")
     if clearance is None:  # one clearance weight: no figure (and no stale one from before)
@@ -229,8 +93,7 @@ def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = N
         chosen = choose_mission(rows)
     else:
         chosen = pick_mission(rows, mission_key, str(db))
-    mission_files = _mission_files(chosen, out_dir, str(db))
-    written += mission_files
+    written += mission_files(chosen, out_dir, str(db))
     report = out_dir / "report.md"
     report.write_text(
         render_markdown(
@@ -246,82 +109,6 @@ def write_report(db: str | Path, out: str | Path, *, mission_key: str | None = N
         encoding="utf-8",
     )
     return [report, *written]
-
-
-def pick_mission(rows: Sequence[Row], key_prefix: str, source: str) -> Row:
-    """The row whose key starts with ``key_prefix``; none or several is an
-    :class:`~selfrepair.errors.InputError` naming ``source`` (the results database)."""
-    hits = [r for r in rows if key_prefix and str(r["key"]).startswith(key_prefix)]
-    if len(hits) != 1:
-        examples = ", ".join(str(r["key"])[:12] for r in hits[:3])
-        raise InputError(
-            f"expected the mission key prefix to match exactly one stored mission, {len(hits)} "
-            f"match {key_prefix!r}" + (f" (e.g. {examples}); give more characters" if hits else ""),
-            source=source,
-        )
-    return hits[0]
-
-
-def choose_mission(rows: Sequence[Row]) -> Row:
-    """A telling mission to draw: reached, repaired by the table at least once, on a small maze,
-    preferring the hand-written table, a mission that also replanned, and many replacements."""
-
-    def score(row: Row) -> tuple[object, ...]:
-        replacements = int(row.get("replacements") or 0)
-        replans = int(row.get("replans") or 0)
-        width = int(row.get("maze_width") or 999)
-        return (
-            row.get("reached") == 1,
-            replacements > 0,
-            width <= 32,
-            row.get("table") == "handwritten",
-            replans > 0 and replacements > 0,
-            Fraction(str(row.get("clearance_weight") or "0")) == 0,
-            min(replacements, 12),
-            -width,
-            str(row["key"]),
-        )
-
-    return max(rows, key=score)
-
-
-def rerun_mission(row: Row, source: str = "<results database>") -> MissionResult:
-    """Run a stored mission again from its canonical configuration (results are deterministic,
-    so this gives its steps and repairs; the timings are new). A configuration this version
-    cannot run is an :class:`~selfrepair.errors.InputError` naming ``source``."""
-    from selfrepair.execution.executor import run_mission
-    from selfrepair.experiment.missions import to_spec
-
-    mission = Mission(
-        str(row["key"]), str(row["experiment"]), int(row["seed"] or 0), str(row["config"]), ()
-    )
-    try:
-        spec = to_spec(mission)
-    except (KeyError, TypeError, ValueError, AttributeError) as exc:
-        if isinstance(exc, SelfRepairError):
-            raise
-        raise InputError(
-            f"mission {mission.key[:12]!r}: its stored configuration cannot be run again "
-            f"({type(exc).__name__}: {exc})",
-            source=source,
-        ) from None
-    return run_mission(spec)
-
-
-def _mission_files(row: Row, out_dir: Path, source: str) -> list[Path]:
-    """Run the chosen mission again, write its trace, picture and GIF."""
-    from selfrepair.execution.trace import read_trace, write_trace
-    from selfrepair.experiment import missionplot
-    from selfrepair.experiment.animate import animate_trace
-
-    result = rerun_mission(row, source)
-    trace_path = out_dir / "mission.jsonl"
-    write_trace(result, trace_path)
-    picture = missionplot.picture_from_trace(read_trace(trace_path))
-    png = missionplot.figure_mission(picture, out_dir / "mission.png")
-    gif = out_dir / "mission.gif"
-    animate_trace(trace_path, gif, max_frames=60)
-    return [trace_path, png, gif]
 
 
 def counted(value: object, noun: str) -> str:
@@ -345,27 +132,26 @@ def baselines_section(rows: Sequence[Row], figure: str | None = None) -> str:
     """The section on the baselines from neighbouring fields (:mod:`.comparison`): the table on
     the missions every strategy ran, repair time by maze, and the figure (``figure``: its file
     name, when drawn)."""
-    lines = compare_baselines(rows)
-    mazes = sorted({str(r.get("maze")) for r in common_rows(rows)})
+    tables = baseline_tables(rows)
     parts = [
         "",
         "## Baselines: D* Lite, LPG-adapt and A* replanning",
         "",
-        f"The same missions for every strategy ({lines[0].missions if lines else 0} each, on "
-        f"{', '.join(mazes) or 'no maze'}). Medians with 95% bootstrap intervals over missions; "
-        "*ticks over A\\**: mean of the differences paired with the A* replanner. Definitions in "
-        "docs/baselines.md.",
+        f"The same missions for every strategy ({tables.missions} each, on "
+        f"{', '.join(tables.mazes) or 'no maze'}). Medians with 95% bootstrap intervals over "
+        "missions; *ticks over A\\**: mean of the differences paired with the A* replanner. "
+        "Definitions in docs/baselines.md.",
         "",
-        markdown_table(BaselineLine.HEADERS, [line.cells() for line in lines]),
+        markdown_table(*tables.comparison),
         "",
         "Repair latency at the first faulty action (ms) by maze, over every mission that met a "
         "fault:",
         "",
-        markdown_table(*maze_table(rows, FIRST_REPAIR)),
+        markdown_table(*tables.first_repair),
         "",
         "Repair time per mission (ms, all its repairs added up) by maze:",
         "",
-        markdown_table(*maze_table(rows, REPAIR_COMPUTE)),
+        markdown_table(*tables.repair_compute),
         "",
     ]
     if figure is not None:
@@ -377,14 +163,6 @@ def baselines_section(rows: Sequence[Row], figure: str | None = None) -> str:
             "",
         ]
     return "\n".join(parts)
-
-
-def markdown_table(headers: Sequence[str], body: Sequence[Sequence[str]]) -> str:
-    """A GitHub-flavoured Markdown table (first column left-aligned, the rest right-aligned)."""
-    lines = ["| " + " | ".join(headers) + " |"]
-    lines.append("|" + "|".join([":---"] + ["---:"] * (len(headers) - 1)) + "|")
-    lines += ["| " + " | ".join(cells) + " |" for cells in body]
-    return "\n".join(lines)
 
 
 def render_markdown(

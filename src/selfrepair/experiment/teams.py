@@ -71,7 +71,7 @@ from selfrepair.team.grid import components
 from selfrepair.team.model import TeamTableName
 from selfrepair.team.randomteam import GripperMix
 from selfrepair.team.result import TeamOptions, TeamResult
-from selfrepair.textio import JSONObject
+from selfrepair.textio import JSONObject, source_dir
 from selfrepair.tomlfile import Frozen, NonEmpty, find_line, read_toml, validate
 
 __all__ = [
@@ -160,7 +160,7 @@ class TeamExperimentConfig(Frozen):
     @property
     def base_dir(self) -> Path:
         """The directory relative paths in the file are resolved against."""
-        return Path(self.source).parent if not self.source.startswith("<") else Path.cwd()
+        return source_dir(self.source)
 
 
 def load_experiment(

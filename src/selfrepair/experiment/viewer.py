@@ -15,7 +15,7 @@ is inline, and the page's content security policy forbids loading anything.
 
 :func:`view_trace` and :func:`view_results` are what ``selfrepair view`` runs: the first reads a
 trace file; the second re-runs a mission stored in a results database (as the report does, see
-:func:`selfrepair.experiment.report.rerun_mission`) to get its trace.
+:func:`selfrepair.experiment.reportmission.rerun_mission`) to get its trace.
 """
 
 from __future__ import annotations
@@ -422,7 +422,7 @@ def trace_from_results(db: str | Path, key_prefix: str) -> tuple[Trace, dict[str
     trace and where it came from (database, full key, and whether the re-run agrees with the
     stored row on status and steps)."""
     from selfrepair.execution.trace import trace_lines
-    from selfrepair.experiment.report import pick_mission, rerun_mission
+    from selfrepair.experiment.reportmission import pick_mission, rerun_mission
     from selfrepair.experiment.store import ResultStore
 
     if not key_prefix:
@@ -456,7 +456,7 @@ def view_results(
 ) -> Path:
     """Write the viewer page of the stored mission ``key_prefix`` of ``db`` to ``out``: the
     team page for a mission of a team experiment (run again from its stored configuration)."""
-    from selfrepair.experiment.report import pick_mission
+    from selfrepair.experiment.reportmission import pick_mission
     from selfrepair.experiment.store import ResultStore
     from selfrepair.experiment.teams import is_team_rows
 

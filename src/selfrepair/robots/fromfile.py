@@ -10,11 +10,11 @@ Both steps raise a :class:`~selfrepair.errors.ConfigError` naming the file, the 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from pathlib import Path
 
 from selfrepair.errors import ConfigError, InputError
 from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.registry import get_domain, load_plugin
+from selfrepair.textio import source_dir
 from selfrepair.tomlfile import find_line
 
 __all__ = ["DEFAULT_DOMAIN", "file_domain", "load_plugins"]
@@ -34,7 +34,7 @@ def load_plugins(data: Mapping[str, object], text: str, source: str) -> None:
             source=source,
             line=line,
         )
-    base = Path(source).parent if not source.startswith("<") else Path.cwd()
+    base = source_dir(source)
     for plugin in plugins:
         try:
             load_plugin(base / plugin)

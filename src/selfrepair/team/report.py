@@ -18,6 +18,7 @@ from typing import Any
 
 from selfrepair.optional import matplotlib
 from selfrepair.team.summary import TeamSummary, by_fault_case, summarize_team
+from selfrepair.textio import markdown_table
 
 __all__ = ["render_team_markdown", "write_team_figures"]
 
@@ -31,14 +32,6 @@ _STYLE = {
     "grid.color": "#d9d9d9",
     "font.size": 9,
 }
-
-
-
-def _table(headers: Sequence[str], body: Sequence[Sequence[str]]) -> str:
-    lines = ["| " + " | ".join(headers) + " |"]
-    lines.append("|" + "|".join([":---"] + ["---:"] * (len(headers) - 1)) + "|")
-    lines += ["| " + " | ".join(cells) + " |" for cells in body]
-    return "\n".join(lines)
 
 
 def write_team_figures(rows: Sequence[Row], out_dir: Path) -> list[Path]:
@@ -127,11 +120,11 @@ def render_team_markdown(rows: Sequence[Row], source: str, chosen: Row, mission_
         "acknowledgements, new plans). *drive plannings / repair*: drives planned inside the "
         "repair latency.",
         "",
-        _table(TeamSummary.HEADERS, [s.cells() for s in summaries]),
+        markdown_table(TeamSummary.HEADERS, [s.cells() for s in summaries]),
         "",
         "## Tasks delivered per fault case",
         "",
-        _table(
+        markdown_table(
             ["fault case", *variants],
             [
                 [case] + [f"{100 * shares.get((case, v), 0.0):.1f}%" for v in variants]

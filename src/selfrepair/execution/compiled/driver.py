@@ -28,6 +28,7 @@ from selfrepair.execution.compiled.arrays import (
     fault_arrays,
     move_arrays,
 )
+from selfrepair.execution.compiled.draws import MAX_SEED, MAX_WORD, threshold
 from selfrepair.execution.compiled.planner import (
     KernelPlanner,
     cached_planner,
@@ -74,6 +75,11 @@ _REPAIR_STATUS = {
     RepairStatus.BUDGET_EXHAUSTED: k.R_BUDGET,
 }
 _STATUS_OF = {code: status for status, code in _REPAIR_STATUS.items()}
+_EVENT_KIND = {
+    Persistence.PERMANENT: k.EV_PERMANENT,
+    Persistence.TRANSIENT: k.EV_TRANSIENT,
+    Persistence.INTERMITTENT: k.EV_INTERMITTENT,
+}
 
 
 def refusal(spec: MissionSpec, stepper: Stepper | None = None) -> str | None:
@@ -93,8 +99,13 @@ def refusal(spec: MissionSpec, stepper: Stepper | None = None) -> str | None:
     if spec.schedule.detection is Detection.HIDDEN:
         return "faults hidden from the robot (detection hidden) run in Python"
     events = spec.schedule.events
-    if any(e.persistence is Persistence.INTERMITTENT for e in events):
-        return "intermittent faults run in Python (their draws are numpy generators)"
+    if any(e.persistence is Persistence.INTERMITTENT for e in events) and (
+        spec.seed > MAX_SEED or len(events) > MAX_WORD or spec.step_limit() > MAX_WORD
+    ):
+        return (
+            f"intermittent faults run in Python with a seed above {MAX_SEED} or more than "
+            f"{MAX_WORD} steps or events (the compiled draw takes 64-bit seeds, 32-bit steps)"
+        )
     if len({e.fault for e in events}) > MAX_SCHEDULE_FAULTS:
         return f"more than {MAX_SCHEDULE_FAULTS} distinct faults in the schedule"
     if not spec.maze.in_bounds(spec.start.x, spec.start.y):
@@ -135,13 +146,14 @@ class _Mission:
         grid = sim.grid
         self.grid = np.frombuffer(grid.data, dtype=np.uint8)
         unit = sim.unit
-        ev = np.zeros((len(spec.schedule.events), 5), dtype=np.int64)
+        ev = np.zeros((len(spec.schedule.events), 6), dtype=np.int64)
         for e, event in enumerate(spec.schedule.events):
             scale = 1 if event.clock == "step" else unit
             end = 0 if event.duration is None else (event.at + event.duration) * scale
-            persistent = int(event.persistence is Persistence.PERMANENT)
-            ev[e] = (self.bits[event.fault], int(event.clock != "step"), persistent,
-                     event.at * scale, end)  # fmt: skip
+            p = event.probability
+            cut = threshold(p) if event.persistence is Persistence.INTERMITTENT and p else 0
+            ev[e] = (self.bits[event.fault], int(event.clock != "step"),
+                     _EVENT_KIND[event.persistence], event.at * scale, end, cut)  # fmt: skip
         self.ev = ev
         self.waits = np.array([self.index.of(w) for w in domain.waits], dtype=np.int64)
         replacement = spec.strategy == StrategyName.REPLACEMENT
@@ -172,6 +184,7 @@ class _Mission:
         par[k.P_NSLOTS] = 4 * n_actions
         par[k.P_WEIGHT] = int(weight)
         par[k.P_MAX_TRIES] = MAX_REPAIRS_PER_STEP
+        par[k.P_SEED] = spec.seed if spec.seed <= MAX_SEED else 0  # only intermittent draws read it
         self.par = par
         plan = [self.index.of(a) for a, _ in stepper.queue]
         n = len(plan)

@@ -26,8 +26,10 @@ A warm mission (every pattern it meets already answered) runs in one call except
 Layouts (all ``int64`` unless said): ``mv[a, h]`` the move of action ``a`` from heading ``h``
 (``dx, dy, heading, units, n_cells, cells...`` as offsets into the free-cell buffer ``grid``,
 uint8); ``avail[m, a]`` whether action ``a`` is available under the fault set of bit mask ``m``
-(uint8) and ``block[m, a]`` the mask of the faults that make it fail; ``ev[e]`` a fault event
-``bit, clock (0 step, 1 time units), persistent (1) or transient (0), at, end``; the look-up
+(uint8) and ``block[m, a]`` the mask of the faults that make it fail; ``ev[e]`` fault event
+``e`` of the schedule: ``bit, clock (0 step, 1 time units), kind (EV_PERMANENT, EV_TRANSIENT or
+EV_INTERMITTENT), at, end, threshold`` (an intermittent event is active at a step when its draw,
+:func:`~selfrepair.execution.compiled.draws.draw53`, is below the threshold); the look-up
 hash (``hk1``, ``hk2`` keys, ``hv`` values) maps (known-set look-up id * slots + slot, masked
 occupancy code, or ``-1 - cell`` for a slot read by cell) to an answer id or ``NO_ANSWER``;
 answer ``i``'s actions are ``ans_act[ans_off[i] : ans_off[i] + ans_len[i]]``.
@@ -45,6 +47,7 @@ from typing import Any, cast
 import numpy as np
 import numpy.typing as npt
 
+from selfrepair.execution.compiled.draws import draw53
 from selfrepair.execution.compiled.planner import plan_in_kernel
 from selfrepair.jit import NUMBA, njit, no_refcount
 
@@ -158,7 +161,13 @@ P_NSLOTS = 13
 P_WEIGHT = 14
 P_MAX_TRIES = 15
 P_BUDGET = 16
-P_SIZE = 17
+P_SEED = 17  # the mission's seed (intermittent draws)
+P_SIZE = 18
+
+# --- fault event kinds (ev[e, 2]) ------------------------------------------------------------
+EV_TRANSIENT = 0
+EV_PERMANENT = 1
+EV_INTERMITTENT = 2
 
 # --- trace rows (tr[i]) ----------------------------------------------------------------------
 T_STEP, T_ACTION, T_X, T_Y, T_H, T_EX, T_EY, T_EH, T_UNITS, T_SOURCE, T_KNOWN = range(11)
@@ -248,11 +257,19 @@ def hash_put(hk1: I64, hk2: I64, hv: I64, k1: int, k2: int, value: int) -> None:
 
 
 @njit(cache=True, inline="always")
-def _true_mask(ev: I64, step: int, units: int) -> int:
+def _true_mask(ev: I64, step: int, units: int, seed: int) -> int:
+    """The mask of the faults active at the start of step ``step``, ``units`` time units in
+    (:meth:`~selfrepair.execution.faults.FaultSchedule.active_faults`): an intermittent event
+    ``e`` from its start on when the draw of ``[seed, e, step]`` is below its probability."""
     mask = 0
     for e in range(ev.shape[0]):
         now = step if ev[e, 1] == 0 else units
-        if now >= ev[e, 3] and (ev[e, 2] == 1 or now < ev[e, 4]):
+        if now < ev[e, 3]:
+            continue
+        kind = ev[e, 2]
+        if kind == EV_PERMANENT or (kind == EV_TRANSIENT and now < ev[e, 4]) or (
+            kind == EV_INTERMITTENT and draw53(seed, e, step) < ev[e, 5]
+        ):
             mask |= 1 << ev[e, 0]
     return mask
 
@@ -320,7 +337,7 @@ def run_kernel(
                 st[S_END] = STEP_LIMIT
                 return DONE
             if par[P_SENSE_NOW]:
-                st[S_KNOWN] = _true_mask(ev, st[S_STEP], st[S_UNITS])
+                st[S_KNOWN] = _true_mask(ev, st[S_STEP], st[S_UNITS], par[P_SEED])
             st[S_TRIES] = 0
             if st[S_NSTEPS] >= tr.shape[0] or st[S_QLEN] + 2 > qa.shape[0]:
                 return GROW
@@ -369,7 +386,7 @@ def run_kernel(
         a, source = qa[qlen - 1], qs[qlen - 1]
         x, y, h = st[S_X], st[S_Y], st[S_H]
         known = st[S_KNOWN]
-        true = _true_mask(ev, st[S_STEP], st[S_UNITS])
+        true = _true_mask(ev, st[S_STEP], st[S_UNITS], par[P_SEED])
         n = st[S_NSTEPS]
         row = tr[n]
         row[T_STEP], row[T_ACTION], row[T_X], row[T_Y], row[T_H] = st[S_STEP], a, x, y, h
