@@ -13,10 +13,10 @@ batches and compares every array.
 
 Intermittent faults draw at every step from ``numpy.random.default_rng([seed, event, step])``
 (:mod:`selfrepair.execution.faults`). :func:`intermittent_draws_numpy` asks numpy for exactly
-those draws; :func:`intermittent_draws_numba` computes the same numbers in the kernel: numpy's
-``SeedSequence`` mixing (its 32-bit hash, pool of four words) and one output of its ``PCG64``
-generator (128-bit LCG, XSL-RR output), turned into a double as ``Generator.random`` does. A
-property test checks them against numpy.
+those draws; :func:`intermittent_draws_numba` computes the same numbers in the kernel with the
+compiled mission loop's draw (:mod:`selfrepair.execution.compiled.draws`: numpy's
+``SeedSequence`` mixing and one output of its ``PCG64`` generator), turned into a double as
+``Generator.random`` does. A property test checks them against numpy.
 
 Layout. Per robot, one row of ``state`` (int64, the ``_X`` .. ``_SEED`` columns below), its known
 faults as a bit mask over ``domain.faults`` (uint64), its elapsed ticks (float64, summed in the
@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from selfrepair.execution.compiled.draws import draw53
 from selfrepair.jit import NUMBA, njit
 
 __all__ = [
@@ -134,23 +135,11 @@ def _step_robots(
             hidden = state[r, _HIDDEN] != 0
             if hidden:  # the wheels do what the fault-behaviour model says (-1: the command fails)
                 a = effective[sid, a]
-            if hidden and a < 0:  # a domain without a model: a failed attempt naming no fault
-                outcome[r] = FAILED
-                state[r, _UNITS] += failed_units
-                state[r, _SIM] += 1
-                gain = -terms[_FAILED_TICKS] - terms[_FAULT_PENALTY]
-                elapsed[r] += terms[_FAILED_TICKS]
-                moved_clock = True
-            elif not hidden and avail[sid, a] == 0:  # a true fault forbids it: a failed attempt
-                outcome[r] = FAILED
-                state[r, _UNITS] += failed_units
-                state[r, _SIM] += 1
-                gain = -terms[_FAILED_TICKS] - terms[_FAULT_PENALTY]
-                elapsed[r] += terms[_FAILED_TICKS]
-                if state[r, _SENSES] == 0:
-                    known[r] |= blocking[sid, a]
-                moved_clock = True
-            else:
+            # a failed attempt: with hidden faults, a domain without a model (naming no fault);
+            # else a true fault forbids the action
+            failed = a < 0 if hidden else avail[sid, a] == 0
+            bumped = False
+            if not failed:
                 base = state[r, _BASE] + y * state[r, _STRIDE] + x
                 stride = state[r, _STRIDE]
                 free = True
@@ -170,18 +159,22 @@ def _step_robots(
                     gain = -durations[a]
                     elapsed[r] += durations[a]
                     moved_clock = True
-                elif hidden:  # the motion stops at the wall: a bump, one tick, no move
-                    outcome[r] = BUMPED
-                    state[r, _UNITS] += failed_units
-                    state[r, _SIM] += 1
-                    gain = -terms[_FAILED_TICKS] - terms[_BLOCKED_PENALTY]
-                    elapsed[r] += terms[_FAILED_TICKS]
-                    moved_clock = True
+                elif hidden:  # the motion stops at the wall: a bump
+                    bumped = True
                 else:  # the footprint is not free: refused, nothing changes
                     outcome[r] = COLLISION
                     gain = -terms[_BLOCKED_PENALTY]
                     elapsed[r] += 0.0
                     moved_clock = False
+            if failed or bumped:  # one tick passes and the robot stays where it is
+                outcome[r] = FAILED if failed else BUMPED
+                state[r, _UNITS] += failed_units
+                state[r, _SIM] += 1
+                gain = -terms[_FAILED_TICKS] - terms[_FAULT_PENALTY if failed else _BLOCKED_PENALTY]
+                elapsed[r] += terms[_FAILED_TICKS]
+                moved_clock = True
+                if failed and not hidden and state[r, _SENSES] == 0:
+                    known[r] |= blocking[sid, a]  # the failure names the faults that forbid it
             state[r, _STEPS] += 1
             done = x == state[r, _GX] and y == state[r, _GY]
             if done:
@@ -247,84 +240,12 @@ def intermittent_draws_numpy(which: Array, state: Array, events: Array, draws: A
                 draws[r, j] = np.random.default_rng([seed, j, step]).random()
 
 
-_M32 = np.uint64(0xFFFFFFFF)
-_S16 = np.uint64(16)
-_S32 = np.uint64(32)
-_INIT_A = np.uint64(0x43B0D7E5)
-_MULT_A = np.uint64(0x931E8875)
-_INIT_B = np.uint64(0x8B51F9DD)
-_MULT_B = np.uint64(0x58F38DED)
-_MIX_L = np.uint64(0xCA01F9DD)
-_MIX_R = np.uint64(0x4973F715)
-_PCG_HI = np.uint64(0x2360ED051FC65DA4)
-_PCG_LO = np.uint64(0x4385DF649FCCF645)
-_ONE = np.uint64(1)
-_ZERO = np.uint64(0)
-
-
-@njit(cache=True, inline="always")
-def _mulhi(a: np.uint64, b: np.uint64) -> np.uint64:  # pragma: no cover - compiled
-    """The high 64 bits of the 128-bit product ``a * b``."""
-    a0, a1 = a & _M32, a >> _S32
-    b0, b1 = b & _M32, b >> _S32
-    p00, p01, p10, p11 = a0 * b0, a0 * b1, a1 * b0, a1 * b1
-    mid = (p00 >> _S32) + (p01 & _M32) + (p10 & _M32)
-    return p11 + (p01 >> _S32) + (p10 >> _S32) + (mid >> _S32)
-
-
-@njit(cache=True, inline="always")
-def _lcg(hi: np.uint64, lo: np.uint64, inc_hi: np.uint64, inc_lo: np.uint64) -> Any:
-    """One step of PCG64's 128-bit LCG: ``state * multiplier + increment`` (mod 2**128)."""
-    new_lo = lo * _PCG_LO
-    new_hi = _mulhi(lo, _PCG_LO) + lo * _PCG_HI + hi * _PCG_LO
-    out_lo = new_lo + inc_lo
-    carry = _ONE if out_lo < new_lo else _ZERO
-    return new_hi + inc_hi + carry, out_lo
-
-
 @njit(cache=True)
 def uniform_numba(seed: int, index: int, step: int) -> float:  # pragma: no cover - compiled
-    """``numpy.random.default_rng([seed, index, step]).random()`` for integers below 2**32."""
-    entropy = (np.uint64(seed), np.uint64(index), np.uint64(step), _ZERO)
-    pool = np.empty(4, dtype=np.uint64)
-    hc = _INIT_A
-    for i in range(4):  # SeedSequence.mix_entropy: hash each word into the pool ...
-        value = entropy[i] ^ hc
-        hc = (hc * _MULT_A) & _M32
-        value = (value * hc) & _M32
-        pool[i] = value ^ (value >> _S16)
-    for src in range(4):  # ... then mix every word into every other one
-        for dst in range(4):
-            if src != dst:
-                value = pool[src] ^ hc
-                hc = (hc * _MULT_A) & _M32
-                value = (value * hc) & _M32
-                value ^= value >> _S16
-                mixed = (_MIX_L * pool[dst] - _MIX_R * value) & _M32
-                pool[dst] = mixed ^ (mixed >> _S16)
-    words = np.empty(8, dtype=np.uint64)
-    hb = _INIT_B
-    for i in range(8):  # SeedSequence.generate_state(4, uint64), little-endian word pairs
-        value = pool[i % 4] ^ hb
-        hb = (hb * _MULT_B) & _M32
-        value = (value * hb) & _M32
-        words[i] = value ^ (value >> _S16)
-    seed_hi = words[0] | (words[1] << _S32)
-    seed_lo = words[2] | (words[3] << _S32)
-    inc0 = words[4] | (words[5] << _S32)
-    inc1 = words[6] | (words[7] << _S32)
-    inc_hi = (inc0 << _ONE) | (inc1 >> np.uint64(63))
-    inc_lo = (inc1 << _ONE) | _ONE
-    # pcg64_set_seed: state = 0; step; state += seed; step
-    hi, lo = _lcg(_ZERO, _ZERO, inc_hi, inc_lo)
-    lo2 = lo + seed_lo
-    carry = _ONE if lo2 < lo else _ZERO
-    hi, lo = _lcg(hi + seed_hi + carry, lo2, inc_hi, inc_lo)
-    hi, lo = _lcg(hi, lo, inc_hi, inc_lo)  # next64: step, then the XSL-RR output
-    mixed = hi ^ lo
-    rot = hi >> np.uint64(58)
-    out = (mixed >> rot) | (mixed << ((np.uint64(64) - rot) & np.uint64(63)))
-    return float(out >> np.uint64(11)) * (1.0 / 9007199254740992.0)
+    """``numpy.random.default_rng([seed, index, step]).random()`` for integers below 2**32: the
+    compiled mission loop's draw (:func:`~selfrepair.execution.compiled.draws.draw53`) as a
+    double, as ``Generator.random`` makes it."""
+    return float(draw53(seed, index, step)) * (1.0 / 9007199254740992.0)
 
 
 @njit(cache=True, nogil=True)
