@@ -279,3 +279,45 @@ def test_a_book_that_starts_afresh_during_a_search_gives_the_same_plan(
     rows = tolerance_masks(resolve_table("generated-agnostic"), maze.free_grid(2), ACTIONS,
                            SINGLE).counts  # fmt: skip
     assert rows.any()
+
+
+@NUMBA
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    st.integers(0, 10_000), st.sampled_from([1, 2]), st.sampled_from([1, 2]),
+    st.sampled_from(["handwritten", "generated-agnostic"]),
+)  # fmt: skip
+def test_a_row_added_from_the_kernels_code_equals_a_fresh_books_row(
+    seed: int, corridor: int, k: int, table: str
+) -> None:
+    """A pattern the compiled search misses reaches the book with the code the kernel read
+    (not read again from the grid): that code is the book's own reading of the cell, and the
+    rows a search adds that way (their parts reused from earlier maps) equal the rows of a
+    fresh book that has met no other map."""
+    t = resolve_table(table)
+    model = fault_model(FOUR_WHEEL, k)
+    warm = generate_maze(13, 13, corridor=corridor, braid=0.4, seed=seed + 1)
+    tolerance_masks(t, warm.free_grid(max(2, table_reach(t))), ACTIONS, model)  # parts met
+    maze = generate_maze(13, 13, corridor=corridor, braid=0.4, seed=seed)
+    grid = maze.free_grid(max(2, table_reach(t)))
+    term = tolerance_term(t, grid, ACTIONS, model)
+    assert term.source is not None
+    handed: list[tuple[int, int, int]] = []
+    fill = MaskBook.fill
+
+    def checked(book: MaskBook, g: object, x: int, y: int, code: int | None = None) -> int:
+        assert code == book.code(grid, x, y)
+        handed.append((x, y, code))
+        return fill(book, grid, x, y, code)
+
+    for route in random_routes(maze, 3, seed):
+        with pytest.MonkeyPatch.context() as patch:
+            patch.setattr(MaskBook, "fill", checked)
+            plan(PlanningProblem(maze, route.start, route.goal, step_term=term), backend="numba")
+    assert handed or table == "handwritten"  # the wider patterns: misses on every new maze
+    fresh = MaskBook(t, ACTIONS, model, RecursionMode.FLAT, DEFAULT_MAX_DEPTH, MAX_LOOKUP_PATTERNS)
+    expected = fresh.masks(grid).counts
+    counts = term.dense_counts()
+    for x, y, _ in handed:
+        assert np.array_equal(counts[y, x], expected[y, x]), (x, y)
+    assert np.array_equal(counts, expected)

@@ -133,8 +133,8 @@ def _term(book: MaskBook, grid: FreeGrid, penalty: Fraction | None, label: str) 
         assert current is not None  # a book's union, hence its table's use, never changes
         return current
 
-    def fill(x: int, y: int) -> None:
-        book.fill(grid, x, y)
+    def fill(x: int, y: int, code: int) -> None:
+        book.fill(grid, x, y, code)
 
     source = PatternSource(
         grid, table, fill, lambda: _masks(book, grid).counts, len(book.model.fault_sets)

@@ -38,7 +38,8 @@ A step term (:class:`~selfrepair.search.term.StepTerm`, the tolerant planner's) 
 expanded cell: the cell's row of counts (per heading and move), found for a term by pattern by
 gathering the cell's pattern from the term's grid and probing its table's index
 (:func:`_pattern_row`), and kept per cell between searches on that term (:class:`_TermState`);
-a pattern the table lacks makes the kernel return so the source can add it.
+a pattern the table lacks makes the kernel return, with the pattern's code, so the source can
+add its row.
 
 Kernels are resumable: all search state lives in arrays, and a call stops after a given number of
 expansions (so that the Python wrapper can look at the clock between calls) or when the heap or
@@ -84,7 +85,7 @@ CHUNK = 1 << 15
 """Expansions per kernel call when a time limit is set (between two looks at the clock)."""
 
 _PAUSED, _SOLVED, _UNSOLVABLE, _GROW, _MISS = 0, 1, 2, 3, 4
-_SIZE, _COUNTER, _EXPANSIONS, _FOUND = 0, 1, 2, 3
+_SIZE, _COUNTER, _EXPANSIONS, _FOUND, _CODE = 0, 1, 2, 3, 4
 _WITH, _HARD, _PER, _PW, _FSTRIDE, _FBASE = 0, 1, 2, 3, 4, 5
 """The lattice kernel's step-term parameters: whether there is a term, whether it is hard, the
 scaled cost per count (soft), the kernel's padded width, and the stride and base offset of the
@@ -430,17 +431,24 @@ _FIRST_QUEUE = 1 << 12
 
 
 @njit(cache=True, inline="always")
-def _pattern_row(cell: int, pw: int, term: Any, free: Any, offs: Any, keys: Any, rows: Any) -> int:
-    """The pattern row of kernel cell ``cell`` (-1: a pattern the table has not met): the code
-    read from ``free`` (the term's grid, ``term[_FSTRIDE]`` bytes a row, cell ``(x, y)`` at
-    ``(y + 1) * stride + x + 1 + term[_FBASE]`` in padded coordinates) at ``offs``, then probed
-    in the open-addressing index ``keys``/``rows`` from
-    :func:`selfrepair.search.term.pattern_slot`'s slot."""
+def _pattern_code(cell: int, pw: int, term: Any, free: Any, offs: Any) -> Any:
+    """The pattern code of kernel cell ``cell``, read from ``free`` (the term's grid,
+    ``term[_FSTRIDE]`` bytes a row, cell ``(x, y)`` at ``(y + 1) * stride + x + 1 + term[_FBASE]``
+    in padded coordinates) at ``offs``."""
     y = cell // pw
     q = y * term[_FSTRIDE] + (cell - y * pw) + term[_FBASE]
     code = np.int64(0)
     for j in range(offs.shape[0]):
         code |= np.int64(free[q + offs[j]]) << j
+    return code
+
+
+@njit(cache=True, inline="always")
+def _pattern_row(cell: int, pw: int, term: Any, free: Any, offs: Any, keys: Any, rows: Any) -> int:
+    """The pattern row of kernel cell ``cell`` (-1: a pattern the table has not met): its code
+    (:func:`_pattern_code`) probed in the open-addressing index ``keys``/``rows`` from
+    :func:`selfrepair.search.term.pattern_slot`'s slot."""
+    code = _pattern_code(cell, pw, term, free, offs)
     mask = keys.shape[0] - 1
     slot = ((code ^ (code >> 7) ^ (code >> 19)) * PATTERN_MIX) & mask
     while True:
@@ -484,6 +492,7 @@ def _lattice(
                 row = _pattern_row(cell, pw, term, free, offs, keys, rows)
                 if row < 0:  # a pattern never met: the caller fills it, then calls again
                     scal[_FOUND] = cell
+                    scal[_CODE] = _pattern_code(cell, pw, term, free, offs)
                     status = _MISS
                     break
                 crow[cell] = row
@@ -712,10 +721,12 @@ _TERM_STATES: BoundedCache[StepTerm, _TermState] = BoundedCache(
 
 @njit(cache=True)
 def _pattern_rows(
-    cells: Any, pw: int, term: Any, free: Any, offs: Any, keys: Any, rows: Any, out: Any
-) -> None:
+    cells: Any, pw: int, term: Any, free: Any, offs: Any, keys: Any, rows: Any, out: Any,
+    codes: Any,
+) -> None:  # fmt: skip
     for i in range(cells.shape[0]):
         out[i] = _pattern_row(cells[i], pw, term, free, offs, keys, rows)
+        codes[i] = _pattern_code(cells[i], pw, term, free, offs)
 
 
 def term_counts(term: StepTerm) -> npt.NDArray[np.int32]:
@@ -735,13 +746,16 @@ def term_counts(term: StepTerm) -> npt.NDArray[np.int32]:
     cells = (ys + 1) * pw + xs + 1
     tpar = np.array([1, 0, 0, pw, state.stride, state.base], dtype=np.int64)
     out = np.empty(len(cells), dtype=np.int32)
+    codes = np.empty(len(cells), dtype=np.int64)
     while True:
-        _pattern_rows(cells, pw, tpar, state.free, state.offs, state.keys, state.rows, out)
+        _pattern_rows(
+            cells, pw, tpar, state.free, state.offs, state.keys, state.rows, out, codes
+        )  # fmt: skip
         missing = np.flatnonzero(out < 0)
         if not len(missing):
             break
         at = int(missing[0])
-        source.fill(int(xs[at]), int(ys[at]))
+        source.fill(int(xs[at]), int(ys[at]), int(codes[at]))
         state.refresh(source.table())
     n_actions = len(term.actions)
     found = np.zeros((height, width, 4, n_actions), dtype=np.int32)
@@ -824,7 +838,7 @@ def plan_lattice(
     rec[start_state] = (0, opened << _MOVE_BITS, 0)
     heap[_BASE] = ((h0 << shift) | h0, start_state)
     heap[_BASE + 1 : _BASE + 4, 0] = _NO_KEY  # slots from the size on never win a comparison
-    scal = np.array([1, 0, 0, -1], dtype=np.int64)
+    scal = np.array([1, 0, 0, -1, 0], dtype=np.int64)
     par = np.array([rnum, rden, wmul, goal_cell, goal_head, 0, opened, shift], dtype=np.int64)
     nbr = _neighbourhoods(maze)
     ts = None
@@ -848,7 +862,7 @@ def plan_lattice(
                 if cell == missed:
                     raise AssertionError(f"pattern of kernel cell {cell} is still missing")
                 missed = cell
-                term.source.fill(cell % pw - 1, cell // pw - 1)
+                term.source.fill(cell % pw - 1, cell // pw - 1, int(scal[_CODE]))
                 ts.refresh(term.source.table())
             else:
                 return code

@@ -8,8 +8,8 @@ A term holds its counts either **densely** (an array over every pose) or **by pa
 of cells around the step's start cell (its *pattern*), and a :class:`PatternTable` maps each
 pattern met so far to a *row* of counts per (heading, action). The compiled search reads a
 cell's pattern and its row only when it expands that cell, and asks the source for a pattern it
-has not met (:meth:`PatternSource.fill`), so a first plan on a map pays for the cells it
-expands, not for the whole map.
+has not met (:meth:`PatternSource.fill`, with the code it read), so a first plan on a map pays
+for the cells it expands, not for the whole map.
 """
 
 from __future__ import annotations
@@ -122,14 +122,15 @@ class PatternSource:
     """The counts of a term by pattern, on one grid (see the module docstring).
 
     ``table()`` is the current :class:`PatternTable` (a source may start a new one, which makes
-    every row read before stale); ``fill(x, y)`` stores the row of the pattern around cell
-    ``(x, y)`` of ``grid``, which the table did not have; ``dense()`` gives the counts of every
+    every row read before stale); ``fill(x, y, code)`` stores the row of ``code``, the pattern
+    around cell ``(x, y)`` of ``grid`` as the compiled search read it, which the table did not
+    have; ``dense()`` gives the counts of every
     pose, ``dense()[y, x, heading, k]`` (the reference, for the pure-Python search and for
     checking a plan's cost). ``max_count`` bounds every count."""
 
     grid: FreeGrid
     table: Callable[[], PatternTable]
-    fill: Callable[[int, int], None]
+    fill: Callable[[int, int, int], None]
     dense: Callable[[], npt.NDArray[np.int32]]
     max_count: int
 
