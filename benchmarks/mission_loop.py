@@ -176,7 +176,7 @@ def warm_hit(n: int) -> dict[str, float]:
     context = mission_context(spec, spec.options.resolved_table())
     lk = compiled_lookups(context, len(robot.actions))
     known = frozenset(robot.parse_faults("FL:F,RR:B"))
-    sid = lk.sets[known]
+    sid = lk.sets[known, frozenset()]  # the look-ups under no guard set
     index = {id(a): i for i, a in enumerate(robot.actions)}
     action = index[id(hits[0].action)]
     poses = [r.pose for r in hits if index[id(r.action)] == action]

@@ -130,7 +130,9 @@ faulty complex actions (:func:`complex_actions`) to be replaced when they are re
 
 DEFERRING = frozenset({RecursionMode.PRIMITIVE})
 """Modes whose replacements may keep faulty complex actions for later (``Replacement.deferred``);
-the compiled look-ups do not model them, so these modes always use :func:`find_replacement`."""
+the replacement strategy's whole-plan rewriting does not model them, so in these modes it reads
+look-ups per guard set (:class:`~selfrepair.repair.strategies.replacement.DeferringRepairer`; the
+compiled mission loop does the same)."""
 
 PRIMITIVE_DISTINCT = 2
 """An action is primitive when every candidate for it uses at most this many different actions."""

@@ -19,7 +19,7 @@ emptied by a cold run, like the look-ups they copy).
 
 from __future__ import annotations
 
-from typing import TypeVar
+from typing import Any, TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -29,8 +29,13 @@ from selfrepair.execution.compiled import kernel as k
 from selfrepair.execution.moves import MoveTable
 from selfrepair.geometry import FreeGrid
 from selfrepair.repair.lookups import MISSING, GridLookups, action_index, occupancy_rows
+from selfrepair.repair.replacement import DEFERRING, Replacement
 from selfrepair.repair.strategies import MissionContext, Repair
-from selfrepair.repair.strategies.replacement import strategy_lookups
+from selfrepair.repair.strategies.replacement import (
+    deferring_lookups,
+    hit_repair,
+    strategy_lookups,
+)
 from selfrepair.robots.domain import SomeDomain
 
 __all__ = [
@@ -38,6 +43,7 @@ __all__ = [
     "MAX_SCHEDULE_FAULTS",
     "CompiledLookups",
     "compiled_lookups",
+    "empty_hash",
     "fault_arrays",
     "move_arrays",
 ]
@@ -51,6 +57,16 @@ MAX_SCHEDULE_FAULTS = 10
 MAX_CODE_RADIUS = 3
 """The largest occupancy window radius whose codes fit 63 bits (``(2r + 1)^2 = 49``); a look-up
 of a wider neighbourhood is keyed by cell instead (same answers, one per cell)."""
+
+
+def empty_hash(capacity: int) -> tuple[Int64s, Int64s, Int64s]:
+    """An empty hash table of the kernels (:func:`kernel.hash_put`) with room for ``capacity``
+    slots: first keys (all :data:`kernel.EMPTY`), second keys and values."""
+    return (
+        np.full(capacity, k.EMPTY, dtype=np.int64),
+        np.zeros(capacity, dtype=np.int64),
+        np.zeros(capacity, dtype=np.int64),
+    )
 
 
 def move_arrays(table: MoveTable) -> Int64s:
@@ -124,16 +140,28 @@ class CompiledLookups:
         self.context = context
         self.grid: FreeGrid = context.grid
         self.n_slots = 4 * n_actions
-        self.sets: dict[frozenset[object], int] = {}
+        self.deferring = context.options.recursion in DEFERRING
+        """Whether answers may defer faulty complex actions (``primitive``): look-ups are then
+        per (known faults, guard set), and an answer lists its deferred positions."""
+        self.sets: dict[tuple[frozenset[object], frozenset[object]], int] = {}
+        self.known_of: list[frozenset[object]] = []
+        self.guards: list[frozenset[object]] = [frozenset()]
+        """The guard sets met so far, by id (0: none)."""
+        self._guard_ids: dict[frozenset[object], int] = {frozenset(): 0}
+        self.gk1, self.gk2, self.gv = empty_hash(1 << 6)
+        self._g_stored = 0
+        self.ans_doff = np.zeros(64, dtype=np.int64)
+        self.ans_dlen = np.zeros(64, dtype=np.int64)
+        self.ans_dpos = np.zeros(64, dtype=np.int64)
+        self._n_def = 0
+        self._kept: list[object] = []
         self._set_of: dict[tuple[object, ...], npt.NDArray[np.int64]] = {}
-        self.on_grid: list[GridLookups[Repair]] = []
+        self.on_grid: list[GridLookups[Any]] = []
         self.lk_mask = np.full((4, self.n_slots), k.UNLOADED, dtype=np.int64)
         self.lk_r = np.zeros((4, self.n_slots), dtype=np.int64)
         self.radii: list[int] = []
         self.codes = np.zeros((0, self.grid.height, self.grid.width), dtype=np.int64)
-        self.hk1 = np.full(1 << 10, k.EMPTY, dtype=np.int64)
-        self.hk2 = np.zeros(1 << 10, dtype=np.int64)
-        self.hv = np.zeros(1 << 10, dtype=np.int64)
+        self.hk1, self.hk2, self.hv = empty_hash(1 << 10)
         self.stored = 0
         self.answers: list[Repair] = []
         self._ids: dict[int, int] = {}
@@ -151,16 +179,41 @@ class CompiledLookups:
             found = self._set_of[faults] = np.full(1 << len(faults), -1, dtype=np.int64)
         return found
 
-    def set_id(self, known: frozenset[object]) -> int:
-        """The id of the look-ups under ``known`` (made on first use)."""
-        sid = self.sets.get(known)
+    def set_id(self, known: frozenset[object], guard: frozenset[object] = frozenset()) -> int:
+        """The id of the look-ups under ``known`` with the guard set ``guard`` (only a deferring
+        mode has guards; made on first use)."""
+        sid = self.sets.get((known, guard))
         if sid is None:
-            sid = self.sets[known] = len(self.on_grid)
-            self.on_grid.append(strategy_lookups(self.context, known, self.grid))
+            sid = self.sets[known, guard] = len(self.on_grid)
+            on_grid: GridLookups[Any] = (
+                deferring_lookups(self.context, known, guard, self.grid)
+                if self.deferring
+                else strategy_lookups(self.context, known, self.grid)
+            )
+            self.on_grid.append(on_grid)
+            self.known_of.append(known)
             if sid >= self.lk_mask.shape[0]:
                 self.lk_mask = _grown(self.lk_mask, k.UNLOADED)
                 self.lk_r = _grown(self.lk_r, 0)
         return sid
+
+    def serve_guard(self, k1: int, k2: int) -> None:
+        """Answer the kernel's ``NEED_GUARD`` for key ``(k1, k2)`` and store it: for an even
+        ``k1 = 2 g``, the id of guard set ``g`` with action ``k2`` added; for an odd
+        ``k1 = 2 g + 1``, the look-up id of the known faults of look-up ``k2`` with guard ``g``."""
+        guard = self.guards[k1 >> 1]
+        if k1 & 1:
+            value = self.set_id(self.known_of[k2], guard)
+        else:
+            grown = guard | {self.context.domain.actions[k2]}
+            value = self._guard_ids.get(grown, -1)
+            if value < 0:
+                value = self._guard_ids[grown] = len(self.guards)
+                self.guards.append(grown)
+        if 2 * (self._g_stored + 1) > self.gk1.shape[0]:
+            self.gk1, self.gk2, self.gv = _rehashed(self.gk1, self.gk2, self.gv)
+        k.hash_put(self.gk1, self.gk2, self.gv, k1, k2, value)
+        self._g_stored += 1
 
     def load_slot(self, sid: int, slot: int) -> None:
         """Load the masks of the action of ``slot`` (all four headings) and copy the answers its
@@ -192,19 +245,34 @@ class CompiledLookups:
             value = on_grid.fill(slot, x, y, code)
         self._put(sid, slot, key, value)
 
-    def _put(self, sid: int, slot: int, key: int, value: Repair | None) -> None:
+    def _put(self, sid: int, slot: int, key: int, value: Repair | Replacement | None) -> None:
         if 2 * (self.stored + 1) > self.hk1.shape[0]:
-            self._rehash()
+            self.hk1, self.hk2, self.hv = _rehashed(self.hk1, self.hk2, self.hv)
         aid = k.NO_ANSWER if value is None else self._answer(value)
         k.hash_put(self.hk1, self.hk2, self.hv, sid * self.n_slots + slot, key, aid)
         self.stored += 1
 
-    def _answer(self, value: Repair) -> int:
+    def _answer(self, value: Repair | Replacement) -> int:
+        """The id of answer ``value``: a :class:`Repair`, or in a deferring mode a
+        :class:`Replacement` (its repair and its deferred positions are stored)."""
         aid = self._ids.get(id(value))
         if aid is not None:
             return aid
         aid = self._ids[id(value)] = len(self.answers)
-        self.answers.append(value)  # keeps ``value`` alive, so its id stays its own
+        self._kept.append(value)  # keeps ``value`` alive, so its id stays its own
+        if isinstance(value, Replacement):
+            self.answers.append(hit_repair(value))
+            deferred = value.deferred
+            if aid >= self.ans_doff.shape[0]:
+                self.ans_doff = _grown(self.ans_doff, 0)
+                self.ans_dlen = _grown(self.ans_dlen, 0)
+            while self._n_def + len(deferred) > self.ans_dpos.shape[0]:
+                self.ans_dpos = _grown(self.ans_dpos, 0)
+            self.ans_doff[aid], self.ans_dlen[aid] = self._n_def, len(deferred)
+            self.ans_dpos[self._n_def : self._n_def + len(deferred)] = deferred
+            self._n_def += len(deferred)
+        else:
+            self.answers.append(value)
         if aid >= self.ans_off.shape[0]:
             self.ans_off = _grown(self.ans_off, 0)
             self.ans_len = _grown(self.ans_len, 0)
@@ -224,14 +292,14 @@ class CompiledLookups:
             self.radii.append(radius)
         return self.radii.index(radius)
 
-    def _rehash(self) -> None:
-        old = (self.hk1, self.hk2, self.hv)
-        cap = 2 * old[0].shape[0]
-        self.hk1 = np.full(cap, k.EMPTY, dtype=np.int64)
-        self.hk2 = np.zeros(cap, dtype=np.int64)
-        self.hv = np.zeros(cap, dtype=np.int64)
-        for i in np.flatnonzero(old[0] != k.EMPTY).tolist():
-            k.hash_put(self.hk1, self.hk2, self.hv, int(old[0][i]), int(old[1][i]), int(old[2][i]))
+
+
+def _rehashed(hk1: Int64s, hk2: Int64s, hv: Int64s) -> tuple[Int64s, Int64s, Int64s]:
+    """The hash table ``(hk1, hk2, hv)`` in twice the room."""
+    keys, codes, values = empty_hash(2 * hk1.shape[0])
+    for i in np.flatnonzero(hk1 != k.EMPTY).tolist():
+        k.hash_put(keys, codes, values, int(hk1[i]), int(hk2[i]), int(hv[i]))
+    return keys, codes, values
 
 
 _G = TypeVar("_G", bound=np.generic)

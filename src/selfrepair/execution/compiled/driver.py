@@ -25,6 +25,7 @@ from selfrepair.execution.compiled import kernel as k
 from selfrepair.execution.compiled.arrays import (
     MAX_SCHEDULE_FAULTS,
     compiled_lookups,
+    empty_hash,
     fault_arrays,
     move_arrays,
 )
@@ -88,8 +89,6 @@ def refusal(spec: MissionSpec, stepper: Stepper | None = None) -> str | None:
         return "numba is not installed (the 'fast' extra)"
     if spec.strategy not in (StrategyName.REPLAN, StrategyName.REPLACEMENT):
         return f"strategy {spec.strategy!s} runs in Python (compiled: replan, replacement)"
-    if spec.strategy == StrategyName.REPLACEMENT and spec.options.recursion in DEFERRING:
-        return f"recursion mode {spec.options.recursion!s} defers actions (Python only)"
     if spec.objective is not None:
         return "a tolerant planning objective runs in Python"
     if stepper is not None and stepper.horizon:
@@ -157,6 +156,7 @@ class _Mission:
         self.ev = ev
         self.waits = np.array([self.index.of(w) for w in domain.waits], dtype=np.int64)
         replacement = spec.strategy == StrategyName.REPLACEMENT
+        deferring = replacement and spec.options.recursion in DEFERRING
         n_actions = len(domain.actions)
         self.lookups = compiled_lookups(context, n_actions) if replacement else None
         self.set_of = (
@@ -173,7 +173,8 @@ class _Mission:
         goal_h = -1 if spec.goal_heading is None else int(spec.goal_heading)
         par = np.zeros(k.P_SIZE, dtype=np.int64)
         par[k.P_STRATEGY] = int(replacement)
-        par[k.P_REWRITE] = int(replacement and spec.options.rewrite)
+        par[k.P_REWRITE] = int(replacement and spec.options.rewrite and not deferring)
+        par[k.P_DEFER] = int(deferring)
         par[k.P_WIDTH], par[k.P_HEIGHT] = grid.width, grid.height
         par[k.P_STRIDE], par[k.P_MARGIN] = grid.stride, grid.margin
         par[k.P_GX], par[k.P_GY], par[k.P_GH] = spec.goal[0], spec.goal[1], goal_h
@@ -193,6 +194,7 @@ class _Mission:
         self.qs = np.zeros(cap, dtype=np.int64)
         self.qa[:n] = plan[::-1]
         self.qs[:n] = k.SRC_PLAN
+        self.pend = np.zeros((cap, 2), dtype=np.int64)  # deferring: pending by marker
         self.tr = np.zeros((max(64, 2 * n), k.T_COLS), dtype=np.int64)
         self.rp = np.zeros((64, k.RP_COLS), dtype=np.int64)
         self.rp_act = np.zeros(max(256, 4 * n), dtype=np.int64)
@@ -253,11 +255,16 @@ class _Mission:
                 lk_arrays = (lk.lk_mask, lk.lk_r, lk.codes, lk.hk1, lk.hk2, lk.hv,
                              lk.ans_off, lk.ans_len, lk.ans_act)  # fmt: skip
             lk_mask, lk_r, codes, hk1, hk2, hv, ans_off, ans_len, ans_act = lk_arrays
+            deferring: tuple[Any, ...] = (
+                _NO_DEFERRING
+                if lk is None
+                else (self.pend, lk.gk1, lk.gk2, lk.gv, lk.ans_doff, lk.ans_dlen, lk.ans_dpos)
+            )
             code = k.run_kernel(
                 self.par, self.st, self.mv, self.grid, self.avail, self.block, self.waits,
                 self.ev, self.set_of, lk_mask, lk_r, codes, hk1, hk2, hv, ans_off, ans_len,
                 ans_act, self.pen, self.pb, self.qa, self.qs, self.tr, self.rp, self.rp_act,
-                self.planner, self.search,
+                self.planner, self.search, deferring,
             )  # fmt: skip
             if code == k.DONE:
                 return int(self.st[k.S_END])
@@ -277,11 +284,15 @@ class _Mission:
             lk.fill(*args)
         elif code == k.NEED_PLAN:
             self._plan(args[0])
+        elif code == k.NEED_GUARD:
+            assert lk is not None
+            lk.serve_guard(args[0], args[1])
         elif code == k.NEED_PLANNER:
             self._load_planner(args[0], kernel_planner(self.spec, self.known(args[0])))
         elif code == k.GROW:
             need = int(st[k.S_PLAN_LEN]) + int(st[k.S_QLEN]) + 2
             self.qa, self.qs = _grow(self.qa, need), _grow(self.qs, need)
+            self.pend = _grow(self.pend, self.qa.shape[0])
             self.tr, self.rp = _grow(self.tr), _grow(self.rp)
             self.rp_act = _grow(self.rp_act, int(st[k.S_NACT]) + need + 64)
             self.pb = _grow(self.pb, need)
@@ -341,13 +352,18 @@ _NO_SEARCH = (np.zeros((1, 3), dtype=np.int64), np.zeros(1, dtype=np.int64),
 _RECORDS: BoundedCache[int, list[tuple[object, ...]]] = BoundedCache(
     "compiled-loop search records", 4, kind=CacheKind.PLAN
 )
+_NO_DEFERRING = (
+    np.zeros((1, 2), dtype=np.int64),
+    *empty_hash(2),
+    np.zeros(1, dtype=np.int64),
+    np.zeros(1, dtype=np.int64),
+    np.zeros(1, dtype=np.int64),
+)
 _NO_LOOKUPS = (
     np.zeros((1, 1), dtype=np.int64),
     np.zeros((1, 1), dtype=np.int64),
     np.zeros((1, 1, 1), dtype=np.int64),
-    np.full(2, k.EMPTY, dtype=np.int64),
-    np.zeros(2, dtype=np.int64),
-    np.zeros(2, dtype=np.int64),
+    *empty_hash(2),
     np.zeros(1, dtype=np.int64),
     np.zeros(1, dtype=np.int64),
     np.zeros(1, dtype=np.int32),
@@ -415,8 +431,7 @@ def _warm() -> None:
     """Load the kernels the driver calls from Python (from numba's cache, or compiled) once per
     process, before any repair's clock runs: a cold run's first fill must not pay for it."""
     if not _WARM:
-        keys, codes, values = (np.full(2, k.EMPTY, dtype=np.int64), np.zeros(2, dtype=np.int64),
-                               np.zeros(2, dtype=np.int64))  # fmt: skip
+        keys, codes, values = empty_hash(2)
         k.hash_put(keys, codes, values, 0, 0, 0)
         k.hash_get(keys, codes, values, 0, 0)
         _WARM.append(True)

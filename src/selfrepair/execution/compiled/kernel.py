@@ -2,9 +2,10 @@
 
 It is :func:`selfrepair.execution.executor.run_mission`'s loop (the executor's ``_loop``, the
 :class:`~selfrepair.execution.stepper.Stepper` and the :class:`~selfrepair.execution.simulator.
-Simulator`) for the ``replan`` strategy and the ``replacement`` strategy in a recursion mode that
-does not defer (with or without whole-plan rewriting), written over arrays so that no step and
-no warm repair runs Python. The Python loop is the reference: the property test of
+Simulator`) for the ``replan`` strategy and the ``replacement`` strategy in every recursion mode
+(with or without whole-plan rewriting; ``primitive``, which defers faulty complex actions, as the
+:class:`~selfrepair.repair.strategies.replacement.DeferringRepairer`), written over arrays so
+that no step and no warm repair runs Python. The Python loop is the reference: the property test of
 ``tests/test_compiled_loop.py`` runs both and compares the traces step by step.
 
 **Resumable.** All state lives in arrays handed in (``st`` holds the scalars). The kernel runs
@@ -19,7 +20,8 @@ clock still running: the latency of a repair covers whatever it needed. The exit
 * ``NEED_FILL``: a pattern met for the first time (the reference search answers it, as in the
   Python loop's compiled look-ups);
 * ``NEED_PLAN``: a replan (the driver calls the mission's planner);
-* ``GROW``: an output or queue array is full (``GROW_HEAP``: the planner's heap).
+* ``GROW``: an output or queue array is full (``GROW_HEAP``: the planner's heap);
+* ``NEED_GUARD``: a deferring mode's guard set or guarded look-ups not known yet (see below).
 
 A warm mission (every pattern it meets already answered) runs in one call except for its replans.
 
@@ -33,6 +35,15 @@ EV_INTERMITTENT), at, end, threshold`` (an intermittent event is active at a ste
 hash (``hk1``, ``hk2`` keys, ``hv`` values) maps (known-set look-up id * slots + slot, masked
 occupancy code, or ``-1 - cell`` for a slot read by cell) to an answer id or ``NO_ANSWER``;
 answer ``i``'s actions are ``ans_act[ans_off[i] : ans_off[i] + ans_len[i]]``.
+
+Deferring mode (``primitive``, the :class:`~selfrepair.repair.strategies.replacement.
+DeferringRepairer`): answer ``i`` also lists the positions of its deferred actions,
+``ans_dpos[ans_doff[i] : ans_doff[i] + ans_dlen[i]]``. The repairer's pending deferred actions
+are ``pend[m] = (action + 1, guard id)`` by marker ``m`` (their distance from the end of the
+queue; action 0: none pending), up to ``st[S_PEND_HI]``. Guard sets are ids (0: empty); the
+guard hash (``gk1``, ``gk2``, ``gv``) maps ``(2 g, action)`` to the id of guard ``g`` with the
+action added and ``(2 g + 1, look-up id under no guard)`` to the look-up id under guard ``g``;
+a key not there yet is a ``NEED_GUARD`` exit.
 
 Clock: repairs are timed with ``clock_gettime(CLOCK_MONOTONIC)``, the clock behind Python's
 ``time.perf_counter_ns`` on Linux, called from the kernel (:func:`clock_ns`).
@@ -57,6 +68,8 @@ U8 = npt.NDArray[np.uint8]
 """The free-cell bytes of the padded grid and the available-action flags."""
 I32 = npt.NDArray[np.int32]
 """The compiled look-ups' answer actions."""
+Deferring = tuple[I64, I64, I64, I64, I64, I64, I64]
+"""The deferring mode's arrays: ``pend, gk1, gk2, gv, ans_doff, ans_dlen, ans_dpos``."""
 Kernels = tuple[npt.NDArray[np.generic], ...]
 """The arrays a compiled planner or search works in (int64 mostly; the planner also has int32
 and uint16 ones), passed through as one tuple."""
@@ -73,6 +86,7 @@ GROW = 5
 TOO_MANY = 6
 NEED_PLANNER = 7
 GROW_HEAP = 8
+NEED_GUARD = 9
 
 # --- mission ends (st[END]) ------------------------------------------------------------------
 REACHED = 0
@@ -141,7 +155,8 @@ S_FAIL_REP = 28  # the record of the repair that failed
 S_PL_MASK = 29  # the known mask the loaded planner serves (-1: none)
 S_PL_KERNEL = 30  # 1: the loaded planner runs in the kernel; 0: the driver plans
 S_PLAN_EXP = 31  # expansions of the plan just made in the kernel
-S_SIZE = 32
+S_PEND_HI = 32  # deferring mode: the highest marker that may be pending (0: none)
+S_SIZE = 33
 
 # --- par: the mission's parameters -----------------------------------------------------------
 P_STRATEGY = 0  # 0 replan, 1 replacement
@@ -162,7 +177,8 @@ P_WEIGHT = 14
 P_MAX_TRIES = 15
 P_BUDGET = 16
 P_SEED = 17  # the mission's seed (intermittent draws)
-P_SIZE = 18
+P_DEFER = 18  # 1: the recursion mode defers faulty complex actions (primitive)
+P_SIZE = 19
 
 # --- fault event kinds (ev[e, 2]) ------------------------------------------------------------
 EV_TRANSIENT = 0
@@ -280,11 +296,20 @@ def _lookup(
     hk1: I64, hk2: I64, hv: I64, known: int, a: int, x: int, y: int, h: int,
 ) -> int:  # fmt: skip
     """The answer id of action ``a`` from pose ``(x, y, h)`` under the known mask, ``NO_ANSWER``,
-    or ``EMPTY`` after setting an exit in ``st[S_END + 1 ...]`` (returned as ``-10 - code``)."""
+    or an exit (returned as ``-10 - code``, its arguments set in ``st[S_ARG0 ...]``)."""
     sid = set_of[known]
     if sid < 0:
         st[S_ARG0] = known
         return -10 - NEED_SET
+    return _lookup_in(st, par, sid, lk_mask, lk_r, codes, hk1, hk2, hv, a, x, y, h)
+
+
+@njit(cache=True, inline="always")
+def _lookup_in(
+    st: I64, par: I64, sid: int, lk_mask: I64, lk_r: I64, codes: I64,
+    hk1: I64, hk2: I64, hv: I64, a: int, x: int, y: int, h: int,
+) -> int:  # fmt: skip
+    """:func:`_lookup` in the look-ups of id ``sid``."""
     slot = 4 * a + h
     m = lk_mask[sid, slot]
     if m == UNLOADED:
@@ -321,10 +346,12 @@ def run_kernel(
     set_of: I64, lk_mask: I64, lk_r: I64, codes: I64, hk1: I64, hk2: I64, hv: I64,
     ans_off: I64, ans_len: I64, ans_act: I32, pen: I64, pb: I64,
     qa: I64, qs: I64, tr: I64, rp: I64, rp_act: I64, planner: Kernels, search: Kernels,
+    deferring: Deferring,
 ) -> int:  # fmt: skip
     """Run (or resume) the mission; the exit code (see the module docstring). ``planner`` is
     the loaded kernel planner's arrays and ``search`` its records, generation and heap
-    (:mod:`selfrepair.execution.compiled.planner`)."""
+    (:mod:`selfrepair.execution.compiled.planner`); ``deferring`` the deferring mode's arrays
+    ``(pend, gk1, gk2, gv, ans_doff, ans_dlen, ans_dpos)``."""
     stride, margin = par[P_STRIDE], par[P_MARGIN]
     gx, gy, gh = par[P_GX], par[P_GY], par[P_GH]
     while True:
@@ -359,7 +386,7 @@ def run_kernel(
                 return GROW
             code = _repair(par, st, mv, avail, ev, set_of, lk_mask, lk_r, codes, hk1, hk2, hv,
                            ans_off, ans_len, ans_act, pb, qa, qs, rp, rp_act, planner,
-                           search)  # fmt: skip
+                           search, deferring)  # fmt: skip
             if code != DONE:
                 return code
             st[S_PHASE] = 0
@@ -423,6 +450,7 @@ def _repair(
     par: I64, st: I64, mv: I64, avail: U8, ev: I64, set_of: I64, lk_mask: I64, lk_r: I64,
     codes: I64, hk1: I64, hk2: I64, hv: I64, ans_off: I64, ans_len: I64, ans_act: I32,
     pb: I64, qa: I64, qs: I64, rp: I64, rp_act: I64, planner: Kernels, search: Kernels,
+    deferring: Deferring,
 ) -> int:  # fmt: skip
     """One repair of the queue (``st[S_RACTION]``: the faulty front action, -1 for the
     defensive replan), recorded in ``rp``; an exit code when it needs Python first."""
@@ -434,8 +462,37 @@ def _repair(
     rec = rp[r]
     kind = K_REPLAN
     aid = -1
+    defer = par[P_DEFER] == 1 and a >= 0
+    pend, gk1, gk2, gv, ans_doff, ans_dlen, ans_dpos = deferring
+    grown = 0  # deferring: the guard id of this repair's guard set with ``a`` added
     if a < 0:
         kind = K_DEFENSIVE
+    elif defer:
+        # DeferringRepairer.repair: the guard of the deferred action pending at this marker
+        sid = set_of[known]
+        if sid < 0:
+            st[S_ARG0] = known
+            return NEED_SET
+        guard = pend[qlen, 1] if qlen <= st[S_PEND_HI] and pend[qlen, 0] == a + 1 else 0
+        if guard != 0:
+            sid = _hash_get(gk1, gk2, gv, 2 * guard + 1, sid)
+            if sid == EMPTY:
+                st[S_ARG0], st[S_ARG1] = 2 * guard + 1, set_of[known]
+                return NEED_GUARD
+        aid = _lookup_in(st, par, sid, lk_mask, lk_r, codes, hk1, hk2, hv, a, x, y, h)
+        if aid <= -10:
+            return -10 - aid
+        kind = K_MISS if aid == NO_ANSWER else K_HIT
+        if kind == K_HIT and ans_dlen[aid] > 0:  # every guard id the commit needs, known first
+            grown = _hash_get(gk1, gk2, gv, 2 * guard, a)
+            if grown == EMPTY:
+                st[S_ARG0], st[S_ARG1] = 2 * guard, a
+                return NEED_GUARD
+            for j in range(ans_dlen[aid]):
+                d = ans_act[ans_off[aid] + ans_dpos[ans_doff[aid] + j]]
+                if _hash_get(gk1, gk2, gv, 2 * grown, d) == EMPTY:
+                    st[S_ARG0], st[S_ARG1] = 2 * grown, d
+                    return NEED_GUARD
     elif par[P_STRATEGY] == 1:
         aid = _lookup(st, par, set_of, lk_mask, lk_r, codes, hk1, hk2, hv, known, a, x, y, h)
         if aid <= -10:
@@ -537,6 +594,25 @@ def _repair(
     rec[RP_KNOWN], rec[RP_QLEN] = known, qlen
     st[S_NACT] = off + n
     st[S_NREP] = r + 1
+    if defer:  # the repairer's pending deferred actions, as DeferringRepairer.repair keeps them
+        hi = st[S_PEND_HI]
+        for m in range(qlen + 1, hi + 1):  # passed: no longer ahead
+            pend[m, 0] = 0
+        hi = min(hi, qlen)
+        pend[qlen, 0] = 0  # popped
+        if kind == K_MISS:  # a replan replaces the whole queue
+            for m in range(hi + 1):
+                pend[m, 0] = 0
+            hi = 0
+        else:
+            after = qlen - 1 + ans_len[aid]
+            for j in range(ans_dlen[aid]):
+                p = ans_dpos[ans_doff[aid] + j]
+                d = ans_act[ans_off[aid] + p]
+                pend[after - p, 0] = d + 1
+                pend[after - p, 1] = _hash_get(gk1, gk2, gv, 2 * grown, d)
+                hi = max(hi, after - p)
+        st[S_PEND_HI] = hi
     return DONE
 
 

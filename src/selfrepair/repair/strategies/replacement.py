@@ -46,6 +46,8 @@ from selfrepair.tables.model import SomeTable
 __all__ = [
     "DeferringRepairer",
     "ReplacementRepairer",
+    "deferring_lookups",
+    "hit_repair",
     "replacement",
     "start_replacement",
     "strategy_lookups",
@@ -112,6 +114,34 @@ def strategy_lookups(
     """The look-ups the strategy reads under ``known`` on ``grid`` (the compiled mission loop
     copies their answers: :mod:`selfrepair.execution.compiled`)."""
     return grid_lookups(_lookups(context, known), grid)
+
+
+def deferring_lookups(
+    context: MissionContext, known: frozenset[object], guard: frozenset[object], grid: FreeGrid
+) -> GridLookups[Replacement]:
+    """The look-ups a :class:`DeferringRepairer` reads under ``known`` with the guard set
+    ``guard`` on ``grid`` (answers with their deferred actions; the compiled mission loop copies
+    them and makes each hit's repair with :func:`hit_repair`)."""
+    options = context.options
+    lookups = fault_lookups(
+        _table(context),
+        known,
+        mode=options.recursion,
+        max_depth=options.max_depth,
+        answer=_same_replacement,
+        guard=guard,
+        max_patterns=options.max_lookup_patterns,
+    )
+    return grid_lookups(lookups, grid)
+
+
+def _same_replacement(found: Replacement) -> Replacement:
+    return found
+
+
+def hit_repair(found: Replacement) -> Repair:
+    """The repair of a table hit ``found`` (what the strategy returns for it)."""
+    return _hit(found)
 
 
 def _miss(context: MissionContext, request: RepairRequest, action: object) -> Repair:
