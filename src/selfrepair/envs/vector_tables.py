@@ -188,15 +188,23 @@ class GridStore:
     def _own_start(self, robot: int) -> int:
         return self._fixed_bytes.size + robot * self._region
 
-    def place(self, robot: int, maze: Maze) -> tuple[int, int, bool]:
-        """Store ``maze`` for ``robot``; the buffer index of its cell ``(0, 0)``, its row stride,
-        and whether the buffer was rebuilt (every robot with a maze of its own then moved)."""
+    def _layout(self, maze: Maze) -> tuple[int | None, int, int]:
+        """Where ``maze`` is stored if it is a fixed source's (else ``None``), its row stride,
+        and the offset of its cell ``(0, 0)`` from the start of its padded bytes."""
         stride = maze.width + 2 * self.margin
         pad = self.margin * stride + self.margin
         for index, fixed in enumerate(self._fixed):
             if fixed is maze:
-                self._own[robot] = None
-                return self._starts[index] + pad, stride, False
+                return self._starts[index], stride, pad
+        return None, stride, pad
+
+    def place(self, robot: int, maze: Maze) -> tuple[int, int, bool]:
+        """Store ``maze`` for ``robot``; the buffer index of its cell ``(0, 0)``, its row stride,
+        and whether the buffer was rebuilt (every robot with a maze of its own then moved)."""
+        start, stride, pad = self._layout(maze)
+        if start is not None:
+            self._own[robot] = None
+            return start + pad, stride, False
         rebuilt = False
         self._own[robot] = maze
         if self._size(maze) > self._region:
@@ -210,11 +218,9 @@ class GridStore:
 
     def base_of(self, robot: int, maze: Maze) -> int:
         """The buffer index of cell ``(0, 0)`` of ``robot``'s maze ``maze`` (already placed)."""
-        stride = maze.width + 2 * self.margin
-        pad = self.margin * stride + self.margin
-        for index, fixed in enumerate(self._fixed):
-            if fixed is maze:
-                return self._starts[index] + pad
-        if self._own[robot] is not maze:
-            raise ProblemError(f"robot {robot}'s maze is not stored")
-        return self._own_start(robot) + pad
+        start, _, pad = self._layout(maze)
+        if start is None:
+            if self._own[robot] is not maze:
+                raise ProblemError(f"robot {robot}'s maze is not stored")
+            start = self._own_start(robot)
+        return start + pad

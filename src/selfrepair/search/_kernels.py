@@ -360,13 +360,24 @@ def _heap(tag: str, dtype: Any, need: int, columns: int = 4) -> npt.NDArray[Any]
     return heap
 
 
+def _padded(maze: Maze, inner: Any, border: int, dtype: Any, width: int = 1) -> npt.NDArray[Any]:
+    """An array of the maze's shape grown by ``width`` cells on every side: ``inner`` (a value
+    per maze cell) inside, ``border`` on the border (the padded layout of the kernels)."""
+    out = np.full((maze.height + 2 * width, maze.width + 2 * width), border, dtype=dtype)
+    out[width:-width, width:-width] = inner
+    return out
+
+
+def _frozen_flat(array: npt.NDArray[Any]) -> npt.NDArray[Any]:
+    """``array`` flattened (row after row) and made read-only, as the plan caches keep it."""
+    out = array.ravel()
+    out.setflags(write=False)
+    return out
+
+
 def _padded_free(maze: Maze) -> npt.NDArray[np.uint8]:
     def make() -> npt.NDArray[np.uint8]:
-        free = np.zeros((maze.height + 2, maze.width + 2), dtype=np.uint8)
-        free[1:-1, 1:-1] = ~maze.walls
-        out = free.ravel()
-        out.setflags(write=False)
-        return out
+        return _frozen_flat(_padded(maze, ~maze.walls, 0, np.uint8))
 
     return _cached(_FREE, maze, make)  # type: ignore[no-any-return]
 
@@ -381,17 +392,14 @@ def _neighbourhoods(maze: Maze) -> npt.NDArray[np.uint16]:
     free."""
 
     def make() -> npt.NDArray[np.uint16]:
-        free = np.zeros((maze.height + 4, maze.width + 4), dtype=np.uint16)
-        free[2:-2, 2:-2] = ~maze.walls
+        free = _padded(maze, ~maze.walls, 0, np.uint16, width=2)
         h, w = maze.height + 2, maze.width + 2
         mask = np.zeros((h, w), dtype=np.uint16)
         for dy in (-1, 0, 1):
             for dx in (-1, 0, 1):
                 bit = np.uint16(1 << (3 * (dy + 1) + dx + 1))
                 mask |= free[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w] * bit
-        out = mask.ravel()
-        out.setflags(write=False)
-        return out
+        return _frozen_flat(mask)
 
     return _cached(_NEIGHBOURS, maze, make)  # type: ignore[no-any-return]
 
@@ -629,10 +637,7 @@ def _padded_penalty(maze: Maze, radius: int) -> tuple[npt.NDArray[np.int64], int
     def make() -> tuple[npt.NDArray[np.int64], int]:
         from selfrepair.world.maze import clearance_penalties
 
-        padded = np.full((maze.height + 2, maze.width + 2), radius, dtype=np.int64)
-        padded[1:-1, 1:-1] = clearance_penalties(maze, radius)
-        out = padded.ravel()
-        out.setflags(write=False)
+        out = _frozen_flat(_padded(maze, clearance_penalties(maze, radius), radius, np.int64))
         return out, int(out.max(initial=0))
 
     return _cached(_PENALTY, (maze, radius), make)  # type: ignore[no-any-return]

@@ -25,6 +25,7 @@ from selfrepair.execution.compiled import kernel as k
 from selfrepair.execution.compiled.arrays import (
     MAX_SCHEDULE_FAULTS,
     compiled_lookups,
+    empty_hash,
     fault_arrays,
     move_arrays,
 )
@@ -388,9 +389,7 @@ _RECORDS: BoundedCache[int, list[tuple[object, ...]]] = BoundedCache(
 )
 _NO_DEFERRING = (
     np.zeros((1, 2), dtype=np.int64),
-    np.full(2, k.EMPTY, dtype=np.int64),
-    np.zeros(2, dtype=np.int64),
-    np.zeros(2, dtype=np.int64),
+    *empty_hash(2),
     np.zeros(1, dtype=np.int64),
     np.zeros(1, dtype=np.int64),
     np.zeros(1, dtype=np.int64),
@@ -399,9 +398,7 @@ _NO_LOOKUPS = (
     np.zeros((1, 1), dtype=np.int64),
     np.zeros((1, 1), dtype=np.int64),
     np.zeros((1, 1, 1), dtype=np.int64),
-    np.full(2, k.EMPTY, dtype=np.int64),
-    np.zeros(2, dtype=np.int64),
-    np.zeros(2, dtype=np.int64),
+    *empty_hash(2),
     np.zeros(1, dtype=np.int64),
     np.zeros(1, dtype=np.int64),
     np.zeros(1, dtype=np.int32),
@@ -469,8 +466,7 @@ def _warm() -> None:
     """Load the kernels the driver calls from Python (from numba's cache, or compiled) once per
     process, before any repair's clock runs: a cold run's first fill must not pay for it."""
     if not _WARM:
-        keys, codes, values = (np.full(2, k.EMPTY, dtype=np.int64), np.zeros(2, dtype=np.int64),
-                               np.zeros(2, dtype=np.int64))  # fmt: skip
+        keys, codes, values = empty_hash(2)
         k.hash_put(keys, codes, values, 0, 0, 0)
         k.hash_get(keys, codes, values, 0, 0)
         _WARM.append(True)
