@@ -7,8 +7,9 @@ Simulator`) for the ``replan`` strategy, the ``replacement`` strategy in every r
 :class:`~selfrepair.repair.strategies.replacement.DeferringRepairer`) and the ``lookahead``
 strategy (its window, the stepper's horizon of ``before`` actions, and its fallbacks; the
 window's search is the driver's, one ``NEED_WINDOW`` exit per window, since it plans to a goal
-of its own), written over arrays so that no step and no warm table repair runs Python. The Python loop is the reference: the property test of
-``tests/test_compiled_loop.py`` runs both and compares the traces step by step.
+of its own), written over arrays so that no step and no warm table repair runs Python. The
+Python loop is the reference: the property test of ``tests/test_compiled_loop.py`` runs both and
+compares the traces step by step.
 
 **Resumable.** All state lives in arrays handed in (``st`` holds the scalars). The kernel runs
 until the mission ends or until it needs something only Python has, and then returns an *exit*
