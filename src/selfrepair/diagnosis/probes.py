@@ -94,6 +94,19 @@ def _better(info: float, ticks: float, length: int, best: Probe, per_tick: bool)
     return mine > theirs + 1e-12 or (abs(mine - theirs) <= 1e-12 and ticks < best.ticks)
 
 
+def _to_split(belief: FaultBelief, mask: int | None) -> int | None:
+    """The hypotheses of ``mask`` (default: all) still possible, as a mask, when they fall into
+    two classes or more; ``None`` when there is nothing to split."""
+    alive = belief.alive if mask is None else mask & belief.alive
+    return alive if len(belief.model.classes_in(alive)) >= 2 else None
+
+
+def _posterior_over(belief: FaultBelief, alive: int) -> npt.NDArray[np.float64]:
+    """The posterior, normalised over the hypotheses of ``alive``."""
+    post = belief.posterior()
+    return post / float(sum(post[i] for i in belief.model.members(alive)))
+
+
 def best_probe(
     belief: FaultBelief,
     pose: Pose,
@@ -104,14 +117,11 @@ def best_probe(
     """The probe of most information per tick that splits the hypotheses of ``mask`` (default:
     those still possible) from ``pose``; ``None`` when they cannot be split in two commands (one
     class left, or walls hide every difference)."""
-    model = belief.model
-    alive = belief.alive if mask is None else mask & belief.alive
-    if len(model.classes_in(alive)) < 2:
+    alive = _to_split(belief, mask)
+    if alive is None:
         return None
-    post = belief.posterior()
-    norm = float(sum(post[i] for i in model.members(alive)))
-    post = post / norm
-    actions = model.domain.actions
+    post = _posterior_over(belief, alive)
+    actions = belief.model.domain.actions
     best: Probe | None = None
     for a in range(len(actions)):
         split, ticks = _split(belief, a, pose, post, alive)
@@ -509,15 +519,14 @@ def isolating_probe(
     them. ``information`` is the entropy of the first command's split (bits), ``ticks`` its
     expected ticks."""
     model = belief.model
-    alive = belief.alive if mask is None else mask & belief.alive
-    if len(model.classes_in(alive)) < 2:
+    alive = _to_split(belief, mask)
+    if alive is None:
         return None
     if planner is None:
         planner = ProbePlanner(model, belief.grid, switch, noise)
     action = planner.plan(belief, pose, alive, depth, watchers)
     if action is None:
         return best_probe(belief, pose, alive)  # only a sequence splits them (walls)
-    post = belief.posterior()
-    post = post / float(sum(post[i] for i in model.members(alive)))
+    post = _posterior_over(belief, alive)
     split, ticks = _split(belief, model.index[action], pose, post, alive)
     return Probe((action,), _entropy(m for _, m in split.values()), ticks)
