@@ -18,7 +18,12 @@ four-wheel robot, the default ``stall`` behaviour, seeds ``0 .. --seeds - 1``):
   (no replanning: this isolates what the readings tell, not how the repair goes); *active*: after
   the first surprise, while no class is isolated, the probes of active diagnosis
   (``isolating_probe`` over the hypotheses still in the running, ``FaultBelief.contenders``; the
-  plan's next action when no probe splits them);
+  plan's next action when no probe splits them). The probe planner counts the readings the
+  probe will get as the belief counts them: the robot's own at 1% noise (a reading one
+  perturbation from a rival's prediction only contradicts it, the confirmation rule wants a
+  second) and each teammate's that will see the motion (``watchers``, where they stand:
+  ``following``). ``--planner blind`` plans as before this counting (every reading exact, the
+  robot alone), the peer to compare with in one session;
 - the true outcome and the robot's own reading: the mission's ``Simulator`` with the fault hidden
   (it performs ``Domain.effective`` of the command, stops a motion that sweeps a wall at the start:
   a bump, and reads the odometry from its own stream);
@@ -31,7 +36,9 @@ Reported per mode: missions with a surprise, the share isolated, median actions 
 its bootstrap interval (non-isolated missions count as infinite), the reduction ``1 -
 median(team) / median(alone)`` with a paired bootstrap interval, and the wrong-isolation rate.
 
-Usage: ``python benchmarks/cooperative_diagnosis.py [--seeds N] [--range R] [--observer-noise P]``.
+Usage: ``python benchmarks/cooperative_diagnosis.py [--seeds N] [--range R] [--noise P]
+[--observer-noise P] [--modes passive active] [--planner counting|blind]`` (prints the load at
+the end).
 Results go to ``benchmarks/results/cooperative_diagnosis.json``.
 """
 
@@ -55,6 +62,7 @@ from selfrepair.diagnosis import (
 from selfrepair.diagnosis.cooperative import (
     Observer,
     SensingRange,
+    following,
     observer_streams,
     team_observations,
 )
@@ -75,7 +83,7 @@ MAX_COMMANDS = 60
 
 def _mission(
     maze: Any, start: Pose, actions: tuple[Any, ...], faults: frozenset[Any], seed: int,
-    observers: tuple[Observer, ...], active: bool, noise: float,
+    observers: tuple[Observer, ...], active: bool, noise: float, counting: bool = True,
 ) -> tuple[float, bool | None] | None:  # fmt: skip
     """Actions to isolate (``inf``: never) and whether the isolated class holds the truth;
     ``None`` when no command surprised the robot."""
@@ -85,7 +93,7 @@ def _mission(
     sim = Simulator(FOUR_WHEEL, maze, start, schedule, seed,
                     observation=ObservationModel(noise, bumps=True))  # fmt: skip
     belief = FaultBelief(model, maze.free_grid(2))
-    planner = ProbePlanner(model, belief.grid)
+    planner = ProbePlanner(model, belief.grid, noise=noise if counting else 0.0)
     streams = observer_streams(seed, observers)
     history = [start]
     surprise: int | None = None
@@ -96,7 +104,9 @@ def _mission(
         pose = sim.pose
         if active and surprise is not None and not probing:
             mask = belief.contenders(CONFIDENCE)
-            probe = isolating_probe(belief, pose, mask, planner=planner)
+            watchers = tuple(zip(observers, following(history, len(observers)), strict=True))
+            probe = isolating_probe(belief, pose, mask, planner=planner,
+                                    watchers=watchers if counting else ())  # fmt: skip
             probing = list(probe.actions) if probe is not None else []
         if probing:
             action = probing.pop(0)
@@ -108,7 +118,7 @@ def _mission(
         mine = sim.observe(step, action, pose, outcome)
         belief.update(mine)
         end = sim.pose
-        behind = tuple(history[max(0, len(history) - 1 - i)] for i in range(1, len(observers) + 1))
+        behind = following(history, len(observers))
         for seen in team_observations(step, action, pose, end, False, observers, behind, streams):
             belief.update(seen)
         history.append(end)
@@ -124,13 +134,19 @@ def _mission(
     return None if surprise is None else (math.inf, None)
 
 
-def run(seeds: int, sensing: int, noise: float, observer_noise: float) -> dict[str, Any]:
-    """Every mission of the module docstring, alone and with two observers, per mode."""
+def run(
+    seeds: int, sensing: int, noise: float, observer_noise: float,
+    modes: tuple[str, ...] = ("passive", "active"), counting: bool = True,
+) -> dict[str, Any]:  # fmt: skip
+    """Every mission of the module docstring, alone and with two observers, per mode
+    (``counting``: the probe planner counts the readings as the belief will, the teammates'
+    included; else it plans as if every reading were exact and the robot alone)."""
     team = tuple(Observer(f"t{i}", observer_noise, SensingRange(sensing)) for i in (1, 2))
     singles = [s for s in FOUR_WHEEL.fault_sets if len(s) == 1]
     out: dict[str, Any] = {"noise": noise, "observer_noise": observer_noise, "range": sensing,
-                           "metric": "chebyshev", "seeds": seeds}  # fmt: skip
-    for mode in ("passive", "active"):
+                           "metric": "chebyshev", "seeds": seeds,
+                           "planner": "counting" if counting else "blind"}  # fmt: skip
+    for mode in modes:
         alone: list[float] = []
         together: list[float] = []
         wrong = {"alone": [0, 0], "team": [0, 0]}
@@ -145,7 +161,8 @@ def run(seeds: int, sensing: int, noise: float, observer_noise: float) -> dict[s
                         pair = []
                         for label, observers in (("alone", ()), ("team", team)):
                             got = _mission(maze, route.start, result.actions, faults, seed,
-                                           observers, mode == "active", noise)  # fmt: skip
+                                           observers, mode == "active", noise,
+                                           counting)  # fmt: skip
                             if got is None:  # no surprise (the same own readings in both arms)
                                 break
                             n, right = got
@@ -208,12 +225,22 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--range", type=int, default=3, dest="sensing")
     parser.add_argument("--noise", type=float, default=NOISE, help="the robot's own odometry")
     parser.add_argument("--observer-noise", type=float, default=None, help="default: --noise")
+    parser.add_argument("--modes", nargs="+", choices=("passive", "active"),
+                        default=["passive", "active"])  # fmt: skip
+    parser.add_argument(
+        "--planner", choices=("counting", "blind"), default="counting",
+        help="blind: the probe planner of before, as if every reading were exact and alone",
+    )  # fmt: skip
     args = parser.parse_args(argv)
     observer = args.noise if args.observer_noise is None else args.observer_noise
-    report = run(args.seeds, args.sensing, args.noise, observer)
+    counting = args.planner == "counting"
+    report = run(args.seeds, args.sensing, args.noise, observer, tuple(args.modes), counting)
+    loadavg = Path("/proc/loadavg")
+    report["load"] = loadavg.read_text().split()[:3] if loadavg.exists() else None
     print(json.dumps(report, indent=1))
     RESULTS.mkdir(exist_ok=True)
     suffix = "" if args.noise == NOISE and observer == NOISE else f"-{args.noise:g}-{observer:g}"
+    suffix += "" if counting else "-blind"
     (RESULTS / f"cooperative_diagnosis{suffix}.json").write_text(
         json.dumps(report, indent=1) + "\n"
     )

@@ -144,6 +144,7 @@ STRATEGIES = st.sampled_from(
     + [("replacement", mode, rewrite) for mode in ("flat", "guarded", "layered")
        for rewrite in (False, True)]
     + [("replacement", "primitive", False)]
+    + [("lookahead", mode, False) for mode in ("flat", "guarded", "layered")]
 )  # fmt: skip
 
 
@@ -157,6 +158,7 @@ STRATEGIES = st.sampled_from(
     st.sampled_from([Fraction(0), Fraction(1)]),
     st.booleans(),
     st.sampled_from([(None, "auto"), (None, "python"), (25, "auto")]),
+    st.tuples(st.integers(0, 3), st.integers(0, 2), st.sampled_from([1, 6, 20_000])),
 )
 def test_compiled_loop_gives_the_python_loops_trace(
     seed: int,
@@ -166,9 +168,11 @@ def test_compiled_loop_gives_the_python_loops_trace(
     weight: Fraction,
     cold: bool,
     planner: tuple[int | None, str],
+    lookahead: tuple[int, int, int],
 ) -> None:
     """Replans run in the kernel (backend auto), or in Python (backend python), with a node
-    budget that some run out of."""
+    budget that some run out of; lookahead windows of 0 to 3 actions after the faulty one,
+    looking 0 to 2 actions ahead, with a window budget some searches run out of."""
     name, mode, rewrite = strategy
     maze = generate_maze(11, 9, braid=0.4, seed=seed)
     route = random_routes(maze, 1, seed)[0]
@@ -178,7 +182,15 @@ def test_compiled_loop_gives_the_python_loops_trace(
         route.goal,
         schedule=schedule,
         strategy=name,
-        options=StrategyOptions(table=table, recursion=mode, rewrite=rewrite, max_wait=3),
+        options=StrategyOptions(
+            table=table,
+            recursion=mode,
+            rewrite=rewrite,
+            max_wait=3,
+            window=lookahead[0],
+            before=lookahead[1],
+            lookahead_expansions=lookahead[2],
+        ),
         clearance_weight=weight,
         seed=seed,
         replan_max_expansions=planner[0],
@@ -240,6 +252,37 @@ def test_primitive_recursion_defers_alike_on_the_paper_routes(maze_name: str) ->
 
 
 @NUMBA
+@pytest.mark.parametrize("maze_name", ["narrow-short", "wide-long"])
+def test_lookahead_windows_alike_on_the_paper_routes(maze_name: str) -> None:
+    """The paper's lookahead (window 3, looking 0 or 2 actions ahead) and a tight window budget
+    whose searches fail, so the replacement and replan fallbacks run from past the healthy
+    prefix: the compiled loop gives the Python loop's trace on every route of the maze."""
+    maze = load_bundled(maze_name)
+    sources: set[tuple[str, ...]] = set()
+    early = 0
+    for route in bundled_routes(maze_name):
+        for faults in ("FL:F,RR:B", "FL:B,FR:F"):
+            for before, budget in ((0, 20_000), (2, 20_000), (2, 3)):
+                spec = MissionSpec(
+                    maze, route.start, route.goal,
+                    schedule=FaultSchedule.permanent(FOUR_WHEEL.parse_faults(faults)),
+                    strategy="lookahead",
+                    options=StrategyOptions(table="handwritten", recursion="guarded", window=3,
+                                            before=before, lookahead_expansions=budget),
+                )  # fmt: skip
+                python, compiled = _both(spec, cold=True)
+                _same(python, compiled)
+                sources |= {r.repair.attempts for r in compiled.repairs}
+                early += sum(
+                    1 for r in compiled.repairs
+                    if r.action is not None and r.repair.consumed > 1
+                    and r.repair.attempts[0] == "lookahead" and r.repair.source != "lookahead"
+                )  # fmt: skip
+    assert ("lookahead",) in sources and ("lookahead", "replacement") in sources
+    assert early > 0  # fallbacks that kept a healthy prefix in front
+
+
+@NUMBA
 def test_waits_and_a_mission_that_gives_up_end_alike() -> None:
     maze = load_bundled("narrow-short")
     route = bundled_routes("narrow-short")[0]
@@ -267,8 +310,10 @@ def _spec(**changes: Any) -> MissionSpec:
 
 @NUMBA
 def test_footings_that_the_compiled_loop_cannot_take_run_in_python() -> None:
-    lookahead = _spec(strategy="lookahead")
-    assert run_mission(lookahead).footing == "python"
+    lookahead = _spec(strategy="lookahead", options=StrategyOptions(before=2))
+    assert run_mission(lookahead).footing == "compiled"
+    deferring = _spec(strategy="lookahead", options=StrategyOptions(recursion="primitive"))
+    assert run_mission(deferring).footing == "python"
     primitive = _spec(options=StrategyOptions(recursion="primitive"))
     assert run_mission(primitive).footing == "compiled"
     event = FaultEvent(FAULTS[0], persistence=Persistence.INTERMITTENT, probability=0.5)
@@ -282,7 +327,7 @@ def test_footings_that_the_compiled_loop_cannot_take_run_in_python() -> None:
     assert run_mission(_spec()).footing == "compiled"
     assert run_mission(_spec(footing="python")).footing == "python"
     with pytest.raises(ProblemError, match="footing 'compiled' cannot run this mission: strategy"):
-        run_mission(dataclasses.replace(lookahead, footing="compiled"))
+        run_mission(dataclasses.replace(_spec(strategy="dstar-lite"), footing="compiled"))
     with pytest.raises(ProblemError, match="footing must be"):
         _spec(footing="fast")
 

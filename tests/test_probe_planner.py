@@ -14,6 +14,8 @@ from selfrepair.diagnosis import (
     isolating_probe,
 )
 from selfrepair.diagnosis.belief import CONFIRMATIONS, predictions
+from selfrepair.diagnosis.cooperative import Observer, SensingRange
+from selfrepair.diagnosis.probes import RULED_OUT
 from selfrepair.geometry import FreeGrid, Heading, Pose
 from selfrepair.robots.four_wheel import FOUR_WHEEL, SINGLE_FAULTS, parse_action
 from selfrepair.world.maze import parse_maze
@@ -129,3 +131,74 @@ def test_exact_readings_isolate_as_before() -> None:
     belief = _none_or_fl_s()
     belief.update(Observation(0, parse_action("SSSS"), CENTRE, CENTRE))
     assert belief.alive == 1 and belief.isolated(0.01) == 0 and belief.isolated() == 0
+
+
+# --- the planner counts the readings as the belief will (noise, teammates) -------------------
+
+
+def _label(planner: ProbePlanner, code: str, faults: str) -> int:
+    h = MODEL.sets.index(FOUR_WHEEL.parse_faults(faults)) if faults else 0
+    return int(planner.at(CENTRE).label[MODEL.index[parse_action(code)], MODEL.class_of[h]])
+
+
+def test_evidence_counts_each_reading_by_its_sensor() -> None:
+    # SSSS: "none" waits, FL:S turns right in place: one perturbation apart (another heading)
+    near, far = Observer("t1", 0.01, SensingRange(3)), Observer("t2", 0.01, SensingRange(0))
+    exact = Observer("t3", 0.0, SensingRange(3))
+    cases = [
+        (0.01, (), 1),  # the robot's own noisy reading only contradicts FL:S
+        (0.01, ((near, CENTRE),), 2),  # a teammate in range adds its own contradiction
+        (0.01, ((near, CENTRE), (far, Pose(9, 9, Heading.N))), 2),  # one out of range: none
+        (0.01, ((exact, CENTRE),), RULED_OUT),  # an exact teammate rules FL:S out
+        (0.0, (), RULED_OUT),  # so does an exact own reading
+    ]
+    for noise, watchers, expected in cases:
+        planner = ProbePlanner(MODEL, None, noise=noise)
+        planner.plan(_none_or_fl_s(), CENTRE, watchers=watchers)  # sets the watchers
+        truth, rival = _label(planner, "SSSS", ""), _label(planner, "SSSS", "FL:S")
+        assert truth != rival
+        assert planner.evidence(CENTRE)[truth, rival] == expected, (noise, watchers)
+
+
+def _noisy_isolation(faults: str, first: str, counting: bool, watched: bool) -> int:
+    """Commands after the surprise ``first`` from the centre of open space until the belief
+    isolates a class at 1% noise (every reading right, as the plan assumes); ``watched``: two
+    teammates at the centre read each command too."""
+    truth = FOUR_WHEEL.parse_faults(faults)
+    team = tuple((Observer(f"t{i}", 0.01, SensingRange(3)), CENTRE) for i in (1, 2))
+    watchers = team if watched else ()
+    belief = FaultBelief(MODEL)
+    planner = ProbePlanner(MODEL, None, noise=0.01 if counting else 0.0)
+
+    def command(step: int, action: object, pose: Pose) -> Pose:
+        end = FOUR_WHEEL.apply(pose, FOUR_WHEEL.effective(action, truth))
+        belief.update(Observation(step, action, pose, end, False, False, 0.01))
+        for observer, at in watchers:
+            if observer.watches(at, pose, end):
+                seen = Observation(step, action, pose, end, None, False, 0.01, observer.name)
+                belief.update(seen)
+        return end
+
+    pose, commands = command(0, parse_action(first), CENTRE), 0
+    while belief.isolated(0.01) is None:
+        probe = isolating_probe(belief, pose, belief.contenders(0.01), planner=planner,
+                                watchers=watchers if counting else ())  # fmt: skip
+        assert probe is not None
+        for action in probe.actions:
+            commands += 1
+            pose = command(commands, action, pose)
+        assert commands <= 8
+    return commands
+
+
+def test_counting_the_noise_spares_the_robot_alone_its_unconfirmed_splits() -> None:
+    # known answers (open space, 1% noise, readings right): planning as if exact, the robot
+    # splits by readings one perturbation apart that the confirmation rule must see twice
+    assert _noisy_isolation("RL:S", "SSSS", counting=False, watched=False) == 5
+    assert _noisy_isolation("RL:S", "SSSS", counting=True, watched=False) == 3
+
+
+def test_two_watching_teammates_confirm_in_the_same_command() -> None:
+    alone = _noisy_isolation("FL:F", "FFFF", counting=True, watched=False)
+    team = _noisy_isolation("FL:F", "FFFF", counting=True, watched=True)
+    assert (alone, team) == (3, 2)

@@ -163,6 +163,17 @@ def test_team_run_trace_replay_frame_and_animate(
     assert gif.read_bytes()[:3] == b"GIF"
 
 
+def test_team_frame_and_animation_refuse_the_wrong_suffix_before_reading(tmp_path: Path) -> None:
+    from selfrepair.errors import TraceError
+    from selfrepair.team.draw import animate_team_trace, draw_team_frame
+
+    missing = tmp_path / "absent.jsonl"  # never read: the output's suffix is checked first
+    with pytest.raises(TraceError, match=r"m\.gif: expected an output file ending in \.png"):
+        draw_team_frame(missing, tmp_path / "m.gif")
+    with pytest.raises(TraceError, match=r"f\.png: expected an output file ending in \.gif"):
+        animate_team_trace(missing, tmp_path / "f.png")
+
+
 def test_team_replay_exits_1_on_a_conflict(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -16,9 +16,13 @@ observation's own noise rate. There is no second belief.
   and its sensing range. A teammate observes a command when **both** the robot's cell before the
   command and its true cell after it are in range of the teammate's cell (it watched the whole
   motion); where the teammate stands is given per command.
+- :func:`observer_team`: ``t1``, ``t2``, ... alike (experiment files, ``--observers``);
 - :func:`observer_streams`: one ``numpy.random.Generator`` per observer, seeded ``[seed, 24, 1 +
   i]`` from the mission's seed (the robot's own stream is ``[seed, 24]``), so the same seed gives
   the same readings and no two sensors share a generator.
+- :func:`following`: where each observer stands for the next command when the team follows
+  the robot (observer ``i``, from 1, where the robot truly was ``i`` commands before: the
+  simulator's rule, which the robot's probe planner and the trace check use too);
 - :func:`team_observations`: the observations of one command by the observers in range.
 
 A teammate has no access to the robot's bump switch (``bumped`` is ``None`` in its reading); the
@@ -43,7 +47,9 @@ __all__ = [
     "Metric",
     "Observer",
     "SensingRange",
+    "following",
     "observer_streams",
+    "observer_team",
     "team_observations",
 ]
 
@@ -105,11 +111,29 @@ class Observer:
         )
 
 
+def observer_team(count: int, noise: float, cells: int) -> tuple[Observer, ...]:
+    """``count`` observers named ``t1``, ``t2``, ... with odometry error rate ``noise`` and a
+    Chebyshev range of ``cells`` (the teams of experiment files and ``--observers``)."""
+    sensing = SensingRange(cells)
+    return tuple(Observer(f"t{i}", noise, sensing) for i in range(1, count + 1))
+
+
 def observer_streams(seed: int, observers: Sequence[Observer]) -> tuple[np.random.Generator, ...]:
     """One generator per observer, in order (see the module docstring)."""
     return tuple(
         np.random.default_rng([seed, OBSERVER_STREAM, 1 + i]) for i in range(len(observers))
     )
+
+
+def following(trail: Sequence[Pose], count: int) -> tuple[Pose, ...]:
+    """Where observers ``1 .. count`` stand for the next command when they follow the robot:
+    ``trail`` holds the robot's true poses from the mission's start, the last its pose now (the
+    next command's start); observer ``i`` stands at ``trail[-1 - i]`` (the start, while the
+    trail is shorter)."""
+    if not trail:
+        raise ProblemError("expected a trail of at least the start pose")
+    last = len(trail) - 1
+    return tuple(trail[max(0, last - i)] for i in range(1, count + 1))
 
 
 def team_observations(

@@ -15,7 +15,7 @@ each group of the first ends.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
@@ -24,11 +24,22 @@ import numpy as np
 import numpy.typing as npt
 
 from selfrepair.caching import BoundedCache, CacheKind
-from selfrepair.diagnosis.belief import FaultBelief, predictions
+from selfrepair.diagnosis.belief import CONFIRMATIONS, FaultBelief, predictions
+from selfrepair.diagnosis.cooperative import Observer
 from selfrepair.diagnosis.hypotheses import FAILS, FaultModel
+from selfrepair.diagnosis.observation import ObservationModel, perturbed
 from selfrepair.geometry import FreeGrid, Pose
 
-__all__ = ["BUMP_COST", "TICK_COST", "Probe", "ProbePlanner", "best_probe", "isolating_probe"]
+__all__ = [
+    "BUMP_COST",
+    "RULED_OUT",
+    "TICK_COST",
+    "Probe",
+    "ProbePlanner",
+    "Watcher",
+    "best_probe",
+    "isolating_probe",
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -83,6 +94,19 @@ def _better(info: float, ticks: float, length: int, best: Probe, per_tick: bool)
     return mine > theirs + 1e-12 or (abs(mine - theirs) <= 1e-12 and ticks < best.ticks)
 
 
+def _to_split(belief: FaultBelief, mask: int | None) -> int | None:
+    """The hypotheses of ``mask`` (default: all) still possible, as a mask, when they fall into
+    two classes or more; ``None`` when there is nothing to split."""
+    alive = belief.alive if mask is None else mask & belief.alive
+    return alive if len(belief.model.classes_in(alive)) >= 2 else None
+
+
+def _posterior_over(belief: FaultBelief, alive: int) -> npt.NDArray[np.float64]:
+    """The posterior, normalised over the hypotheses of ``alive``."""
+    post = belief.posterior()
+    return post / float(sum(post[i] for i in belief.model.members(alive)))
+
+
 def best_probe(
     belief: FaultBelief,
     pose: Pose,
@@ -93,14 +117,11 @@ def best_probe(
     """The probe of most information per tick that splits the hypotheses of ``mask`` (default:
     those still possible) from ``pose``; ``None`` when they cannot be split in two commands (one
     class left, or walls hide every difference)."""
-    model = belief.model
-    alive = belief.alive if mask is None else mask & belief.alive
-    if len(model.classes_in(alive)) < 2:
+    alive = _to_split(belief, mask)
+    if alive is None:
         return None
-    post = belief.posterior()
-    norm = float(sum(post[i] for i in model.members(alive)))
-    post = post / norm
-    actions = model.domain.actions
+    post = _posterior_over(belief, alive)
+    actions = belief.model.domain.actions
     best: Probe | None = None
     for a in range(len(actions)):
         split, ticks = _split(belief, a, pose, post, alive)
@@ -185,14 +206,36 @@ _TABLES: BoundedCache[FaultModel, _Tables] = BoundedCache(
 @dataclass(frozen=True, slots=True, eq=False)
 class _At:
     """What every command does to every class from one pose: ``onehot[a, c, l]`` whether class
-    ``c`` reads outcome ``l`` after action ``a``; the outcome's end pose ``ends[l]``; per action
-    and class the bump indicator and the ticks."""
+    ``c`` reads outcome ``l`` after action ``a``; the outcome's end pose ``ends[l]`` and its
+    prediction ``outcomes[l]`` (end relative to the start cell, bump, failure); per action and
+    class the bump indicator and the ticks."""
 
     label: npt.NDArray[np.intp]
     onehot: npt.NDArray[np.float64]
     ends: tuple[Pose, ...]
+    outcomes: tuple[tuple[Pose, bool, bool], ...]
     bumps: npt.NDArray[np.float64]
     ticks: npt.NDArray[np.float64]
+
+
+Watcher = tuple[Observer, Pose]
+"""A teammate watching the robot and where it stands for the probe (it stays there while the
+plan runs)."""
+
+RULED_OUT = 1 << 20
+"""The evidence of a reading that rules a class out (far above :data:`~.belief.CONFIRMATIONS`)."""
+
+
+def _against(truth: Pose, rival: Pose, noise: float) -> int:
+    """What one pose reading of ``truth`` (exact, as the plan assumes) says against a class
+    predicting ``rival``: nothing when equal; one more contradiction when the sensor is noisy
+    and ``rival`` is one of the reading's perturbations (the belief keeps it, counting a miss);
+    else it rules the class out."""
+    if truth == rival:
+        return 0
+    if noise > 0 and rival in perturbed(truth):
+        return 1
+    return RULED_OUT
 
 
 class ProbePlanner:
@@ -201,15 +244,32 @@ class ProbePlanner:
     ``grid``, ``None``: an open plane; ``switch``: whether the robot reads a bump switch; without
     one a bump reads as staying put)."""
 
-    __slots__ = ("_at", "_memo", "_tables", "grid", "model", "switch")
+    __slots__ = (
+        "_at",
+        "_evidence",
+        "_memo",
+        "_tables",
+        "_watchers",
+        "grid",
+        "model",
+        "noise",
+        "switch",
+    )
 
-    def __init__(self, model: FaultModel, grid: FreeGrid | None, switch: bool = True) -> None:
+    def __init__(
+        self, model: FaultModel, grid: FreeGrid | None, switch: bool = True, noise: float = 0.0
+    ) -> None:
+        ObservationModel(noise)  # validates the rate
         self.model = model
         self.grid = grid
         self.switch = switch
+        self.noise = noise
+        """The error rate of the robot's own odometry (0: exact readings)."""
         self._tables = _TABLES.get(model, lambda: _tables(model))
         self._at: dict[Pose, _At] = {}
-        self._memo: dict[tuple[bytes, Pose, int], float] = {}
+        self._memo: dict[tuple[bytes, bytes, bytes, Pose, int], float] = {}
+        self._evidence: dict[Pose, npt.NDArray[np.int64]] = {}
+        self._watchers: tuple[Watcher, ...] = ()
 
     def at(self, pose: Pose) -> _At:
         """The outcomes of every command from ``pose`` (kept)."""
@@ -220,6 +280,7 @@ class ProbePlanner:
         n_actions, n_classes = len(model.domain.actions), len(model.classes)
         keys: dict[tuple[Any, ...], int] = {}
         ends: list[Pose] = []
+        outcomes: list[tuple[Pose, bool, bool]] = []
         label = np.empty((n_actions, n_classes), dtype=np.intp)
         bumps = np.empty((n_actions, n_classes))
         ticks = np.empty((n_actions, n_classes))
@@ -231,6 +292,7 @@ class ProbePlanner:
                 number = keys.setdefault(key, len(keys))
                 if number == len(ends):
                     ends.append(Pose(pose.x + end.x, pose.y + end.y, end.heading))
+                    outcomes.append((end, bump, fails))
                 labels.append(number)
                 bumped.append(float(bump))
                 durations.append(1.0 if bump else tables.ticks[a][h][g])
@@ -240,11 +302,48 @@ class ProbePlanner:
             ticks[a] = np.asarray(durations)[index]
         onehot = np.zeros((n_actions, n_classes, len(ends)))
         onehot[np.arange(n_actions)[:, None], np.arange(n_classes)[None, :], label] = 1.0
-        found = self._at[pose] = _At(label, onehot, tuple(ends), bumps, ticks)
+        found = self._at[pose] = _At(label, onehot, tuple(ends), tuple(outcomes), bumps, ticks)
         return found
 
+    def evidence(self, pose: Pose) -> npt.NDArray[np.int64]:
+        """``evidence[l, m]``: what the readings of a command from ``pose`` that ends in outcome
+        ``l`` (read exactly, as the plan assumes) say against a class predicting outcome ``m``:
+        the contradictions they add (the robot's own reading, with its bump switch when it has
+        one, and one reading per watcher in range of the whole motion, each by its sensor's
+        noise: see :func:`_against`), or :data:`RULED_OUT` (ruled out). For the watchers of the
+        current :meth:`plan` (kept until the next)."""
+        found = self._evidence.get(pose)
+        if found is not None:
+            return found
+        at = self.at(pose)
+        outcomes, ends = at.outcomes, at.ends
+        seeing = [
+            [o.noise for o, stands in self._watchers if o.watches(stands, pose, end)]
+            for end in ends
+        ]
+        n = len(outcomes)
+        out = np.zeros((n, n), dtype=np.int64)
+        for read, (end, bump, fails) in enumerate(outcomes):
+            for m, (other, other_bump, other_fails) in enumerate(outcomes):
+                if read == m:
+                    continue
+                if fails != other_fails or (self.switch and bump != other_bump):
+                    out[read, m] = RULED_OUT  # the switch and the failed signal are exact
+                    continue
+                total = _against(end, other, self.noise)
+                for noise in seeing[read]:
+                    total = min(RULED_OUT, total + _against(end, other, noise))
+                out[read, m] = total
+        self._evidence[pose] = out
+        return out
+
     def plan(
-        self, belief: FaultBelief, pose: Pose, mask: int | None = None, depth: int = 3
+        self,
+        belief: FaultBelief,
+        pose: Pose,
+        mask: int | None = None,
+        depth: int = 3,
+        watchers: Sequence[Watcher] = (),
     ) -> Any | None:
         """The first command of the adaptive probe plan that isolates the classes of ``mask``
         (default: the hypotheses still possible) from ``pose``, or ``None`` when one class is
@@ -259,7 +358,18 @@ class ProbePlanner:
         :data:`TICK_COST` per expected tick. Beyond ``depth``, estimates: one more command for
         a parsimonious class not isolated yet, ``1 + log2(classes) / 3`` expected. Depth-first
         branch and bound: commands are tried in the order of a lower bound, ties to the first
-        in the domain's order."""
+        in the domain's order.
+
+        What the readings of a command say is counted as the belief counts it (the plan takes
+        every reading to be right): with exact odometry a differing reading rules a class out;
+        with noisy odometry (:attr:`noise`) a reading one perturbation away from a class's
+        prediction only contradicts it, and a class is isolated once every rival is
+        contradicted :data:`~.belief.CONFIRMATIONS` times more than it
+        (:meth:`FaultBelief.isolated`); the rivals' contradictions so far
+        (:attr:`FaultBelief.misses`) are where the plan starts. Each of ``watchers`` (teammates,
+        where they stand; they stay there while the plan runs) that sees the whole motion of a
+        command adds its own reading, with its own noise, and no bump switch. So a teammate in
+        range can confirm in the same command what the robot alone confirms with a second."""
         model = self.model
         alive = belief.alive if mask is None else mask & belief.alive
         classes = np.asarray(model.classes_in(alive), dtype=np.intp)
@@ -272,13 +382,32 @@ class ProbePlanner:
         fewest = min(sizes)
         primary = np.zeros(len(model.classes))
         primary[classes[np.asarray(sizes) == fewest]] = 1.0
+        misses = np.zeros(len(classes), dtype=np.int64)
+        if self.noise > 0 or any(o.noise > 0 for o, _ in watchers):
+            seen = belief.misses
+            for j, c in enumerate(classes):
+                misses[j] = round(min(seen[h] for h in model.members(model.classes[c] & alive)))
+            misses = np.minimum(misses - misses.min(), CONFIRMATIONS - 1)
+        watchers = tuple(watchers)
+        if watchers != self._watchers:
+            self._watchers = watchers
+            self._evidence.clear()
         self._memo.clear()  # the weights and the parsimonious classes change with the belief
-        found = self._search(classes, mass / mass.sum(), primary, pose, depth, root=True)
+        cand = np.ones(len(classes), dtype=bool)
+        found = self._search(
+            classes, misses, cand, mass / mass.sum(), primary, pose, depth, root=True
+        )
         return None if found is None else model.domain.actions[int(found)]
+
+    def _exact(self) -> bool:
+        """Whether every reading is exact (a differing one rules a class out)."""
+        return self.noise == 0 and all(o.noise == 0 for o, _ in self._watchers)
 
     def _search(
         self,
         idx: npt.NDArray[np.intp],
+        misses: npt.NDArray[np.int64],
+        cand: npt.NDArray[np.bool_],
         w: npt.NDArray[np.float64],
         primary: npt.NDArray[np.float64],
         pose: Pose,
@@ -286,23 +415,38 @@ class ProbePlanner:
         root: bool = False,
     ) -> Any:
         """The value ``_WORST * worst + expected`` of the best plan isolating classes ``idx``
-        (weights ``w``, summing to 1) from ``pose`` in ``depth`` commands (see :meth:`plan`); at
-        the root, the best action's index instead (``None``: no command splits them)."""
+        from ``pose`` in ``depth`` commands (see :meth:`plan`); at the root, the best action's
+        index instead (``None``: no command splits them). ``misses``: per class, the
+        contradictions it has more than the least contradicted (below
+        :data:`~.belief.CONFIRMATIONS`); ``cand``: the classes that may be the truth here (the
+        others disagree with a reading of the plan, but not yet enough); ``w``: the weights of
+        the candidates (zero for the others), summing to 1."""
         n = len(idx)
-        first = primary[idx].sum() > 0
+        first = (primary[idx] * cand).sum() > 0
         if n <= 1:
             return 0.0
         if depth == 0:
             return _WORST * first + 1.0 + math.log2(n) / 3.0
-        key = (idx.tobytes(), pose, depth)
+        key = (idx.tobytes(), misses.tobytes(), cand.tobytes(), pose, depth)
         if not root and key in self._memo:
             return self._memo[key]
         at = self.at(pose)
         onehot = at.onehot[:, idx, :]
         parts = np.einsum("acl,c->al", onehot, w)
         counts = onehot.sum(axis=1)
-        ambiguous_first = (np.einsum("acl,c->al", onehot, primary[idx]) > 0) & (counts > 1)
         splits = (counts > 0).sum(axis=1) >= 2
+        if self._exact():  # a branch keeps the classes of its outcome
+            sizes, keep, low, new = counts, None, None, None
+        else:  # a branch keeps every class not yet contradicted enough
+            labels = at.label[:, idx]
+            against = self.evidence(pose)[labels[:, :, None], labels[:, None, :]]
+            new = misses[None, None, :] + against
+            low = new.min(axis=2)
+            keep = new < low[:, :, None] + CONFIRMATIONS
+            sizes = np.zeros_like(counts)
+            rows, cols = np.nonzero(np.broadcast_to(cand, labels.shape))
+            sizes[rows, labels[rows, cols]] = keep.sum(axis=2)[rows, cols]
+        ambiguous_first = (np.einsum("acl,c->al", onehot, primary[idx] * cand) > 0) & (sizes > 1)
         own = 1.0 + BUMP_COST * (at.bumps[:, idx] @ w) + TICK_COST * (at.ticks[:, idx] @ w)
         own = own + _WORST * first
         if not splits.any():
@@ -311,7 +455,7 @@ class ProbePlanner:
                 self._memo[key] = value
             return None if root else value
         if depth == 1:
-            leaf = np.where(counts > 1, 1.0 + np.log2(np.maximum(counts, 1)) / 3.0, 0.0)
+            leaf = np.where(sizes > 1, 1.0 + np.log2(np.maximum(sizes, 1)) / 3.0, 0.0)
             worst = _WORST * ambiguous_first.any(axis=1)
             costs = np.where(splits, own + worst + (parts * leaf).sum(axis=1), np.inf)
             best = int(np.argmin(costs))
@@ -319,7 +463,7 @@ class ProbePlanner:
                 return best
             self._memo[key] = float(costs[best])
             return float(costs[best])
-        bounds = own + _WORST * ambiguous_first.any(axis=1) + (parts * (counts > 1)).sum(axis=1)
+        bounds = own + _WORST * ambiguous_first.any(axis=1) + (parts * (sizes > 1)).sum(axis=1)
         bounds = np.where(splits, bounds, np.inf)
         order = np.argsort(bounds, kind="stable")
         best_value, best_action = math.inf, -1
@@ -328,10 +472,21 @@ class ProbePlanner:
                 break
             expected, worst = float(own[a]), 0.0
             labels = at.label[a, idx]
-            for part in np.flatnonzero(counts[a] > 1):
-                inside = labels == part
-                sub = w[inside]
-                got = self._search(idx[inside], sub / sub.sum(), primary, at.ends[part], depth - 1)
+            for part in np.flatnonzero(sizes[a] > 1):
+                mine = labels == part
+                if keep is None or new is None or low is None:
+                    inside, sub_misses, sub_cand = mine, misses[mine], cand[mine]
+                else:
+                    j = int(np.flatnonzero(mine & cand)[0])
+                    inside = keep[a, j]
+                    sub_misses = new[a, j, inside] - low[a, j]
+                    sub_cand = cand[inside] & mine[inside]
+                sub = np.where(sub_cand, w[inside], 0.0)
+                total = float(sub.sum())
+                sub = sub / total if total > 0 else sub_cand / float(sub_cand.sum())
+                got = self._search(
+                    idx[inside], sub_misses, sub_cand, sub, primary, at.ends[part], depth - 1
+                )
                 high = _WORST * math.floor(got / _WORST)
                 worst = max(worst, high)
                 expected += float(parts[a, part]) * (got - high)
@@ -354,21 +509,24 @@ def isolating_probe(
     depth: int = 3,
     switch: bool = True,
     planner: ProbePlanner | None = None,
+    noise: float = 0.0,
+    watchers: Sequence[Watcher] = (),
 ) -> Probe | None:
     """The probe :meth:`ProbePlanner.plan` chooses (one command; ``planner``: one kept for the
-    mission, else a new one), or, when no single command splits the hypotheses, the two-command
-    sequence of :func:`best_probe`; ``None`` when nothing splits them. ``information`` is the
-    entropy of the first command's split (bits), ``ticks`` its expected ticks."""
+    mission, else a new one with ``switch`` and the robot's odometry ``noise``; ``watchers``:
+    the teammates that will watch it, where they stand), or, when no single command splits the
+    hypotheses, the two-command sequence of :func:`best_probe`; ``None`` when nothing splits
+    them. ``information`` is the entropy of the first command's split (bits), ``ticks`` its
+    expected ticks."""
     model = belief.model
-    alive = belief.alive if mask is None else mask & belief.alive
-    if len(model.classes_in(alive)) < 2:
+    alive = _to_split(belief, mask)
+    if alive is None:
         return None
     if planner is None:
-        planner = ProbePlanner(model, belief.grid, switch)
-    action = planner.plan(belief, pose, alive, depth)
+        planner = ProbePlanner(model, belief.grid, switch, noise)
+    action = planner.plan(belief, pose, alive, depth, watchers)
     if action is None:
         return best_probe(belief, pose, alive)  # only a sequence splits them (walls)
-    post = belief.posterior()
-    post = post / float(sum(post[i] for i in model.members(alive)))
+    post = _posterior_over(belief, alive)
     split, ticks = _split(belief, model.index[action], pose, post, alive)
     return Probe((action,), _entropy(m for _, m in split.values()), ticks)

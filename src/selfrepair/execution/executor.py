@@ -146,6 +146,7 @@ def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContex
         backend=backend,
         belief=belief,
         behaviour=spec.behaviour,
+        observers=spec.observers if spec.schedule.detection is Detection.HIDDEN else (),
     )
 
 

@@ -38,7 +38,12 @@ from typing import NamedTuple, Protocol
 
 import numpy as np
 
-from selfrepair.diagnosis.cooperative import Observer, observer_streams, team_observations
+from selfrepair.diagnosis.cooperative import (
+    Observer,
+    following,
+    observer_streams,
+    team_observations,
+)
 from selfrepair.diagnosis.observation import Observation, ObservationModel
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import Detection, FaultClock, FaultSchedule
@@ -305,8 +310,7 @@ class Simulator:
         if not self.observers:
             return ()
         trail = self._trail
-        last = len(trail) - 1
-        behind = [trail[max(0, last - i)] for i in range(1, len(self.observers) + 1)]
+        behind = following(trail, len(self.observers))
         trail.append(self.pose)
         return team_observations(
             step,

@@ -33,6 +33,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from selfrepair.diagnosis import FaultBelief, FaultModel, Observation, fault_model, perturbed
+from selfrepair.diagnosis.cooperative import following
 from selfrepair.errors import TraceError
 from selfrepair.execution.faults import Detection
 from selfrepair.execution.moves import move_table
@@ -186,7 +187,7 @@ def _check_step(
         if name not in observers:
             return f"a reading by {name!r}, who is not among the header's observers"
         number, observer = observers[name]
-        at = trail[max(0, len(trail) - 1 - number)]
+        at = following(trail, number)[-1]
         if not observer.watches(at, step.start, step.end):
             return f"a reading by {name!r}, out of its range at {at}"
         if not _possible(pose, step.end, observer.noise):

@@ -47,7 +47,7 @@ from selfrepair.textio import read_text
 from selfrepair.world.events import WorldSchedule
 from selfrepair.world.maze import parse_maze
 
-__all__ = ["parse_trace", "read_trace", "spec_from_header"]
+__all__ = ["parse_trace", "read_trace", "read_trace_text", "spec_from_header"]
 
 
 def _parse_step(domain: SomeDomain, f: TraceFields) -> TraceStep:
@@ -214,14 +214,17 @@ def read_trace(
     """Read and parse a trace file (see :func:`parse_trace`); a file over ``max_trace_bytes``
     (:data:`selfrepair.limits.MAX_TRACE_BYTES`; ``None``: no limit) is refused unread."""
     path = Path(path)
-    text = read_text(
-        path,
-        what="JSON Lines trace",
-        error=TraceError,
-        max_bytes=max_trace_bytes,
-        limit="max_trace_bytes",
-    )
+    text = read_trace_text(path, "JSON Lines trace", max_trace_bytes)
     return parse_trace(text, source=str(path), partial=partial)
+
+
+def read_trace_text(path: str | Path, what: str, max_trace_bytes: int | None) -> str:
+    """The text of the trace file ``path`` (a single robot's or a team's, named by ``what`` in
+    messages); a file over ``max_trace_bytes`` is refused unread, other problems raise
+    :class:`~selfrepair.errors.TraceError`."""
+    return read_text(
+        path, what=what, error=TraceError, max_bytes=max_trace_bytes, limit="max_trace_bytes"
+    )
 
 
 def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> MissionSpec:

@@ -24,7 +24,7 @@ from selfrepair.diagnosis import (
     DEFAULT_MAX_FAULTS,
     ObservationModel,
 )
-from selfrepair.diagnosis.cooperative import Observer, SensingRange
+from selfrepair.diagnosis.cooperative import Observer, observer_team
 from selfrepair.errors import ConfigError
 from selfrepair.execution.faults import Detection, FaultEvent, FaultSchedule, canonical_order
 from selfrepair.execution.result import MissionSpec
@@ -351,9 +351,7 @@ def _observers(settings: dict[str, Any] | None) -> tuple[Observer, ...]:
     ``t1``, ``t2``, ... as in :mod:`selfrepair.diagnosis.cooperative`."""
     if not settings:
         return ()
-    sensing = SensingRange(int(settings["range"]))
-    noise = float(settings["noise"])
-    return tuple(Observer(f"t{i}", noise, sensing) for i in range(1, int(settings["count"]) + 1))
+    return observer_team(int(settings["count"]), float(settings["noise"]), int(settings["range"]))
 
 
 def to_spec(mission: Mission) -> MissionSpec:

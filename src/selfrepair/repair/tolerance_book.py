@@ -10,8 +10,11 @@ heading and action, the number of fault sets under which the step needs a replan
 It is found once, through the compiled look-ups (:func:`~selfrepair.repair.lookups.fault_lookups`,
 so the answer is the ``replacement`` strategy's own), and kept for every later cell, grid and maze
 with the same pattern; each (heading, action) part of a row is also kept by the part's own,
-smaller, pattern, so a new row mostly reuses parts already found: then making it is one
-dictionary look-up per part and one gather of the parts' answers (numpy), about 6 µs.
+smaller, pattern, so a new row mostly reuses parts already found. The book's
+:class:`~selfrepair.search.term.PatternTable` (what the compiled planner reads) keeps the parts'
+answers too, so the planner adds the row of a new pattern whose parts are all known itself,
+without leaving the compiled search; the book takes those rows in (:meth:`MaskBook.sync`) before
+it next answers or makes masks. Only a pattern with a part never met runs the strategy's search.
 
 So making the masks of a grid costs one gather of the union's cells around every free cell (numpy),
 one ``np.unique`` over the patterns, one dictionary look-up per distinct pattern and one gather of
@@ -191,8 +194,12 @@ class MaskBook:
         self._words = np.zeros((*shape, words), dtype=np.uint64)
         self._size = 0
         self._row_of: dict[int, int] = {}
+        old: PatternTable | None = getattr(self, "_table", None)
+        if old is not None:  # a search still holding it adds no rows to it
+            old.retire()
+        project = [self.project[h][k] for h in Heading for k in range(len(self.actions))]
         self._table = (  # the rows again, indexed for the compiled search (patterns it can read)
-            PatternTable(self.cells, len(Heading), len(self.actions))
+            PatternTable(self.cells, len(Heading), len(self.actions), project, MAX_BOOK_ROWS)
             if len(self.cells) <= MAX_PATTERN_CELLS
             else None
         )
@@ -211,15 +218,38 @@ class MaskBook:
     @property
     def rows(self) -> int:
         """Rows (distinct patterns) kept now."""
+        self.sync()
         return self._size
 
     @property
     def pattern_table(self) -> PatternTable | None:
         """The rows as a :class:`~selfrepair.search.term.PatternTable` the compiled search reads
-        per expanded cell (row numbers are this book's), or ``None`` when the union has more
-        than :data:`~selfrepair.search.term.MAX_PATTERN_CELLS` cells; a new one after the book
-        starts afresh."""
+        per expanded cell (row numbers are this book's; the rows it added taken in first), or
+        ``None`` when the union has more than :data:`~selfrepair.search.term.MAX_PATTERN_CELLS`
+        cells; a new one after the book starts afresh."""
+        self.sync()
         return self._table
+
+    def sync(self) -> None:
+        """Take in the rows the compiled search added to the pattern table (their counts, fault
+        sets from their parts' answers, and codes), and give it room up to
+        :data:`MAX_BOOK_ROWS` rows."""
+        table = self._table
+        if table is None:
+            return
+        size = table.size
+        start = self._size
+        if size > start:
+            while len(self._counts) < size:
+                self._counts = np.concatenate([self._counts, np.zeros_like(self._counts)])
+                self._words = np.concatenate([self._words, np.zeros_like(self._words)])
+            self._counts[start:size] = table.counts[start:size]
+            self._words[start:size] = self._answer_words[table.answers[start:size]]
+            for row, code in enumerate(table.codes[start:size].tolist(), start):
+                self._row_of[code] = row
+            self._size = size
+        if table.limit != MAX_BOOK_ROWS:
+            table.set_limit(MAX_BOOK_ROWS)
 
     def code(self, grid: FreeGrid, x: int, y: int) -> int:
         """The pattern of cell ``(x, y)`` of ``grid`` (bit ``j``: ``cells[j]`` around it free)."""
@@ -231,6 +261,7 @@ class MaskBook:
         """The row of the pattern around cell ``(x, y)`` of ``grid`` (``code``, when the caller
         has read it already), found now if it is new (the book starts afresh first when it is
         full)."""
+        self.sync()
         if code is None:
             code = self.code(grid, x, y)
         row = self._row_of.get(code)
@@ -266,6 +297,7 @@ class MaskBook:
     def masks(self, grid: FreeGrid) -> ToleranceMasks:
         """The :class:`ToleranceMasks` of ``grid`` (rows of new patterns found on the way)."""
         found = self.patterns(grid)
+        self.sync()
         if self._size + len(found.codes) > MAX_BOOK_ROWS:
             self._start()
         known = self._row_of
@@ -301,15 +333,17 @@ class MaskBook:
             for i, (parts, project) in enumerate(self._keys):
                 if found[i] < 0:
                     h, k = divmod(i, n)
-                    part = self._part(self.faulty[k], Heading(h), code, x, y, grid, full)
-                    found[i] = parts[code & project] = self._answer(*part)
+                    count, bits = self._part(self.faulty[k], Heading(h), code, x, y, grid, full)
+                    found[i] = parts[code & project] = answer = self._answer(count, bits)
+                    if self._table is not None:
+                        self._table.add_part(i, code & project, answer, count)
         at = np.array(found, dtype=np.intp)
         self._counts[row] = self._answer_counts[at].reshape(self._counts.shape[1:])
         self._words[row] = self._answer_words[at].reshape(self._words.shape[1:])
         self._size += 1
         self._row_of[code] = row
         if self._table is not None:
-            self._table.add(code, self._counts[row])
+            self._table.add(code, self._counts[row], at.reshape(self._counts.shape[1:]))
         return row
 
     def _answer(self, count: int, bits: int) -> int:

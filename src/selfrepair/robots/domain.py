@@ -304,9 +304,7 @@ def check_domain(domain: Domain[A, F]) -> None:
         if not isinstance(duration, Fraction | int) or duration <= 0:
             raise fail(f"action {text} has duration {duration!r}; expected a positive Fraction")
         for probe in _PROBES:
-            _check_translation(domain, action, text, probe, fail)
-            if domain.footprint_connected:
-                _check_connected(domain, action, text, probe, fail)
+            _check_motion(domain, action, text, probe, fail)
     for action in domain.wait_actions:
         if action not in domain.waits:
             raise fail(
@@ -342,13 +340,17 @@ def _check_behaviours(domain: Domain[A, F], fail: Callable[[str], ProblemError])
                     )
 
 
-def _check_translation(
+def _check_motion(
     domain: Domain[A, F],
     action: A,
     text: str,
     probe: Pose,
     fail: Callable[[str], ProblemError],
 ) -> None:
+    """Fail unless ``action`` from ``probe`` acts the same in every cell (translation) and, for a
+    domain that declares ``footprint_connected``, its footprint holds a 4-connected path from the
+    start cell to the end cell of exactly their Manhattan length (breadth-first inside the
+    footprint, neighbours in a fixed order)."""
     end, cells = domain.apply(probe, action), domain.footprint(probe, action)
     if not cells or cells[0] != probe.cell:
         raise fail(f"the footprint of {text} must start with the start cell")
@@ -358,27 +360,17 @@ def _check_translation(
     want_cells = tuple((x + dx, y + dy) for x, y in cells)
     if domain.apply(shifted, action) != want_end or domain.footprint(shifted, action) != want_cells:
         raise fail(f"action {text} does not act the same in every cell (translation)")
-
-
-def _check_connected(
-    domain: Domain[A, F],
-    action: A,
-    text: str,
-    probe: Pose,
-    fail: Callable[[str], ProblemError],
-) -> None:
-    """Fail unless the footprint of ``action`` from ``probe`` holds a 4-connected path from the
-    start cell to the end cell of exactly their Manhattan length (breadth-first inside the
-    footprint, neighbours in a fixed order)."""
-    start, goal = probe.cell, domain.apply(probe, action).cell
-    cells = set(domain.footprint(probe, action))
+    if not domain.footprint_connected:
+        return
+    start, goal = probe.cell, end.cell
+    footprint = set(cells)
     want = abs(goal[0] - start[0]) + abs(goal[1] - start[1])
     frontier, seen = [start], {start}
     for _ in range(want):
         reached: list[Cell] = []
         for x, y in frontier:
             for nxt in ((x, y - 1), (x + 1, y), (x, y + 1), (x - 1, y)):
-                if nxt in cells and nxt not in seen:
+                if nxt in footprint and nxt not in seen:
                     seen.add(nxt)
                     reached.append(nxt)
         frontier = reached

@@ -38,8 +38,9 @@ A step term (:class:`~selfrepair.search.term.StepTerm`, the tolerant planner's) 
 expanded cell: the cell's row of counts (per heading and move), found for a term by pattern by
 gathering the cell's pattern from the term's grid and probing its table's index
 (:func:`_pattern_row`), and kept per cell between searches on that term (:class:`_TermState`);
-a pattern the table lacks makes the kernel return, with the pattern's code, so the source can
-add its row.
+a pattern the table lacks is added by the kernel itself when the table knows the answer of every
+part of it (:func:`_assemble`), and otherwise makes the kernel return, with the pattern's code,
+so the source can add its row.
 
 Kernels are resumable: all search state lives in arrays, and a call stops after a given number of
 expansions (so that the Python wrapper can look at the clock between calls) or when the heap or
@@ -65,7 +66,7 @@ from selfrepair.jit import NUMBA, njit
 from selfrepair.robots.domain import Domain
 from selfrepair.search.astar import PlanStatus
 from selfrepair.search.problem import CellBound, PlanningProblem, make_pose, pose_table
-from selfrepair.search.term import PATTERN_MIX, PatternTable, StepTerm
+from selfrepair.search.term import PART_STEP, PATTERN_MIX, PatternTable, StepTerm
 from selfrepair.world.maze import Maze
 
 _Fn = TypeVar("_Fn", bound=Callable[..., Any])
@@ -360,13 +361,24 @@ def _heap(tag: str, dtype: Any, need: int, columns: int = 4) -> npt.NDArray[Any]
     return heap
 
 
+def _padded(maze: Maze, inner: Any, border: int, dtype: Any, width: int = 1) -> npt.NDArray[Any]:
+    """An array of the maze's shape grown by ``width`` cells on every side: ``inner`` (a value
+    per maze cell) inside, ``border`` on the border (the padded layout of the kernels)."""
+    out = np.full((maze.height + 2 * width, maze.width + 2 * width), border, dtype=dtype)
+    out[width:-width, width:-width] = inner
+    return out
+
+
+def _frozen_flat(array: npt.NDArray[Any]) -> npt.NDArray[Any]:
+    """``array`` flattened (row after row) and made read-only, as the plan caches keep it."""
+    out = array.ravel()
+    out.setflags(write=False)
+    return out
+
+
 def _padded_free(maze: Maze) -> npt.NDArray[np.uint8]:
     def make() -> npt.NDArray[np.uint8]:
-        free = np.zeros((maze.height + 2, maze.width + 2), dtype=np.uint8)
-        free[1:-1, 1:-1] = ~maze.walls
-        out = free.ravel()
-        out.setflags(write=False)
-        return out
+        return _frozen_flat(_padded(maze, ~maze.walls, 0, np.uint8))
 
     return _cached(_FREE, maze, make)  # type: ignore[no-any-return]
 
@@ -381,17 +393,14 @@ def _neighbourhoods(maze: Maze) -> npt.NDArray[np.uint16]:
     free."""
 
     def make() -> npt.NDArray[np.uint16]:
-        free = np.zeros((maze.height + 4, maze.width + 4), dtype=np.uint16)
-        free[2:-2, 2:-2] = ~maze.walls
+        free = _padded(maze, ~maze.walls, 0, np.uint16, width=2)
         h, w = maze.height + 2, maze.width + 2
         mask = np.zeros((h, w), dtype=np.uint16)
         for dy in (-1, 0, 1):
             for dx in (-1, 0, 1):
                 bit = np.uint16(1 << (3 * (dy + 1) + dx + 1))
                 mask |= free[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w] * bit
-        out = mask.ravel()
-        out.setflags(write=False)
-        return out
+        return _frozen_flat(mask)
 
     return _cached(_NEIGHBOURS, maze, make)  # type: ignore[no-any-return]
 
@@ -460,10 +469,54 @@ def _pattern_row(cell: int, pw: int, term: Any, free: Any, offs: Any, keys: Any,
         slot = (slot + 1) & mask
 
 
+@njit(cache=True, inline="always")
+def _assemble(
+    code: Any, project: Any, parts: Any, acounts: Any, counts: Any, answers: Any, codes: Any,
+    keys: Any, rows: Any, meta: Any,
+) -> int:  # fmt: skip
+    """Add the row of pattern ``code`` to a :class:`~selfrepair.search.term.PatternTable` (its
+    arrays, ``counts``, ``answers`` and ``parts`` flat: every array of the lattice kernel is
+    one-dimensional, so that the mission kernel's one stand-in fits them all) from the answers
+    of its parts, and return the row;
+    -1 when a part has no answer yet or the table has no room (``meta``; the caller then adds
+    the row). Probes as :func:`~selfrepair.search.term.part_slot` and
+    :meth:`~selfrepair.search.term.PatternTable.add` do."""
+    size = meta[0]
+    if size >= meta[1]:
+        return -1
+    n = project.shape[0]
+    base = size * n
+    pmask = parts.shape[0] // 3 - 1
+    for i in range(n):
+        part = code & project[i]
+        first = ((part ^ (part >> 7) ^ (part >> 19)) * PATTERN_MIX) & pmask
+        slot = (first + i * PART_STEP) & pmask
+        while True:
+            key = parts[3 * slot]
+            if key == part and parts[3 * slot + 1] == i:
+                break
+            if key < 0:
+                return -1
+            slot = (slot + 1) & pmask
+        answer = parts[3 * slot + 2]
+        answers[base + i] = answer
+        counts[base + i] = acounts[answer]
+    codes[size] = code
+    mask = keys.shape[0] - 1
+    slot = ((code ^ (code >> 7) ^ (code >> 19)) * PATTERN_MIX) & mask
+    while keys[slot] >= 0:
+        slot = (slot + 1) & mask
+    keys[slot] = code
+    rows[slot] = size
+    meta[0] = size + 1
+    return int(size)
+
+
 @_search_kernel
 def _lattice(
     nbr: Any, pen: Any, hdist: Any, mt: Any, par: Any, rec: Any, heap: Any, scal: Any,
     term: Any, counts: Any, crow: Any, free: Any, offs: Any, keys: Any, rows: Any,
+    project: Any, parts: Any, acounts: Any, answers: Any, codes: Any, meta: Any,
 ) -> int:  # fmt: skip
     rnum, rden, wmul = par[0], par[1], par[2]
     goal_cell, goal_head, limit, opened, shift = par[3], par[4], par[5], par[6], par[7]
@@ -490,11 +543,16 @@ def _lattice(
             row = crow[cell]
             if row < 0:
                 row = _pattern_row(cell, pw, term, free, offs, keys, rows)
-                if row < 0:  # a pattern never met: the caller fills it, then calls again
-                    scal[_FOUND] = cell
-                    scal[_CODE] = _pattern_code(cell, pw, term, free, offs)
-                    status = _MISS
-                    break
+                if row < 0:  # a pattern never met: its row from its parts' answers, if known
+                    code = _pattern_code(cell, pw, term, free, offs)
+                    row = _assemble(
+                        code, project, parts, acounts, counts, answers, codes, keys, rows, meta
+                    )  # fmt: skip
+                    if row < 0:  # else the caller fills it, then calls again
+                        scal[_FOUND] = cell
+                        scal[_CODE] = code
+                        status = _MISS
+                        break
                 crow[cell] = row
             row = (row * 4 + head) * nmoves
         size = _pop2(heap, rec, size)
@@ -629,10 +687,7 @@ def _padded_penalty(maze: Maze, radius: int) -> tuple[npt.NDArray[np.int64], int
     def make() -> tuple[npt.NDArray[np.int64], int]:
         from selfrepair.world.maze import clearance_penalties
 
-        padded = np.full((maze.height + 2, maze.width + 2), radius, dtype=np.int64)
-        padded[1:-1, 1:-1] = clearance_penalties(maze, radius)
-        out = padded.ravel()
-        out.setflags(write=False)
+        out = _frozen_flat(_padded(maze, clearance_penalties(maze, radius), radius, np.int64))
         return out, int(out.max(initial=0))
 
     return _cached(_PENALTY, (maze, radius), make)  # type: ignore[no-any-return]
@@ -652,7 +707,23 @@ class _TermState:
     row (-1: not read yet), and for a term by pattern its grid's bytes, the pattern's cells as
     offsets in them and the pattern table the rows refer to."""
 
-    __slots__ = ("base", "counts", "crow", "free", "keys", "offs", "rows", "stride", "table")
+    __slots__ = (
+        "acounts",
+        "answers",
+        "base",
+        "codes",
+        "counts",
+        "crow",
+        "free",
+        "keys",
+        "meta",
+        "offs",
+        "parts",
+        "project",
+        "rows",
+        "stride",
+        "table",
+    )
 
     def __init__(self, term: StepTerm, pw: int) -> None:
         height, width = term.size
@@ -664,6 +735,7 @@ class _TermState:
             inner[:] = np.arange(height * width, dtype=np.int32).reshape(height, width)
             self.counts = term.dense_counts().astype(np.int32).reshape(-1)  # a writable copy
             self.free, self.offs, self.keys, self.rows = _NO_BYTES, _NO_INTS, _NO_INTS, _NO_ROWS
+            self._no_parts()
             self.stride = self.base = 0
             return
         grid = source.grid
@@ -681,11 +753,21 @@ class _TermState:
         self.base = (margin - 1) * self.stride + margin - 1
         self.offs = table.dy * self.stride + table.dx
         self.counts, self.keys, self.rows = _NO_COUNTS, _NO_INTS, _NO_ROWS
+        self._no_parts()
         self.refresh(table)
 
+    def _no_parts(self) -> None:
+        self.project, self.parts, self.acounts = _NO_INTS, _NO_PARTS, _NO_ROWS
+        self.answers, self.codes, self.meta = _NO_ROWS, _NO_INTS, _NO_META
+
     def arrays(self) -> tuple[npt.NDArray[Any], ...]:
-        """The kernel's term arrays: counts, cell rows, grid bytes, offsets, index keys, rows."""
-        return self.counts, self.crow, self.free, self.offs, self.keys, self.rows
+        """The kernel's term arrays: counts, cell rows, grid bytes, offsets, index keys, rows,
+        then the table's parts (projections, index, answer counts) and its rows' answers, codes
+        and meta (see :class:`~selfrepair.search.term.PatternTable`)."""
+        return (
+            self.counts, self.crow, self.free, self.offs, self.keys, self.rows,
+            self.project, self.parts, self.acounts, self.answers, self.codes, self.meta,
+        )  # fmt: skip
 
     def refresh(self, table: PatternTable) -> None:
         """Read ``table``'s current arrays; a new table (the source started afresh) makes every
@@ -695,6 +777,9 @@ class _TermState:
         self.table = table
         self.counts = table.counts.reshape(-1)
         self.keys, self.rows = table.keys, table.rows
+        self.project, self.acounts = table.project, table.acounts
+        self.parts = table.parts.reshape(-1)
+        self.answers, self.codes, self.meta = table.answers.reshape(-1), table.codes, table.meta
 
 
 # Stand-ins the kernel never reads (no term, or a dense one), with the flags of the real arrays
@@ -706,7 +791,12 @@ _NO_ROWS = np.zeros(1, dtype=np.int32)
 _NO_COUNTS = np.zeros(1, dtype=np.int32)
 _NO_CELLS = np.zeros(1, dtype=np.int32)
 _NO_TERM = np.zeros(6, dtype=np.int64)
-_NO_TERM_ARRAYS = (_NO_COUNTS, _NO_CELLS, _NO_BYTES, _NO_INTS, _NO_INTS, _NO_ROWS)
+_NO_PARTS = np.full(3, -1, dtype=np.int64)
+_NO_META = np.zeros(2, dtype=np.int64)  # no room: the kernel never adds a row
+_NO_TERM_ARRAYS = (
+    _NO_COUNTS, _NO_CELLS, _NO_BYTES, _NO_INTS, _NO_INTS, _NO_ROWS,
+    _NO_INTS, _NO_PARTS, _NO_ROWS, _NO_ROWS, _NO_INTS, _NO_META,
+)  # fmt: skip
 
 
 def _term_state(term: StepTerm, pw: int) -> _TermState:
@@ -844,7 +934,7 @@ def plan_lattice(
     ts = None
     tpar = _NO_TERM
     if term is not None:
-        ts = _term_state(term, pw)
+        ts = _term_state(term, pw)  # arrays left behind by a grown table: read-only to it
         tpar = np.array([1, int(term.hard), per_count, pw, ts.stride, ts.base], dtype=np.int64)
     missed = -1
 

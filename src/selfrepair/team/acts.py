@@ -17,11 +17,8 @@ def pick_or_drop(
 ) -> int | None:
     action = head.action
     state = world.items[action.item]
-    if state.settled:
-        robot.queue.popleft()
-        return None
-    if action.kind is ActionKind.DROP and robot.holding != action.item:
-        robot.queue.popleft()  # nothing to drop: the item went another way
+    if state.settled or (action.kind is ActionKind.DROP and robot.holding != action.item):
+        robot.queue.popleft()  # settled, or nothing to drop: the item went another way
         return None
     if not robot.can_grip:
         incident(world, repairer, robot, head, IncidentKind.GRIPPER, t)
@@ -39,8 +36,7 @@ def handover(
     world: TeamWorld, repairer: TeamRepairer, robot: RobotState, head: Entry, t: int
 ) -> int | None:
     action = head.action
-    state = world.items[action.item]
-    if state.settled:
+    if world.items[action.item].settled:
         robot.queue.popleft()
         return None
     giver, taker = world.robots[action.robot], world.robots[action.taker]

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 from selfrepair.errors import TraceError
@@ -49,12 +50,19 @@ _MARKERS = {Heading.N: "^", Heading.E: ">", Heading.S: "v", Heading.W: "<"}
 
 
 
-def _load(path: str | Path, max_trace_bytes: int | None = MAX_TRACE_BYTES) -> TeamTrace:
+def _open(
+    path: str | Path, out: str | Path, suffix: str, max_trace_bytes: int | None
+) -> tuple[ModuleType, TeamTrace]:
+    """Refuse an ``out`` not ending in ``suffix``, then load matplotlib and the trace at
+    ``path``, which must re-simulate (what drawing a frame and animating both start with)."""
+    if not str(out).lower().endswith(suffix):
+        raise TraceError(f"expected an output file ending in {suffix}", source=str(out))
+    mpl = matplotlib()
     trace = read_team_trace(path, max_trace_bytes=max_trace_bytes)
     report = replay_team(trace)
     if not report.ok:
         raise TraceError(f"the trace does not re-simulate: {report}", source=str(path))
-    return trace
+    return mpl, trace
 
 
 @dataclass(frozen=True, slots=True)
@@ -219,13 +227,10 @@ def draw_team_frame(
     max_trace_bytes: int | None = MAX_TRACE_BYTES,
 ) -> Path:
     """Draw one moment of a team trace (default: the first handover, else the first repair)."""
-    if not str(out).lower().endswith(".png"):
-        raise TraceError("expected an output file ending in .png", source=str(out))
-    mpl = matplotlib()
+    mpl, trace = _open(trace_path, out, ".png", max_trace_bytes)
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    trace = _load(trace_path, max_trace_bytes)
     t = _default_tick(trace) if tick is None else round(tick * trace.scale)
     if t < 0:
         raise TraceError(f"expected a tick >= 0, got {tick}", source=str(trace_path))
@@ -248,13 +253,10 @@ def animate_team_trace(
     max_trace_bytes: int | None = MAX_TRACE_BYTES,
 ) -> int:
     """Write a GIF of a team trace; returns the number of frames (the last one held)."""
-    if not str(out).lower().endswith(".gif"):
-        raise TraceError("expected an output file ending in .gif", source=str(out))
-    mpl = matplotlib()
+    mpl, trace = _open(trace_path, out, ".gif", max_trace_bytes)
     from matplotlib.animation import FuncAnimation, PillowWriter
     from matplotlib.figure import Figure
 
-    trace = _load(trace_path, max_trace_bytes)
     end = max([m.end for m in trace.moves] + [a.end for a in trace.acts] + [1])
     step = max(trace.scale, -(-end // max(1, max_frames)))
     frames = [*range(0, end + 1, step)]

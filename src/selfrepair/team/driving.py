@@ -34,7 +34,7 @@ from selfrepair.search.astar import PlanStatus
 from selfrepair.search.lattice import bfs_distances, planning_actions
 from selfrepair.team.model import IncidentKind
 from selfrepair.team.model import drive as drive_action
-from selfrepair.team.reservations import FOREVER, TimedStep
+from selfrepair.team.reservations import TimedStep
 from selfrepair.team.result import OwnRepairRecord, TeamSource
 from selfrepair.team.robottable import robot_table
 from selfrepair.team.scenario import grid_distances
@@ -253,10 +253,3 @@ def make_room(world: TeamWorld, robot: RobotState, at: int) -> None:
         other.retry_at = 0
         world.yields += 1
         world.messages += 1
-
-
-def next_step_time(robot: RobotState) -> int:
-    """When ``robot``'s next placed primitive starts (:data:`FOREVER` if none)."""
-    if robot.drive is None or not robot.drive.steps:
-        return FOREVER
-    return robot.drive.steps[0].start

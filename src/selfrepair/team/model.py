@@ -247,10 +247,6 @@ class TeamScenario:
         """The robot called ``name``."""
         return self.robots[self._index[name]]
 
-    def robot_index(self, name: str) -> int:
-        """The position of robot ``name`` in :attr:`robots` (its priority and colour)."""
-        return self._index[name]
-
     def task(self, item: str) -> Task:
         """The task of ``item``."""
         for task in self.tasks:

@@ -14,7 +14,6 @@ robot's simulator keeps the true faults apart from what the robot knows.
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 from fractions import Fraction
 
@@ -275,10 +274,6 @@ class TeamWorld:
     yields: int = 0
     last_progress: int = 0
     dirty: set[str] = field(default_factory=set)
-
-    def robot_list(self) -> Iterator[RobotState]:
-        """The robots in priority order (scenario order)."""
-        return iter(self.robots.values())
 
     def known_extra(self, exclude: str = "", events: bool = True) -> frozenset[Cell]:
         """Free cells of the maze the team treats as walls: known blocked cells, cells of

@@ -35,11 +35,10 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from selfrepair.execution.result import StepSource
 from selfrepair.execution.traceformat import pose_json
-from selfrepair.geometry import Cell, Pose
-from selfrepair.team.model import TeamAction, TeamScenario
-from selfrepair.team.result import TeamOptions
+from selfrepair.geometry import Cell
+from selfrepair.team.model import TeamScenario
+from selfrepair.team.result import ActRecord, FaultRecord, MoveRecord, TeamOptions
 
 __all__ = [
     "TEAM_TRACE_FORMAT",
@@ -73,37 +72,23 @@ def maze_digest(rows: Sequence[str]) -> str:
 
 
 @dataclass(frozen=True, slots=True)
-class TraceMove:
-    """A ``move`` line, read back."""
+class TraceMove(MoveRecord):
+    """A ``move`` line, read back: the move and the ``line`` it stood on."""
 
-    robot: str
-    start: int
-    end: int
-    action: object
-    before: Pose
-    after: Pose
-    source: StepSource
     line: int
 
 
 @dataclass(frozen=True, slots=True)
-class TraceAct:
-    """An ``act`` line, read back."""
+class TraceAct(ActRecord):
+    """An ``act`` line, read back: the act and the ``line`` it stood on."""
 
-    start: int
-    end: int
-    action: TeamAction
-    cells: tuple[Cell, ...]
     line: int
 
 
 @dataclass(frozen=True, slots=True)
-class TraceFault:
-    """A ``fault`` line, read back."""
+class TraceFault(FaultRecord):
+    """A ``fault`` line, read back: the fault record and the ``line`` it stood on."""
 
-    at: int
-    index: int
-    active: bool
     line: int
 
 

@@ -13,6 +13,7 @@ from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.faults import Detection, Persistence
 from selfrepair.execution.result import StepSource
 from selfrepair.execution.traceformat import TraceFields
+from selfrepair.execution.traceread import read_trace_text
 from selfrepair.limits import MAX_TRACE_BYTES
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.robots.domain import SomeDomain
@@ -35,7 +36,6 @@ from selfrepair.team.traceformat import (
     TraceFault,
     TraceMove,
 )
-from selfrepair.textio import read_text
 from selfrepair.world.events import WorldSchedule
 from selfrepair.world.maze import parse_maze
 
@@ -59,13 +59,7 @@ def read_team_trace(
     """Read and type-check a team trace; a trace without its summary is refused unless
     ``partial`` (it was cut short), a file over ``max_trace_bytes`` before it is read."""
     file = Path(path)
-    text = read_text(
-        file,
-        what="team trace",
-        error=TraceError,
-        max_bytes=max_trace_bytes,
-        limit="max_trace_bytes",
-    )
+    text = read_trace_text(file, "team trace", max_trace_bytes)
     return parse_team_trace(text, source=str(file), partial=partial)
 
 

@@ -43,6 +43,7 @@ __all__ = [
     "MAX_SCHEDULE_FAULTS",
     "CompiledLookups",
     "compiled_lookups",
+    "empty_hash",
     "fault_arrays",
     "move_arrays",
 ]
@@ -56,6 +57,16 @@ MAX_SCHEDULE_FAULTS = 10
 MAX_CODE_RADIUS = 3
 """The largest occupancy window radius whose codes fit 63 bits (``(2r + 1)^2 = 49``); a look-up
 of a wider neighbourhood is keyed by cell instead (same answers, one per cell)."""
+
+
+def empty_hash(capacity: int) -> tuple[Int64s, Int64s, Int64s]:
+    """An empty hash table of the kernels (:func:`kernel.hash_put`) with room for ``capacity``
+    slots: first keys (all :data:`kernel.EMPTY`), second keys and values."""
+    return (
+        np.full(capacity, k.EMPTY, dtype=np.int64),
+        np.zeros(capacity, dtype=np.int64),
+        np.zeros(capacity, dtype=np.int64),
+    )
 
 
 def move_arrays(table: MoveTable) -> Int64s:
@@ -137,9 +148,7 @@ class CompiledLookups:
         self.guards: list[frozenset[object]] = [frozenset()]
         """The guard sets met so far, by id (0: none)."""
         self._guard_ids: dict[frozenset[object], int] = {frozenset(): 0}
-        self.gk1 = np.full(1 << 6, k.EMPTY, dtype=np.int64)
-        self.gk2 = np.zeros(1 << 6, dtype=np.int64)
-        self.gv = np.zeros(1 << 6, dtype=np.int64)
+        self.gk1, self.gk2, self.gv = empty_hash(1 << 6)
         self._g_stored = 0
         self.ans_doff = np.zeros(64, dtype=np.int64)
         self.ans_dlen = np.zeros(64, dtype=np.int64)
@@ -152,9 +161,7 @@ class CompiledLookups:
         self.lk_r = np.zeros((4, self.n_slots), dtype=np.int64)
         self.radii: list[int] = []
         self.codes = np.zeros((0, self.grid.height, self.grid.width), dtype=np.int64)
-        self.hk1 = np.full(1 << 10, k.EMPTY, dtype=np.int64)
-        self.hk2 = np.zeros(1 << 10, dtype=np.int64)
-        self.hv = np.zeros(1 << 10, dtype=np.int64)
+        self.hk1, self.hk2, self.hv = empty_hash(1 << 10)
         self.stored = 0
         self.answers: list[Repair] = []
         self._ids: dict[int, int] = {}
@@ -289,12 +296,10 @@ class CompiledLookups:
 
 def _rehashed(hk1: Int64s, hk2: Int64s, hv: Int64s) -> tuple[Int64s, Int64s, Int64s]:
     """The hash table ``(hk1, hk2, hv)`` in twice the room."""
-    cap = 2 * hk1.shape[0]
-    new = np.full(cap, k.EMPTY, dtype=np.int64), np.zeros(cap, dtype=np.int64)
-    values = np.zeros(cap, dtype=np.int64)
+    keys, codes, values = empty_hash(2 * hk1.shape[0])
     for i in np.flatnonzero(hk1 != k.EMPTY).tolist():
-        k.hash_put(new[0], new[1], values, int(hk1[i]), int(hk2[i]), int(hv[i]))
-    return new[0], new[1], values
+        k.hash_put(keys, codes, values, int(hk1[i]), int(hk2[i]), int(hv[i]))
+    return keys, codes, values
 
 
 _G = TypeVar("_G", bound=np.generic)

@@ -25,6 +25,7 @@ from selfrepair.execution.compiled import kernel as k
 from selfrepair.execution.compiled.arrays import (
     MAX_SCHEDULE_FAULTS,
     compiled_lookups,
+    empty_hash,
     fault_arrays,
     move_arrays,
 )
@@ -51,7 +52,7 @@ from selfrepair.repair.strategies import (
 )
 from selfrepair.search.astar import PlanResult
 from selfrepair.search.problem import make_pose
-from selfrepair.status import REPAIR_OF_PLAN, MissionStatus, mission_status
+from selfrepair.status import REPAIR_OF_PLAN, MissionStatus, PlanStatus, mission_status
 
 __all__ = ["FOOTINGS", "LoopEnd", "compiled_loop", "refusal", "runs_compiled"]
 
@@ -68,7 +69,9 @@ _SOURCES = (
     StepSource.REPLAN,
     StepSource.FAILED_ATTEMPT,
     StepSource.WAIT,
+    StepSource.LOOKAHEAD,
 )
+_COMPILED = (StrategyName.REPLAN, StrategyName.REPLACEMENT, StrategyName.LOOKAHEAD)
 _REPAIR_STATUS = {
     RepairStatus.REPAIRED: k.R_REPAIRED,
     RepairStatus.STUCK: k.R_STUCK,
@@ -86,12 +89,16 @@ def refusal(spec: MissionSpec, stepper: Stepper | None = None) -> str | None:
     """Why the compiled loop cannot run ``spec`` (one line), or ``None`` when it can."""
     if not k.NUMBA:
         return "numba is not installed (the 'fast' extra)"
-    if spec.strategy not in (StrategyName.REPLAN, StrategyName.REPLACEMENT):
-        return f"strategy {spec.strategy!s} runs in Python (compiled: replan, replacement)"
+    if spec.strategy not in _COMPILED:
+        compiled = "replan, replacement, lookahead"
+        return f"strategy {spec.strategy!s} runs in Python (compiled: {compiled})"
+    if spec.strategy == StrategyName.LOOKAHEAD and spec.options.recursion in DEFERRING:
+        mode = spec.options.recursion
+        return f"lookahead's fallback in {mode!s} recursion defers actions (Python only)"
     if spec.objective is not None:
         return "a tolerant planning objective runs in Python"
-    if stepper is not None and stepper.horizon:
-        return "a repair horizon runs in Python"
+    if stepper is not None and stepper.horizon and spec.strategy != StrategyName.LOOKAHEAD:
+        return "a repair horizon runs in Python (compiled: lookahead's)"
     if spec.world:
         return "world events (a changing maze) run in Python"
     if spec.schedule.detection is Detection.HIDDEN:
@@ -155,9 +162,10 @@ class _Mission:
         self.ev = ev
         self.waits = np.array([self.index.of(w) for w in domain.waits], dtype=np.int64)
         replacement = spec.strategy == StrategyName.REPLACEMENT
+        lookahead = spec.strategy == StrategyName.LOOKAHEAD
         deferring = replacement and spec.options.recursion in DEFERRING
         n_actions = len(domain.actions)
-        self.lookups = compiled_lookups(context, n_actions) if replacement else None
+        self.lookups = compiled_lookups(context, n_actions) if replacement or lookahead else None
         self.set_of = (
             self.lookups.set_of(self.faults)
             if self.lookups is not None
@@ -171,7 +179,9 @@ class _Mission:
         ) if weight else np.zeros(1, dtype=np.int64)  # fmt: skip
         goal_h = -1 if spec.goal_heading is None else int(spec.goal_heading)
         par = np.zeros(k.P_SIZE, dtype=np.int64)
-        par[k.P_STRATEGY] = int(replacement)
+        par[k.P_STRATEGY] = 2 if lookahead else int(replacement)
+        par[k.P_BEFORE] = stepper.horizon if lookahead else 0
+        par[k.P_WINDOW] = spec.options.window
         par[k.P_REWRITE] = int(replacement and spec.options.rewrite and not deferring)
         par[k.P_DEFER] = int(deferring)
         par[k.P_WIDTH], par[k.P_HEIGHT] = grid.width, grid.height
@@ -208,6 +218,7 @@ class _Mission:
         self.plans: list[PlanResult] = []
         self._known: dict[int, frozenset[object]] = {}
         st[k.S_PL_MASK] = -1
+        st[k.S_EARLY_AT] = -1
         self.planner: tuple[Any, ...] = _NO_PLANNER  # the compiled planner's arrays
         self.search: tuple[Any, ...] = _NO_SEARCH
         self._holder: list[tuple[Any, ...]] = [_NO_SEARCH]
@@ -282,7 +293,14 @@ class _Mission:
             assert lk is not None
             lk.fill(*args)
         elif code == k.NEED_PLAN:
-            self._plan(args[0])
+            self._plan(args[0], self.pose(args[1], args[2], args[3]))
+        elif code == k.NEED_WINDOW:
+            self._plan_window(args[0], self.pose(args[1], args[2], args[3]))
+        elif code == k.OFF_GRID:
+            raise ProblemError(
+                f"lookahead at {self.pose(int(st[k.S_X]), int(st[k.S_Y]), int(st[k.S_H]))}: the "
+                "faulty action would be met off the maze"
+            )
         elif code == k.NEED_GUARD:
             assert lk is not None
             lk.serve_guard(args[0], args[1])
@@ -309,25 +327,43 @@ class _Mission:
         else:  # pragma: no cover - the kernel has no other exit
             raise AssertionError(f"unknown kernel exit {code}")
 
-    def _plan(self, mask: int) -> None:
-        """Plan from the current pose under the known faults (the mission's planner)."""
+    def _plan(self, mask: int, pose: Pose) -> None:
+        """Plan from ``pose`` to the goal under the known faults (the mission's planner)."""
         st, context = self.st, self.context
-        pose = self.pose(int(st[k.S_X]), int(st[k.S_Y]), int(st[k.S_H]))
         result = context.plan(
             pose, context.goal, context.goal_heading, self.known(mask), context.replan_budget
         )
-        status = REPAIR_OF_PLAN[result.status]
+        status = self._planned(result)
+        st[k.S_PLAN_STATUS] = _REPAIR_STATUS[status]
+        st[k.S_PLAN_LEN] = len(result.actions)
+        st[k.S_PLAN_EXP] = result.expansions
+        st[k.S_PLAN_ID] = len(self.plans) - 1
+        st[k.S_PLAN_READY] = 1
+
+    def _plan_window(self, mask: int, end: Pose) -> None:
+        """The lookahead window's search: from the current pose to the window's end ``end``
+        under the known faults, within the window budget (as ``lookahead`` asks it)."""
+        st, context = self.st, self.context
+        pose = self.pose(int(st[k.S_X]), int(st[k.S_Y]), int(st[k.S_H]))
+        budget = context.options.lookahead_expansions
+        result = context.plan(pose, end.cell, end.heading, self.known(mask), budget)
+        solved = result.status is PlanStatus.SOLVED
+        self._planned(result)
+        st[k.S_LA_STATUS] = k.R_REPAIRED if solved else k.R_STUCK
+        st[k.S_LA_LEN] = len(result.actions)
+        st[k.S_LA_EXP] = result.expansions
+        st[k.S_LA_ID] = len(self.plans) - 1
+        st[k.S_LA_READY] = 1
+
+    def _planned(self, result: PlanResult) -> RepairStatus:
+        """Keep ``result`` and put its actions in the plan buffer; its repair status."""
         of = self.index.of
         acts = [of(a) for a in result.actions]
         while self.pb.shape[0] < len(acts):
             self.pb = _grow(self.pb)
         self.pb[: len(acts)] = acts
-        st[k.S_PLAN_STATUS] = _REPAIR_STATUS[status]
-        st[k.S_PLAN_LEN] = len(acts)
-        st[k.S_PLAN_EXP] = result.expansions
-        st[k.S_PLAN_ID] = len(self.plans)
-        st[k.S_PLAN_READY] = 1
         self.plans.append(result)
+        return REPAIR_OF_PLAN[result.status]
 
     def pose(self, x: int, y: int, h: int) -> Pose:
         """The pose of ``(x, y, h)`` (shared from the maze's pose table when it has one)."""
@@ -353,9 +389,7 @@ _RECORDS: BoundedCache[int, list[tuple[object, ...]]] = BoundedCache(
 )
 _NO_DEFERRING = (
     np.zeros((1, 2), dtype=np.int64),
-    np.full(2, k.EMPTY, dtype=np.int64),
-    np.zeros(2, dtype=np.int64),
-    np.zeros(2, dtype=np.int64),
+    *empty_hash(2),
     np.zeros(1, dtype=np.int64),
     np.zeros(1, dtype=np.int64),
     np.zeros(1, dtype=np.int64),
@@ -364,9 +398,7 @@ _NO_LOOKUPS = (
     np.zeros((1, 1), dtype=np.int64),
     np.zeros((1, 1), dtype=np.int64),
     np.zeros((1, 1, 1), dtype=np.int64),
-    np.full(2, k.EMPTY, dtype=np.int64),
-    np.zeros(2, dtype=np.int64),
-    np.zeros(2, dtype=np.int64),
+    *empty_hash(2),
     np.zeros(1, dtype=np.int64),
     np.zeros(1, dtype=np.int64),
     np.zeros(1, dtype=np.int32),
@@ -434,8 +466,7 @@ def _warm() -> None:
     """Load the kernels the driver calls from Python (from numba's cache, or compiled) once per
     process, before any repair's clock runs: a cold run's first fill must not pay for it."""
     if not _WARM:
-        keys, codes, values = (np.full(2, k.EMPTY, dtype=np.int64), np.zeros(2, dtype=np.int64),
-                               np.zeros(2, dtype=np.int64))  # fmt: skip
+        keys, codes, values = empty_hash(2)
         k.hash_put(keys, codes, values, 0, 0, 0)
         k.hash_get(keys, codes, values, 0, 0)
         _WARM.append(True)
@@ -491,7 +522,19 @@ def _record(mission: _Mission, row: list[int]) -> RepairRecord:
     ]
     pose = make_pose(x, y, _HEADINGS[h])
     action = None if a < 0 else actions[a]
+    window = row[k.RP_WINDOW]
     repair: Repair
+    if kind == k.K_WINDOW:
+        result = mission.plans[window]
+        repair = Repair(
+            RepairStatus.REPAIRED,
+            RepairSource.LOOKAHEAD,
+            result.actions,
+            consumed,
+            expansions=result.expansions,
+            attempts=(StrategyName.LOOKAHEAD,),
+        )
+        return RepairRecord(step, pose, action, repair, latency)
     if kind in (k.K_HIT, k.K_REWRITE):
         lookups = mission.lookups
         assert lookups is not None
@@ -529,4 +572,13 @@ def _record(mission: _Mission, row: list[int]) -> RepairRecord:
             assert table is not None
             examined = len(table.candidates(action, mission.known(known)))
             repair = chained(repair, (StrategyName.REPLACEMENT,), examined=examined)
+    if window >= 0:  # lookahead's fallback: the healthy prefix kept in front, the window's work
+        prefix = row[k.RP_PREFIX]
+        if prefix:
+            spliced = tuple(actions[i] for i in mission.rp_act[off : off + length].tolist())
+            consumed_all = repair.consumed + prefix if kind == k.K_HIT else repair.consumed
+            repair = repair._replace(actions=spliced, consumed=consumed_all)
+        repair = chained(
+            repair, (StrategyName.LOOKAHEAD,), expansions=mission.plans[window].expansions
+        )
     return RepairRecord(step, pose, action, repair, latency)

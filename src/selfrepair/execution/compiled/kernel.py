@@ -2,11 +2,14 @@
 
 It is :func:`selfrepair.execution.executor.run_mission`'s loop (the executor's ``_loop``, the
 :class:`~selfrepair.execution.stepper.Stepper` and the :class:`~selfrepair.execution.simulator.
-Simulator`) for the ``replan`` strategy and the ``replacement`` strategy in every recursion mode
+Simulator`) for the ``replan`` strategy, the ``replacement`` strategy in every recursion mode
 (with or without whole-plan rewriting; ``primitive``, which defers faulty complex actions, as the
-:class:`~selfrepair.repair.strategies.replacement.DeferringRepairer`), written over arrays so
-that no step and no warm repair runs Python. The Python loop is the reference: the property test of
-``tests/test_compiled_loop.py`` runs both and compares the traces step by step.
+:class:`~selfrepair.repair.strategies.replacement.DeferringRepairer`) and the ``lookahead``
+strategy (its window, the stepper's horizon of ``before`` actions, and its fallbacks; the
+window's search is the driver's, one ``NEED_WINDOW`` exit per window, since it plans to a goal
+of its own), written over arrays so that no step and no warm table repair runs Python. The
+Python loop is the reference: the property test of ``tests/test_compiled_loop.py`` runs both and
+compares the traces step by step.
 
 **Resumable.** All state lives in arrays handed in (``st`` holds the scalars). The kernel runs
 until the mission ends or until it needs something only Python has, and then returns an *exit*
@@ -21,7 +24,9 @@ clock still running: the latency of a repair covers whatever it needed. The exit
   Python loop's compiled look-ups);
 * ``NEED_PLAN``: a replan (the driver calls the mission's planner);
 * ``GROW``: an output or queue array is full (``GROW_HEAP``: the planner's heap);
-* ``NEED_GUARD``: a deferring mode's guard set or guarded look-ups not known yet (see below).
+* ``NEED_GUARD``: a deferring mode's guard set or guarded look-ups not known yet (see below);
+* ``NEED_WINDOW``: a lookahead window's search (the driver plans to the window's end pose);
+* ``OFF_GRID``: a lookahead fallback would look an action up off the maze (an error).
 
 A warm mission (every pattern it meets already answered) runs in one call except for its replans.
 
@@ -87,6 +92,8 @@ TOO_MANY = 6
 NEED_PLANNER = 7
 GROW_HEAP = 8
 NEED_GUARD = 9
+NEED_WINDOW = 10
+OFF_GRID = 11
 
 # --- mission ends (st[END]) ------------------------------------------------------------------
 REACHED = 0
@@ -100,6 +107,7 @@ SRC_REPLACEMENT = 1
 SRC_REPLAN = 2
 SRC_FAILED = 3
 SRC_WAIT = 4
+SRC_LOOKAHEAD = 5
 
 # --- repair kinds (rp[i, RP_KIND]) -----------------------------------------------------------
 K_HIT = 0
@@ -107,6 +115,7 @@ K_REWRITE = 1
 K_REPLAN = 2
 K_MISS = 3
 K_DEFENSIVE = 4
+K_WINDOW = 5
 
 # --- repair statuses -------------------------------------------------------------------------
 R_REPAIRED = 0
@@ -156,7 +165,13 @@ S_PL_MASK = 29  # the known mask the loaded planner serves (-1: none)
 S_PL_KERNEL = 30  # 1: the loaded planner runs in the kernel; 0: the driver plans
 S_PLAN_EXP = 31  # expansions of the plan just made in the kernel
 S_PEND_HI = 32  # deferring mode: the highest marker that may be pending (0: none)
-S_SIZE = 33
+S_EARLY_AT = 33  # lookahead: the step of the last early repair (-1: none)
+S_LA_READY = 34  # lookahead: 1 when the window's search answered the pending NEED_WINDOW
+S_LA_STATUS = 35
+S_LA_LEN = 36
+S_LA_EXP = 37
+S_LA_ID = 38
+S_SIZE = 39
 
 # --- par: the mission's parameters -----------------------------------------------------------
 P_STRATEGY = 0  # 0 replan, 1 replacement
@@ -178,7 +193,9 @@ P_MAX_TRIES = 15
 P_BUDGET = 16
 P_SEED = 17  # the mission's seed (intermittent draws)
 P_DEFER = 18  # 1: the recursion mode defers faulty complex actions (primitive)
-P_SIZE = 19
+P_BEFORE = 19  # lookahead: actions after the front checked for known faults (the horizon)
+P_WINDOW = 20  # lookahead: actions after the faulty one in the window
+P_SIZE = 21
 
 # --- fault event kinds (ev[e, 2]) ------------------------------------------------------------
 EV_TRANSIENT = 0
@@ -192,9 +209,10 @@ T_COLS = 11
 # --- repair rows (rp[i]) ---------------------------------------------------------------------
 (
     RP_STEP, RP_X, RP_Y, RP_H, RP_ACTION, RP_KIND, RP_AID, RP_STATUS, RP_LATENCY, RP_CONSUMED,
-    RP_ACT_OFF, RP_ACT_LEN, RP_SUBST, RP_PLAN, RP_KNOWN, RP_QLEN, RP_EXPANSIONS,
-) = range(17)  # fmt: skip
-RP_COLS = 17
+    RP_ACT_OFF, RP_ACT_LEN, RP_SUBST, RP_PLAN, RP_KNOWN, RP_QLEN, RP_EXPANSIONS, RP_WINDOW,
+    RP_PREFIX,
+) = range(19)  # fmt: skip
+RP_COLS = 19
 
 _MUL1 = np.int64(-7046029254386353131)  # 0x9E3779B97F4A7C15 as a signed 64-bit integer
 _MUL2 = np.int64(-4658895280553007687)  # 0xBF58476D1CE4E5B9
@@ -373,15 +391,27 @@ def run_kernel(
             known = st[S_KNOWN]
             qlen = st[S_QLEN]
             if st[S_PHASE] == 0:
+                ahead = -1
                 if qlen > 0 and avail[known, qa[qlen - 1]]:
-                    break
+                    if par[P_BEFORE] > 0 and st[S_EARLY_AT] != st[S_STEP]:
+                        # the stepper's horizon: a known fault among the next actions
+                        for i in range(1, min(par[P_BEFORE] + 1, qlen)):
+                            if not avail[known, qa[qlen - 1 - i]]:
+                                ahead = qa[qlen - 1 - i]
+                                break
+                    if ahead < 0:
+                        break
                 if st[S_TRIES] >= par[P_MAX_TRIES]:
                     return TOO_MANY
                 if st[S_NREP] >= rp.shape[0] or rp_act.shape[0] - st[S_NACT] < qlen + 64:
                     return GROW  # before the clock starts: growing is no part of a repair
                 st[S_PHASE] = 1
                 st[S_T0] = _now()
-                st[S_RACTION] = qa[qlen - 1] if qlen > 0 else -1
+                if ahead >= 0:
+                    st[S_EARLY_AT] = st[S_STEP]  # at most one early repair per step
+                    st[S_RACTION] = ahead
+                else:
+                    st[S_RACTION] = qa[qlen - 1] if qlen > 0 else -1
             if st[S_NREP] >= rp.shape[0]:
                 return GROW
             code = _repair(par, st, mv, avail, ev, set_of, lk_mask, lk_r, codes, hk1, hk2, hv,
@@ -465,8 +495,44 @@ def _repair(
     defer = par[P_DEFER] == 1 and a >= 0
     pend, gk1, gk2, gv, ans_doff, ans_dlen, ans_dpos = deferring
     grown = 0  # deferring: the guard id of this repair's guard set with ``a`` added
+    pfx = 0  # lookahead fallback: the healthy actions before the faulty one, kept in front
+    window = -1  # lookahead: the plan id of the window's search
+    wlen = 0
+    px, py, ph = x, y, h  # where the look-up and the replan start (lookahead: past the prefix)
     if a < 0:
         kind = K_DEFENSIVE
+    elif par[P_STRATEGY] == 2:
+        # lookahead(): the window runs from the front to P_WINDOW actions after the first
+        # faulty action among the first P_BEFORE + 1
+        f = 0
+        for i in range(min(par[P_BEFORE] + 1, qlen)):
+            if not avail[known, qa[qlen - 1 - i]]:
+                f = i
+                break
+        wlen = min(f + par[P_WINDOW] + 1, qlen)
+        if st[S_LA_READY] == 0:
+            ex, ey, eh = x, y, h
+            for i in range(wlen):
+                b = qa[qlen - 1 - i]
+                ex, ey, eh = ex + mv[b, eh, 0], ey + mv[b, eh, 1], mv[b, eh, 2]
+            st[S_ARG0], st[S_ARG1], st[S_ARG2], st[S_ARG3] = known, ex, ey, eh
+            return NEED_WINDOW
+        window = st[S_LA_ID]
+        if st[S_LA_STATUS] == R_REPAIRED:
+            kind = K_WINDOW
+        else:  # replacement() for the faulty action where the robot will meet it
+            pfx = f
+            for i in range(f):
+                b = qa[qlen - 1 - i]
+                px, py, ph = px + mv[b, ph, 0], py + mv[b, ph, 1], mv[b, ph, 2]
+            if not (0 <= px < par[P_WIDTH] and 0 <= py < par[P_HEIGHT]):
+                return OFF_GRID
+            b = qa[qlen - 1 - f]
+            aid = _lookup(st, par, set_of, lk_mask, lk_r, codes, hk1, hk2, hv, known, b, px, py,
+                          ph)  # fmt: skip
+            if aid <= -10:
+                return -10 - aid
+            kind = K_MISS if aid == NO_ANSWER else K_HIT
     elif defer:
         # DeferringRepairer.repair: the guard of the deferred action pending at this marker
         sid = set_of[known]
@@ -498,23 +564,40 @@ def _repair(
         if aid <= -10:
             return -10 - aid
         kind = K_MISS if aid == NO_ANSWER else K_HIT
-    if kind != K_HIT:  # a replan
+    if kind == K_WINDOW:  # the window's sub-plan replaces the window
+        status = R_REPAIRED
+        off = st[S_NACT]
+        consumed = wlen
+        n = st[S_LA_LEN]
+        if qlen - wlen + n + 2 > qa.shape[0] or n > rp_act.shape[0] - off:
+            st[S_PLAN_LEN] = n
+            return GROW  # the sub-plan stays ready for the retry
+        for i in range(n):
+            rp_act[off + i] = pb[i]
+        st[S_QLEN] -= consumed
+        _push(qa, qs, st, rp_act, off, n, SRC_LOOKAHEAD)
+        rec[RP_PLAN] = -1
+        rec[RP_EXPANSIONS] = 0
+        rec[RP_SUBST] = 0
+    elif kind != K_HIT:  # a replan (lookahead: from past the prefix, which stays in front)
         off = st[S_NACT]
         consumed = qlen
-        st[S_ARG0] = known
+        st[S_ARG0], st[S_ARG1], st[S_ARG2], st[S_ARG3] = known, px, py, ph
         if st[S_PLAN_READY] == 0 and st[S_PL_MASK] != known:
             return NEED_PLANNER
+        for i in range(pfx):
+            rp_act[off + i] = qa[qlen - 1 - i]
         if st[S_PLAN_READY] == 0 and st[S_PL_KERNEL] == 1:  # one call of the lattice kernel
             mt, hdist, ppen, nbr, ppar, moves = planner
             prec, gen, heap, pscal, ppar2, pextra = search
             found, n, expansions = plan_in_kernel(
                 mt, hdist, ppen, nbr, ppar, moves, prec, gen, heap, pscal, ppar2, pextra,
-                x, y, h, par[P_BUDGET], rp_act, off,
+                px, py, ph, par[P_BUDGET], rp_act, off + pfx,
             )  # fmt: skip
             if found == 4:
                 return GROW_HEAP
-            if found == 3 or n + 2 > qa.shape[0]:
-                st[S_PLAN_LEN] = n
+            if found == 3 or pfx + n + 2 > qa.shape[0]:
+                st[S_PLAN_LEN] = pfx + n
                 return GROW
             status = R_REPAIRED if found == 0 else (R_STUCK if found == 1 else R_BUDGET)
             rec[RP_PLAN] = -1
@@ -524,30 +607,35 @@ def _repair(
             status = st[S_PLAN_STATUS]
             n = st[S_PLAN_LEN]
             expansions = st[S_PLAN_EXP]
-            if status == R_REPAIRED and (n + 2 > qa.shape[0] or n > rp_act.shape[0] - off):
+            if status == R_REPAIRED and (
+                pfx + n + 2 > qa.shape[0] or pfx + n > rp_act.shape[0] - off
+            ):
                 return GROW  # the plan stays ready for the retry
             st[S_PLAN_READY] = 0
             for i in range(n):
-                rp_act[off + i] = pb[i]
+                rp_act[off + pfx + i] = pb[i]
             rec[RP_PLAN] = st[S_PLAN_ID]
         if status == R_REPAIRED:
+            n += pfx
             st[S_QLEN] = 0
             _push(qa, qs, st, rp_act, off, n, SRC_REPLAN)
         else:
-            n = 0
+            n = pfx  # the record keeps the prefix (nothing is spliced)
         rec[RP_EXPANSIONS] = expansions
         rec[RP_SUBST] = 0
     else:
         status = R_REPAIRED
         off = st[S_NACT]
-        consumed = 1
+        consumed = 1 + pfx
         substituted = 0
         start, length = ans_off[aid], ans_len[aid]
         if rp_act.shape[0] - off < length + qlen:
             return GROW
+        for i in range(pfx):  # lookahead: the healthy actions before the faulty one
+            rp_act[off + i] = qa[qlen - 1 - i]
         for i in range(length):
-            rp_act[off + i] = ans_act[start + i]
-        n = length
+            rp_act[off + pfx + i] = ans_act[start + i]
+        n = pfx + length
         if par[P_REWRITE]:
             # the whole-plan rewrite: walk the rest of the queue along its predicted poses
             width, height = par[P_WIDTH], par[P_HEIGHT]
@@ -592,6 +680,8 @@ def _repair(
     rec[RP_ACTION], rec[RP_KIND], rec[RP_AID], rec[RP_STATUS] = a, kind, aid, status
     rec[RP_CONSUMED], rec[RP_ACT_OFF], rec[RP_ACT_LEN] = consumed, off, n
     rec[RP_KNOWN], rec[RP_QLEN] = known, qlen
+    rec[RP_WINDOW], rec[RP_PREFIX] = window, pfx
+    st[S_LA_READY] = 0
     st[S_NACT] = off + n
     st[S_NREP] = r + 1
     if defer:  # the repairer's pending deferred actions, as DeferringRepairer.repair keeps them

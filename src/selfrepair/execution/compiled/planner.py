@@ -170,8 +170,9 @@ def plan_in_kernel(
     par[0], par[1], par[2], par[3], par[4] = rnum, rden, wmul, goal_cell, goal_head
     par[5], par[6], par[7], par[8] = budget, opened, shift, 0
     code = kn._lattice(
-        nbr, pen, hdist, mt, par, rec, heap, scal, extra, extra, extra, extra, extra, extra, extra
-    )
+        nbr, pen, hdist, mt, par, rec, heap, scal, extra, extra, extra, extra, extra, extra, extra,
+        extra, extra, extra, extra, extra, extra,
+    )  # fmt: skip
     expansions = scal[kn._EXPANSIONS]
     if code == kn._GROW:
         return 4, 0, expansions

@@ -21,8 +21,11 @@ leaves a choice (docs/diagnosis.md):
     changes.
 ``active-diagnosis``
     ``conformant``, but when no conformant repair exists and more than one class remains (the
-    ambiguity blocks progress), it first runs the probe of most information per tick
-    (:func:`selfrepair.diagnosis.best_probe`: one command, or two), then comes back.
+    ambiguity blocks progress), it first runs the probe that isolates in the fewest commands
+    (:func:`selfrepair.diagnosis.isolating_probe`: one command, or two), then comes back. The
+    probe planner counts the readings a probe will get as the belief will: the robot's own with
+    its odometry's noise and those of the observing teammates (``MissionContext.observers``,
+    where they stand as they follow the robot) that will see the motion.
 
 When a command takes the robot elsewhere than it should have (a *surprise*), the queue no longer
 starts where the robot is: the repairer is asked before the next command and *rejoins* the
@@ -45,6 +48,7 @@ from selfrepair.diagnosis import (
     fault_model,
     isolating_probe,
 )
+from selfrepair.diagnosis.cooperative import following
 from selfrepair.geometry import Pose
 from selfrepair.repair.strategies.names import RepairSource, StrategyName
 from selfrepair.repair.strategies.protocol import (
@@ -89,6 +93,7 @@ class DiagnosingRepairer:
         "_error",
         "_known",
         "_margin",
+        "_noise",
         "_planner",
         "_policy",
         "_probing",
@@ -96,6 +101,7 @@ class DiagnosingRepairer:
         "_relaxed",
         "_switch",
         "_table",
+        "_trail",
         "_wanted",
         "belief",
         "isolated_class",
@@ -125,6 +131,8 @@ class DiagnosingRepairer:
         self._relaxed = False  # no conformant repair: the most probable class until news
         self._after = 0
         self._switch = True  # the robot reads a bump switch (its observations say)
+        self._noise = 0.0  # the error rate of its odometry (its observations say)
+        self._trail: list[Pose] = []  # where each command started (the observers follow)
         self._planner: ProbePlanner | None = None  # made at the first probe
         self.surprise_step: int | None = None
         """The step of the first surprise (a command that went elsewhere, bumped or failed)."""
@@ -160,6 +168,9 @@ class DiagnosingRepairer:
         belief = self.belief
         belief.update(observation)
         self._switch = observation.bumped is not None
+        self._noise = observation.noise
+        if self._context.observers:
+            self._trail.append(observation.start)
         noisy = observation.noise > 0
         for reading in seen:
             belief.update(reading)
@@ -283,10 +294,19 @@ class DiagnosingRepairer:
         replaced), or ``None`` when none splits the classes or the budget is spent."""
         if self.probes >= MAX_PROBES:
             return None
-        if self._planner is None or self._planner.switch != self._switch:
-            self._planner = ProbePlanner(self.model, self.belief.grid, self._switch)
+        planner = self._planner
+        if planner is None or planner.switch != self._switch or planner.noise != self._noise:
+            planner = self._planner = ProbePlanner(
+                self.model, self.belief.grid, self._switch, self._noise
+            )
+        observers = self._context.observers
+        stands = following([*self._trail, request.pose], len(observers)) if observers else ()
         found = isolating_probe(
-            self.belief, request.pose, self._contenders(), planner=self._planner
+            self.belief,
+            request.pose,
+            self._contenders(),
+            planner=planner,
+            watchers=tuple(zip(observers, stands, strict=True)),
         )
         if found is None:
             return None

@@ -33,6 +33,7 @@ from typing import Generic, NamedTuple, Protocol
 
 from typing_extensions import TypeVar
 
+from selfrepair.diagnosis.cooperative import Observer
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.repair.replacement import FreeTest
 from selfrepair.repair.strategies.names import RepairSource
@@ -111,6 +112,10 @@ class MissionContext:
     behaviour: str | None = None
     """The fault-behaviour model the robot assumes for its hidden faults (the domain's default
     when ``None``; the simulator uses the same one: the model is taken to be right)."""
+    observers: tuple[Observer, ...] = ()
+    """The teammates that watch the robot when its faults are hidden, following it
+    (:func:`selfrepair.diagnosis.cooperative.following`): active diagnosis counts their
+    readings when it plans a probe."""
 
     def at_goal(self, pose: Pose) -> bool:
         """Whether ``pose`` satisfies the mission's goal."""
