@@ -57,6 +57,9 @@ NON_DEFAULT = {
     "max_wait": ["--max-wait", "3"],
     "fault_behaviour": [],  # needs --detect hidden and a robot with a model: test_diagnosis_cli
     "noise": [],  # needs --detect hidden: test_diagnosis_cli
+    "observers": [],  # likewise
+    "observer_range": [],  # likewise
+    "observer_noise": [],  # likewise
     "bump_switch": ["--no-bumps"],
     "max_faults": ["--max-faults", "1"],
     "fault_prior": ["--fault-prior", "0.1"],

@@ -5,11 +5,16 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from selfrepair.cli import main
+from selfrepair.diagnosis.cooperative import Observer, SensingRange
 from selfrepair.errors import ConfigError
+from selfrepair.execution import executor
+from selfrepair.execution.result import MissionSpec
+from selfrepair.experiment import compare as comparing
 from selfrepair.experiment.config import parse_config
 from selfrepair.experiment.missions import expand, to_spec
 
@@ -40,6 +45,17 @@ def test_run_with_hidden_faults_reports_the_diagnosis(capsys: pytest.CaptureFixt
         (["--detect", "hidden", "--fault-prior", "1"], "--fault-prior: expected a number in (0,"),
         (["--detect", "hidden", "--confidence", "-0.1"], "--confidence: expected a number"),
         (["--detect", "seen"], "--detect: expected one of now, on-use, hidden"),
+        (["--observers", "2"], "--observers: expected --detect hidden"),
+        (["--observer-noise", "0.1"], "--observer-noise: expected --detect hidden"),
+        (["--detect", "hidden", "--observers", "9"], "--observers: expected a number from 0 to 8"),
+        (["--detect", "hidden", "--observers", "-1"], "--observers: expected a number from 0"),
+        (["--detect", "hidden", "--observers", "2", "--observer-range", "65"],
+         "--observer-range: expected a number from 0 to 64"),
+        (["--detect", "hidden", "--observers", "2", "--observer-noise", "0.5"],
+         "--observer-noise: expected a number in [0, 0.5)"),
+        (["--detect", "hidden", "--observer-range", "2"],
+         "--observer-range: expected --observers N of at least 1"),
+        (["--detect", "hidden", "--observers", "two"], "--observers"),
     ],
 )
 def test_bad_hidden_fault_options_are_one_line_exit_2(
@@ -49,6 +65,48 @@ def test_bad_hidden_fault_options_are_one_line_exit_2(
         assert main([command, *ROUTE, *extra]) == 2
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and expected in err, err
+
+
+def test_run_with_observers_hears_them(capsys: pytest.CaptureFixture[str]) -> None:
+    def isolated(*extra: str) -> dict[str, object]:
+        code = main(
+            ["run", *ROUTE, "--detect", "hidden", "--strategy", "active-diagnosis", "--noise",
+             "0.01", "--json", "--no-warm-up", *extra]
+        )  # fmt: skip
+        row: dict[str, object] = json.loads(capsys.readouterr().out)
+        assert code == 0 and row["status"] == "reached" and row["isolated_right"] == 1
+        return row
+
+    alone = isolated()
+    team = isolated("--observers", "2", "--observer-range", "3", "--observer-noise", "0.01")
+    blind = isolated("--observers", "2", "--observer-range", "0")  # sees only its own cell
+    assert (alone["observers"], team["observers"], blind["observers"]) == (0, 2, 2)
+    assert isinstance(alone["isolation_actions"], int)
+    assert isinstance(team["isolation_actions"], int)
+    assert team["isolation_actions"] < alone["isolation_actions"]
+
+
+class _Captured(Exception):
+    def __init__(self, spec: MissionSpec) -> None:
+        super().__init__()
+        self.spec = spec
+
+
+def _capture(*args: Any, **kwargs: Any) -> None:
+    raise _Captured(args[0])
+
+
+def test_run_and_compare_give_the_mission_its_observers(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(executor, "run_mission", _capture)  # what run calls
+    monkeypatch.setattr(comparing, "compare_strategies", _capture)  # what compare calls
+    args = [*ROUTE, "--detect", "hidden", "--noise", "0.02", "--observers", "3",
+            "--observer-range", "2", "--no-warm-up"]  # fmt: skip
+    for command, extra in (("run", []), ("compare", []), ("run", ["--observer-noise", "0"])):
+        with pytest.raises(_Captured) as info:
+            main([command, *args, *extra])
+        observers = info.value.spec.observers
+        noise = 0.0 if extra else 0.02  # default: the robot's own rate
+        assert observers == tuple(Observer(f"t{i}", noise, SensingRange(2)) for i in (1, 2, 3))
 
 
 def test_a_robot_without_a_model_refuses_a_fault_behaviour(

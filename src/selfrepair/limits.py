@@ -23,12 +23,14 @@ __all__ = [
     "DEFAULT_FAULT_PRIOR",
     "DEFAULT_MAX_FAULTS",
     "DEFAULT_MAX_WAIT",
+    "DEFAULT_OBSERVER_RANGE",
     "DEFAULT_SENSING_RANGE",
     "MAX_CELLS",
     "MAX_CLEARANCE_WEIGHT",
     "MAX_FILE_BYTES",
     "MAX_LOOKUP_PATTERNS",
     "MAX_MISSIONS",
+    "MAX_OBSERVERS",
     "MAX_ROBOTS",
     "MAX_TABLE_BYTES",
     "MAX_TABLE_CANDIDATES",
@@ -112,6 +114,13 @@ robot's singles and doubles (:mod:`selfrepair.diagnosis.hypotheses`)."""
 DEFAULT_FAULT_PRIOR = 0.05
 """The one default a priori probability of each fault (``StrategyOptions.fault_prior``,
 ``--fault-prior``, experiment files, traces)."""
+
+MAX_OBSERVERS = 8
+"""Observing teammates one mission may have (experiment files, ``--observers``)."""
+
+DEFAULT_OBSERVER_RANGE = 3
+"""The observers' sensing range in cells unless told otherwise (experiment files,
+``--observer-range``; the cooperative benchmark's)."""
 
 DEFAULT_CONFIDENCE = 0.01
 """The one default of the error ``e`` a diagnosing robot accepts (``StrategyOptions.confidence``,

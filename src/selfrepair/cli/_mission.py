@@ -40,9 +40,11 @@ from selfrepair.limits import (
     DEFAULT_FAULT_PRIOR,
     DEFAULT_MAX_FAULTS,
     DEFAULT_MAX_WAIT,
+    DEFAULT_OBSERVER_RANGE,
     DEFAULT_SENSING_RANGE,
     MAX_CELLS,
     MAX_LOOKUP_PATTERNS,
+    MAX_OBSERVERS,
     MAX_TABLE_BYTES,
     MAX_TABLE_CANDIDATES,
 )
@@ -94,6 +96,34 @@ BumpSwitch = Annotated[
     typer.Option(
         "--bumps/--no-bumps",
         help="Faults hidden: the robot senses when a motion stops at a wall.",
+    ),
+]
+ObserversOpt = Annotated[
+    int,
+    typer.Option(
+        "--observers",
+        metavar="N",
+        help=f"Faults hidden: N teammates (0 to {MAX_OBSERVERS}) follow the robot, observer i "
+        "where it was i commands before, and tell it what they see of each motion in range; "
+        "active diagnosis plans its probes counting their readings (docs/diagnosis.md).",
+    ),
+]
+ObserverRange = Annotated[
+    int,
+    typer.Option(
+        "--observer-range",
+        metavar="CELLS",
+        help="Faults hidden: how far an observer sees (Chebyshev cells, 0 to 64).",
+    ),
+]
+ObserverNoise = Annotated[
+    float | None,
+    typer.Option(
+        "--observer-noise",
+        metavar="P",
+        help="Faults hidden: the observers' odometry error rate (0 to below 0.5). Default: "
+        "--noise.",
+        show_default=False,
     ),
 ]
 MaxFaults = Annotated[
@@ -238,6 +268,9 @@ class MissionOptions:
     fault_behaviour: FaultBehaviourOpt = None
     noise: Noise = 0.0
     bump_switch: BumpSwitch = True
+    observers: ObserversOpt = 0
+    observer_range: ObserverRange = DEFAULT_OBSERVER_RANGE
+    observer_noise: ObserverNoise = None
     max_faults: MaxFaults = DEFAULT_MAX_FAULTS
     fault_prior: FaultPrior = DEFAULT_FAULT_PRIOR
     confidence: Confidence = DEFAULT_CONFIDENCE

@@ -17,11 +17,18 @@ if TYPE_CHECKING:
     from collections.abc import Sequence
 
     from selfrepair.diagnosis import ObservationModel
+    from selfrepair.diagnosis.cooperative import Observer
     from selfrepair.execution.faults import FaultSchedule
     from selfrepair.execution.result import MissionSpec
     from selfrepair.robots.domain import SomeDomain
 
-__all__ = ["build_schedule", "mission_spec", "observation_options", "table_note"]
+__all__ = [
+    "build_schedule",
+    "mission_spec",
+    "observation_options",
+    "observer_options",
+    "table_note",
+]
 
 
 def build_schedule(
@@ -118,6 +125,7 @@ def mission_spec(
     check_choice(m.sensing, tuple(Sensing), "--sensing")
     world = WorldSchedule(parse_events(m.events), Sensing(m.sensing), m.sensing_range)
     observation = observation_options(domain, m)
+    observers = observer_options(m)
     return MissionSpec(
         maze=resolve_maze(find_input(m.maze), max_cells=m.max_cells),
         start=parse_pose(m.start, source="--start"),
@@ -140,6 +148,7 @@ def mission_spec(
         ),
         behaviour=m.fault_behaviour,
         observation=observation,
+        observers=observers,
         clearance_weight=parse_weight(m.clearance_weight),
         seed=m.seed,
         heuristic=m.heuristic,
@@ -178,6 +187,42 @@ def observation_options(
         if not inside:
             raise InputError(f"expected a number {wanted}, got {value}", source=option)
     return ObservationModel(m.noise, m.bump_switch)
+
+
+def observer_options(m: MissionOptions) -> "tuple[Observer, ...]":
+    """The observing teammates of the options, checked: ``--observers`` in range, and with
+    ``--observer-range`` and ``--observer-noise`` only with ``--detect hidden`` and at least one
+    observer."""
+    from selfrepair.diagnosis.cooperative import observer_team
+    from selfrepair.execution.faults import Detection
+    from selfrepair.limits import DEFAULT_OBSERVER_RANGE, MAX_OBSERVERS
+
+    given = [
+        (name, set_)
+        for name, set_ in (
+            ("--observers", m.observers != 0),
+            ("--observer-range", m.observer_range != DEFAULT_OBSERVER_RANGE),
+            ("--observer-noise", m.observer_noise is not None),
+        )
+        if set_
+    ]
+    if given and m.detect != Detection.HIDDEN:
+        raise InputError(
+            "expected --detect hidden (teammates watch a robot whose faults are hidden)",
+            source=given[0][0],
+        )
+    noise = m.noise if m.observer_noise is None else m.observer_noise
+    for inside, option, wanted, value in (
+        (0 <= m.observers <= MAX_OBSERVERS, "--observers", f"from 0 to {MAX_OBSERVERS}",
+         m.observers),
+        (0 <= m.observer_range <= 64, "--observer-range", "from 0 to 64", m.observer_range),
+        (0.0 <= noise < 0.5, "--observer-noise", "in [0, 0.5)", noise),
+    ):  # fmt: skip
+        if not inside:
+            raise InputError(f"expected a number {wanted}, got {value}", source=option)
+    if given and not m.observers:
+        raise InputError("expected --observers N of at least 1", source=given[0][0])
+    return observer_team(m.observers, noise, m.observer_range)
 
 
 def table_note(mission: MissionOptions, spec: "MissionSpec") -> str | None:

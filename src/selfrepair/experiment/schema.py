@@ -32,7 +32,7 @@ from selfrepair.experiment.schema_strategies import (
     StrategyConfig,
 )
 from selfrepair.geometry import parse_cell, parse_pose
-from selfrepair.limits import DEFAULT_SENSING_RANGE
+from selfrepair.limits import DEFAULT_OBSERVER_RANGE, DEFAULT_SENSING_RANGE, MAX_OBSERVERS
 from selfrepair.robots.fromfile import DEFAULT_DOMAIN
 from selfrepair.textio import source_dir
 from selfrepair.tomlfile import Float, Frozen, Int, NonEmpty
@@ -59,13 +59,6 @@ __all__ = [
     "StrategyConfig",
     "WorldConfig",
 ]
-
-MAX_OBSERVERS = 8
-"""Observing teammates one mission may have."""
-
-DEFAULT_OBSERVER_RANGE = 3
-"""The observers' sensing range in cells unless the file says otherwise (the cooperative
-benchmark's)."""
 
 FAULT_PROFILES = ("paper", "singles", "doubles", "all")
 """Named fault-set profiles; see :func:`selfrepair.experiment.faultsets.fault_profile`."""
