@@ -26,7 +26,7 @@ from selfrepair.execution.stepper import Stepper
 from selfrepair.geometry import Heading, Pose
 from selfrepair.physics.identified import load_identified
 from selfrepair.physics.model import ORIGIN, RobotParams, WallBox, heading_yaw, mjcf, wall_boxes
-from selfrepair.physics.simulator import lattice_motion
+from selfrepair.physics.simulator import lattice_motion, wheel_commands
 from selfrepair.physics.tracker import (
     ContinuousPose,
     LatticeMotion,
@@ -198,6 +198,28 @@ def test_a_three_wheel_turn_turns_in_place_on_its_diagonal_pair() -> None:
 
     (row,) = measure(actions=[parse_action("FFFB")], faulty=False).rows
     assert row.confirmed and row.tracked_position < 0.02  # it drifted 0.2 cells on three wheels
+
+
+@PHYSICS
+def test_a_diagonal_pair_turn_confirmed_from_rest_drifts_after_another_action() -> None:
+    # docs/physics.md ("What the grazes are"): fidelity measures FFFB from rest 0.000 cells
+    # off, but after SFFS it ends 0.19 cells off; a spin on all four wheels holds (0.02).
+    from selfrepair.physics.world import PhysicsWorld, pose_error
+
+    def after(first: str, then: str) -> float:
+        world, pose = PhysicsWorld(None, ORIGIN), ORIGIN
+        for name in (first, then):
+            a = parse_action(name)
+            run = world.run(
+                wheel_commands(FOUR_WHEEL, a), Fraction(FOUR_WHEEL.duration(a)),
+                motion=lattice_motion(FOUR_WHEEL, a), reference_start=pose,
+            )  # fmt: skip
+            pose = FOUR_WHEEL.apply(pose, a)
+        return pose_error(run.end, pose)[0]
+
+    assert after("FFFB", "FFFB") < 0.01
+    assert 0.1 < after("SFFS", "FFFB") < 0.3
+    assert after("SFFS", "BFBF") < 0.05
 
 
 @PHYSICS

@@ -1,0 +1,208 @@
+"""Why physics missions touch walls: every contact episode, and turns in place after other actions.
+
+Two measurements (deterministic; MuJoCo, the default robot and tracker):
+
+``missions``
+    The physics experiment's missions in one bundled maze (``--maze``, its four routes, the 12
+    paper fault sets, one ``--strategy``, robot model ``--robot``). For every action during which
+    the robot touched a wall: the action's wheel commands, the 10 ms control updates with a
+    contact, the geoms that touched, and how far the robot stood from its cell centre (cm) and
+    from its lattice heading (degrees) when the action began. Then, per action, its end error
+    (cells) over every time a mission ran it.
+``sequence``
+    Every turn in place that ``selfrepair physics fidelity`` confirms (from rest, within 0.05
+    cells and 3 degrees), run on an open floor from the origin after each of a few other actions
+    (``FFFF``, ``BBBB``, ``SFFS``, ``FBFB`` and itself): its end error there. Fidelity measures an
+    action from rest; in a mission it starts where the last one left the robot and its wheels.
+
+Writes ``benchmarks/results/physics_contacts.json``.
+
+Usage: ``python benchmarks/physics_contacts.py [--maze M] [--strategy S] [--robot R]
+[--workers N] [--no-missions] [--no-sequence]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+from collections import Counter, defaultdict
+from concurrent.futures import ProcessPoolExecutor
+from fractions import Fraction
+from typing import Any
+
+from _common import write_report
+from selfrepair.execution.executor import run_mission
+from selfrepair.experiment.faultsets import PAPER_FAULT_SETS
+from selfrepair.experiment.physics import _spec
+from selfrepair.geometry import Pose
+from selfrepair.physics.fidelity import measure
+from selfrepair.physics.model import ORIGIN
+from selfrepair.physics.simulator import PhysicsSimulator, lattice_motion, wheel_commands
+from selfrepair.physics.tracker import ContinuousPose
+from selfrepair.physics.world import PhysicsWorld, pose_error
+from selfrepair.robots.four_wheel import FOUR_WHEEL, parse_action
+from selfrepair.world.bundled import bundled_routes
+
+PREDECESSORS = ("FFFF", "BBBB", "SFFS", "FBFB")
+
+
+def _offset(pose: ContinuousPose, cell: float) -> tuple[float, float]:
+    """How far ``pose`` is from the nearest cell centre (cm) and lattice heading (degrees)."""
+    dx, dy = pose.x - round(pose.x), pose.y - round(pose.y)
+    deg = math.degrees(pose.yaw)
+    return math.hypot(dx, dy) * cell * 100, abs((deg + 45) % 90 - 45)
+
+
+def mission_contacts(job: tuple[str, int, str, str, str]) -> dict[str, Any]:
+    """One mission in physics with every contact episode (see the module docstring)."""
+    maze, route, faults, strategy, robot = job
+    spec = _spec(maze, route, faults, strategy, robot)
+    world = PhysicsWorld(spec.maze, spec.start)
+    mj = world.mj
+    names = [
+        mj.mj_id2name(world.model, mj.mjtObj.mjOBJ_GEOM, i) or "" for i in range(world.model.ngeom)
+    ]
+    walls = {i for i, n in enumerate(names) if n.startswith("wall")}
+    current: list[Any] = [None]
+    episodes: dict[int, dict[str, Any]] = {}
+
+    def observe(w: PhysicsWorld) -> None:
+        touched = set()
+        for k in range(w.data.ncon):
+            g1, g2 = int(w.data.contact.geom1[k]), int(w.data.contact.geom2[k])
+            if g1 in walls or g2 in walls:
+                touched.add(names[g2] if g1 in walls else names[g1])
+        if touched and current[0] is not None:
+            index, start = current[0]
+            e = episodes.setdefault(index, {"updates": 0, "geoms": set(), "start": start})
+            e["updates"] += 1
+            e["geoms"] |= touched
+
+    world.observer = observe
+    sims: list[PhysicsSimulator] = []
+
+    def make(s: Any) -> PhysicsSimulator:
+        sim = PhysicsSimulator(
+            s.domain, s.maze, s.start, s.schedule, s.seed, world=s.world,
+            behaviour=s.behaviour, physics=world,
+        )  # fmt: skip
+        advance = sim.advance
+
+        def traced(action: object) -> Any:
+            current[0] = (len(sim.physics_steps), world.pose())
+            return advance(action)
+
+        sim.advance = traced  # type: ignore[method-assign]
+        sims.append(sim)
+        return sim
+
+    lattice = run_mission(spec)
+    result = run_mission(spec, simulator=make)
+    steps = sims[0].physics_steps
+    out = []
+    for index, e in sorted(episodes.items()):
+        if index >= len(steps):
+            continue
+        off, deg = _offset(e["start"], world.params.cell)
+        out.append({
+            "action": str(steps[index].action), "updates": e["updates"],
+            "geoms": sorted(e["geoms"]), "start_offset_cm": off, "start_heading_deg": deg,
+            "end_error": steps[index].position_error,
+        })  # fmt: skip
+    return {
+        "mission": list(job), "lattice_reached": lattice.reached, "reached": result.reached,
+        "episodes": out,
+        "steps": [(str(s.action), s.position_error) for s in steps],
+    }  # fmt: skip
+
+
+def missions(maze: str, strategy: str, robot: str, workers: int) -> dict[str, Any]:
+    jobs = [
+        (maze, route, faults, strategy, robot)
+        for route in range(len(bundled_routes(maze)))
+        for faults in PAPER_FAULT_SETS
+    ]
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        done = list(pool.map(mission_contacts, jobs, chunksize=2))
+    completed = [d for d in done if d["lattice_reached"]]
+    clean = sum(1 for d in completed if d["reached"] and not d["episodes"])
+    episodes = [e for d in done for e in d["episodes"]]
+    by_action = Counter(e["action"] for e in episodes)
+    offsets = [e["start_offset_cm"] for e in episodes]
+    errors: dict[str, list[float]] = defaultdict(list)
+    for d in done:
+        for action, error in d["steps"]:
+            errors[action].append(error)
+    print(f"{maze}, {strategy}, {robot}: {clean} of {len(completed)} missions without a contact")
+    print(f"{len(episodes)} actions with a contact: {dict(by_action.most_common())}")
+    if offsets:
+        print(
+            f"  the robot's distance from its cell centre when they began: median "
+            f"{statistics.median(offsets):.1f} cm, {sum(o > 4.8 for o in offsets)} over 4.8 cm"
+        )
+    print("end error per action in these missions (cells): runs, median, max, over 0.05")
+    table = {}
+    for action, v in sorted(errors.items(), key=lambda kv: -max(kv[1])):
+        row = {"runs": len(v), "median": statistics.median(v), "max": max(v),
+               "over": sum(x > 0.05 for x in v)}  # fmt: skip
+        table[action] = row
+        print(f"  {action}: {row['runs']}, {row['median']:.3f}, {row['max']:.3f}, {row['over']}")
+    return {"missions": len(done), "completed": len(completed), "without_contact": clean,
+            "episodes": episodes, "by_action": dict(by_action), "end_errors": table}  # fmt: skip
+
+
+def _after(first: str, then: str) -> float:
+    """``then``'s end error (cells) on an open floor after ``first`` from the origin."""
+    world = PhysicsWorld(None, ORIGIN)
+    pose: Pose = ORIGIN
+    for name in (first, then):
+        action = parse_action(name)
+        end = FOUR_WHEEL.apply(pose, action)
+        run = world.run(
+            wheel_commands(FOUR_WHEEL, action), Fraction(FOUR_WHEEL.duration(action)),
+            motion=lattice_motion(FOUR_WHEEL, action), reference_start=pose,
+        )  # fmt: skip
+        pose = end
+    return pose_error(run.end, pose)[0]
+
+
+def _sequence_job(name: str) -> tuple[str, dict[str, float]]:
+    return name, {first: _after(first, name) for first in (*PREDECESSORS, name)}
+
+
+def sequence(workers: int) -> dict[str, Any]:
+    rows = measure(faulty=False).rows
+    turns = [r.action for r in rows if r.confirmed and str(r.motion).startswith("turn")]
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        done = dict(pool.map(_sequence_job, [str(a) for a in turns]))
+    print(f"{len(done)} confirmed turns in place, end error (cells) after: "
+          f"{', '.join((*PREDECESSORS, 'itself'))}")  # fmt: skip
+    held = 0
+    for name, after in sorted(done.items(), key=lambda kv: -max(kv[1].values())):
+        worst = max(after.values())
+        held += worst <= 0.05
+        print(f"  {name}: " + ", ".join(f"{v:.3f}" for v in after.values()) + f"  max {worst:.3f}")
+    print(f"{held} of {len(done)} stay within 0.05 cells after every one")
+    return {"turns": done, "held": held}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--maze", default="narrow-short")
+    parser.add_argument("--strategy", default="replacement")
+    parser.add_argument("--robot", default="four-wheel-confirmed")
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--no-missions", action="store_true")
+    parser.add_argument("--no-sequence", action="store_true")
+    args = parser.parse_args()
+    report: dict[str, Any] = {"maze": args.maze, "strategy": args.strategy, "robot": args.robot}
+    if not args.no_missions:
+        report["missions"] = missions(args.maze, args.strategy, args.robot, args.workers)
+    if not args.no_sequence:
+        report["sequence"] = sequence(args.workers)
+    write_report("physics_contacts", report)
+
+
+if __name__ == "__main__":
+    main()
