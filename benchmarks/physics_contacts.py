@@ -34,7 +34,7 @@ from typing import Any
 from _common import write_report
 from selfrepair.execution.executor import run_mission
 from selfrepair.experiment.faultsets import PAPER_FAULT_SETS
-from selfrepair.experiment.physics import _spec
+from selfrepair.experiment.physics import physics_mission_spec
 from selfrepair.geometry import Pose
 from selfrepair.physics.fidelity import measure
 from selfrepair.physics.model import ORIGIN
@@ -57,7 +57,7 @@ def _offset(pose: ContinuousPose, cell: float) -> tuple[float, float]:
 def mission_contacts(job: tuple[str, int, str, str, str]) -> dict[str, Any]:
     """One mission in physics with every contact episode (see the module docstring)."""
     maze, route, faults, strategy, robot = job
-    spec = _spec(maze, route, faults, strategy, robot)
+    spec = physics_mission_spec(maze, route, faults, strategy, robot)
     world = PhysicsWorld(spec.maze, spec.start)
     mj = world.mj
     names = [

@@ -11,12 +11,11 @@ from typing import Any
 import pytest
 import typer
 
+from capture import captured_spec
 from selfrepair.caching import clear_caches
 from selfrepair.cli import app, main
 from selfrepair.cli._mission import MissionOptions
-from selfrepair.execution import executor
 from selfrepair.execution.result import MissionSpec
-from selfrepair.experiment import compare as comparing
 from selfrepair.repair.lookups import lookup_memory
 
 ROUTE = ["narrow-short", "--start", "1,1,E", "--goal", "13,13"]
@@ -101,30 +100,16 @@ def test_the_help_names_the_intended_differences(capsys: pytest.CaptureFixture[s
     assert "Takes every option of compare but --strategies" in text
 
 
-class _Captured(Exception):
-    def __init__(self, spec: MissionSpec) -> None:
-        super().__init__()
-        self.spec = spec
-
-
-def _capture(*args: Any, **kwargs: Any) -> None:
-    raise _Captured(args[0])
-
-
 def test_every_mission_option_reaches_the_spec_of_both_commands(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """Both commands build the same mission from the same flags, every option set to a value
     other than its default (the mission is captured before it runs)."""
     assert set(NON_DEFAULT) == {f.name for f in fields(MissionOptions)} - {"maze", "start", "goal"}
-    monkeypatch.setattr(executor, "run_mission", _capture)  # what run calls
-    monkeypatch.setattr(comparing, "compare_strategies", _capture)  # what compare calls
     argv = [*ROUTE, *(arg for args in NON_DEFAULT.values() for arg in args)]
     specs = {}
     for command, strategy in (("run", "--strategy"), ("compare", "--strategies")):
-        with pytest.raises(_Captured) as captured:
-            main([command, *argv, strategy, "replacement"])
-        specs[command] = captured.value.spec
+        specs[command] = captured_spec(monkeypatch, [command, *argv, strategy, "replacement"])
     run, compare = specs["run"], specs["compare"]
     assert compare.options == run.options
     for field in fields(MissionSpec):

@@ -5,16 +5,13 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
 
 import pytest
 
+from capture import captured_spec
 from selfrepair.cli import main
 from selfrepair.diagnosis.cooperative import Observer, SensingRange
 from selfrepair.errors import ConfigError
-from selfrepair.execution import executor
-from selfrepair.execution.result import MissionSpec
-from selfrepair.experiment import compare as comparing
 from selfrepair.experiment.config import parse_config
 from selfrepair.experiment.missions import expand, to_spec
 
@@ -86,25 +83,11 @@ def test_run_with_observers_hears_them(capsys: pytest.CaptureFixture[str]) -> No
     assert team["isolation_actions"] < alone["isolation_actions"]
 
 
-class _Captured(Exception):
-    def __init__(self, spec: MissionSpec) -> None:
-        super().__init__()
-        self.spec = spec
-
-
-def _capture(*args: Any, **kwargs: Any) -> None:
-    raise _Captured(args[0])
-
-
 def test_run_and_compare_give_the_mission_its_observers(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(executor, "run_mission", _capture)  # what run calls
-    monkeypatch.setattr(comparing, "compare_strategies", _capture)  # what compare calls
     args = [*ROUTE, "--detect", "hidden", "--noise", "0.02", "--observers", "3",
             "--observer-range", "2", "--no-warm-up"]  # fmt: skip
     for command, extra in (("run", []), ("compare", []), ("run", ["--observer-noise", "0"])):
-        with pytest.raises(_Captured) as info:
-            main([command, *args, *extra])
-        observers = info.value.spec.observers
+        observers = captured_spec(monkeypatch, [command, *args, *extra]).observers
         noise = 0.0 if extra else 0.02  # default: the robot's own rate
         assert observers == tuple(Observer(f"t{i}", noise, SensingRange(2)) for i in (1, 2, 3))
 

@@ -48,6 +48,7 @@ __all__ = [
     "FootingRow",
     "footing_summary",
     "physics_experiment",
+    "physics_mission_spec",
     "stored_footing_rows",
 ]
 
@@ -106,7 +107,13 @@ def _robot(name: str) -> tuple[SomeDomain, SomeTable | None]:
     return _ROBOTS.get(name, lambda: _make_robot(name))
 
 
-def _spec(maze: str, route: int, faults: str, label: str, robot: str) -> MissionSpec:
+def physics_mission_spec(
+    maze: str, route: int, faults: str, label: str, robot: str
+) -> MissionSpec:
+    """The mission of ``experiment physics`` on bundled ``maze``'s route ``route`` under the
+    permanent ``faults`` (the domain's text), with strategy ``label`` (a key of
+    :data:`STRATEGIES`) and robot model ``robot`` (a key of :data:`ROBOTS`): the one place that
+    builds it, for the experiment and for ``benchmarks/physics_contacts.py``."""
     strategy, options = STRATEGIES[label]
     domain, table = _robot(robot)
     if table is not None:
@@ -121,7 +128,7 @@ def _spec(maze: str, route: int, faults: str, label: str, robot: str) -> Mission
 
 def _run(job: tuple[str, int, str, str, bool, str]) -> FootingRow:
     maze, route, faults, label, tracked, robot = job
-    spec = _spec(maze, route, faults, label, robot)
+    spec = physics_mission_spec(maze, route, faults, label, robot)
     lattice = run_mission(spec)
     done = run_physics_mission(spec, tracked=tracked)
     o = done.outcome
