@@ -177,6 +177,17 @@ def run(
     return out
 
 
+def _verdict(reduction: float, low: float, high: float, target: float) -> str:
+    """``met`` when the median cut and its whole paired interval reach ``target``, ``not met``
+    when the whole interval falls short, else ``inconclusive`` (the median alone says nothing
+    the interval does not bear out)."""
+    if reduction >= target and low >= target:
+        return "met"
+    if high < target or not math.isfinite(reduction):
+        return "not met"
+    return "inconclusive"
+
+
 def _summary(
     missions: int, alone: list[float], together: list[float], wrong: dict[str, list[int]]
 ) -> dict[str, Any]:
@@ -209,7 +220,7 @@ def _summary(
         "mean_isolated_alone": float(a[np.isfinite(a)].mean()),
         "mean_isolated_team": float(t[np.isfinite(t)].mean()),
         "reduction": reduction, "reduction_interval": [float(low), float(high)],
-        "target_30pct": "met" if reduction >= 0.30 else "not met",
+        "target_30pct": _verdict(reduction, float(low), float(high), 0.30),
         "wrong_alone": wrong["alone"][0] / max(1, wrong["alone"][1]),
         "wrong_team": wrong["team"][0] / max(1, wrong["team"][1]),
         "wrong_target_1pct": "met"
