@@ -15,7 +15,7 @@ from selfrepair.diagnosis import (
 )
 from selfrepair.diagnosis.belief import CONFIRMATIONS, predictions
 from selfrepair.diagnosis.cooperative import Observer, SensingRange
-from selfrepair.diagnosis.probes import RULED_OUT
+from selfrepair.diagnosis.probeplan import RULED_OUT
 from selfrepair.geometry import FreeGrid, Heading, Pose
 from selfrepair.robots.four_wheel import FOUR_WHEEL, SINGLE_FAULTS, parse_action
 from selfrepair.world.maze import parse_maze

@@ -33,7 +33,8 @@ from selfrepair.diagnosis.observation import (
     ObservationModel,
     perturbed,
 )
-from selfrepair.diagnosis.probes import Probe, ProbePlanner, best_probe, isolating_probe
+from selfrepair.diagnosis.probeplan import ProbePlanner, isolating_probe
+from selfrepair.diagnosis.probes import Probe, best_probe
 
 __all__ = [
     "DEFAULT_CONFIDENCE",
