@@ -102,6 +102,7 @@ __all__ = [
     "lookup_memory",
     "neighbourhood",
     "occupancy_rows",
+    "same_replacement",
 ]
 
 T = TypeVar("T")
@@ -388,7 +389,9 @@ def fault_lookups(
     return cast("FaultLookups[T]", _LOOKUPS.get(key, lambda: FaultLookups(*args)))
 
 
-def _same(found: Replacement) -> Replacement:
+def same_replacement(found: Replacement) -> Replacement:
+    """The answer that is the replacement found itself (every field, ``deferred`` included): one
+    module-level function, so every reader of these look-ups shares one cache entry."""
     return found
 
 
@@ -412,7 +415,7 @@ def compiled_replacement(
         known_faults,
         mode=mode,
         max_depth=max_depth,
-        answer=_same,
+        answer=same_replacement,
         guard=frozenset(guard),
         max_patterns=max_patterns,
     )

@@ -293,7 +293,6 @@ class CompiledLookups:
         return self.radii.index(radius)
 
 
-
 def _rehashed(hk1: Int64s, hk2: Int64s, hv: Int64s) -> tuple[Int64s, Int64s, Int64s]:
     """The hash table ``(hk1, hk2, hv)`` in twice the room."""
     keys, codes, values = empty_hash(2 * hk1.shape[0])

@@ -28,6 +28,7 @@ from selfrepair.repair.lookups import (
     fault_lookups,
     grid_lookups,
     occupancy_rows,
+    same_replacement,
 )
 from selfrepair.repair.replacement import DEFERRING, Replacement
 from selfrepair.repair.strategies.names import RepairSource, StrategyName
@@ -55,9 +56,9 @@ __all__ = [
 ]
 
 
-def _hit(found: Replacement) -> Repair:
-    """The repair of a table hit. It does not depend on the pose, so the compiled look-ups store
-    it and a warm hit returns it as it is."""
+def hit_repair(found: Replacement) -> Repair:
+    """The repair of a table hit ``found`` (what the strategy returns for it). It does not
+    depend on the pose, so the compiled look-ups store it and a warm hit returns it as it is."""
     return Repair(
         RepairStatus.REPAIRED,
         RepairSource.REPLACEMENT,
@@ -103,7 +104,7 @@ def _lookups(context: MissionContext, known: frozenset[object]) -> FaultLookups[
         known,
         mode=options.recursion,
         max_depth=options.max_depth,
-        answer=_hit,
+        answer=hit_repair,
         max_patterns=options.max_lookup_patterns,
     )
 
@@ -128,20 +129,11 @@ def deferring_lookups(
         known,
         mode=options.recursion,
         max_depth=options.max_depth,
-        answer=_same_replacement,
+        answer=same_replacement,
         guard=guard,
         max_patterns=options.max_lookup_patterns,
     )
     return grid_lookups(lookups, grid)
-
-
-def _same_replacement(found: Replacement) -> Replacement:
-    return found
-
-
-def hit_repair(found: Replacement) -> Repair:
-    """The repair of a table hit ``found`` (what the strategy returns for it)."""
-    return _hit(found)
 
 
 def _miss(context: MissionContext, request: RepairRequest, action: object) -> Repair:
@@ -425,7 +417,7 @@ class DeferringRepairer:
         for position in found.deferred:
             deferred = found.actions[position]
             pending[after - position] = (deferred, replacing | {deferred})
-        return _hit(found)
+        return hit_repair(found)
 
 
 def start_replacement(context: MissionContext) -> Repairer:
