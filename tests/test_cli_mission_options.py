@@ -59,6 +59,7 @@ NON_DEFAULT = {
     "observers": [],  # likewise
     "observer_range": [],  # likewise
     "observer_noise": [],  # likewise
+    "observer_view": [],  # likewise
     "bump_switch": ["--no-bumps"],
     "max_faults": ["--max-faults", "1"],
     "fault_prior": ["--fault-prior", "0.1"],

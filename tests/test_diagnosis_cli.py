@@ -53,6 +53,11 @@ def test_run_with_hidden_faults_reports_the_diagnosis(capsys: pytest.CaptureFixt
         (["--detect", "hidden", "--observer-range", "2"],
          "--observer-range: expected --observers N of at least 1"),
         (["--detect", "hidden", "--observers", "two"], "--observers"),
+        (["--observer-view", "wheels"], "--observer-view: expected --detect hidden"),
+        (["--detect", "hidden", "--observer-view", "wheels"],
+         "--observer-view: expected --observers N of at least 1"),
+        (["--detect", "hidden", "--observers", "2", "--observer-view", "legs"],
+         "--observer-view: expected one of pose, wheels"),
     ],
 )
 def test_bad_hidden_fault_options_are_one_line_exit_2(

@@ -126,6 +126,16 @@ ObserverNoise = Annotated[
         show_default=False,
     ),
 ]
+ObserverViewOpt = Annotated[
+    str,
+    typer.Option(
+        "--observer-view",
+        metavar="VIEW",
+        help="Faults hidden: what an observer sees of each motion in range: pose (the robot's "
+        "pose after it) or wheels (the pose and which wheels turn which way, each wheel misread "
+        "at --observer-noise; a robot with actuators, docs/diagnosis.md).",
+    ),
+]
 MaxFaults = Annotated[
     int,
     typer.Option(
@@ -271,6 +281,7 @@ class MissionOptions:
     observers: ObserversOpt = 0
     observer_range: ObserverRange = DEFAULT_OBSERVER_RANGE
     observer_noise: ObserverNoise = None
+    observer_view: ObserverViewOpt = "pose"
     max_faults: MaxFaults = DEFAULT_MAX_FAULTS
     fault_prior: FaultPrior = DEFAULT_FAULT_PRIOR
     confidence: Confidence = DEFAULT_CONFIDENCE

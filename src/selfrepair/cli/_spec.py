@@ -125,7 +125,7 @@ def mission_spec(
     check_choice(m.sensing, tuple(Sensing), "--sensing")
     world = WorldSchedule(parse_events(m.events), Sensing(m.sensing), m.sensing_range)
     observation = observation_options(domain, m)
-    observers = observer_options(m)
+    observers = observer_options(m, domain)
     return MissionSpec(
         maze=resolve_maze(find_input(m.maze), max_cells=m.max_cells),
         start=parse_pose(m.start, source="--start"),
@@ -189,11 +189,12 @@ def observation_options(
     return ObservationModel(m.noise, m.bump_switch)
 
 
-def observer_options(m: MissionOptions) -> "tuple[Observer, ...]":
+def observer_options(m: MissionOptions, domain: "SomeDomain") -> "tuple[Observer, ...]":
     """The observing teammates of the options, checked: ``--observers`` in range, and with
-    ``--observer-range`` and ``--observer-noise`` only with ``--detect hidden`` and at least one
-    observer."""
-    from selfrepair.diagnosis.cooperative import observer_team
+    ``--observer-range``, ``--observer-noise`` and ``--observer-view`` only with ``--detect
+    hidden`` and at least one observer; ``--observer-view wheels`` only for a robot that
+    declares actuators (``domain``)."""
+    from selfrepair.diagnosis.cooperative import ObserverView, observer_team
     from selfrepair.execution.faults import Detection
     from selfrepair.limits import DEFAULT_OBSERVER_RANGE, MAX_OBSERVERS
 
@@ -203,6 +204,7 @@ def observer_options(m: MissionOptions) -> "tuple[Observer, ...]":
             ("--observers", m.observers != 0),
             ("--observer-range", m.observer_range != DEFAULT_OBSERVER_RANGE),
             ("--observer-noise", m.observer_noise is not None),
+            ("--observer-view", m.observer_view != ObserverView.POSE.value),
         )
         if set_
     ]
@@ -220,9 +222,17 @@ def observer_options(m: MissionOptions) -> "tuple[Observer, ...]":
     ):  # fmt: skip
         if not inside:
             raise InputError(f"expected a number {wanted}, got {value}", source=option)
+    check_choice(m.observer_view, tuple(v.value for v in ObserverView), "--observer-view")
     if given and not m.observers:
         raise InputError("expected --observers N of at least 1", source=given[0][0])
-    return observer_team(m.observers, noise, m.observer_range)
+    view = ObserverView(m.observer_view)
+    if view is ObserverView.WHEELS and domain.actuators is None:
+        raise InputError(
+            f"expected a robot with actuators a teammate can see; {domain.name!r} declares none "
+            "(use --observer-view pose)",
+            source="--observer-view",
+        )
+    return observer_team(m.observers, noise, m.observer_range, view)
 
 
 def table_note(mission: MissionOptions, spec: "MissionSpec") -> str | None:

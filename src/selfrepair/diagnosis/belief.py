@@ -17,6 +17,14 @@ the prediction depends on which motions the walls stop (a bump), so the key also
 the command's motion groups are blocked there (tested in the grid once per action and pose met,
 the union of their footprints first).
 
+A teammate's actuator reading (``Observation.wheels``, the wheel view) enters the same entry as
+its pose reading: each motion group performs one action, so a group's likelihood is the pose
+term times the chance of reading that action's actuators as read
+(:meth:`~.observation.Actuators.likelihood`: ``1 - p`` per actuator read as the group sets it,
+``p / (m - 1)`` per actuator read as another of its ``m`` states), and each actuator read
+otherwise counts as one more reading the group explains only as a sensor error
+(:attr:`FaultBelief.misses`). Exact (``p == 0``), a group whose actuators differ is ruled out.
+
 An observation that no hypothesis still possible explains (a fault outside the hypotheses, a
 wrong behaviour model) changes nothing and is counted in :attr:`FaultBelief.inexplicable`.
 Observations of the robot made by teammates enter the same way (their ``source`` and ``noise``
@@ -32,7 +40,7 @@ import numpy as np
 import numpy.typing as npt
 
 from selfrepair.diagnosis.hypotheses import FAILS, FaultModel, Group
-from selfrepair.diagnosis.observation import PERTURBATIONS, Observation, perturbed
+from selfrepair.diagnosis.observation import PERTURBATIONS, Observation, actuators_of, perturbed
 from selfrepair.geometry import FreeGrid, Heading, Pose
 from selfrepair.limits import DEFAULT_CONFIDENCE
 from selfrepair.textio import JSONObject
@@ -117,9 +125,9 @@ class FaultBelief:
 
     def update(self, observation: Observation) -> int:
         """Take ``observation`` in; returns the new :attr:`alive`."""
-        action, start, end, bumped, failed, noise = (
+        action, start, end, bumped, failed, noise, wheels = (
             observation.action, observation.start, observation.end, observation.bumped,
-            observation.failed, observation.noise,
+            observation.failed, observation.noise, observation.wheels,
         )  # fmt: skip
         a = self.model.index[action]
         heading = start.heading
@@ -131,7 +139,7 @@ class FaultBelief:
             blocked = blocks[where] = self._blocked(a, start)
         key = (
             a, heading, blocked, end.x - start.x, end.y - start.y, end.heading, bumped, failed,
-            noise,
+            noise, wheels,
         )  # fmt: skip
         entry = self._cache.get(key)
         if entry is None:
@@ -184,23 +192,33 @@ class FaultBelief:
         """The support bit set and (noisy readings only) the likelihood vector of ``key`` and
         the indicator of the hypotheses it contradicts (their predicted reading is another)."""
         reading = Pose(key[3], key[4], key[5])
-        bumped, failed = key[6], key[7]
+        bumped, failed, wheels = key[6], key[7], key[9]
         likelihood = np.zeros(self.model.size) if noise > 0 else None
         missed = np.zeros(self.model.size) if noise > 0 else None
         support = 0
         groups = self.model.groups[action][heading]
+        read = None
+        if wheels is not None:
+            actuators, read = actuators_of(self.model.domain), self.model.index[wheels]
         for group, stopped in zip(groups, blocked or repeat(False), strict=False):
             end, bumps, fails = _predicted(group, stopped, heading)
             if fails != failed or (bumped is not None and bumps != bumped):
                 continue
+            misses = 0
             if reading == end:
                 value = 1.0 - noise
             elif noise > 0 and reading in perturbed(end):
-                value = noise / PERTURBATIONS
-                if missed is not None:
-                    missed[list(group.members)] = 1.0
+                value, misses = noise / PERTURBATIONS, 1
             else:
                 continue
+            if read is not None and group.performed != FAILS:
+                wrong = actuators.mismatches(read, group.performed)
+                if wrong and noise == 0:
+                    continue
+                value *= actuators.likelihood(read, group.performed, noise)
+                misses += wrong
+            if misses and missed is not None:
+                missed[list(group.members)] = float(misses)
             support |= group.mask
             if likelihood is not None:
                 likelihood[list(group.members)] = value

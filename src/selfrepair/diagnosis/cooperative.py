@@ -10,16 +10,31 @@ independent of the robot's. The robot's :class:`~.belief.FaultBelief` takes it i
 :meth:`~.belief.FaultBelief.update` as its own reading: one more likelihood term, with the
 observation's own noise rate. There is no second belief.
 
+What a teammate sees is its *view* (:class:`ObserverView`, ``--observer-view``):
+
+- ``pose`` (the default): the robot's pose after the command, as above: the same information as
+  the robot's own odometry, from an independent sensor;
+- ``wheels``: the pose reading and, besides it, the robot's actuators
+  (:attr:`Domain.actuators <selfrepair.robots.domain.Domain.actuators>`: for the four-wheel robot,
+  which wheels turn and which way), i.e. the effective command the faults made of the command
+  (``Domain.effective``, the one world model), each actuator read wrong with the observer's rate
+  ``p_i`` (:func:`~.observation.read_actuators`). It reads them whenever it watches the whole
+  motion, a bump included (the wheels were driven before the bumper stopped them); a command
+  that failed outright (a domain without a fault-behaviour model) turns no actuator and gives no
+  actuator reading. The actuator draws come from a stream of their own, ``[seed, 24, 1 + i,
+  1]``, so an observer's pose readings are the same draws under either view.
+
 - :class:`SensingRange`: how far an observer sees, ``cells`` in the ``metric`` (Chebyshev: the
   square of side ``2 * cells + 1`` around it; Manhattan: the diamond).
-- :class:`Observer`: a teammate's name (the observation's ``source``), its sensor's error rate
-  and its sensing range. A teammate observes a command when **both** the robot's cell before the
-  command and its true cell after it are in range of the teammate's cell (it watched the whole
-  motion); where the teammate stands is given per command.
+- :class:`Observer`: a teammate's name (the observation's ``source``), its sensor's error rate,
+  its sensing range and its view. A teammate observes a command when **both** the robot's cell
+  before the command and its true cell after it are in range of the teammate's cell (it watched
+  the whole motion); where the teammate stands is given per command.
 - :func:`observer_team`: ``t1``, ``t2``, ... alike (experiment files, ``--observers``);
-- :func:`observer_streams`: one ``numpy.random.Generator`` per observer, seeded ``[seed, 24, 1 +
-  i]`` from the mission's seed (the robot's own stream is ``[seed, 24]``), so the same seed gives
-  the same readings and no two sensors share a generator.
+- :func:`observer_streams`: per observer, its pose stream ``[seed, 24, 1 + i]`` and actuator
+  stream ``[seed, 24, 1 + i, 1]`` (:class:`Streams`) from the mission's seed (the robot's own
+  stream is ``[seed, 24]``), so the same seed gives the same readings and no two sensors share a
+  generator.
 - :func:`following`: where each observer stands for the next command when the team follows
   the robot (observer ``i``, from 1, where the robot truly was ``i`` commands before: the
   simulator's rule, which the robot's probe planner and the trace check use too);
@@ -35,18 +50,28 @@ from __future__ import annotations
 import enum
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
-from selfrepair.diagnosis.observation import SELF, Observation, ObservationModel
+from selfrepair.diagnosis.observation import (
+    SELF,
+    Observation,
+    ObservationModel,
+    actuators_of,
+    read_actuators,
+)
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Cell, Pose
+from selfrepair.robots.domain import SomeDomain
 
 __all__ = [
     "OBSERVER_STREAM",
     "Metric",
     "Observer",
+    "ObserverView",
     "SensingRange",
+    "Streams",
     "following",
     "observer_streams",
     "observer_team",
@@ -56,6 +81,15 @@ __all__ = [
 OBSERVER_STREAM = 24
 """The stream number shared with the robot's own readings; observer ``i`` draws from
 ``[seed, OBSERVER_STREAM, 1 + i]``."""
+
+
+class ObserverView(enum.Enum):
+    """What an observer sees of a command it watches (see the module docstring)."""
+
+    POSE = "pose"
+    """The robot's pose after the command."""
+    WHEELS = "wheels"
+    """The pose and the robot's actuators (which wheels turn, which way)."""
 
 
 class Metric(enum.Enum):
@@ -92,16 +126,25 @@ class SensingRange:
 class Observer:
     """A teammate that watches the robot: ``name`` (the observations' ``source``; not
     ``"self"``), the odometry error rate ``noise`` of its sensor (the model of
-    :class:`~.observation.ObservationModel`) and its :class:`SensingRange`."""
+    :class:`~.observation.ObservationModel`; the wheel view reads each actuator with the same
+    rate), its :class:`SensingRange` and its :class:`ObserverView`."""
 
     name: str
     noise: float = 0.0
     sensing: SensingRange = SensingRange()
+    view: ObserverView = ObserverView.POSE
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name or self.name == SELF:
             raise ProblemError(f"expected an observer name other than {SELF!r}, got {self.name!r}")
         ObservationModel(self.noise)  # validates the rate
+        if not isinstance(self.view, ObserverView):
+            raise ProblemError(f"expected an observer view of {[v.value for v in ObserverView]}")
+
+    @property
+    def wheels(self) -> bool:
+        """Whether it sees the robot's actuators (:attr:`ObserverView.WHEELS`)."""
+        return self.view is ObserverView.WHEELS
 
     def watches(self, at: Pose, start: Pose, end: Pose) -> bool:
         """Whether, standing at ``at``, it sees the whole motion from ``start`` to ``end``."""
@@ -111,17 +154,32 @@ class Observer:
         )
 
 
-def observer_team(count: int, noise: float, cells: int) -> tuple[Observer, ...]:
-    """``count`` observers named ``t1``, ``t2``, ... with odometry error rate ``noise`` and a
-    Chebyshev range of ``cells`` (the teams of experiment files and ``--observers``)."""
+def observer_team(
+    count: int, noise: float, cells: int, view: ObserverView = ObserverView.POSE
+) -> tuple[Observer, ...]:
+    """``count`` observers named ``t1``, ``t2``, ... with odometry error rate ``noise``, a
+    Chebyshev range of ``cells`` and ``view`` (the teams of experiment files and
+    ``--observers``)."""
     sensing = SensingRange(cells)
-    return tuple(Observer(f"t{i}", noise, sensing) for i in range(1, count + 1))
+    return tuple(Observer(f"t{i}", noise, sensing, view) for i in range(1, count + 1))
 
 
-def observer_streams(seed: int, observers: Sequence[Observer]) -> tuple[np.random.Generator, ...]:
-    """One generator per observer, in order (see the module docstring)."""
+class Streams(NamedTuple):
+    """One observer's random streams: ``pose`` for its pose readings, ``wheels`` for its
+    actuator readings (the wheel view)."""
+
+    pose: np.random.Generator
+    wheels: np.random.Generator
+
+
+def observer_streams(seed: int, observers: Sequence[Observer]) -> tuple[Streams, ...]:
+    """The :class:`Streams` of each observer, in order (see the module docstring)."""
     return tuple(
-        np.random.default_rng([seed, OBSERVER_STREAM, 1 + i]) for i in range(len(observers))
+        Streams(
+            np.random.default_rng([seed, OBSERVER_STREAM, 1 + i]),
+            np.random.default_rng([seed, OBSERVER_STREAM, 1 + i, 1]),
+        )
+        for i in range(len(observers))
     )
 
 
@@ -144,11 +202,17 @@ def team_observations(
     failed: bool,
     observers: Sequence[Observer],
     poses: Sequence[Pose],
-    streams: Sequence[np.random.Generator],
+    streams: Sequence[Streams],
+    *,
+    performed: object = None,
+    domain: SomeDomain | None = None,
 ) -> tuple[Observation, ...]:
     """The readings of one command by the observers that watch it: the robot was commanded
     ``action`` at ``start`` and truly ended at ``end`` (after a bump: ``start``), ``failed`` as
     said; observer ``i`` stands at ``poses[i]`` and draws from ``streams[i]``. In observer order.
+    An observer with the wheel view also reads the actuators of ``performed``, the action the
+    actuators truly performed (``Domain.effective`` of ``action`` under the true faults), of
+    ``domain``: both are needed then, unless the command failed.
 
     An observer out of range draws nothing, so an observer's readings do not depend on where the
     others stand."""
@@ -157,9 +221,19 @@ def team_observations(
             f"expected one pose and one stream per observer, got {len(observers)} observers, "
             f"{len(poses)} poses and {len(streams)} streams"
         )
+    wheels = not failed and any(o.wheels for o in observers)
+    if wheels:
+        if domain is None or performed is None:
+            raise ProblemError("the wheel view needs the domain and the action performed")
+        actuators_of(domain)  # fails for a domain without actuators
     out = []
     for observer, at, rng in zip(observers, poses, streams, strict=True):
         if observer.watches(at, start, end):
             model = ObservationModel(observer.noise, bumps=False)
-            out.append(model.read(step, action, start, end, False, failed, rng, observer.name))
+            seen = model.read(step, action, start, end, False, failed, rng.pose, observer.name)
+            if wheels and observer.wheels:
+                assert domain is not None
+                read = read_actuators(domain, performed, observer.noise, rng.wheels)
+                seen = seen._replace(wheels=read)
+            out.append(seen)
     return tuple(out)

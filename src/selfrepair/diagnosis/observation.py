@@ -16,19 +16,37 @@ the caller seeds from the mission's seed (never global random state), one draw p
 
 Modelling choice: the pose the robot navigates by is exact (localisation against the known map is
 not this question); what is noisy is the reading of each command's motion that diagnosis uses.
+
+A watching teammate may also read the robot's actuators (the *wheel view*, see
+:mod:`~.cooperative`): ``wheels`` is then the action the actuators were seen performing, read
+actuator by actuator (:attr:`Domain.actuators <selfrepair.robots.domain.Domain.actuators>`, the
+four-wheel robot: each wheel's mode) by :func:`read_actuators`: each actuator's state is read
+right with probability ``1 - p`` and as one of its other states, uniformly, with probability
+``p`` (the same rate as the sensor's pose readings), one draw per actuator.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 
+from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.geometry import Heading, Pose
+from selfrepair.robots.domain import SomeDomain
 
-__all__ = ["PERTURBATIONS", "SELF", "Observation", "ObservationModel", "perturbed"]
+__all__ = [
+    "PERTURBATIONS",
+    "SELF",
+    "Actuators",
+    "Observation",
+    "ObservationModel",
+    "actuators_of",
+    "perturbed",
+    "read_actuators",
+]
 
 SELF = "self"
 """The source of the robot's own observations."""
@@ -53,7 +71,9 @@ class Observation(NamedTuple):
     ``start`` is the pose the command started from, ``end`` the pose read after it. ``bumped`` is
     the bump switch (``None``: no switch); ``failed`` whether the command failed outright.
     ``noise`` is the odometry error rate of the sensor that made the reading and ``source`` who
-    made it. An immutable ``NamedTuple`` (one per command)."""
+    made it. ``wheels`` is the action a teammate with the wheel view saw the actuators perform
+    (read with the same rate ``noise`` per actuator, :func:`read_actuators`; ``None``: no
+    actuator reading). An immutable ``NamedTuple`` (one per command)."""
 
     step: int
     action: object
@@ -63,6 +83,74 @@ class Observation(NamedTuple):
     failed: bool = False
     noise: float = 0.0
     source: str = SELF
+    wheels: object = None
+
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Actuators:
+    """The actuators of one domain as a watching teammate sees them: ``states[a]`` the state of
+    each actuator in action ``a`` (an index into ``Domain.actions``), ``values[i]`` the states
+    actuator ``i`` takes (in order of first appearance), ``action`` the action of each
+    combination of states (every combination is one: checked by ``check_domain``)."""
+
+    states: tuple[tuple[Any, ...], ...]
+    values: tuple[tuple[Any, ...], ...]
+    action: dict[tuple[Any, ...], int]
+
+    def mismatches(self, a: int, b: int) -> int:
+        """How many actuators actions ``a`` and ``b`` (indices) set differently."""
+        return sum(x != y for x, y in zip(self.states[a], self.states[b], strict=True))
+
+    def likelihood(self, read: int, performed: int, noise: float) -> float:
+        """The chance that action ``performed`` is read as ``read`` (indices) at error rate
+        ``noise`` per actuator: ``1 - noise`` per actuator read right, ``noise / (m - 1)`` per
+        actuator of ``m`` states read as one other state."""
+        value = 1.0
+        for i, (x, y) in enumerate(zip(self.states[read], self.states[performed], strict=True)):
+            value *= 1.0 - noise if x == y else noise / (len(self.values[i]) - 1)
+        return value
+
+
+def actuators_of(domain: SomeDomain) -> Actuators:
+    """The :class:`Actuators` of ``domain`` (kept); :class:`ProblemError` for a domain that
+    declares none (:attr:`Domain.actuators <selfrepair.robots.domain.Domain.actuators>`)."""
+    if domain.actuators is None:
+        raise ProblemError(
+            f"domain {domain.name!r} declares no actuators a teammate can see (the wheel view "
+            "needs them)"
+        )
+    return _ACTUATORS.get(domain, lambda: _actuators(domain))
+
+
+def _actuators(domain: SomeDomain) -> Actuators:
+    assert domain.actuators is not None
+    states = tuple(tuple(domain.actuators(a)) for a in domain.actions)
+    values = tuple(tuple(dict.fromkeys(column)) for column in zip(*states, strict=True))
+    return Actuators(states, values, {s: i for i, s in enumerate(states)})
+
+
+_ACTUATORS: BoundedCache[SomeDomain, Actuators] = BoundedCache(
+    "diagnosis actuator tables", 16, kind=CacheKind.PREFILLED
+)
+
+
+def read_actuators(
+    domain: SomeDomain, performed: object, noise: float, rng: np.random.Generator | None
+) -> object:
+    """The action a teammate reads the actuators as performing when they truly perform
+    ``performed``: each actuator read right with probability ``1 - noise``, else as one of its
+    other states uniformly (one draw per actuator from ``rng``; none when ``noise == 0``)."""
+    if noise == 0.0:
+        return performed
+    if rng is None:
+        raise ProblemError("a noisy actuator reading needs a random generator")
+    table = actuators_of(domain)
+    states = list(table.states[domain.actions.index(performed)])
+    for i, draw in enumerate(rng.random(len(states))):
+        if draw < noise:
+            others = [v for v in table.values[i] if v != states[i]]
+            states[i] = others[int(draw / noise * len(others))]
+    return domain.actions[table.action[tuple(states)]]
 
 
 @dataclass(frozen=True, slots=True)

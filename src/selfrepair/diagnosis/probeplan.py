@@ -4,14 +4,15 @@
 fewest-fault classes first, then the expected cost, a bump costed as :data:`BUMP_COST` commands),
 counting each reading as the belief counts it (:func:`_against`: under noisy odometry a reading one
 perturbation from a rival only contradicts it) and each watching teammate's reading with its own
-noise. :func:`isolating_probe` is its entry point and falls back to the greedy two-command
-sequence of :func:`.probes.best_probe` when only a sequence splits the hypotheses.
+noise, its actuator reading too when it has the wheel view (:func:`_wheels_against`).
+:func:`isolating_probe` is its entry point and falls back to the greedy two-command sequence of
+:func:`.probes.best_probe` when only a sequence splits the hypotheses.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
@@ -23,7 +24,7 @@ from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.diagnosis.belief import CONFIRMATIONS, FaultBelief, predictions
 from selfrepair.diagnosis.cooperative import Observer
 from selfrepair.diagnosis.hypotheses import FAILS, FaultModel
-from selfrepair.diagnosis.observation import ObservationModel, perturbed
+from selfrepair.diagnosis.observation import ObservationModel, actuators_of, perturbed
 from selfrepair.diagnosis.probes import (
     Probe,
     _entropy,
@@ -103,13 +104,16 @@ _TABLES: BoundedCache[FaultModel, _Tables] = BoundedCache(
 class _At:
     """What every command does to every class from one pose: ``onehot[a, c, l]`` whether class
     ``c`` reads outcome ``l`` after action ``a``; the outcome's end pose ``ends[l]`` and its
-    prediction ``outcomes[l]`` (end relative to the start cell, bump, failure); per action and
-    class the bump indicator and the ticks."""
+    prediction ``outcomes[l]`` (end relative to the start cell, bump, failure), the actions
+    performed by the classes of the outcome ``performed[l]`` (one, when a teammate with the
+    wheel view sees the motion and the outcome is split by them); per action and class the bump
+    indicator and the ticks."""
 
     label: npt.NDArray[np.intp]
     onehot: npt.NDArray[np.float64]
     ends: tuple[Pose, ...]
     outcomes: tuple[tuple[Pose, bool, bool], ...]
+    performed: tuple[tuple[int, ...], ...]
     bumps: npt.NDArray[np.float64]
     ticks: npt.NDArray[np.float64]
 
@@ -134,6 +138,17 @@ def _against(truth: Pose, rival: Pose, noise: float) -> int:
     return RULED_OUT
 
 
+def _wheels_against(table: Any, truth: int, rival: tuple[int, ...], noise: float) -> int:
+    """What one actuator reading of ``truth`` (an action index, read exactly, as the plan
+    assumes) says against a class performing one of ``rival`` (the least it says of them):
+    nothing when the actuators agree; with a noisy sensor one contradiction per actuator that
+    differs (the belief counts each as a miss); exact, any difference rules the class out."""
+    wrong = min(table.mismatches(truth, other) for other in rival)
+    if wrong == 0:
+        return 0
+    return RULED_OUT if noise == 0 else wrong
+
+
 class ProbePlanner:
     """Plans probes that isolate a fault class in few commands (see :meth:`plan`). Mutable: it
     keeps, for one robot's mission, what each command does from each pose met (the known map
@@ -145,6 +160,7 @@ class ProbePlanner:
         "_evidence",
         "_memo",
         "_tables",
+        "_views",
         "_watchers",
         "grid",
         "model",
@@ -165,30 +181,63 @@ class ProbePlanner:
         self._at: dict[Pose, _At] = {}
         self._memo: dict[tuple[bytes, bytes, bytes, Pose, int], float] = {}
         self._evidence: dict[Pose, npt.NDArray[np.int64]] = {}
+        self._views: dict[Pose, _At] = {}
         self._watchers: tuple[Watcher, ...] = ()
 
     def at(self, pose: Pose) -> _At:
-        """The outcomes of every command from ``pose`` (kept)."""
+        """The outcomes of every command from ``pose`` (kept): what the robot and teammates
+        that read its pose can tell apart."""
         found = self._at.get(pose)
-        if found is not None:
-            return found
+        if found is None:
+            found = self._at[pose] = self._outcomes(pose, None)
+        return found
+
+    def view(self, pose: Pose) -> _At:
+        """The outcomes of every command from ``pose`` as the readings of the current
+        :meth:`plan`'s watchers tell them apart: :meth:`at`, with each outcome a teammate with
+        the wheel view sees split by the action performed (kept until the next plan)."""
+        wheels = [(o, stands) for o, stands in self._watchers if o.wheels]
+        if not wheels:
+            return self.at(pose)
+        found = self._views.get(pose)
+        if found is None:
+            found = self._views[pose] = self._outcomes(
+                pose, lambda end: any(o.watches(stands, pose, end) for o, stands in wheels)
+            )
+        return found
+
+    def _outcomes(self, pose: Pose, split: Callable[[Pose], bool] | None) -> _At:
+        """The :class:`_At` of ``pose``; ``split(end)``: whether the outcomes ending at ``end``
+        are told apart by the action performed (``None``: never)."""
         model, tables = self.model, self._tables
         n_actions, n_classes = len(model.domain.actions), len(model.classes)
         keys: dict[tuple[Any, ...], int] = {}
         ends: list[Pose] = []
         outcomes: list[tuple[Pose, bool, bool]] = []
+        performed: list[dict[int, None]] = []
+        seen: dict[Pose, bool] = {}
         label = np.empty((n_actions, n_classes), dtype=np.intp)
         bumps = np.empty((n_actions, n_classes))
         ticks = np.empty((n_actions, n_classes))
         h = pose.heading
         for a in range(n_actions):
             labels, bumped, durations = [], [], []
-            for g, (_, (end, bump, fails)) in enumerate(predictions(model, a, pose, self.grid)):
-                key = (end, bump, fails) if self.switch else (end, fails)
+            for g, (group, (end, bump, fails)) in enumerate(
+                predictions(model, a, pose, self.grid)
+            ):
+                key: tuple[Any, ...] = (end, bump, fails) if self.switch else (end, fails)
+                there = Pose(pose.x + end.x, pose.y + end.y, end.heading)
+                if split is not None and not fails:
+                    if there not in seen:
+                        seen[there] = split(there)
+                    if seen[there]:
+                        key = (*key, group.performed)
                 number = keys.setdefault(key, len(keys))
                 if number == len(ends):
-                    ends.append(Pose(pose.x + end.x, pose.y + end.y, end.heading))
+                    ends.append(there)
                     outcomes.append((end, bump, fails))
+                    performed.append({})
+                performed[number][group.performed] = None
                 labels.append(number)
                 bumped.append(float(bump))
                 durations.append(1.0 if bump else tables.ticks[a][h][g])
@@ -198,25 +247,35 @@ class ProbePlanner:
             ticks[a] = np.asarray(durations)[index]
         onehot = np.zeros((n_actions, n_classes, len(ends)))
         onehot[np.arange(n_actions)[:, None], np.arange(n_classes)[None, :], label] = 1.0
-        found = self._at[pose] = _At(label, onehot, tuple(ends), tuple(outcomes), bumps, ticks)
-        return found
+        return _At(
+            label,
+            onehot,
+            tuple(ends),
+            tuple(outcomes),
+            tuple(tuple(p) for p in performed),
+            bumps,
+            ticks,
+        )
 
     def evidence(self, pose: Pose) -> npt.NDArray[np.int64]:
         """``evidence[l, m]``: what the readings of a command from ``pose`` that ends in outcome
         ``l`` (read exactly, as the plan assumes) say against a class predicting outcome ``m``:
         the contradictions they add (the robot's own reading, with its bump switch when it has
         one, and one reading per watcher in range of the whole motion, each by its sensor's
-        noise: see :func:`_against`), or :data:`RULED_OUT` (ruled out). For the watchers of the
-        current :meth:`plan` (kept until the next)."""
+        noise: see :func:`_against`; a watcher with the wheel view adds its actuator reading,
+        :func:`_wheels_against`), or :data:`RULED_OUT` (ruled out). Outcomes are those of
+        :meth:`view`. For the watchers of the current :meth:`plan` (kept until the next)."""
         found = self._evidence.get(pose)
         if found is not None:
             return found
-        at = self.at(pose)
-        outcomes, ends = at.outcomes, at.ends
+        at = self.view(pose)
+        outcomes, ends, performed = at.outcomes, at.ends, at.performed
         seeing = [
-            [o.noise for o, stands in self._watchers if o.watches(stands, pose, end)]
+            [(o.noise, o.wheels) for o, stands in self._watchers if o.watches(stands, pose, end)]
             for end in ends
         ]
+        wheels = any(o.wheels for o, _ in self._watchers)
+        table = actuators_of(self.model.domain) if wheels else None
         n = len(outcomes)
         out = np.zeros((n, n), dtype=np.int64)
         for read, (end, bump, fails) in enumerate(outcomes):
@@ -227,8 +286,11 @@ class ProbePlanner:
                     out[read, m] = RULED_OUT  # the switch and the failed signal are exact
                     continue
                 total = _against(end, other, self.noise)
-                for noise in seeing[read]:
+                for noise, wheels in seeing[read]:
                     total = min(RULED_OUT, total + _against(end, other, noise))
+                    if wheels and table is not None and not fails and len(performed[read]) == 1:
+                        said = _wheels_against(table, performed[read][0], performed[m], noise)
+                        total = min(RULED_OUT, total + said)
                 out[read, m] = total
         self._evidence[pose] = out
         return out
@@ -264,8 +326,11 @@ class ProbePlanner:
         (:meth:`FaultBelief.isolated`); the rivals' contradictions so far
         (:attr:`FaultBelief.misses`) are where the plan starts. Each of ``watchers`` (teammates,
         where they stand; they stay there while the plan runs) that sees the whole motion of a
-        command adds its own reading, with its own noise, and no bump switch. So a teammate in
-        range can confirm in the same command what the robot alone confirms with a second."""
+        command adds its own reading, with its own noise, and no bump switch; one with the wheel
+        view also its reading of the actuators (each actuator that differs from a class's
+        performed action one contradiction, or ruled out when exact), and the outcomes it sees
+        are told apart by the action performed (:meth:`view`). So a teammate in range can
+        confirm in the same command what the robot alone confirms with a second."""
         model = self.model
         alive = belief.alive if mask is None else mask & belief.alive
         classes = np.asarray(model.classes_in(alive), dtype=np.intp)
@@ -288,6 +353,7 @@ class ProbePlanner:
         if watchers != self._watchers:
             self._watchers = watchers
             self._evidence.clear()
+            self._views.clear()
         self._memo.clear()  # the weights and the parsimonious classes change with the belief
         cand = np.ones(len(classes), dtype=bool)
         found = self._search(
@@ -326,7 +392,7 @@ class ProbePlanner:
         key = (idx.tobytes(), misses.tobytes(), cand.tobytes(), pose, depth)
         if not root and key in self._memo:
             return self._memo[key]
-        at = self.at(pose)
+        at = self.view(pose)
         onehot = at.onehot[:, idx, :]
         parts = np.einsum("acl,c->al", onehot, w)
         counts = onehot.sum(axis=1)

@@ -304,7 +304,9 @@ class Simulator:
         """What the observing teammates saw of the last command (see :meth:`observe`): they
         follow the robot, observer ``i`` (from 1) standing where it truly was ``i`` commands
         before this one (its start pose before that), and each in range of the motion reads the
-        true end with its own sensor and stream ``[seed, 24, i]``
+        true end with its own sensor and stream ``[seed, 24, i]``; with the wheel view also the
+        actuators of the action truly performed (:attr:`last_action`, ``Domain.effective``),
+        from stream ``[seed, 24, i, 1]``
         (:func:`~selfrepair.diagnosis.cooperative.team_observations`). Call it once per command,
         after :meth:`observe`; empty without observers."""
         if not self.observers:
@@ -321,6 +323,8 @@ class Simulator:
             self.observers,
             behind,
             self._streams,
+            performed=self.last_action,
+            domain=self.domain,
         )
 
     def _advance_hidden(self, action: object) -> Outcome:

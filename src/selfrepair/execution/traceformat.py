@@ -22,10 +22,12 @@ A trace has one JSON object per line:
    known from the next step on); with the faults hidden (version 2), also what the robot
    observed and believed after it: ``read`` (its pose reading), ``bumped`` (its bump switch,
    ``null`` without one), ``seen`` (``[[observer, [x, y, "N"]], ...]``, teammates' readings, when
-   it has observers), ``surprise``, and for a strategy that keeps a belief ``belief`` (the bit set
-   of the hypotheses still possible, as hexadecimal text: bit ``i`` is hypothesis ``i`` of the
-   header's ``hidden.hypotheses``) and ``best`` (the most probable class, an index into
-   ``hidden.classes``, each a list of hypothesis indices);
+   it has observers; an observer with the wheel view adds the action it read the wheels
+   performing, ``[observer, [x, y, "N"], "SFFF"]``), ``surprise``, and for a strategy that
+   keeps a belief ``belief`` (the bit set of the hypotheses still possible, as hexadecimal
+   text: bit ``i`` is hypothesis ``i`` of the header's ``hidden.hypotheses``) and ``best``
+   (the most probable class, an index into ``hidden.classes``, each a list of hypothesis
+   indices);
 4. the mission summary (``"type": "summary"``): the row of
    :func:`selfrepair.execution.metrics.mission_row`.
 
@@ -111,7 +113,8 @@ class TraceRepair:
 class TraceObservation:
     """What a step line of a hidden-fault trace (version 2) says the robot observed and believed
     after the step: its own pose reading ``read`` and bump switch ``bumped`` (``None``: no
-    switch), the teammates' readings ``seen`` (observer name and pose read), the bit set
+    switch), the teammates' readings ``seen`` (observer name, pose read and, wheel view, the
+    action's text its actuators were read as performing, else ``None``), the bit set
     ``belief`` of the hypotheses still possible and the most probable class ``best`` (both
     ``None`` for a strategy that keeps no belief), and whether the step was a ``surprise`` (the
     reading is not where the command should have taken the robot, it bumped or the command
@@ -119,7 +122,7 @@ class TraceObservation:
 
     read: Pose
     bumped: bool | None
-    seen: tuple[tuple[str, Pose], ...]
+    seen: tuple[tuple[str, Pose, str | None], ...]
     belief: int | None
     best: int | None
     surprise: bool

@@ -22,19 +22,21 @@ live belief's, the most probable class is recomputed from a fresh belief fed the
 the observation model can give of the step's true end (the end itself with exact odometry; the
 end or one of its seven wrong readings with noise), the bump switch must match the step, a
 teammate's reading must be one its sensing range allowed (it follows the robot: observer ``i``
-stands where the robot was ``i`` steps before), the surprise flag must be what the reading says,
-and a fresh belief fed the recorded readings must give the recorded bit set and most probable
-class after every step.
+stands where the robot was ``i`` steps before) and, with the wheel view, name an action (exact:
+the action the true faults made of the command, ``Domain.effective``), the surprise flag must be
+what the reading says, and a fresh belief fed the recorded readings must give the recorded bit
+set and most probable class after every step.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from fractions import Fraction
 from typing import Any
 
 from selfrepair.diagnosis import FaultBelief, FaultModel, Observation, fault_model, perturbed
-from selfrepair.diagnosis.cooperative import following
-from selfrepair.errors import TraceError
+from selfrepair.diagnosis.cooperative import Observer, following
+from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.faults import Detection
 from selfrepair.execution.moves import move_table
 from selfrepair.execution.result import MissionResult, MissionSpec, StepSource, TraceStep
@@ -102,7 +104,12 @@ def observation_fields(result: MissionResult) -> dict[int, dict[str, Any]]:
             "surprise": surprising(spec, own),
         }
         if seen:
-            fields["seen"] = [[o.source, pose_json(o.end)] for o in seen]
+            fields["seen"] = [
+                [o.source, pose_json(o.end)]
+                if o.wheels is None
+                else [o.source, pose_json(o.end), spec.domain.format_action(o.wheels)]
+                for o in seen
+            ]
         if belief is not None and index < len(beliefs):
             for reading in readings:
                 belief.update(reading)
@@ -131,9 +138,18 @@ def parse_observation(f: TraceFields) -> TraceObservation | None:
         raise f.fail(f"expected 'surprise' to be true or false, got {surprise!r}")
     seen = []
     for item in f.data.get("seen", []):
-        if not (isinstance(item, list) and len(item) == 2 and isinstance(item[0], str)):
-            raise f.fail(f'expected \'seen\' as [["name", [x, y, "N"]], ...], got {item!r}')
-        seen.append((item[0], TraceFields({"p": item[1]}, f.source, f.line).pose("p")))
+        if not (
+            isinstance(item, list)
+            and len(item) in (2, 3)
+            and isinstance(item[0], str)
+            and (len(item) == 2 or isinstance(item[2], str))
+        ):
+            raise f.fail(
+                f'expected \'seen\' as [["name", [x, y, "N"]] or ["name", [x, y, "N"], '
+                f'"action read"], ...], got {item!r}'
+            )
+        pose = TraceFields({"p": item[1]}, f.source, f.line).pose("p")
+        seen.append((item[0], pose, item[2] if len(item) == 3 else None))
     belief_text = f.text("belief", optional=True)
     belief = None
     if belief_text is not None:
@@ -154,13 +170,16 @@ def check_observations(spec: MissionSpec, trace: Trace) -> tuple[int, str] | Non
     belief = FaultBelief(model, _grid(spec))
     observers = {o.name: (i, o) for i, o in enumerate(spec.observers, start=1)}
     trail = [spec.start]
+    ticks = Fraction(0)
     for index, (step, seen) in enumerate(zip(trace.steps, trace.observations, strict=False)):
         if seen is None:
             return index, "records no observation, but the trace records them for other steps"
-        problem = _check_step(spec, step, seen, observers, trail, belief)
+        true = spec.schedule.active_faults(index, ticks, spec.seed)
+        problem = _check_step(spec, step, seen, observers, trail, belief, true)
         if problem is not None:
             return index, problem
         trail.append(step.end)
+        ticks += step.duration
     return None
 
 
@@ -171,6 +190,7 @@ def _check_step(
     observers: Mapping[str, Any],
     trail: Sequence[Pose],
     belief: FaultBelief,
+    true: frozenset[object],
 ) -> str | None:
     noise = spec.observation.noise
     if not _possible(seen.read, step.end, noise):
@@ -183,7 +203,7 @@ def _check_step(
     if seen.surprise != surprising(spec, own):
         return f"records surprise {seen.surprise}, its reading says {not seen.surprise}"
     readings = [own]
-    for name, pose in seen.seen:
+    for name, pose, text in seen.seen:
         if name not in observers:
             return f"a reading by {name!r}, who is not among the header's observers"
         number, observer = observers[name]
@@ -192,8 +212,11 @@ def _check_step(
             return f"a reading by {name!r}, out of its range at {at}"
         if not _possible(pose, step.end, observer.noise):
             return f"{name!r} reads {pose} after the step ended at {step.end}"
+        wheels = _wheels(spec, step, observer, text, failed, true)
+        if isinstance(wheels, str):
+            return f"{name!r} {wheels}"
         readings.append(Observation(step.step, step.action, step.start, pose, None, failed,
-                                    observer.noise, name))  # fmt: skip
+                                    observer.noise, name, wheels))  # fmt: skip
     for reading in readings:
         belief.update(reading)
     if seen.belief is not None and seen.belief != belief.alive:
@@ -205,6 +228,35 @@ def _check_step(
         best = belief.most_probable()[0]
         return f"records class {seen.best} as most probable, the readings give {best}"
     return None
+
+
+def _wheels(
+    spec: MissionSpec,
+    step: TraceStep,
+    observer: Observer,
+    text: str | None,
+    failed: bool,
+    true: frozenset[object],
+) -> object:
+    """The action an observer's recorded actuator reading names (``None``: no reading), or why
+    it cannot be (a string): one is recorded exactly when the observer has the wheel view and
+    the command did not fail; read exactly it is the action the true faults made of the step's
+    command (``Domain.effective``)."""
+    want = observer.wheels and not failed
+    if text is None:
+        return "records no wheel reading, but it has the wheel view" if want else None
+    if not want:
+        return f"records the wheel reading {text!r} without the wheel view of a moving command"
+    try:
+        read = spec.domain.parse_action(text)
+    except InputError:
+        return f"records the wheel reading {text!r}, not an action of the robot"
+    performed = spec.domain.effective(step.action, true, spec.behaviour)
+    if observer.noise == 0 and read != performed:
+        return f"reads the wheels as {text}, exact, where they performed " + (
+            spec.domain.format_action(performed)
+        )
+    return read
 
 
 def _possible(read: Pose, end: Pose, noise: float) -> bool:

@@ -21,7 +21,7 @@ from selfrepair.diagnosis import (
     DEFAULT_MAX_FAULTS,
     ObservationModel,
 )
-from selfrepair.diagnosis.cooperative import Metric, Observer, SensingRange
+from selfrepair.diagnosis.cooperative import Metric, Observer, ObserverView, SensingRange
 from selfrepair.errors import InputError, TraceError
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.result import MissionSpec, StepSource, TraceStep
@@ -273,6 +273,7 @@ def spec_from_header(header: Mapping[str, Any], source: str = "<trace>") -> Miss
                     str(o["name"]),
                     float(o["noise"]),
                     SensingRange(int(o["range"]), Metric(o.get("metric", "chebyshev"))),
+                    ObserverView(o.get("view", "pose")),
                 )
                 for o in hidden.get("observers", ())
             ),

@@ -8,7 +8,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any, TypeVar
 
-from selfrepair.diagnosis.cooperative import Observer
+from selfrepair.diagnosis.cooperative import Observer, ObserverView
 from selfrepair.execution.faults import Detection
 from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionResult, MissionSpec, RepairRecord, TraceStep
@@ -84,8 +84,9 @@ def _hidden_json(spec: MissionSpec) -> dict[str, Any]:
 def _observer(observer: Observer) -> dict[str, Any]:
     """An observing teammate as the header keeps it."""
     sensing = observer.sensing
+    view = {} if observer.view is ObserverView.POSE else {"view": observer.view.value}
     return {"name": observer.name, "noise": observer.noise, "range": sensing.cells,
-            "metric": sensing.metric.value}  # fmt: skip
+            "metric": sensing.metric.value, **view}  # fmt: skip
 
 
 def _fault_texts(domain: Domain[A, F], faults: Iterable[F]) -> list[str]:

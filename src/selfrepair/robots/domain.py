@@ -140,6 +140,12 @@ class Domain(Generic[A, F]):
     behaviours: tuple[FaultBehaviour[A, F], ...] = ()
     """What the actuators do under a forbidden command, as named models (the first is the
     default; empty: no model, a forbidden command fails; see :meth:`effective`)."""
+    actuators: Callable[[A], tuple[object, ...]] | None = None
+    """What a teammate watching the robot sees of an action: the state of each actuator, in a
+    fixed order (the four-wheel robot: each wheel's mode, FL FR RL RR); the wheel view of
+    cooperative diagnosis reads it (docs/diagnosis.md). Every combination of the states each
+    actuator takes must be exactly one action (checked), so a misread actuator still names an
+    action. ``None``: no actuator a teammate can see."""
     action_set: frozenset[A] = field(init=False, repr=False)
     waits: tuple[A, ...] = field(init=False, repr=False)
     """The actions that keep every pose and sweep only the start cell, ``wait_actions`` first,
@@ -316,6 +322,25 @@ def check_domain(domain: Domain[A, F]) -> None:
         if domain.parse_faults(text) != faults:
             raise fail(f"fault text {text!r} does not parse back to the same set")
     _check_behaviours(domain, fail)
+    _check_actuators(domain, fail)
+
+
+def _check_actuators(domain: Domain[A, F], fail: Callable[[str], ProblemError]) -> None:
+    """Fail unless the actuator states (when declared) have one length, and every combination of
+    the states each actuator takes is exactly one action of the domain."""
+    if domain.actuators is None:
+        return
+    states = [tuple(domain.actuators(a)) for a in domain.actions]
+    if len({len(s) for s in states}) != 1 or not states[0]:
+        raise fail("expected the same, non-zero number of actuator states for every action")
+    if len(set(states)) != len(states):
+        raise fail("expected each action to have its own actuator states")
+    per = [set(column) for column in zip(*states, strict=True)]
+    if math.prod(len(values) for values in per) != len(states):
+        raise fail(
+            f"expected every combination of actuator states to be an action: {len(states)} "
+            f"actions, {math.prod(len(values) for values in per)} combinations"
+        )
 
 
 def _check_behaviours(domain: Domain[A, F], fail: Callable[[str], ProblemError]) -> None:

@@ -434,6 +434,11 @@ def _parse_faults(text: str) -> FaultSet:
     return parse_faults(text)
 
 
+def _wheel_modes(action: Action) -> tuple[object, ...]:
+    """What a watching teammate sees: each wheel's mode (the wheel view of diagnosis)."""
+    return action.wheels
+
+
 def _motion_class(action: Action) -> str:
     return _MOTION[action.code].name
 
@@ -457,6 +462,7 @@ FOUR_WHEEL: Domain[Action, Fault] = Domain(
     fault_parts=lambda fault: (fault.wheel.name, fault.mode.letter),
     wait_actions=(parse_action("SSSS"),),
     behaviours=BEHAVIOURS,
+    actuators=_wheel_modes,
     description="four-wheeled skid-steer robot: 81 actions, 12 wheel faults (e.g. FL:F)",
 )
 """The four-wheel skid-steer robot as a :class:`~selfrepair.robots.domain.Domain`. Levels: waits,
