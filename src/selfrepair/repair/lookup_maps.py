@@ -294,8 +294,8 @@ def depth_key(mode: RecursionMode, max_depth: int) -> int:
 @dataclass(frozen=True, slots=True)
 class LookupMemory:
     """What one compiled (table, fault set, mode) look-up holds: compiled actions, stored
-    patterns and approximate bytes (``sys.getsizeof``, see :mod:`selfrepair.repair.lookups`). ``max_depth``
-    is 0 except in the modes it changes (guarded, primitive)."""
+    patterns and approximate bytes (``sys.getsizeof``, see :mod:`selfrepair.repair.lookups`).
+    ``max_depth`` is 0 except in the modes it changes (guarded, primitive)."""
 
     table: str
     faults: str
