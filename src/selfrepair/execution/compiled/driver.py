@@ -191,19 +191,15 @@ class CompiledMission:
             if lk is None:
                 lk_arrays: tuple[Any, ...] = _NO_LOOKUPS  # int64 arrays, ans_act int32
             else:
-                lk_arrays = (lk.lk_mask, lk.lk_r, lk.codes, lk.hk1, lk.hk2, lk.hv,
-                             lk.ans_off, lk.ans_len, lk.ans_act)  # fmt: skip
-            lk_mask, lk_r, codes, hk1, hk2, hv, ans_off, ans_len, ans_act = lk_arrays
+                lk_arrays = (lk.lk, lk.codes, lk.ht, lk.ans, lk.ans_act)
+            slots, codes, ht, ans, ans_act = lk_arrays
             deferring: tuple[Any, ...] = (
-                _NO_DEFERRING
-                if lk is None
-                else (self.pend, lk.gk1, lk.gk2, lk.gv, lk.ans_doff, lk.ans_dlen, lk.ans_dpos)
+                _NO_DEFERRING if lk is None else (self.pend, lk.gh, lk.ans_dpos)
             )
             code = k.run_kernel(
                 self.par, self.st, self.mv, self.grid, self.avail, self.block, self.waits,
-                self.ev, self.set_of, lk_mask, lk_r, codes, hk1, hk2, hv, ans_off, ans_len,
-                ans_act, self.pen, self.pb, self.qa, self.qs, self.tr, self.rp, self.rp_act,
-                self.planner, self.search, deferring,
+                self.ev, self.set_of, slots, codes, ht, ans, ans_act, self.pen, self.pb, self.qa,
+                self.qs, self.tr, self.rp, self.rp_act, self.planner, self.search, deferring,
             )  # fmt: skip
             if code == k.DONE:
                 return int(self.st[k.S_END])
@@ -318,18 +314,14 @@ _RECORDS: BoundedCache[int, list[tuple[object, ...]]] = BoundedCache(
 )
 _NO_DEFERRING = (
     np.zeros((1, 2), dtype=np.int64),
-    *empty_hash(2),
-    np.zeros(1, dtype=np.int64),
-    np.zeros(1, dtype=np.int64),
+    empty_hash(2),
     np.zeros(1, dtype=np.int64),
 )
 _NO_LOOKUPS = (
-    np.zeros((1, 1), dtype=np.int64),
-    np.zeros((1, 1), dtype=np.int64),
+    np.zeros((1, 1, 2), dtype=np.int64),
     np.zeros((1, 1, 1), dtype=np.int64),
-    *empty_hash(2),
-    np.zeros(1, dtype=np.int64),
-    np.zeros(1, dtype=np.int64),
+    empty_hash(2),
+    np.zeros((1, k.A_COLS), dtype=np.int64),
     np.zeros(1, dtype=np.int32),
 )
 
@@ -353,7 +345,7 @@ def warm() -> None:
     """Load the kernels the driver calls from Python (from numba's cache, or compiled) once per
     process, before any repair's clock runs: a cold run's first fill must not pay for it."""
     if not _WARM:
-        keys, codes, values = empty_hash(2)
-        k.hash_put(keys, codes, values, 0, 0, 0)
-        k.hash_get(keys, codes, values, 0, 0)
+        table = empty_hash(2)
+        k.hash_put(table, 0, 0, 0)
+        k.hash_get(table, 0, 0)
         _WARM.append(True)
