@@ -16,10 +16,19 @@ Two measurements (deterministic; MuJoCo, the default robot and tracker):
     fidelity --in-sequence`` does for every action): its end error there. Fidelity measures an
     action from rest; in a mission it starts where the last one left the robot and its wheels.
 
+``response``
+    What a controller for a turn on a diagonal pair would be built from: the pair's two wheels
+    driven at ``m + a/2`` and ``m - a/2`` wheel speeds (signs of a clockwise turn: the left
+    wheel forward, the right one backward; the other two braked), the wheel ramps as in
+    :class:`~selfrepair.physics.world.PhysicsWorld`, from rest at the origin of an open floor
+    for 2 s: the robot centre's mean velocity (cells/s, in the robot's frame: forward, right)
+    from 0.6 s on, per unit of ``a = m / 4``, for the front-left/rear-right and the
+    rear-left/front-right pair and mean wheel speeds ``m`` from 0.5 to 2.5.
+
 Writes ``benchmarks/results/physics_contacts.json``.
 
 Usage: ``python benchmarks/physics_contacts.py [--maze M] [--strategy S] [--robot R]
-[--workers N] [--no-missions] [--no-sequence]``.
+[--workers N] [--no-missions] [--no-sequence] [--no-response]``.
 """
 
 from __future__ import annotations
@@ -36,6 +45,7 @@ from selfrepair.execution.executor import run_mission
 from selfrepair.experiment.faultsets import PAPER_FAULT_SETS
 from selfrepair.experiment.physics import physics_mission_spec
 from selfrepair.physics.fidelity import PREDECESSORS, measure, measure_in_sequence
+from selfrepair.physics.model import ORIGIN
 from selfrepair.physics.simulator import PhysicsSimulator
 from selfrepair.physics.tracker import ContinuousPose
 from selfrepair.physics.world import PhysicsWorld
@@ -168,6 +178,47 @@ def sequence() -> dict[str, Any]:
     return {"turns": done, "held": held}
 
 
+def _velocity(speeds: tuple[float, float, float, float]) -> tuple[float, float]:
+    """The robot centre's mean velocity (forward, right; cells/s, robot frame) from 0.6 s to 2 s
+    with the four wheels ramped to ``speeds`` (units of the wheel speed) from rest."""
+    world = PhysicsWorld(None, ORIGIN)
+    p, data = world.params, world.data
+    every, total, done = p.control_every, round(2.0 / p.timestep), 0
+    step = p.wheel_accel * every * p.timestep / p.wheel_radius
+    seen: list[tuple[float, float]] = []
+    while done < total:
+        data.ctrl[:] = [
+            min(max(s * p.wheel_omega, c - step), c + step)
+            for s, c in zip(speeds, data.ctrl, strict=True)
+        ]
+        world.mj.mj_step(world.model, data, every)
+        done += every
+        if done * p.timestep > 0.6:
+            yaw = world.pose().yaw
+            vx, vy = data.qvel[0] / p.cell, data.qvel[1] / p.cell
+            seen.append((
+                math.cos(yaw) * vx + math.sin(yaw) * vy, math.sin(yaw) * vx - math.cos(yaw) * vy
+            ))  # fmt: skip
+    return statistics.fmean(v[0] for v in seen), statistics.fmean(v[1] for v in seen)
+
+
+def response() -> dict[str, Any]:
+    """The diagonal pairs' translation per unit of speed difference (see the module docstring)."""
+    out: dict[str, Any] = {}
+    print("diagonal pair, mean wheel speed m: centre velocity per unit of a (forward, right)")
+    for m in (0.5, 1.0, 1.5, 2.0, 2.5):
+        a = m / 4
+        pairs = {
+            "FL/RR": (m + a / 2, 0.0, 0.0, -(m - a / 2)),
+            "RL/FR": (0.0, -(m - a / 2), m + a / 2, 0.0),
+        }
+        for name, speeds in pairs.items():
+            forward, right = _velocity(speeds)
+            out[f"{name} m={m}"] = {"forward": forward / a, "right": right / a}
+            print(f"  {name} m={m}: ({forward / a:+.3f}, {right / a:+.3f})")
+    return out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--maze", default="narrow-short")
@@ -176,12 +227,15 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--no-missions", action="store_true")
     parser.add_argument("--no-sequence", action="store_true")
+    parser.add_argument("--no-response", action="store_true")
     args = parser.parse_args()
     report: dict[str, Any] = {"maze": args.maze, "strategy": args.strategy, "robot": args.robot}
     if not args.no_missions:
         report["missions"] = missions(args.maze, args.strategy, args.robot, args.workers)
     if not args.no_sequence:
         report["sequence"] = sequence()
+    if not args.no_response:
+        report["response"] = response()
     write_report("physics_contacts", report)
 
 
