@@ -188,8 +188,7 @@ def warm_hit(n: int) -> dict[str, float]:
     st = np.zeros(k.S_SIZE, dtype=np.int64)
     par = np.zeros(k.P_SIZE, dtype=np.int64)
     par[k.P_NSLOTS], par[k.P_WIDTH] = lk.n_slots, maze.width
-    args = (st, par, set_of, lk.lk_mask, lk.lk_r, lk.codes, lk.hk1, lk.hk2, lk.hv, 3, action,
-            xs, ys, hs)  # fmt: skip
+    args = (st, par, set_of, lk.lk, lk.codes, lk.ht, 3, action, xs, ys, hs)
     assert k.warm_hits(len(poses), *args) >= 0  # every pose answered: no exit
     best = float("inf")
     for _ in range(5):

@@ -12,13 +12,23 @@ Two measurements (deterministic; MuJoCo, the default robot and tracker):
 ``sequence``
     Every turn in place that ``selfrepair physics fidelity`` confirms (from rest, within 0.05
     cells and 3 degrees), run on an open floor from the origin after each of a few other actions
-    (``FFFF``, ``BBBB``, ``SFFS``, ``FBFB`` and itself): its end error there. Fidelity measures an
+    (``FFFF``, ``BBBB``, ``SFFS``, ``FBFB``, ``BFBF`` and itself, as ``selfrepair physics
+    fidelity --in-sequence`` does for every action): its end error there. Fidelity measures an
     action from rest; in a mission it starts where the last one left the robot and its wheels.
+
+``response``
+    What a controller for a turn on a diagonal pair would be built from: the pair's two wheels
+    driven at ``m + a/2`` and ``m - a/2`` wheel speeds (signs of a clockwise turn: the left
+    wheel forward, the right one backward; the other two braked), the wheel ramps as in
+    :class:`~selfrepair.physics.world.PhysicsWorld`, from rest at the origin of an open floor
+    for 2 s: the robot centre's mean velocity (cells/s, in the robot's frame: forward, right)
+    from 0.6 s on, per unit of ``a = m / 4``, for the front-left/rear-right and the
+    rear-left/front-right pair and mean wheel speeds ``m`` from 0.5 to 2.5.
 
 Writes ``benchmarks/results/physics_contacts.json``.
 
 Usage: ``python benchmarks/physics_contacts.py [--maze M] [--strategy S] [--robot R]
-[--workers N] [--no-missions] [--no-sequence]``.
+[--workers N] [--no-missions] [--no-sequence] [--no-response]``.
 """
 
 from __future__ import annotations
@@ -28,23 +38,19 @@ import math
 import statistics
 from collections import Counter, defaultdict
 from concurrent.futures import ProcessPoolExecutor
-from fractions import Fraction
 from typing import Any
 
 from _common import write_report
 from selfrepair.execution.executor import run_mission
 from selfrepair.experiment.faultsets import PAPER_FAULT_SETS
 from selfrepair.experiment.physics import physics_mission_spec
-from selfrepair.geometry import Pose
-from selfrepair.physics.fidelity import measure
+from selfrepair.physics.fidelity import PREDECESSORS, measure, measure_in_sequence
 from selfrepair.physics.model import ORIGIN
-from selfrepair.physics.simulator import PhysicsSimulator, lattice_motion, wheel_commands
+from selfrepair.physics.simulator import PhysicsSimulator
 from selfrepair.physics.tracker import ContinuousPose
-from selfrepair.physics.world import PhysicsWorld, pose_error
-from selfrepair.robots.four_wheel import FOUR_WHEEL, parse_action
+from selfrepair.physics.world import PhysicsWorld
+from selfrepair.robots.four_wheel import parse_action
 from selfrepair.world.bundled import bundled_routes
-
-PREDECESSORS = ("FFFF", "BBBB", "SFFS", "FBFB")
 
 
 def _offset(pose: ContinuousPose, cell: float) -> tuple[float, float]:
@@ -152,39 +158,65 @@ def missions(maze: str, strategy: str, robot: str, workers: int) -> dict[str, An
             "episodes": episodes, "by_action": dict(by_action), "end_errors": table}  # fmt: skip
 
 
-def _after(first: str, then: str) -> float:
-    """``then``'s end error (cells) on an open floor after ``first`` from the origin."""
-    world = PhysicsWorld(None, ORIGIN)
-    pose: Pose = ORIGIN
-    for name in (first, then):
-        action = parse_action(name)
-        end = FOUR_WHEEL.apply(pose, action)
-        run = world.run(
-            wheel_commands(FOUR_WHEEL, action), Fraction(FOUR_WHEEL.duration(action)),
-            motion=lattice_motion(FOUR_WHEEL, action), reference_start=pose,
-        )  # fmt: skip
-        pose = end
-    return pose_error(run.end, pose)[0]
-
-
-def _sequence_job(name: str) -> tuple[str, dict[str, float]]:
-    return name, {first: _after(first, name) for first in (*PREDECESSORS, name)}
-
-
-def sequence(workers: int) -> dict[str, Any]:
-    rows = measure(faulty=False).rows
-    turns = [r.action for r in rows if r.confirmed and str(r.motion).startswith("turn")]
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        done = dict(pool.map(_sequence_job, [str(a) for a in turns]))
-    print(f"{len(done)} confirmed turns in place, end error (cells) after: "
+def sequence() -> dict[str, Any]:
+    """Every turn in place that fidelity confirms from rest, run after each of the in-sequence
+    predecessors and itself (:func:`selfrepair.physics.fidelity.measure_in_sequence`)."""
+    rest = measure(faulty=False)
+    turns = [
+        parse_action(r.action) for r in rest.rows if r.confirmed and r.motion.startswith("turn")
+    ]
+    report = measure_in_sequence(actions=turns, predecessors=PREDECESSORS, from_rest=rest)
+    print(f"{len(report.rows)} confirmed turns in place, end error (cells) after: "
           f"{', '.join((*PREDECESSORS, 'itself'))}")  # fmt: skip
-    held = 0
-    for name, after in sorted(done.items(), key=lambda kv: -max(kv[1].values())):
-        worst = max(after.values())
-        held += worst <= 0.05
-        print(f"  {name}: " + ", ".join(f"{v:.3f}" for v in after.values()) + f"  max {worst:.3f}")
-    print(f"{held} of {len(done)} stay within 0.05 cells after every one")
+    done = {}
+    for row in sorted(report.rows, key=lambda r: -r.worst_position):
+        done[row.action] = {first: p for first, p, _ in row.after}
+        print(f"  {row.action}: " + ", ".join(f"{p:.3f}" for _, p, _ in row.after)
+              + f"  max {row.worst_position:.3f}")  # fmt: skip
+    held = sum(r.worst_position <= 0.05 for r in report.rows)
+    print(f"{held} of {len(report.rows)} stay within 0.05 cells after every one")
     return {"turns": done, "held": held}
+
+
+def _velocity(speeds: tuple[float, float, float, float]) -> tuple[float, float]:
+    """The robot centre's mean velocity (forward, right; cells/s, robot frame) from 0.6 s to 2 s
+    with the four wheels ramped to ``speeds`` (units of the wheel speed) from rest."""
+    world = PhysicsWorld(None, ORIGIN)
+    p, data = world.params, world.data
+    every, total, done = p.control_every, round(2.0 / p.timestep), 0
+    step = p.wheel_accel * every * p.timestep / p.wheel_radius
+    seen: list[tuple[float, float]] = []
+    while done < total:
+        data.ctrl[:] = [
+            min(max(s * p.wheel_omega, c - step), c + step)
+            for s, c in zip(speeds, data.ctrl, strict=True)
+        ]
+        world.mj.mj_step(world.model, data, every)
+        done += every
+        if done * p.timestep > 0.6:
+            yaw = world.pose().yaw
+            vx, vy = data.qvel[0] / p.cell, data.qvel[1] / p.cell
+            seen.append((
+                math.cos(yaw) * vx + math.sin(yaw) * vy, math.sin(yaw) * vx - math.cos(yaw) * vy
+            ))  # fmt: skip
+    return statistics.fmean(v[0] for v in seen), statistics.fmean(v[1] for v in seen)
+
+
+def response() -> dict[str, Any]:
+    """The diagonal pairs' translation per unit of speed difference (see the module docstring)."""
+    out: dict[str, Any] = {}
+    print("diagonal pair, mean wheel speed m: centre velocity per unit of a (forward, right)")
+    for m in (0.5, 1.0, 1.5, 2.0, 2.5):
+        a = m / 4
+        pairs = {
+            "FL/RR": (m + a / 2, 0.0, 0.0, -(m - a / 2)),
+            "RL/FR": (0.0, -(m - a / 2), m + a / 2, 0.0),
+        }
+        for name, speeds in pairs.items():
+            forward, right = _velocity(speeds)
+            out[f"{name} m={m}"] = {"forward": forward / a, "right": right / a}
+            print(f"  {name} m={m}: ({forward / a:+.3f}, {right / a:+.3f})")
+    return out
 
 
 def main() -> None:
@@ -195,12 +227,15 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--no-missions", action="store_true")
     parser.add_argument("--no-sequence", action="store_true")
+    parser.add_argument("--no-response", action="store_true")
     args = parser.parse_args()
     report: dict[str, Any] = {"maze": args.maze, "strategy": args.strategy, "robot": args.robot}
     if not args.no_missions:
         report["missions"] = missions(args.maze, args.strategy, args.robot, args.workers)
     if not args.no_sequence:
-        report["sequence"] = sequence(args.workers)
+        report["sequence"] = sequence()
+    if not args.no_response:
+        report["response"] = response()
     write_report("physics_contacts", report)
 
 

@@ -18,7 +18,7 @@ from selfrepair.execution.faults import Detection, FaultSchedule
 from selfrepair.execution.result import MissionSpec, MissionStatus
 from selfrepair.execution.trace import parse_trace, replay, trace_lines
 from selfrepair.geometry import Heading, Pose
-from selfrepair.repair import lookups
+from selfrepair.repair import lookup_maps, lookups
 from selfrepair.repair import neighbourhood as codes
 from selfrepair.repair.lookups import (
     MAX_FAULT_LOOKUPS,
@@ -117,8 +117,8 @@ def test_compiled_look_ups_equal_the_reference_search(
     maze, action, faults = situation
     table = bundled_table(name)
     grid = maze.free_grid(table_reach(table))
-    old = lookups.ENUMERATE_BITS
-    lookups.ENUMERATE_BITS = enumerate_bits
+    old = lookup_maps.ENUMERATE_BITS
+    lookup_maps.ENUMERATE_BITS = enumerate_bits
     lookups._LOOKUPS.clear()
     try:
         for _ in range(2):
@@ -150,7 +150,7 @@ def test_compiled_look_ups_equal_the_reference_search(
                         if mode is RecursionMode.FLAT and not guard:
                             assert flat_replacement(table, action, pose, faults, grid) == reference
     finally:
-        lookups.ENUMERATE_BITS = old
+        lookup_maps.ENUMERATE_BITS = old
 
 
 @PROPERTY
@@ -232,7 +232,7 @@ def test_occupancy_codes_do_not_depend_on_the_band_they_are_made_in(
 
 
 def test_pattern_budget_bounds_memory_and_keeps_answers(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(lookups, "ENUMERATE_BITS", 0)
+    monkeypatch.setattr(lookup_maps, "ENUMERATE_BITS", 0)
     lookups._LOOKUPS.clear()
     table = bundled_table("generated-agnostic")
     rng = np.random.default_rng(3)

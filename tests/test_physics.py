@@ -26,7 +26,7 @@ from selfrepair.execution.stepper import Stepper
 from selfrepair.geometry import Heading, Pose
 from selfrepair.physics.identified import load_identified
 from selfrepair.physics.model import ORIGIN, RobotParams, WallBox, heading_yaw, mjcf, wall_boxes
-from selfrepair.physics.simulator import lattice_motion, wheel_commands
+from selfrepair.physics.simulator import lattice_motion
 from selfrepair.physics.tracker import (
     ContinuousPose,
     LatticeMotion,
@@ -202,24 +202,37 @@ def test_a_three_wheel_turn_turns_in_place_on_its_diagonal_pair() -> None:
 
 @PHYSICS
 def test_a_diagonal_pair_turn_confirmed_from_rest_drifts_after_another_action() -> None:
-    # docs/physics.md ("What the grazes are"): fidelity measures FFFB from rest 0.000 cells
-    # off, but after SFFS it ends 0.19 cells off; a spin on all four wheels holds (0.02).
-    from selfrepair.physics.world import PhysicsWorld, pose_error
+    # docs/physics.md ("Fidelity in sequence"): fidelity measures FFFB from rest 0.000 cells
+    # off, but after SFFS it ends 0.19 cells off; BFFF, driven on the other diagonal, holds.
+    from selfrepair.physics.fidelity import measure_in_sequence
 
-    def after(first: str, then: str) -> float:
-        world, pose = PhysicsWorld(None, ORIGIN), ORIGIN
-        for name in (first, then):
-            a = parse_action(name)
-            run = world.run(
-                wheel_commands(FOUR_WHEEL, a), Fraction(FOUR_WHEEL.duration(a)),
-                motion=lattice_motion(FOUR_WHEEL, a), reference_start=pose,
-            )  # fmt: skip
-            pose = FOUR_WHEEL.apply(pose, a)
-        return pose_error(run.end, pose)[0]
+    report = measure_in_sequence(
+        actions=[parse_action("FFFB"), parse_action("BFFF")], predecessors=("SFFS",)
+    )
+    fffb, bfff = report.rows
+    assert [first for first, _, _ in fffb.after] == ["SFFS", "FFFB"]
+    (_, after_arc, _), (_, after_itself, _) = fffb.after
+    assert fffb.from_rest and not fffb.holds and 0.1 < after_arc < 0.3 and after_itself < 0.01
+    assert bfff.from_rest and bfff.holds and bfff.worst_position < 0.05
+    summary = report.summary()
+    assert summary["all"] == {**summary["turn"]}
+    assert (summary["all"]["from_rest"], summary["all"]["in_sequence"]) == (2, 1)
 
-    assert after("FFFB", "FFFB") < 0.01
-    assert 0.1 < after("SFFS", "FFFB") < 0.3
-    assert after("SFFS", "BFBF") < 0.05
+
+@PHYSICS
+def test_physics_fidelity_cli_prints_the_in_sequence_table(monkeypatch, capsys) -> None:
+    import selfrepair.physics.fidelity as fidelity
+
+    few = [parse_action("FFFF"), parse_action("FSSS")]
+    measure, in_sequence = fidelity.measure, fidelity.measure_in_sequence
+    monkeypatch.setattr(fidelity, "measure", lambda **kw: measure(actions=few, **kw))
+    monkeypatch.setattr(
+        fidelity, "measure_in_sequence", lambda **kw: in_sequence(actions=few, **kw)
+    )
+    assert main(["physics", "fidelity", "--nominal", "--in-sequence"]) == 0
+    out = capsys.readouterr().out
+    assert "in sequence (after FFFF, BBBB, SFFS, FBFB, BFBF and itself)" in out
+    assert "| all | 2 | 1 | 1 |" in out and "| FSSS | turn-right | no | no |" in out
 
 
 @PHYSICS

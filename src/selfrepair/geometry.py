@@ -9,8 +9,8 @@ values, so they live here, below all of them (this module imports nothing of sel
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, fields
 from enum import IntEnum
 
 from selfrepair.errors import InputError
@@ -20,6 +20,7 @@ __all__ = [
     "FreeGrid",
     "Heading",
     "Pose",
+    "make_pose",
     "parse_cell",
     "parse_pose",
     "relative_cell",
@@ -50,10 +51,11 @@ class Heading(IntEnum):
 
     def rotated(self, quarter_turns: int) -> Heading:
         """The heading after ``quarter_turns`` clockwise quarter turns (negative: anticlockwise)."""
-        return Heading((self + quarter_turns) % 4)
+        return _HEADINGS[(self + quarter_turns) % 4]  # the member by index: no enum call
 
 
 _HEADING_VECTORS: tuple[Cell, ...] = ((0, -1), (1, 0), (0, 1), (-1, 0))
+_HEADINGS: tuple[Heading, ...] = tuple(Heading)
 
 
 @dataclass(frozen=True, slots=True, order=True)
@@ -71,6 +73,32 @@ class Pose:
 
     def __str__(self) -> str:
         return f"{self.x},{self.y},{self.heading.name}"
+
+
+def _pose_maker() -> Callable[[int, int, Heading], Pose]:
+    """A :class:`~selfrepair.geometry.Pose` constructor for the hot paths (plan paths, simulator
+    steps) that fills the three slots directly: the same value as ``Pose(x, y, heading)`` at a
+    third of the cost of the frozen dataclass's ``__init__``. Falls back to the class itself should
+    ``Pose`` ever validate its fields (a ``__post_init__``) or change its fields."""
+    names = tuple(f.name for f in fields(Pose))
+    if hasattr(Pose, "__post_init__") or names != ("x", "y", "heading"):
+        return Pose
+    new = object.__new__
+    set_x, set_y, set_heading = (getattr(Pose, name).__set__ for name in names)
+
+    def make(x: int, y: int, heading: Heading) -> Pose:
+        pose = new(Pose)
+        set_x(pose, x)
+        set_y(pose, y)
+        set_heading(pose, heading)
+        return pose
+
+    return make
+
+
+make_pose: Callable[[int, int, Heading], Pose] = _pose_maker()
+"""``make_pose(x, y, heading) == Pose(x, y, heading)``, built faster (see :func:`_pose_maker`;
+:mod:`selfrepair.search.problem` re-exports it)."""
 
 
 def relative_cell(pose: Pose, forward: int, lateral: int) -> Cell:

@@ -179,13 +179,11 @@ def observation_options(
     if (m.fault_behaviour is not None or m.noise) and not hidden:
         option = "--noise" if m.noise else "--fault-behaviour"
         raise InputError("expected --detect hidden (faults the robot is not told)", source=option)
-    for inside, option, wanted, value in (
+    _in_range(
         (0.0 <= m.noise < 0.5, "--noise", "in [0, 0.5)", m.noise),
         (0.0 < m.fault_prior < 1.0, "--fault-prior", "in (0, 1)", m.fault_prior),
         (0.0 <= m.confidence < 1.0, "--confidence", "in [0, 1)", m.confidence),
-    ):
-        if not inside:
-            raise InputError(f"expected a number {wanted}, got {value}", source=option)
+    )
     return ObservationModel(m.noise, m.bump_switch)
 
 
@@ -214,14 +212,12 @@ def observer_options(m: MissionOptions, domain: "SomeDomain") -> "tuple[Observer
             source=given[0][0],
         )
     noise = m.noise if m.observer_noise is None else m.observer_noise
-    for inside, option, wanted, value in (
+    _in_range(
         (0 <= m.observers <= MAX_OBSERVERS, "--observers", f"from 0 to {MAX_OBSERVERS}",
          m.observers),
         (0 <= m.observer_range <= 64, "--observer-range", "from 0 to 64", m.observer_range),
         (0.0 <= noise < 0.5, "--observer-noise", "in [0, 0.5)", noise),
-    ):  # fmt: skip
-        if not inside:
-            raise InputError(f"expected a number {wanted}, got {value}", source=option)
+    )  # fmt: skip
     check_choice(m.observer_view, tuple(v.value for v in ObserverView), "--observer-view")
     if given and not m.observers:
         raise InputError("expected --observers N of at least 1", source=given[0][0])
@@ -233,6 +229,14 @@ def observer_options(m: MissionOptions, domain: "SomeDomain") -> "tuple[Observer
             source="--observer-view",
         )
     return observer_team(m.observers, noise, m.observer_range, view)
+
+
+def _in_range(*checks: tuple[bool, str, str, float]) -> None:
+    """Raise the input error of the first ``(inside, option, wanted, value)`` check that is not
+    ``inside`` (one message for every numeric option out of its range)."""
+    for inside, option, wanted, value in checks:
+        if not inside:
+            raise InputError(f"expected a number {wanted}, got {value}", source=option)
 
 
 def table_note(mission: MissionOptions, spec: "MissionSpec") -> str | None:

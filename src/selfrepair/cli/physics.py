@@ -1,7 +1,8 @@
 """``selfrepair physics ...``: the four-wheel robot in MuJoCo (the ``physics`` extra).
 
 * ``physics fidelity``: every action run in physics against the lattice (open loop and tracked);
-  ``--write-domain FILE`` writes the domain identified from it. Exit 0.
+  ``--write-domain FILE`` writes the domain identified from it; ``--in-sequence`` adds the second
+  table, every nominal action run after each of a few others. Exit 0.
 * ``physics run``: one mission (every option of ``run``) driven through MuJoCo by the same loop;
   ``--video FILE`` renders it headless (GIF or MP4), ``--trace FILE`` writes the lattice trace
   (localised poses) that ``selfrepair view`` shows. Exit 0 when the goal is reached, 1 otherwise.
@@ -23,7 +24,7 @@ from selfrepair.errors import InputError
 from selfrepair.textio import JSONObject
 
 if TYPE_CHECKING:
-    from selfrepair.physics.fidelity import FidelityReport
+    from selfrepair.physics.fidelity import FidelityReport, SequenceReport
     from selfrepair.physics.mission import PhysicsMission
 
 __all__ = [
@@ -32,6 +33,7 @@ __all__ = [
     "physics_experiment",
     "physics_fidelity",
     "physics_run",
+    "sequence_markdown",
 ]
 
 physics_app = command_group(help="The four-wheel robot in MuJoCo: model fidelity and missions.")
@@ -53,27 +55,95 @@ def physics_fidelity(
         Path | None,
         typer.Option("--write-domain", metavar="FILE", help="Write the identified domain here."),
     ] = None,
+    in_sequence: Annotated[
+        bool,
+        typer.Option(
+            "--in-sequence", help="Also run every nominal action after each of a few others."
+        ),
+    ] = False,
 ) -> int:
     """Run every action in physics and compare its end pose with the lattice's.
 
     Per action: position error (cells) and heading error (degrees), open loop and tracked;
     physics confirms an action whose tracked end is within 0.05 cells and 3 degrees. Then every
     action under every single fault that forbids it, per fault-behaviour model: the wheels
-    perform what the model says, compared with the lattice's motion of that action.
+    perform what the model says, compared with the lattice's motion of that action. With
+    --in-sequence, a second table: every nominal action run tracked after each of FFFF, BBBB,
+    SFFS, FBFB, BFBF and itself; it holds in sequence when within 0.05 cells and 3 degrees
+    after every one.
     """
-    from selfrepair.physics.fidelity import measure
+    from selfrepair.physics.fidelity import measure, measure_in_sequence
 
     report = measure(faulty=not nominal)
+    sequence = measure_in_sequence(from_rest=report) if in_sequence else None
     if write_domain is not None:
         import json
 
         text = json.dumps(report.identified(), indent=1) + "\n"
         write_domain.write_text(text, encoding="utf-8")
     if as_json:
-        echo_json({"summary": report.summary(), "rows": [_row_json(r) for r in report.rows]})
+        out: JSONObject = {
+            "summary": report.summary(),
+            "rows": [_row_json(r) for r in report.rows],
+        }
+        if sequence is not None:
+            out["in_sequence"] = _sequence_json(sequence)
+        echo_json(out)
         return 0
     echo(fidelity_markdown(report))
+    if sequence is not None:
+        echo("")
+        echo(sequence_markdown(sequence))
     return 0
+
+
+def _sequence_json(report: "SequenceReport") -> JSONObject:
+    return {
+        "predecessors": list(report.predecessors),
+        "summary": report.summary(),
+        "rows": [
+            {
+                "action": r.action,
+                "motion": r.motion,
+                "from_rest": r.from_rest,
+                "holds": r.holds,
+                "after": [
+                    {"first": f, "position": number_json(p), "heading": number_json(h)}
+                    for f, p, h in r.after
+                ],
+            }
+            for r in report.rows
+        ],
+    }
+
+
+def sequence_markdown(report: "SequenceReport") -> str:
+    """The in-sequence table as Markdown: the summary per motion kind, then one row per action
+    with its end error (cells / degrees) after each predecessor."""
+    lines = [
+        f"in sequence (after {', '.join(report.predecessors)} and itself):",
+        "",
+        "| kind | actions | confirmed from rest | hold in sequence | median worst error |",
+        "|---|---:|---:|---:|---|",
+    ]
+    for kind, s in report.summary().items():
+        lines.append(
+            f"| {kind} | {s['actions']} | {s['from_rest']} | {s['in_sequence']} | "
+            f"{s['worst_position_median']:.3f} cells, {s['worst_heading_median']:.1f} deg |"
+        )
+    heads = " | ".join(f"after {p}" for p in (*report.predecessors, "itself"))
+    lines += [
+        "",
+        f"| action | motion | from rest | in sequence | {heads} |",
+        "|---|---|---|---|" + "---:|" * (len(report.predecessors) + 1),
+    ]
+    for r in report.rows:
+        cells = " | ".join(f"{p:.3f} / {h:.1f}" for _, p, h in r.after)
+        lines.append(
+            f"| {r.action} | {r.motion} | {'yes' if r.from_rest else 'no'} | "
+            f"{'yes' if r.holds else 'no'} | {cells} |"
+        )
+    return "\n".join(lines)
 
 
 def _row_json(row: Any) -> JSONObject:

@@ -31,6 +31,7 @@ __all__ = [
     "Mission",
     "canonical_json",
     "derive_seed",
+    "keyed_mission",
     "mission_key",
     "plugin_identities",
     "portable",
@@ -68,6 +69,18 @@ def canonical_json(data: object) -> str:
 def mission_key(config_json: str) -> str:
     """The stable key of a mission: the first 32 hex digits of SHA-256 of its canonical JSON."""
     return hashlib.sha256(config_json.encode("ascii")).hexdigest()[:32]
+
+
+def keyed_mission(
+    experiment: str,
+    seed: int,
+    settings: dict[str, Any],
+    labels: tuple[tuple[str, str | int | None], ...],
+) -> Mission:
+    """The mission of ``settings``: their canonical JSON, keyed as :func:`portable` sees them
+    (the one rule of a mission's key, for single-robot and team missions alike)."""
+    key = mission_key(canonical_json(portable(settings)))
+    return Mission(key, experiment, seed, canonical_json(settings), labels)
 
 
 def derive_seed(base_seed: int, situation: dict[str, Any]) -> int:

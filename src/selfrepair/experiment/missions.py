@@ -36,7 +36,7 @@ from selfrepair.experiment.keys import (
     Mission,
     canonical_json,
     derive_seed,
-    mission_key,
+    keyed_mission,
     plugin_identities,
     portable,
 )
@@ -253,8 +253,6 @@ def _mission(
     }
     if simulator is not None:  # absent without a [physics] section: older keys stay valid
         settings["simulator"] = simulator
-    text = canonical_json(settings)
-    key = mission_key(canonical_json(portable(settings)))
     options = variant["options"]
     labels: tuple[tuple[str, str | int | None], ...] = (
         ("maze", label),
@@ -280,7 +278,7 @@ def _mission(
         labels += (("world_rate", str(world["rate"])), ("sensing", world["sensing"]))
     if simulator is not None:
         labels += (("simulator", simulator["name"]),)
-    return Mission(key, config.name, seed, text, labels)
+    return keyed_mission(config.name, seed, settings, labels)
 
 
 def _without_objective(options: dict[str, Any]) -> dict[str, Any]:

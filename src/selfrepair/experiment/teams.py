@@ -57,7 +57,7 @@ from selfrepair.experiment.keys import (
     Mission,
     canonical_json,
     derive_seed,
-    mission_key,
+    keyed_mission,
     portable,
 )
 from selfrepair.experiment.mazes import maze_identity, maze_label, maze_of
@@ -287,8 +287,6 @@ def expand_team(
 def _mission(
     config: TeamExperimentConfig, settings: dict[str, Any], seed: int, label: str, load: int
 ) -> Mission:
-    text = canonical_json(settings)
-    key = mission_key(canonical_json(portable(settings)))
     strategy, table = settings["strategy"], settings["team_table"]
     labels: tuple[tuple[str, str | int | None], ...] = (
         ("maze", label),
@@ -303,7 +301,7 @@ def _mission(
         ("team_table", table),
         ("variant", f"{strategy}[{table}]" if table else strategy),
     )
-    return Mission(key, config.name, seed, text, labels)
+    return keyed_mission(config.name, seed, settings, labels)
 
 
 def is_team_rows(rows: Sequence[Mapping[str, Value]]) -> bool:

@@ -8,6 +8,12 @@ tracked end is within :data:`CONFIRM_POSITION` cells (5% of a cell) and :data:`C
 degrees of the lattice's. The tracked end also gives the action's identified motion (snapped to
 the lattice, or dropped when it does not snap; see :mod:`selfrepair.physics.identified`), written
 by :meth:`FidelityReport.identified`.
+
+From rest is not how a mission runs an action: there it starts where the last one left the robot,
+its wheels still turning. :func:`measure_in_sequence` runs every action tracked after each of a
+few preceding actions (:data:`PREDECESSORS`, then the action itself) from the origin on the same
+open floor, and reports the worst end error over them (a :class:`SequenceRow`): an action *holds
+in sequence* when it is within the confirmation tolerances after every one.
 """
 
 from __future__ import annotations
@@ -29,10 +35,14 @@ from selfrepair.robots.four_wheel import FOUR_WHEEL
 __all__ = [
     "CONFIRM_HEADING",
     "CONFIRM_POSITION",
+    "PREDECESSORS",
     "FidelityReport",
     "FidelityRow",
+    "SequenceReport",
+    "SequenceRow",
     "faulty_rows",
     "measure",
+    "measure_in_sequence",
 ]
 
 CONFIRM_POSITION = 0.05
@@ -41,6 +51,10 @@ CONFIRM_HEADING = 3.0
 """... and whose tracked end heading lies within this many degrees of the lattice's."""
 
 _ORIGIN = Pose(0, 0, Heading.N)
+
+PREDECESSORS = ("FFFF", "BBBB", "SFFS", "FBFB", "BFBF")
+"""The actions :func:`measure_in_sequence` runs before each action (then the action itself):
+forward and backward at full speed, an arc, and the spins on all four wheels both ways."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -267,3 +281,92 @@ def faulty_rows(domain: SomeDomain, nominal: list[FidelityRow]) -> list[Fidelity
                     )
                 )
     return out
+
+
+@dataclass(frozen=True, slots=True)
+class SequenceRow:
+    """One action run tracked after each predecessor (``after``: the predecessor's text, then
+    the action's end position error in cells and heading error in degrees there) and the worst
+    of them. ``from_rest`` is whether :func:`measure` confirms it from rest."""
+
+    action: str
+    motion: str
+    after: tuple[tuple[str, float, float], ...]
+    from_rest: bool
+
+    @property
+    def worst_position(self) -> float:
+        """The largest end position error (cells) over the predecessors."""
+        return max(p for _, p, _ in self.after)
+
+    @property
+    def worst_heading(self) -> float:
+        """The largest end heading error (degrees) over the predecessors."""
+        return max(h for _, _, h in self.after)
+
+    @property
+    def holds(self) -> bool:
+        """Whether the action is within the confirmation tolerances after every predecessor."""
+        return all(p < CONFIRM_POSITION and h < CONFIRM_HEADING for _, p, h in self.after)
+
+
+@dataclass(frozen=True, slots=True)
+class SequenceReport:
+    """The in-sequence rows and the predecessors they were run after."""
+
+    rows: tuple[SequenceRow, ...]
+    predecessors: tuple[str, ...]
+
+    def summary(self) -> dict[str, Any]:
+        """Per motion kind (the motion class's first word) and in all: actions, how many
+        physics confirms from rest, how many hold in sequence, and the median worst error."""
+        groups: dict[str, list[SequenceRow]] = {"all": list(self.rows)}
+        for row in self.rows:
+            groups.setdefault(row.motion.split("-")[0], []).append(row)
+        return {
+            kind: {
+                "actions": len(rows),
+                "from_rest": sum(r.from_rest for r in rows),
+                "in_sequence": sum(r.holds for r in rows),
+                "worst_position_median": round(_median([r.worst_position for r in rows]), 4),
+                "worst_heading_median": round(_median([r.worst_heading for r in rows]), 3),
+            }
+            for kind, rows in groups.items()
+        }
+
+
+def measure_in_sequence(
+    domain: SomeDomain = FOUR_WHEEL,
+    params: RobotParams = DEFAULT_PARAMS,
+    actions: Iterable[object] | None = None,
+    predecessors: Iterable[str] = PREDECESSORS,
+    *,
+    from_rest: FidelityReport | None = None,
+) -> SequenceReport:
+    """Run every action of ``domain`` (or ``actions``) tracked after each of ``predecessors``
+    (action texts) and after itself, each pair from rest at the origin facing north on an open
+    floor, the action's reference starting at the predecessor's lattice end (as in a mission,
+    where the robot is localised on the lattice); see the module docstring. ``from_rest`` is the
+    from-rest report to mark confirmed actions from (measured when not given)."""
+    chosen = list(domain.actions if actions is None else actions)
+    rest = from_rest if from_rest is not None else measure(domain, params, chosen, faulty=False)
+    confirmed = {r.action for r in rest.nominal() if r.confirmed}
+    before = [domain.parse_action(text) for text in predecessors]
+    world = PhysicsWorld(None, _ORIGIN, params)
+    rows = []
+    for action in chosen:
+        text = domain.format_action(action)
+        after = []
+        for first in (*before, action):
+            world.place(_ORIGIN)
+            pose = _ORIGIN
+            for a in (first, action):
+                run = world.run(
+                    wheel_commands(domain, a), domain.duration(a),
+                    motion=lattice_motion(domain, a), reference_start=pose,
+                )  # fmt: skip
+                pose = domain.apply(pose, a)
+            position, heading = pose_error(run.end, pose)
+            after.append((domain.format_action(first), position, heading))
+        rows.append(SequenceRow(text, domain.motion_class(action), tuple(after), text in confirmed))
+    return SequenceReport(tuple(rows), tuple(predecessors))

@@ -17,7 +17,7 @@ import numpy.typing as npt
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError, choice
-from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
+from selfrepair.geometry import Cell, FreeGrid, Heading
 from selfrepair.repair.replacement import (
     DEFAULT_MAX_DEPTH,
     DEFERRING,
@@ -27,6 +27,7 @@ from selfrepair.repair.replacement import (
     complex_actions,
 )
 from selfrepair.robots.domain import A, Domain, F
+from selfrepair.search.openmoves import open_moves
 from selfrepair.tables.model import ReplacementTable
 
 __all__ = [
@@ -80,19 +81,15 @@ class ActionIndex(Generic[A, F]):
 
 
 def _action_index(domain: Domain[A, F]) -> ActionIndex[A, F]:
-    starts = [Pose(0, 0, heading) for heading in Heading]
-    moves = []
-    for action in domain.actions:
-        ends = [domain.apply(start, action) for start in starts]
-        moves.append(tuple((end.x, end.y, int(end.heading)) for end in ends))
+    moves = open_moves(domain)  # shared with the planner's set-up in the same run
     return ActionIndex(
         domain,
-        {id(a): i for i, a in enumerate(domain.actions)},
+        moves.ids,
         {a: i for i, a in enumerate(domain.actions)},
-        tuple(moves),
-        tuple(tuple(domain.footprint(s, a) for s in starts) for a in domain.actions),
+        moves.ends,
+        moves.footprints,
         {id(a): 4 * i for i, a in enumerate(domain.actions)},
-        tuple(move for per in moves for move in per),
+        tuple(move for per in moves.ends for move in per),
     )
 
 

@@ -270,21 +270,20 @@ def primitive_by_motion(domain: Domain[A, F], faults: frozenset[F]) -> dict[str,
     return best
 
 
+_PROBES = tuple(Pose(0, 0, heading) for heading in Heading)
+"""The origin facing each heading: where the open-plane checks start an action."""
+
+
 def progress_rate(domain: Domain[A, F], actions: Iterable[A]) -> Fraction:
     """The least ticks per cell of Manhattan displacement over ``actions``, from any heading (0 if
     none moves): ``rate * manhattan(a, b)`` never exceeds the duration of getting from ``a`` to
     ``b`` with those actions, which is what makes the planners' heuristics admissible."""
     rates = []
-    for action in actions:
-        for heading in Heading:
-            end = domain.apply(Pose(0, 0, heading), action)
-            moved = abs(end.x) + abs(end.y)
-            if moved:
-                rates.append(Fraction(domain.duration(action)) / moved)
+    for action in actions:  # per action its best heading: the one that moves it furthest
+        moved = max(abs(end.x) + abs(end.y) for end in (domain.apply(p, action) for p in _PROBES))
+        if moved:
+            rates.append(Fraction(domain.duration(action)) / moved)
     return min(rates, default=Fraction(0))
-
-
-_PROBES = tuple(Pose(0, 0, heading) for heading in Heading)
 
 
 def check_domain(domain: Domain[A, F]) -> None:

@@ -31,7 +31,7 @@ from enum import Enum, IntEnum
 from fractions import Fraction
 
 from selfrepair.errors import InputError
-from selfrepair.geometry import Cell, Pose, relative_cell
+from selfrepair.geometry import Cell, Heading, Pose, make_pose, relative_cell
 from selfrepair.robots.domain import Domain, FaultBehaviour
 
 __all__ = [
@@ -206,6 +206,32 @@ _DURATION: dict[str, Fraction] = {}
 for _action in ACTIONS:
     _MOTION[_action.code], _DURATION[_action.code] = _derive_motion(_action.left, _action.right)
 
+_Step = tuple[int, int, Heading, tuple[Cell, ...]]
+
+
+def _steps(motion: Motion) -> tuple[_Step, _Step, _Step, _Step]:
+    """Per heading, ``motion`` from that heading in world offsets: the end cell's ``(dx, dy)``,
+    the end heading and the swept cells, start cell first (what :func:`step` returns from the
+    origin)."""
+    out = []
+    for heading in Heading:
+        origin = Pose(0, 0, heading)
+        dx, dy = relative_cell(origin, motion.forward, motion.lateral)
+        swept = tuple(relative_cell(origin, f, r) for f, r in motion.swept)
+        out.append((dx, dy, Heading((heading + motion.rotation) % 4), swept))
+    return out[0], out[1], out[2], out[3]
+
+
+_STEPS: dict[str, tuple[_Step, _Step, _Step, _Step]] = {
+    code: _steps(m) for code, m in _MOTION.items()
+}
+"""The motion table of the module docstring per action code and heading, in world offsets: the
+one definition of what an action does, read by :func:`step`, :func:`swept_cells` and the domain's
+``apply`` (a dictionary read and additions per call; made once, at import, as :data:`MOTIONS`)."""
+
+_LETTERS = ("S", "F", "B")
+"""A mode's letter by its value (``F`` = 1, ``S`` = 0, ``B`` = -1 counts from the end)."""
+
 MOTIONS: tuple[Motion, ...] = tuple(dict.fromkeys(_MOTION[a.code] for a in ACTIONS))
 """The nine distinct motions, in order of first appearance in :data:`ACTIONS`."""
 
@@ -235,7 +261,8 @@ def duration(action: Action) -> Fraction:
 
 def swept_cells(pose: Pose, action: Action) -> tuple[Cell, ...]:
     """Every world cell ``action`` passes through when started at ``pose``, start cell first."""
-    return tuple(relative_cell(pose, f, r) for f, r in _MOTION[action.code].swept)
+    x, y = pose.x, pose.y
+    return tuple([(x + dx, y + dy) for dx, dy in _STEPS[action.code][pose.heading][3]])
 
 
 def step(pose: Pose, action: Action) -> tuple[Pose, tuple[Cell, ...], Fraction]:
@@ -245,10 +272,7 @@ def step(pose: Pose, action: Action) -> tuple[Pose, tuple[Cell, ...], Fraction]:
     maze) and the duration. Whether the cells are free is the caller's question: the model itself
     knows no walls.
     """
-    m = _MOTION[action.code]
-    x, y = relative_cell(pose, m.forward, m.lateral)
-    end = Pose(x, y, pose.heading.rotated(m.rotation))
-    return end, swept_cells(pose, action), _DURATION[action.code]
+    return _apply(pose, action), swept_cells(pose, action), _DURATION[action.code]
 
 
 # --- faults ---------------------------------------------------------------------------------
@@ -309,7 +333,10 @@ def format_faults(faults: Iterable[Fault]) -> str:
 def available(action: Action, faults: Iterable[Fault]) -> bool:
     """Whether no fault in ``faults`` forbids a command that ``action`` gives."""
     code = action.code
-    return all(code[f.wheel] != f.mode.letter for f in faults)
+    for fault in faults:  # noqa: SIM110 (a plain loop: no generator frame per call)
+        if code[fault.wheel] == _LETTERS[fault.mode]:
+            return False
+    return True
 
 
 def fastest_by_motion(faults: Iterable[Fault] = ()) -> dict[Motion, Action]:
@@ -413,9 +440,8 @@ stuck direction line: a wheel commanded a direction it cannot go turns the other
 
 
 def _apply(pose: Pose, action: Action) -> Pose:
-    m = _MOTION[action.code]
-    x, y = relative_cell(pose, m.forward, m.lateral)
-    return Pose(x, y, pose.heading.rotated(m.rotation))
+    dx, dy, heading, _ = _STEPS[action.code][pose.heading]
+    return make_pose(pose.x + dx, pose.y + dy, heading)
 
 
 def _level(action: Action) -> int:
@@ -439,8 +465,12 @@ def _wheel_modes(action: Action) -> tuple[object, ...]:
     return action.wheels
 
 
+_CLASS_OF = {code: m.name for code, m in _MOTION.items()}
+"""Each action code's motion class (its motion's name, made once rather than per call)."""
+
+
 def _motion_class(action: Action) -> str:
-    return _MOTION[action.code].name
+    return _CLASS_OF[action.code]
 
 
 FOUR_WHEEL: Domain[Action, Fault] = Domain(

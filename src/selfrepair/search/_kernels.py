@@ -65,6 +65,7 @@ from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.jit import NUMBA, njit
 from selfrepair.robots.domain import Domain
 from selfrepair.search.astar import PlanStatus
+from selfrepair.search.openmoves import open_moves
 from selfrepair.search.problem import CellBound, PlanningProblem, make_pose, pose_table
 from selfrepair.search.term import PART_STEP, PATTERN_MIX, PatternTable, StepTerm
 from selfrepair.world.maze import Maze
@@ -643,32 +644,46 @@ class _Motion(NamedTuple):
 
 
 def _motion(domain: Domain[Any, Any], moves: tuple[Any, ...], pw: int, scale: int) -> _Motion:
-    """Integer motion table ``[heading, move, column]`` derived with ``domain.step`` (columns as
-    in the module's ``_DCELL`` .. ``_SW``). Raises :class:`OverflowError` for an action that
-    reaches beyond the 3x3 neighbourhood or a duration that is not a multiple of ``1/scale``."""
+    """Integer motion table ``[heading, move, column]`` of the planning actions ``moves``, from
+    the domain's moves on an open plane (:func:`~selfrepair.search.openmoves.open_moves`, shared
+    with the other readers of a run) and ``domain.duration`` (columns as in the module's
+    ``_DCELL`` .. ``_SW``). Raises :class:`OverflowError` for an action that reaches beyond the
+    3x3 neighbourhood or a duration that is not a multiple of ``1/scale``. Rows are made as
+    Python lists and copied into the array once."""
     n = len(moves)
     if n > 255:
         raise OverflowError("more than 255 planning actions")
-    width = max([len(domain.footprint(Pose(0, 0, h), a)) for a in moves for h in Heading] or [1])
-    table = np.zeros((4, n, _SW + width), dtype=np.int64)
-    for heading in Heading:
-        for k, action in enumerate(moves):
-            end, swept, duration = domain.step(Pose(0, 0, heading), action)
-            if max(abs(end.x), abs(end.y)) > 1:
+    table_of = open_moves(domain)
+    index = [table_of.index(a) for a in moves]
+    width = max([len(cells) for i in index for cells in table_of.footprints[i]] or [1])
+    durations = []
+    for action in moves:
+        duration = domain.duration(action)
+        scaled = Fraction(duration) * scale
+        if scaled.denominator != 1:
+            raise OverflowError(f"duration {duration} is not a multiple of 1/{scale}")
+        durations.append(scaled.numerator)
+    rows: list[list[list[int]]] = []
+    for heading in range(4):
+        per: list[list[int]] = []
+        for i, units in zip(index, durations, strict=True):
+            dx, dy, end_heading = table_of.ends[i][heading]
+            if max(abs(dx), abs(dy)) > 1:
                 raise OverflowError("an action moves beyond the 3x3 neighbourhood")
-            row = table[heading, k]
-            row[_DCELL] = end.y * pw + end.x
-            row[_NHEAD] = int(end.heading)
-            scaled = Fraction(duration) * scale
-            if scaled.denominator != 1:
-                raise OverflowError(f"duration {duration} is not a multiple of 1/{scale}")
-            row[_DUR] = scaled.numerator
+            swept = table_of.footprints[i][heading]
+            row = [0] * (_SW + width)
+            row[_DCELL], row[_NHEAD], row[_DUR] = dy * pw + dx, end_heading, units
             row[_NSW] = len(swept)
+            need = 0
             for j, (x, y) in enumerate(swept):
                 if max(abs(x), abs(y)) > 1:
                     raise OverflowError("an action sweeps beyond the 3x3 neighbourhood")
                 row[_SW + j] = y * pw + x
-                row[_NEED] |= 1 << (3 * (y + 1) + x + 1)
+                need |= 1 << (3 * (y + 1) + x + 1)
+            row[_NEED] = need
+            per.append(row)
+        rows.append(per)
+    table = np.array(rows, dtype=np.int64).reshape(4, n, _SW + width)
     table.setflags(write=False)
     objects = np.empty(n, dtype=object)
     objects[:] = moves

@@ -16,9 +16,10 @@ from __future__ import annotations
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
-from selfrepair.geometry import Heading, Pose
+from selfrepair.geometry import Heading
 from selfrepair.robots.domain import SomeDomain
 from selfrepair.search.astar import BACKENDS
+from selfrepair.search.openmoves import open_moves
 
 __all__ = ["BACKENDS", "backend_ran", "kernel_refusal", "numba_available", "use_numba"]
 
@@ -47,16 +48,25 @@ def kernel_refusal(domain: SomeDomain) -> str | None:
     return _REFUSALS.get(domain, lambda: _refusal(domain))
 
 
+_NINE = frozenset((x, y) for x in (-1, 0, 1) for y in (-1, 0, 1))
+"""The 3x3 cells around the robot, relative to its cell."""
+
+
 def _refusal(domain: SomeDomain) -> str | None:
     classes = len({domain.motion_class(a) for a in domain.actions})
     if classes > MAX_KERNEL_CLASSES:
         return f"it has {classes} motion classes, more than the kernels' {MAX_KERNEL_CLASSES}"
-    for action in domain.actions:
-        for heading in Heading:
-            start = Pose(0, 0, heading)
-            end = domain.apply(start, action)
-            cells = (end.cell, *domain.footprint(start, action))
-            if any(max(abs(x), abs(y)) > 1 for x, y in cells):
+    moves = open_moves(domain)
+    reached = {(dx, dy) for per in moves.ends for dx, dy, _ in per}
+    reached.update(cell for per in moves.footprints for cells in per for cell in cells)
+    if reached <= _NINE:  # the usual answer, in one set comparison
+        return None
+    for i, action in enumerate(domain.actions):
+        for heading, (dx, dy, _), footprint in zip(
+            Heading, moves.ends[i], moves.footprints[i], strict=True
+        ):
+            cells = ((dx, dy), *footprint)
+            if any(x < -1 or x > 1 or y < -1 or y > 1 for x, y in cells):
                 return (
                     f"action {domain.format_action(action)} facing {heading.name} leaves the 3x3 "
                     "cells around the robot"

@@ -61,6 +61,7 @@ from selfrepair.search.heuristics import (
     heuristic_bound,
     progress_rate,
 )
+from selfrepair.search.openmoves import open_moves
 from selfrepair.search.problem import (
     CellBound,
     PlanningProblem,
@@ -109,8 +110,9 @@ def _setup(domain: SomeDomain, faults: frozenset[object]) -> _Setup:
 
 
 def _make_setup(domain: SomeDomain, faults: frozenset[object]) -> _Setup:
+    moves = open_moves(domain)
     actions = tuple(
-        a for a in primitive_by_motion(domain, faults).values() if not _no_op(domain, a)
+        a for a in primitive_by_motion(domain, faults).values() if not moves.stays(moves.index(a))
     )
     return _Setup(actions, progress_rate(domain, actions))
 
@@ -118,10 +120,6 @@ def _make_setup(domain: SomeDomain, faults: frozenset[object]) -> _Setup:
 _SETUPS: BoundedCache[tuple[SomeDomain, frozenset[object]], _Setup] = BoundedCache(
     "planner actions per fault set", 1024, kind=CacheKind.PLAN
 )
-
-
-def _no_op(domain: SomeDomain, action: object) -> bool:
-    return all(domain.apply(Pose(0, 0, h), action) == Pose(0, 0, h) for h in Heading)
 
 
 def cost_scale(domain: SomeDomain, weight: Fraction) -> int:

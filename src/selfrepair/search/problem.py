@@ -9,9 +9,8 @@ planners that call the kernels.
 
 from __future__ import annotations
 
-import dataclasses
 import math
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
 from dataclasses import dataclass
 from fractions import Fraction
 from typing import Any
@@ -21,7 +20,7 @@ import numpy.typing as npt
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
-from selfrepair.geometry import Cell, Heading, Pose
+from selfrepair.geometry import Cell, Heading, Pose, make_pose
 from selfrepair.robots.domain import Domain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.astar import BACKENDS, MAX_TIME_LIMIT, PlanStatus
@@ -101,31 +100,6 @@ class CellBound:
     def distance(self) -> npt.NDArray[np.int32]:
         """The distances as an ``[y, x]`` array (a view without the border)."""
         return self.padded[1:-1, 1:-1]
-
-
-def _pose_maker() -> Callable[[int, int, Heading], Pose]:
-    """A :class:`~selfrepair.geometry.Pose` constructor for the hot paths (plan paths, simulator
-    steps) that fills the three slots directly: the same value as ``Pose(x, y, heading)`` at a
-    third of the cost of the frozen dataclass's ``__init__``. Falls back to the class itself should
-    ``Pose`` ever validate its fields (a ``__post_init__``) or change its fields."""
-    fields = tuple(f.name for f in dataclasses.fields(Pose))
-    if hasattr(Pose, "__post_init__") or fields != ("x", "y", "heading"):
-        return Pose
-    new = object.__new__
-    set_x, set_y, set_heading = (getattr(Pose, name).__set__ for name in fields)
-
-    def make(x: int, y: int, heading: Heading) -> Pose:
-        pose = new(Pose)
-        set_x(pose, x)
-        set_y(pose, y)
-        set_heading(pose, heading)
-        return pose
-
-    return make
-
-
-make_pose: Callable[[int, int, Heading], Pose] = _pose_maker()
-"""``make_pose(x, y, heading) == Pose(x, y, heading)``, built faster (see :func:`_pose_maker`)."""
 
 
 def pose_table(maze: Maze) -> list[Pose | None] | None:

@@ -59,14 +59,21 @@ MAX_CODE_RADIUS = 3
 of a wider neighbourhood is keyed by cell instead (same answers, one per cell)."""
 
 
-def empty_hash(capacity: int) -> tuple[Int64s, Int64s, Int64s]:
+def empty_hash(capacity: int) -> Int64s:
     """An empty hash table of the kernels (:func:`kernel.hash_put`) with room for ``capacity``
-    slots: first keys (all :data:`kernel.EMPTY`), second keys and values."""
-    return (
-        np.full(capacity, k.EMPTY, dtype=np.int64),
-        np.zeros(capacity, dtype=np.int64),
-        np.zeros(capacity, dtype=np.int64),
-    )
+    slots: one row ``(k1, k2, value, 0)`` per slot (first keys all :data:`kernel.EMPTY`), the
+    rows 32 bytes on 64-byte boundaries, so that a probe reads one cache line."""
+    table = _aligned((capacity, k.H_COLS))
+    table[:, k.H_K1] = k.EMPTY
+    return table
+
+
+def _aligned(shape: tuple[int, int]) -> Int64s:
+    """A zeroed int64 array of ``shape`` whose data starts on a 64-byte boundary."""
+    size = shape[0] * shape[1]
+    raw = np.zeros(size + 8, dtype=np.int64)
+    skip = (-raw.ctypes.data % 64) // 8
+    return raw[skip : skip + size].reshape(shape)
 
 
 def move_arrays(table: MoveTable) -> Int64s:
@@ -148,25 +155,25 @@ class CompiledLookups:
         self.guards: list[frozenset[object]] = [frozenset()]
         """The guard sets met so far, by id (0: none)."""
         self._guard_ids: dict[frozenset[object], int] = {frozenset(): 0}
-        self.gk1, self.gk2, self.gv = empty_hash(1 << 6)
+        self.gh = empty_hash(1 << 6)
         self._g_stored = 0
-        self.ans_doff = np.zeros(64, dtype=np.int64)
-        self.ans_dlen = np.zeros(64, dtype=np.int64)
         self.ans_dpos = np.zeros(64, dtype=np.int64)
         self._n_def = 0
         self._kept: list[object] = []
         self._set_of: dict[tuple[object, ...], npt.NDArray[np.int64]] = {}
         self.on_grid: list[GridLookups[Any]] = []
-        self.lk_mask = np.full((4, self.n_slots), k.UNLOADED, dtype=np.int64)
-        self.lk_r = np.zeros((4, self.n_slots), dtype=np.int64)
+        self.lk = np.full((4, self.n_slots, 2), k.UNLOADED, dtype=np.int64)
+        """Per look-up id and slot: ``(mask, radius index)`` (mask :data:`kernel.UNLOADED`
+        until the kernel asks for the slot)."""
         self.radii: list[int] = []
         self.codes = np.zeros((0, self.grid.height, self.grid.width), dtype=np.int64)
-        self.hk1, self.hk2, self.hv = empty_hash(1 << 10)
+        self.ht = empty_hash(1 << 10)
         self.stored = 0
         self.answers: list[Repair] = []
         self._ids: dict[int, int] = {}
-        self.ans_off = np.zeros(64, dtype=np.int64)
-        self.ans_len = np.zeros(64, dtype=np.int64)
+        self.ans = np.zeros((64, k.A_COLS), dtype=np.int64)
+        """Per answer id: ``(off, len, doff, dlen)``, where its actions and (deferring mode)
+        its deferred positions lie in :attr:`ans_act` and :attr:`ans_dpos`."""
         self.ans_act = np.zeros(256, dtype=np.int32)
         self._n_act = 0
 
@@ -192,9 +199,8 @@ class CompiledLookups:
             )
             self.on_grid.append(on_grid)
             self.known_of.append(known)
-            if sid >= self.lk_mask.shape[0]:
-                self.lk_mask = _grown(self.lk_mask, k.UNLOADED)
-                self.lk_r = _grown(self.lk_r, 0)
+            if sid >= self.lk.shape[0]:
+                self.lk = _grown(self.lk, k.UNLOADED)
         return sid
 
     def serve_guard(self, k1: int, k2: int) -> None:
@@ -210,9 +216,9 @@ class CompiledLookups:
             if value < 0:
                 value = self._guard_ids[grown] = len(self.guards)
                 self.guards.append(grown)
-        if 2 * (self._g_stored + 1) > self.gk1.shape[0]:
-            self.gk1, self.gk2, self.gv = _rehashed(self.gk1, self.gk2, self.gv)
-        k.hash_put(self.gk1, self.gk2, self.gv, k1, k2, value)
+        if 2 * (self._g_stored + 1) > self.gh.shape[0]:
+            self.gh = _rehashed(self.gh)
+        k.hash_put(self.gh, k1, k2, value)
         self._g_stored += 1
 
     def load_slot(self, sid: int, slot: int) -> None:
@@ -228,8 +234,7 @@ class CompiledLookups:
         ridx = 0 if by_cell else self._radius_index(radius)
         for h in range(4):
             mask = int(lookup.masks[h])
-            self.lk_mask[sid, first + h] = k.BY_CELL if by_cell else mask
-            self.lk_r[sid, first + h] = ridx
+            self.lk[sid, first + h] = (k.BY_CELL if by_cell else mask, ridx)
             if not by_cell:
                 for key, value in list(lookup.answers[h].items()):
                     self._put(sid, first + h, key, value)
@@ -246,10 +251,10 @@ class CompiledLookups:
         self._put(sid, slot, key, value)
 
     def _put(self, sid: int, slot: int, key: int, value: Repair | Replacement | None) -> None:
-        if 2 * (self.stored + 1) > self.hk1.shape[0]:
-            self.hk1, self.hk2, self.hv = _rehashed(self.hk1, self.hk2, self.hv)
+        if 2 * (self.stored + 1) > self.ht.shape[0]:
+            self.ht = _rehashed(self.ht)
         aid = k.NO_ANSWER if value is None else self._answer(value)
-        k.hash_put(self.hk1, self.hk2, self.hv, sid * self.n_slots + slot, key, aid)
+        k.hash_put(self.ht, sid * self.n_slots + slot, key, aid)
         self.stored += 1
 
     def _answer(self, value: Repair | Replacement) -> int:
@@ -260,27 +265,23 @@ class CompiledLookups:
             return aid
         aid = self._ids[id(value)] = len(self.answers)
         self._kept.append(value)  # keeps ``value`` alive, so its id stays its own
+        if aid >= self.ans.shape[0]:
+            self.ans = _grown(self.ans, 0)
         if isinstance(value, Replacement):
             self.answers.append(hit_repair(value))
             deferred = value.deferred
-            if aid >= self.ans_doff.shape[0]:
-                self.ans_doff = _grown(self.ans_doff, 0)
-                self.ans_dlen = _grown(self.ans_dlen, 0)
             while self._n_def + len(deferred) > self.ans_dpos.shape[0]:
                 self.ans_dpos = _grown(self.ans_dpos, 0)
-            self.ans_doff[aid], self.ans_dlen[aid] = self._n_def, len(deferred)
+            self.ans[aid, k.A_DOFF], self.ans[aid, k.A_DLEN] = self._n_def, len(deferred)
             self.ans_dpos[self._n_def : self._n_def + len(deferred)] = deferred
             self._n_def += len(deferred)
         else:
             self.answers.append(value)
-        if aid >= self.ans_off.shape[0]:
-            self.ans_off = _grown(self.ans_off, 0)
-            self.ans_len = _grown(self.ans_len, 0)
         of = action_index(self.context.domain).of  # by identity, else by equality
         acts = [of(a) for a in value.actions]
         while self._n_act + len(acts) > self.ans_act.shape[0]:
             self.ans_act = _grown(self.ans_act, 0)
-        self.ans_off[aid], self.ans_len[aid] = self._n_act, len(acts)
+        self.ans[aid, k.A_OFF], self.ans[aid, k.A_LEN] = self._n_act, len(acts)
         self.ans_act[self._n_act : self._n_act + len(acts)] = acts
         self._n_act += len(acts)
         return aid
@@ -293,12 +294,12 @@ class CompiledLookups:
         return self.radii.index(radius)
 
 
-def _rehashed(hk1: Int64s, hk2: Int64s, hv: Int64s) -> tuple[Int64s, Int64s, Int64s]:
-    """The hash table ``(hk1, hk2, hv)`` in twice the room."""
-    keys, codes, values = empty_hash(2 * hk1.shape[0])
-    for i in np.flatnonzero(hk1 != k.EMPTY).tolist():
-        k.hash_put(keys, codes, values, int(hk1[i]), int(hk2[i]), int(hv[i]))
-    return keys, codes, values
+def _rehashed(table: Int64s) -> Int64s:
+    """The hash table ``table`` in twice the room."""
+    out = empty_hash(2 * table.shape[0])
+    for k1, k2, value in table[table[:, k.H_K1] != k.EMPTY, : k.H_V + 1].tolist():
+        k.hash_put(out, k1, k2, value)
+    return out
 
 
 _G = TypeVar("_G", bound=np.generic)

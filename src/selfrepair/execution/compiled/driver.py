@@ -1,18 +1,16 @@
-"""The driver of the compiled mission loop: which missions it takes, the arrays of one mission,
-the kernel's exits served, and the trace, repairs and tallies made from the arrays afterwards.
+"""The driver of the compiled mission loop: the arrays of one mission in the kernel's layout,
+and the kernel's exits served (a fault set's look-up slot, a pattern met for the first time, a
+plan, a planner, more room) until the mission ends.
 
-:func:`compiled_loop` is what :func:`selfrepair.execution.executor.run_mission` calls in place of
-its Python loop when the mission's footing allows it (:func:`refusal` says why not). It leaves
-the mission's state where the Python loop leaves it (the stepper's steps, repairs, known faults
-and waits; the simulator's pose, step count and clock), so the executor makes the same
-:class:`~selfrepair.execution.result.MissionResult` from either. Nothing of this runs per step
-while the kernel runs: the trace and the repair records are made from the arrays once the
-mission has ended, outside every timed repair.
+:class:`CompiledMission` is made and run by
+:func:`~selfrepair.execution.compiled.loop.compiled_loop`, which then makes the trace, the repair
+records and the tallies from its arrays; which missions it takes is
+:mod:`selfrepair.execution.compiled.footing`'s answer.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from fractions import Fraction
 from typing import Any
 
@@ -23,13 +21,12 @@ from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.execution.compiled import kernel as k
 from selfrepair.execution.compiled.arrays import (
-    MAX_SCHEDULE_FAULTS,
     compiled_lookups,
     empty_hash,
     fault_arrays,
     move_arrays,
 )
-from selfrepair.execution.compiled.draws import MAX_SEED, MAX_WORD, threshold
+from selfrepair.execution.compiled.draws import MAX_SEED, threshold
 from selfrepair.execution.compiled.planner import (
     KernelPlanner,
     cached_planner,
@@ -37,47 +34,25 @@ from selfrepair.execution.compiled.planner import (
     new_records,
 )
 from selfrepair.execution.faults import Detection, Persistence, canonical_order
-from selfrepair.execution.result import MissionSpec, RepairRecord, StepSource, TraceStep
+from selfrepair.execution.result import MissionSpec
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS, Simulator
 from selfrepair.execution.stepper import MAX_REPAIRS_PER_STEP, Stepper
 from selfrepair.geometry import Heading, Pose
 from selfrepair.repair.lookups import action_index
 from selfrepair.repair.replacement import DEFERRING
-from selfrepair.repair.strategies import (
-    Repair,
-    RepairSource,
-    RepairStatus,
-    StrategyName,
-    chained,
-)
+from selfrepair.repair.strategies import RepairStatus, StrategyName
 from selfrepair.search.astar import PlanResult
 from selfrepair.search.problem import make_pose
-from selfrepair.status import REPAIR_OF_PLAN, MissionStatus, PlanStatus, mission_status
+from selfrepair.status import REPAIR_OF_PLAN, PlanStatus
 
-__all__ = ["FOOTINGS", "LoopEnd", "compiled_loop", "refusal", "runs_compiled"]
+__all__ = ["REPAIR_STATUS", "CompiledMission", "Refused", "warm"]
 
-FOOTINGS = ("auto", "compiled", "python")
-"""What a mission's ``footing`` may ask for: the compiled loop where it can run (``auto``), the
-compiled loop or an error (``compiled``), or the Python loop."""
-
-LoopEnd = tuple[MissionStatus, str, int, int]
-"""How the loop ended (status, reason), the executed time in units and the clearance penalty."""
-
-_SOURCES = (
-    StepSource.PLAN,
-    StepSource.REPLACEMENT,
-    StepSource.REPLAN,
-    StepSource.FAILED_ATTEMPT,
-    StepSource.WAIT,
-    StepSource.LOOKAHEAD,
-)
-_COMPILED = (StrategyName.REPLAN, StrategyName.REPLACEMENT, StrategyName.LOOKAHEAD)
-_REPAIR_STATUS = {
+REPAIR_STATUS = {
     RepairStatus.REPAIRED: k.R_REPAIRED,
     RepairStatus.STUCK: k.R_STUCK,
     RepairStatus.BUDGET_EXHAUSTED: k.R_BUDGET,
 }
-_STATUS_OF = {code: status for status, code in _REPAIR_STATUS.items()}
+"""The kernel's code of each repair status a plan can end a repair with."""
 _EVENT_KIND = {
     Persistence.PERMANENT: k.EV_PERMANENT,
     Persistence.TRANSIENT: k.EV_TRANSIENT,
@@ -85,53 +60,7 @@ _EVENT_KIND = {
 }
 
 
-def refusal(spec: MissionSpec, stepper: Stepper | None = None) -> str | None:
-    """Why the compiled loop cannot run ``spec`` (one line), or ``None`` when it can."""
-    if not k.NUMBA:
-        return "numba is not installed (the 'fast' extra)"
-    if spec.strategy not in _COMPILED:
-        compiled = "replan, replacement, lookahead"
-        return f"strategy {spec.strategy!s} runs in Python (compiled: {compiled})"
-    if spec.strategy == StrategyName.LOOKAHEAD and spec.options.recursion in DEFERRING:
-        mode = spec.options.recursion
-        return f"lookahead's fallback in {mode!s} recursion defers actions (Python only)"
-    if spec.objective is not None:
-        return "a tolerant planning objective runs in Python"
-    if stepper is not None and stepper.horizon and spec.strategy != StrategyName.LOOKAHEAD:
-        return "a repair horizon runs in Python (compiled: lookahead's)"
-    if spec.world:
-        return "world events (a changing maze) run in Python"
-    if spec.schedule.detection is Detection.HIDDEN:
-        return "faults hidden from the robot (detection hidden) run in Python"
-    events = spec.schedule.events
-    if any(e.persistence is Persistence.INTERMITTENT for e in events) and (
-        spec.seed > MAX_SEED or len(events) > MAX_WORD or spec.step_limit() > MAX_WORD
-    ):
-        return (
-            f"intermittent faults run in Python with a seed above {MAX_SEED} or more than "
-            f"{MAX_WORD} steps or events (the compiled draw takes 64-bit seeds, 32-bit steps)"
-        )
-    if len({e.fault for e in events}) > MAX_SCHEDULE_FAULTS:
-        return f"more than {MAX_SCHEDULE_FAULTS} distinct faults in the schedule"
-    if not spec.maze.in_bounds(spec.start.x, spec.start.y):
-        return "the start lies off the maze"
-    return None
-
-
-def runs_compiled(spec: MissionSpec, sim: Simulator, stepper: Stepper) -> bool:
-    """Whether the compiled loop runs ``spec`` with ``sim`` and ``stepper`` (for footing
-    ``compiled`` a refusal raises :class:`ProblemError` with the reason)."""
-    if spec.footing == "python":
-        return False
-    reason = refusal(spec, stepper)
-    if reason is None and type(sim) is not Simulator:  # another world holds the truth (physics)
-        reason = f"its simulator is a {type(sim).__name__}, not the lattice Simulator"
-    if reason is not None and spec.footing == "compiled":
-        raise ProblemError(f"footing 'compiled' cannot run this mission: {reason}")
-    return reason is None
-
-
-class _Mission:
+class CompiledMission:
     """The arrays of one mission in the kernel's layout, and what serves its exits."""
 
     def __init__(
@@ -145,7 +74,7 @@ class _Mission:
         self.bits = {f: i for i, f in enumerate(self.faults)}
         table = sim.table
         if not table.ends_covered:
-            raise _Refused("a move may end off its footprint")
+            raise Refused("a move may end off its footprint")
         self.mv = move_arrays(table)
         self.avail, self.block = fault_arrays(domain, self.faults)
         grid = sim.grid
@@ -262,19 +191,15 @@ class _Mission:
             if lk is None:
                 lk_arrays: tuple[Any, ...] = _NO_LOOKUPS  # int64 arrays, ans_act int32
             else:
-                lk_arrays = (lk.lk_mask, lk.lk_r, lk.codes, lk.hk1, lk.hk2, lk.hv,
-                             lk.ans_off, lk.ans_len, lk.ans_act)  # fmt: skip
-            lk_mask, lk_r, codes, hk1, hk2, hv, ans_off, ans_len, ans_act = lk_arrays
+                lk_arrays = (lk.lk, lk.codes, lk.ht, lk.ans, lk.ans_act)
+            slots, codes, ht, ans, ans_act = lk_arrays
             deferring: tuple[Any, ...] = (
-                _NO_DEFERRING
-                if lk is None
-                else (self.pend, lk.gk1, lk.gk2, lk.gv, lk.ans_doff, lk.ans_dlen, lk.ans_dpos)
+                _NO_DEFERRING if lk is None else (self.pend, lk.gh, lk.ans_dpos)
             )
             code = k.run_kernel(
                 self.par, self.st, self.mv, self.grid, self.avail, self.block, self.waits,
-                self.ev, self.set_of, lk_mask, lk_r, codes, hk1, hk2, hv, ans_off, ans_len,
-                ans_act, self.pen, self.pb, self.qa, self.qs, self.tr, self.rp, self.rp_act,
-                self.planner, self.search, deferring,
+                self.ev, self.set_of, slots, codes, ht, ans, ans_act, self.pen, self.pb, self.qa,
+                self.qs, self.tr, self.rp, self.rp_act, self.planner, self.search, deferring,
             )  # fmt: skip
             if code == k.DONE:
                 return int(self.st[k.S_END])
@@ -334,7 +259,7 @@ class _Mission:
             pose, context.goal, context.goal_heading, self.known(mask), context.replan_budget
         )
         status = self._planned(result)
-        st[k.S_PLAN_STATUS] = _REPAIR_STATUS[status]
+        st[k.S_PLAN_STATUS] = REPAIR_STATUS[status]
         st[k.S_PLAN_LEN] = len(result.actions)
         st[k.S_PLAN_EXP] = result.expansions
         st[k.S_PLAN_ID] = len(self.plans) - 1
@@ -389,18 +314,14 @@ _RECORDS: BoundedCache[int, list[tuple[object, ...]]] = BoundedCache(
 )
 _NO_DEFERRING = (
     np.zeros((1, 2), dtype=np.int64),
-    *empty_hash(2),
-    np.zeros(1, dtype=np.int64),
-    np.zeros(1, dtype=np.int64),
+    empty_hash(2),
     np.zeros(1, dtype=np.int64),
 )
 _NO_LOOKUPS = (
-    np.zeros((1, 1), dtype=np.int64),
-    np.zeros((1, 1), dtype=np.int64),
+    np.zeros((1, 1, 2), dtype=np.int64),
     np.zeros((1, 1, 1), dtype=np.int64),
-    *empty_hash(2),
-    np.zeros(1, dtype=np.int64),
-    np.zeros(1, dtype=np.int64),
+    empty_hash(2),
+    np.zeros((1, k.A_COLS), dtype=np.int64),
     np.zeros(1, dtype=np.int32),
 )
 
@@ -413,172 +334,18 @@ def _grow(array: npt.NDArray[Any], need: int = 0) -> npt.NDArray[Any]:
     return out
 
 
-class _Refused(Exception):
+class Refused(Exception):
     """The mission's arrays cannot be made (the Python loop runs it)."""
-
-
-def compiled_loop(
-    spec: MissionSpec,
-    sim: Simulator,
-    stepper: Stepper,
-    moved: list[int],
-    why: Callable[[Repair], str],
-    penalty: Sequence[int],
-) -> LoopEnd | None:
-    """Run the mission's loop compiled, or ``None`` (nothing done) when its footing says
-    Python or the compiled loop cannot take it. ``moved`` receives the plan-distance keys of the
-    executed steps; ``why(failure)`` is the reason of a mission that ends on a failed repair;
-    ``penalty`` the clearance penalties in the simulator grid's layout (read when the clearance
-    weight is not zero)."""
-    if not runs_compiled(spec, sim, stepper):
-        return None
-    _warm()
-    try:
-        mission = _Mission(spec, sim, stepper, penalty)
-    except _Refused as exc:
-        if spec.footing == "compiled":
-            raise ProblemError(f"footing 'compiled' cannot run this mission: {exc}") from None
-        return None
-    end = mission.run()
-    _write_back(mission, moved)
-    st = mission.st
-    units, summed = int(st[k.S_EXEC_UNITS]), int(st[k.S_PENALTY])
-    if end == k.REACHED:
-        return MissionStatus.REACHED, "goal reached", units, summed
-    if end == k.STEP_LIMIT:
-        limit = spec.step_limit()
-        return MissionStatus.STEP_LIMIT, f"{limit} steps without reaching the goal", units, summed
-    if end == k.COLLISION:
-        qa = mission.qa
-        action = spec.domain.actions[int(qa[int(st[k.S_QLEN]) - 1])]
-        name = spec.domain.format_action(action)
-        reason = f"{name} at {sim.pose} would sweep a wall"
-        return MissionStatus.COLLISION, reason, units, summed
-    failure = stepper.repairs[int(st[k.S_FAIL_REP])].repair
-    stepper.failure, stepper.stopped = failure, True
-    return mission_status(failure.status), why(failure), units, summed
 
 
 _WARM: list[bool] = []
 
 
-def _warm() -> None:
+def warm() -> None:
     """Load the kernels the driver calls from Python (from numba's cache, or compiled) once per
     process, before any repair's clock runs: a cold run's first fill must not pay for it."""
     if not _WARM:
-        keys, codes, values = empty_hash(2)
-        k.hash_put(keys, codes, values, 0, 0, 0)
-        k.hash_get(keys, codes, values, 0, 0)
+        table = empty_hash(2)
+        k.hash_put(table, 0, 0, 0)
+        k.hash_get(table, 0, 0)
         _WARM.append(True)
-
-
-def _write_back(mission: _Mission, moved: list[int]) -> None:
-    """Leave the stepper and the simulator as the Python loop would (see the module
-    docstring), from the arrays."""
-    st, sim, stepper, spec = mission.st, mission.sim, mission.stepper, mission.spec
-    actions = spec.domain.actions
-    n_actions = len(actions)
-    unit = sim.unit
-    durations: dict[int, Fraction] = {}
-    poses: dict[int, Pose] = {}
-
-    def pose(x: int, y: int, h: int) -> Pose:
-        key = (y << 34) | (x << 2) | h
-        found = poses.get(key)
-        if found is None:
-            found = poses[key] = make_pose(x, y, _HEADINGS[h])
-        return found
-
-    n = int(st[k.S_NSTEPS])
-    tr = mission.tr[:n]
-    steps = stepper.steps
-    for row in tr.tolist():
-        step, a, x, y, h, ex, ey, eh, units, source, known = row
-        duration = durations.get(units)
-        if duration is None:
-            duration = durations[units] = Fraction(units, unit)
-        steps.append(
-            TraceStep(step, actions[a], pose(x, y, h), pose(ex, ey, eh), duration,
-                      _SOURCES[source], mission.known(known))
-        )  # fmt: skip
-    ran = tr[tr[:, k.T_SOURCE] != k.SRC_FAILED]
-    keys = ((ran[:, k.T_Y] << 32) + 4 * ran[:, k.T_X] + ran[:, k.T_H]) * n_actions + ran[
-        :, k.T_ACTION
-    ]
-    moved.extend(keys.tolist())
-    for row in mission.rp[: int(st[k.S_NREP])].tolist():
-        stepper.repairs.append(_record(mission, row))
-    stepper.known = mission.known(int(st[k.S_KNOWN]))
-    stepper.waits = int(st[k.S_WAITS])
-    sim.pose = pose(int(st[k.S_X]), int(st[k.S_Y]), int(st[k.S_H]))
-    sim.steps, sim.units = int(st[k.S_STEP]), int(st[k.S_UNITS])
-
-
-def _record(mission: _Mission, row: list[int]) -> RepairRecord:
-    """The :class:`RepairRecord` of one repair row (the same values the Python loop records)."""
-    actions = mission.spec.domain.actions
-    step, x, y, h, a, kind, aid, _, latency, consumed, off, length, subst, plan, known, qlen = row[
-        : k.RP_EXPANSIONS
-    ]
-    pose = make_pose(x, y, _HEADINGS[h])
-    action = None if a < 0 else actions[a]
-    window = row[k.RP_WINDOW]
-    repair: Repair
-    if kind == k.K_WINDOW:
-        result = mission.plans[window]
-        repair = Repair(
-            RepairStatus.REPAIRED,
-            RepairSource.LOOKAHEAD,
-            result.actions,
-            consumed,
-            expansions=result.expansions,
-            attempts=(StrategyName.LOOKAHEAD,),
-        )
-        return RepairRecord(step, pose, action, repair, latency)
-    if kind in (k.K_HIT, k.K_REWRITE):
-        lookups = mission.lookups
-        assert lookups is not None
-        head = lookups.answers[aid]
-        if kind == k.K_HIT:
-            repair = head
-        else:
-            spliced = tuple(actions[i] for i in mission.rp_act[off : off + length].tolist())
-            repair = Repair(
-                head.status, head.source, spliced, consumed, head.replans, head.candidate_length,
-                head.depth, head.examined, head.expansions, head.attempts, head.candidate_index,
-                subst,
-            )  # fmt: skip
-    else:
-        if plan >= 0:
-            result = mission.plans[plan]
-            status, planned, expansions = (
-                REPAIR_OF_PLAN[result.status], result.actions, result.expansions,
-            )  # fmt: skip
-        else:  # planned in the kernel
-            status = _STATUS_OF[row[k.RP_STATUS]]
-            planned = tuple(actions[i] for i in mission.rp_act[off : off + length].tolist())
-            expansions = row[k.RP_EXPANSIONS]
-        repair = Repair(
-            status,
-            RepairSource.REPLAN,
-            planned,
-            qlen,
-            replans=1,
-            expansions=expansions,
-            attempts=(StrategyName.REPLAN,),
-        )
-        if kind == k.K_MISS:
-            table = mission.context.table
-            assert table is not None
-            examined = len(table.candidates(action, mission.known(known)))
-            repair = chained(repair, (StrategyName.REPLACEMENT,), examined=examined)
-    if window >= 0:  # lookahead's fallback: the healthy prefix kept in front, the window's work
-        prefix = row[k.RP_PREFIX]
-        if prefix:
-            spliced = tuple(actions[i] for i in mission.rp_act[off : off + length].tolist())
-            consumed_all = repair.consumed + prefix if kind == k.K_HIT else repair.consumed
-            repair = repair._replace(actions=spliced, consumed=consumed_all)
-        repair = chained(
-            repair, (StrategyName.LOOKAHEAD,), expansions=mission.plans[window].expansions
-        )
-    return RepairRecord(step, pose, action, repair, latency)

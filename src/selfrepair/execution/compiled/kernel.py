@@ -37,16 +37,19 @@ uint8); ``avail[m, a]`` whether action ``a`` is available under the fault set of
 ``e`` of the schedule: ``bit, clock (0 step, 1 time units), kind (EV_PERMANENT, EV_TRANSIENT or
 EV_INTERMITTENT), at, end, threshold`` (an intermittent event is active at a step when its draw,
 :func:`~selfrepair.execution.compiled.draws.draw53`, is below the threshold); the look-up
-hash (``hk1``, ``hk2`` keys, ``hv`` values) maps (known-set look-up id * slots + slot, masked
-occupancy code, or ``-1 - cell`` for a slot read by cell) to an answer id or ``NO_ANSWER``;
-answer ``i``'s actions are ``ans_act[ans_off[i] : ans_off[i] + ans_len[i]]``.
+hash ``ht`` (a row ``(k1, k2, value, 0)`` per slot, so one probe reads one cache line) maps
+(known-set look-up id * slots + slot, masked occupancy code, or ``-1 - cell`` for a slot read by
+cell) to an answer id or ``NO_ANSWER``; ``lk[sid, slot] = (mask, radius index)`` says how look-up
+``sid`` reads a slot (its neighbourhood mask over the occupancy codes ``codes[radius index]``);
+answer ``i``'s row ``ans[i] = (off, len, doff, dlen)`` places its actions,
+``ans_act[off : off + len]``.
 
 Deferring mode (``primitive``, the :class:`~selfrepair.repair.strategies.replacement.
 DeferringRepairer`): answer ``i`` also lists the positions of its deferred actions,
-``ans_dpos[ans_doff[i] : ans_doff[i] + ans_dlen[i]]``. The repairer's pending deferred actions
+``ans_dpos[doff : doff + dlen]``. The repairer's pending deferred actions
 are ``pend[m] = (action + 1, guard id)`` by marker ``m`` (their distance from the end of the
 queue; action 0: none pending), up to ``st[S_PEND_HI]``. Guard sets are ids (0: empty); the
-guard hash (``gk1``, ``gk2``, ``gv``) maps ``(2 g, action)`` to the id of guard ``g`` with the
+guard hash ``gh`` (rows as ``ht``'s) maps ``(2 g, action)`` to the id of guard ``g`` with the
 action added and ``(2 g + 1, look-up id under no guard)`` to the look-up id under guard ``g``;
 a key not there yet is a ``NEED_GUARD`` exit.
 
@@ -73,8 +76,8 @@ U8 = npt.NDArray[np.uint8]
 """The free-cell bytes of the padded grid and the available-action flags."""
 I32 = npt.NDArray[np.int32]
 """The compiled look-ups' answer actions."""
-Deferring = tuple[I64, I64, I64, I64, I64, I64, I64]
-"""The deferring mode's arrays: ``pend, gk1, gk2, gv, ans_doff, ans_dlen, ans_dpos``."""
+Deferring = tuple[I64, I64, I64]
+"""The deferring mode's arrays: ``pend, gh, ans_dpos``."""
 Kernels = tuple[npt.NDArray[np.generic], ...]
 """The arrays a compiled planner or search works in (int64 mostly; the planner also has int32
 and uint16 ones), passed through as one tuple."""
@@ -214,6 +217,13 @@ T_COLS = 11
 ) = range(19)  # fmt: skip
 RP_COLS = 19
 
+# --- hash rows (ht[i], gh[i]), look-up slots (lk[sid, slot]), answers (ans[aid]) --------------
+H_K1, H_K2, H_V = range(3)
+H_COLS = 4  # 32-byte rows: a probe reads one cache line
+LK_MASK, LK_R = range(2)
+A_OFF, A_LEN, A_DOFF, A_DLEN = range(4)
+A_COLS = 4
+
 _MUL1 = np.int64(-7046029254386353131)  # 0x9E3779B97F4A7C15 as a signed 64-bit integer
 _MUL2 = np.int64(-4658895280553007687)  # 0xBF58476D1CE4E5B9
 
@@ -260,34 +270,35 @@ def _hash(k1: int, k2: int, cap: int) -> int:
 
 
 @njit(cache=True)
-def hash_get(hk1: I64, hk2: I64, hv: I64, k1: int, k2: int) -> int:
-    """The value under ``(k1, k2)``, or ``EMPTY``."""
-    return _hash_get(hk1, hk2, hv, k1, k2)
+def hash_get(ht: I64, k1: int, k2: int) -> int:
+    """The value under ``(k1, k2)`` in the hash table ``ht``, or ``EMPTY``."""
+    return _hash_get(ht, k1, k2)
 
 
 @njit(cache=True, inline="always")
-def _hash_get(hk1: I64, hk2: I64, hv: I64, k1: int, k2: int) -> int:
+def _hash_get(ht: I64, k1: int, k2: int) -> int:
     """:func:`hash_get`, inlined into the kernels (no call, no reference counting)."""
-    cap = hk1.shape[0]
+    cap = ht.shape[0]
     i = _hash(k1, k2, cap)
     while True:
-        if hk1[i] == EMPTY:
+        row = ht[i]
+        if row[H_K1] == EMPTY:
             return EMPTY
-        if hk1[i] == k1 and hk2[i] == k2:
-            return hv[i]  # type: ignore[no-any-return]
+        if row[H_K1] == k1 and row[H_K2] == k2:
+            return row[H_V]  # type: ignore[no-any-return]
         i = (i + 1) & (cap - 1)
 
 
 @njit(cache=True)
-def hash_put(hk1: I64, hk2: I64, hv: I64, k1: int, k2: int, value: int) -> None:
-    """Store ``value`` under ``(k1, k2)`` (the caller keeps the table at most half full)."""
-    cap = hk1.shape[0]
+def hash_put(ht: I64, k1: int, k2: int, value: int) -> None:
+    """Store ``value`` under ``(k1, k2)`` in ``ht`` (the caller keeps it at most half full)."""
+    cap = ht.shape[0]
     i = _hash(k1, k2, cap)
-    while hk1[i] != EMPTY and not (hk1[i] == k1 and hk2[i] == k2):
+    while ht[i, H_K1] != EMPTY and not (ht[i, H_K1] == k1 and ht[i, H_K2] == k2):
         i = (i + 1) & (cap - 1)
-    hk1[i] = k1
-    hk2[i] = k2
-    hv[i] = value
+    ht[i, H_K1] = k1
+    ht[i, H_K2] = k2
+    ht[i, H_V] = value
 
 
 @njit(cache=True, inline="always")
@@ -310,8 +321,8 @@ def _true_mask(ev: I64, step: int, units: int, seed: int) -> int:
 
 @njit(cache=True, inline="always")
 def _lookup(
-    st: I64, par: I64, set_of: I64, lk_mask: I64, lk_r: I64, codes: I64,
-    hk1: I64, hk2: I64, hv: I64, known: int, a: int, x: int, y: int, h: int,
+    st: I64, par: I64, set_of: I64, lk: I64, codes: I64, ht: I64, known: int, a: int,
+    x: int, y: int, h: int,
 ) -> int:  # fmt: skip
     """The answer id of action ``a`` from pose ``(x, y, h)`` under the known mask, ``NO_ANSWER``,
     or an exit (returned as ``-10 - code``, its arguments set in ``st[S_ARG0 ...]``)."""
@@ -319,23 +330,23 @@ def _lookup(
     if sid < 0:
         st[S_ARG0] = known
         return -10 - NEED_SET
-    return _lookup_in(st, par, sid, lk_mask, lk_r, codes, hk1, hk2, hv, a, x, y, h)
+    return _lookup_in(st, par, sid, lk, codes, ht, a, x, y, h)
 
 
 @njit(cache=True, inline="always")
 def _lookup_in(
-    st: I64, par: I64, sid: int, lk_mask: I64, lk_r: I64, codes: I64,
-    hk1: I64, hk2: I64, hv: I64, a: int, x: int, y: int, h: int,
+    st: I64, par: I64, sid: int, lk: I64, codes: I64, ht: I64, a: int, x: int, y: int, h: int,
 ) -> int:  # fmt: skip
     """:func:`_lookup` in the look-ups of id ``sid``."""
     slot = 4 * a + h
-    m = lk_mask[sid, slot]
+    read = lk[sid, slot]
+    m = read[LK_MASK]
     if m == UNLOADED:
         st[S_ARG0], st[S_ARG1] = sid, slot
         return -10 - NEED_SLOT
     k1 = sid * par[P_NSLOTS] + slot
-    k2 = -1 - (y * par[P_WIDTH] + x) if m == BY_CELL else codes[lk_r[sid, slot], y, x] & m
-    v = _hash_get(hk1, hk2, hv, k1, k2)
+    k2 = -1 - (y * par[P_WIDTH] + x) if m == BY_CELL else codes[read[LK_R], y, x] & m
+    v = _hash_get(ht, k1, k2)
     if v == EMPTY:
         st[S_ARG0], st[S_ARG1], st[S_ARG2], st[S_ARG3], st[S_ARG4] = sid, slot, x, y, k2
         return -10 - NEED_FILL
@@ -344,8 +355,8 @@ def _lookup_in(
 
 @no_refcount
 def warm_hits(
-    n: int, st: I64, par: I64, set_of: I64, lk_mask: I64, lk_r: I64, codes: I64,
-    hk1: I64, hk2: I64, hv: I64, known: int, a: int, xs: I64, ys: I64, hs: I64,
+    n: int, st: I64, par: I64, set_of: I64, lk: I64, codes: I64, ht: I64, known: int, a: int,
+    xs: I64, ys: I64, hs: I64,
 ) -> int:  # fmt: skip
     """``n`` look-ups of action ``a`` at the poses ``(xs, ys, hs)`` in turn, as the mission
     kernel makes them (for the benchmark of a warm hit); the sum of the answer ids."""
@@ -353,23 +364,21 @@ def warm_hits(
     k = xs.shape[0]
     for i in range(n):
         j = i % k
-        total += _lookup(st, par, set_of, lk_mask, lk_r, codes, hk1, hk2, hv, known, a,
-                         xs[j], ys[j], hs[j])  # fmt: skip
+        total += _lookup(st, par, set_of, lk, codes, ht, known, a, xs[j], ys[j], hs[j])
     return total
 
 
 @no_refcount
 def run_kernel(
     par: I64, st: I64, mv: I64, grid: U8, avail: U8, block: I64, waits: I64, ev: I64,
-    set_of: I64, lk_mask: I64, lk_r: I64, codes: I64, hk1: I64, hk2: I64, hv: I64,
-    ans_off: I64, ans_len: I64, ans_act: I32, pen: I64, pb: I64,
+    set_of: I64, lk: I64, codes: I64, ht: I64, ans: I64, ans_act: I32, pen: I64, pb: I64,
     qa: I64, qs: I64, tr: I64, rp: I64, rp_act: I64, planner: Kernels, search: Kernels,
     deferring: Deferring,
 ) -> int:  # fmt: skip
     """Run (or resume) the mission; the exit code (see the module docstring). ``planner`` is
     the loaded kernel planner's arrays and ``search`` its records, generation and heap
     (:mod:`selfrepair.execution.compiled.planner`); ``deferring`` the deferring mode's arrays
-    ``(pend, gk1, gk2, gv, ans_doff, ans_dlen, ans_dpos)``."""
+    ``(pend, gh, ans_dpos)``."""
     stride, margin = par[P_STRIDE], par[P_MARGIN]
     gx, gy, gh = par[P_GX], par[P_GY], par[P_GH]
     while True:
@@ -414,9 +423,8 @@ def run_kernel(
                     st[S_RACTION] = qa[qlen - 1] if qlen > 0 else -1
             if st[S_NREP] >= rp.shape[0]:
                 return GROW
-            code = _repair(par, st, mv, avail, ev, set_of, lk_mask, lk_r, codes, hk1, hk2, hv,
-                           ans_off, ans_len, ans_act, pb, qa, qs, rp, rp_act, planner,
-                           search, deferring)  # fmt: skip
+            code = _repair(par, st, mv, avail, ev, set_of, lk, codes, ht, ans, ans_act, pb, qa,
+                           qs, rp, rp_act, planner, search, deferring)  # fmt: skip
             if code != DONE:
                 return code
             st[S_PHASE] = 0
@@ -477,8 +485,8 @@ def run_kernel(
 
 @njit(cache=True, inline="always")
 def _repair(
-    par: I64, st: I64, mv: I64, avail: U8, ev: I64, set_of: I64, lk_mask: I64, lk_r: I64,
-    codes: I64, hk1: I64, hk2: I64, hv: I64, ans_off: I64, ans_len: I64, ans_act: I32,
+    par: I64, st: I64, mv: I64, avail: U8, ev: I64, set_of: I64, lk: I64, codes: I64,
+    ht: I64, ans: I64, ans_act: I32,
     pb: I64, qa: I64, qs: I64, rp: I64, rp_act: I64, planner: Kernels, search: Kernels,
     deferring: Deferring,
 ) -> int:  # fmt: skip
@@ -493,7 +501,7 @@ def _repair(
     kind = K_REPLAN
     aid = -1
     defer = par[P_DEFER] == 1 and a >= 0
-    pend, gk1, gk2, gv, ans_doff, ans_dlen, ans_dpos = deferring
+    pend, gh, ans_dpos = deferring
     grown = 0  # deferring: the guard id of this repair's guard set with ``a`` added
     pfx = 0  # lookahead fallback: the healthy actions before the faulty one, kept in front
     window = -1  # lookahead: the plan id of the window's search
@@ -528,8 +536,7 @@ def _repair(
             if not (0 <= px < par[P_WIDTH] and 0 <= py < par[P_HEIGHT]):
                 return OFF_GRID
             b = qa[qlen - 1 - f]
-            aid = _lookup(st, par, set_of, lk_mask, lk_r, codes, hk1, hk2, hv, known, b, px, py,
-                          ph)  # fmt: skip
+            aid = _lookup(st, par, set_of, lk, codes, ht, known, b, px, py, ph)
             if aid <= -10:
                 return -10 - aid
             kind = K_MISS if aid == NO_ANSWER else K_HIT
@@ -541,26 +548,26 @@ def _repair(
             return NEED_SET
         guard = pend[qlen, 1] if qlen <= st[S_PEND_HI] and pend[qlen, 0] == a + 1 else 0
         if guard != 0:
-            sid = _hash_get(gk1, gk2, gv, 2 * guard + 1, sid)
+            sid = _hash_get(gh, 2 * guard + 1, sid)
             if sid == EMPTY:
                 st[S_ARG0], st[S_ARG1] = 2 * guard + 1, set_of[known]
                 return NEED_GUARD
-        aid = _lookup_in(st, par, sid, lk_mask, lk_r, codes, hk1, hk2, hv, a, x, y, h)
+        aid = _lookup_in(st, par, sid, lk, codes, ht, a, x, y, h)
         if aid <= -10:
             return -10 - aid
         kind = K_MISS if aid == NO_ANSWER else K_HIT
-        if kind == K_HIT and ans_dlen[aid] > 0:  # every guard id the commit needs, known first
-            grown = _hash_get(gk1, gk2, gv, 2 * guard, a)
+        if kind == K_HIT and ans[aid, A_DLEN] > 0:  # every guard id the commit needs, known first
+            grown = _hash_get(gh, 2 * guard, a)
             if grown == EMPTY:
                 st[S_ARG0], st[S_ARG1] = 2 * guard, a
                 return NEED_GUARD
-            for j in range(ans_dlen[aid]):
-                d = ans_act[ans_off[aid] + ans_dpos[ans_doff[aid] + j]]
-                if _hash_get(gk1, gk2, gv, 2 * grown, d) == EMPTY:
+            for j in range(ans[aid, A_DLEN]):
+                d = ans_act[ans[aid, A_OFF] + ans_dpos[ans[aid, A_DOFF] + j]]
+                if _hash_get(gh, 2 * grown, d) == EMPTY:
                     st[S_ARG0], st[S_ARG1] = 2 * grown, d
                     return NEED_GUARD
     elif par[P_STRATEGY] == 1:
-        aid = _lookup(st, par, set_of, lk_mask, lk_r, codes, hk1, hk2, hv, known, a, x, y, h)
+        aid = _lookup(st, par, set_of, lk, codes, ht, known, a, x, y, h)
         if aid <= -10:
             return -10 - aid
         kind = K_MISS if aid == NO_ANSWER else K_HIT
@@ -628,7 +635,7 @@ def _repair(
         off = st[S_NACT]
         consumed = 1 + pfx
         substituted = 0
-        start, length = ans_off[aid], ans_len[aid]
+        start, length = ans[aid, A_OFF], ans[aid, A_LEN]
         if rp_act.shape[0] - off < length + qlen:
             return GROW
         for i in range(pfx):  # lookahead: the healthy actions before the faulty one
@@ -639,32 +646,36 @@ def _repair(
         if par[P_REWRITE]:
             # the whole-plan rewrite: walk the rest of the queue along its predicted poses
             width, height = par[P_WIDTH], par[P_HEIGHT]
+            sid = set_of[known]  # loaded: the first look-up found it (rewriting is replacement's)
             px, py, ph = x + mv[a, h, 0], y + mv[a, h, 1], mv[a, h, 2]
-            done = 0
+            done = 0  # queue actions after the faulty one consumed (up to the last hit)
+            kept = n  # the spliced actions up to the last hit
             for k in range(qlen - 1):
                 b = qa[qlen - 2 - k]
-                if not avail[known, b]:
+                if avail[known, b]:  # a plain action: kept only if a later one is substituted
+                    rp_act[off + n] = b  # room: qlen past the last check
+                    n += 1
+                else:
                     if not (0 <= px < width and 0 <= py < height):
                         break
-                    hit = _lookup(st, par, set_of, lk_mask, lk_r, codes, hk1, hk2, hv,
-                                  known, b, px, py, ph)  # fmt: skip
+                    hit = _lookup_in(st, par, sid, lk, codes, ht, b, px, py, ph)
                     if hit <= -10:
                         return -10 - hit
                     if hit == NO_ANSWER:
                         break
-                    if rp_act.shape[0] - (off + n) < qlen + ans_len[hit]:
+                    hoff, hlen = ans[hit, A_OFF], ans[hit, A_LEN]
+                    if rp_act.shape[0] - (off + n) < qlen + hlen:
                         return GROW
-                    for j in range(done, k):  # the plain actions between substitutions
-                        rp_act[off + n] = qa[qlen - 2 - j]
-                        n += 1
-                    for j in range(ans_len[hit]):
-                        rp_act[off + n] = ans_act[ans_off[hit] + j]
-                        n += 1
+                    for j in range(hlen):
+                        rp_act[off + n + j] = ans_act[hoff + j]
+                    n += hlen
+                    kept = n
                     done = k + 1
                     substituted += 1
                 npx, npy = px + mv[b, ph, 0], py + mv[b, ph, 1]
                 ph = mv[b, ph, 2]
                 px, py = npx, npy
+            n = kept
             if substituted:
                 kind = K_REWRITE
                 consumed = 1 + done
@@ -695,12 +706,12 @@ def _repair(
                 pend[m, 0] = 0
             hi = 0
         else:
-            after = qlen - 1 + ans_len[aid]
-            for j in range(ans_dlen[aid]):
-                p = ans_dpos[ans_doff[aid] + j]
-                d = ans_act[ans_off[aid] + p]
+            after = qlen - 1 + ans[aid, A_LEN]
+            for j in range(ans[aid, A_DLEN]):
+                p = ans_dpos[ans[aid, A_DOFF] + j]
+                d = ans_act[ans[aid, A_OFF] + p]
                 pend[after - p, 0] = d + 1
-                pend[after - p, 1] = _hash_get(gk1, gk2, gv, 2 * grown, d)
+                pend[after - p, 1] = _hash_get(gh, 2 * grown, d)
                 hi = max(hi, after - p)
         st[S_PEND_HI] = hi
     return DONE
