@@ -286,9 +286,9 @@ class ProbePlanner:
                     out[read, m] = RULED_OUT  # the switch and the failed signal are exact
                     continue
                 total = _against(end, other, self.noise)
-                for noise, wheels in seeing[read]:
+                for noise, sees in seeing[read]:
                     total = min(RULED_OUT, total + _against(end, other, noise))
-                    if wheels and table is not None and not fails and len(performed[read]) == 1:
+                    if sees and table is not None and not fails and len(performed[read]) == 1:
                         said = _wheels_against(table, performed[read][0], performed[m], noise)
                         total = min(RULED_OUT, total + said)
                 out[read, m] = total
