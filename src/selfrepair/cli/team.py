@@ -103,6 +103,12 @@ def _with_world(parsed: Any, events: str, sensing: str, sensing_range: int | Non
     return changed
 
 
+ScenarioArg = Annotated[
+    str, typer.Argument(metavar="SCENARIO", help="Bundled scenario (three-robots) or FILE.toml.")
+]
+"""The scenario argument of ``team run`` and ``team compare``: one declaration, one help text."""
+
+
 def _options(
     strategy: str, table: str, max_ticks: int | None, backend: str, robot_table: str | None = None
 ) -> Any:
@@ -119,10 +125,7 @@ def _options(
 
 @team_app.command("run")
 def team_run(
-    scenario: Annotated[
-        str,
-        typer.Argument(metavar="SCENARIO", help="Bundled scenario (three-robots) or FILE.toml."),
-    ],
+    scenario: ScenarioArg,
     strategy: Annotated[
         str, typer.Option("--strategy", metavar="NAME", help=_STRATEGY_HELP)
     ] = "team-replacement",
@@ -231,10 +234,7 @@ def _print_result(result: "TeamResult", baseline: Any) -> None:
 
 @team_app.command("compare")
 def team_compare(
-    scenario: Annotated[
-        str,
-        typer.Argument(metavar="SCENARIO", help="Bundled scenario (three-robots) or FILE.toml."),
-    ],
+    scenario: ScenarioArg,
     repeats: Annotated[
         int,
         typer.Option(
