@@ -432,7 +432,7 @@ def test_an_identified_file_without_in_sequence_marks_is_refused_for_that_robot(
     data = {"actions": [{"action": "FFFF", "forward": 1, "lateral": 0, "rotation": 0,
                          "swept": [[0, 0], [1, 0]], "confirmed": True}]}  # fmt: skip
     assert len(identified_domain(data, confirmed_only=True).actions) == 1
-    with pytest.raises(InputError, match="--in-sequence --write-domain"):
+    with pytest.raises(InputError, match="marked in_sequence"):
         identified_domain(data, in_sequence_only=True)
 
 

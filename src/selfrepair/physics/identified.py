@@ -109,8 +109,8 @@ def identified_domain(
     if in_sequence_only:
         if not all(isinstance(e, Mapping) and "in_sequence" in e for e in entries):
             raise InputError(
-                "expected every action marked in_sequence (write the file with selfrepair "
-                "physics fidelity --in-sequence --write-domain)",
+                "expected every action marked in_sequence (a file written with the "
+                "in-sequence fidelity measured)",
                 source=source,
             )
         entries = [e for e in entries if e["in_sequence"] is True]
