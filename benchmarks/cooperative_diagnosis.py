@@ -37,8 +37,8 @@ its bootstrap interval (non-isolated missions count as infinite), the reduction 
 median(team) / median(alone)`` with a paired bootstrap interval, and the wrong-isolation rate.
 
 Usage: ``python benchmarks/cooperative_diagnosis.py [--seeds N] [--range R] [--noise P]
-[--observer-noise P] [--modes passive active] [--planner counting|blind]`` (prints the load at
-the end).
+[--observer-noise P] [--routes N] [--modes passive active] [--planner counting|blind]``
+(prints the load at the end; ``--routes N``: the first N routes of each maze).
 Results go to ``benchmarks/results/cooperative_diagnosis.json``.
 """
 
@@ -61,6 +61,7 @@ from selfrepair.diagnosis import (
 )
 from selfrepair.diagnosis.cooperative import (
     Observer,
+    ObserverView,
     SensingRange,
     following,
     observer_streams,
@@ -119,7 +120,8 @@ def _mission(
         belief.update(mine)
         end = sim.pose
         behind = following(history, len(observers))
-        for seen in team_observations(step, action, pose, end, False, observers, behind, streams):
+        for seen in team_observations(step, action, pose, end, False, observers, behind, streams,
+                                      performed=sim.last_action, domain=FOUR_WHEEL):  # fmt: skip
             belief.update(seen)
         history.append(end)
         if surprise is None:
@@ -137,29 +139,34 @@ def _mission(
 def run(
     seeds: int, sensing: int, noise: float, observer_noise: float,
     modes: tuple[str, ...] = ("passive", "active"), counting: bool = True,
+    routes: int | None = None,
 ) -> dict[str, Any]:  # fmt: skip
     """Every mission of the module docstring, alone and with two observers, per mode
     (``counting``: the probe planner counts the readings as the belief will, the teammates'
     included; else it plans as if every reading were exact and the robot alone)."""
     team = tuple(Observer(f"t{i}", observer_noise, SensingRange(sensing)) for i in (1, 2))
+    wheel_team = tuple(
+        Observer(f"t{i}", observer_noise, SensingRange(sensing), ObserverView.WHEELS)
+        for i in (1, 2)
+    )
+    arms = (("alone", ()), ("team", team), ("wheels", wheel_team))
     singles = [s for s in FOUR_WHEEL.fault_sets if len(s) == 1]
     out: dict[str, Any] = {"noise": noise, "observer_noise": observer_noise, "range": sensing,
-                           "metric": "chebyshev", "seeds": seeds,
+                           "metric": "chebyshev", "seeds": seeds, "routes_per_maze": routes,
                            "planner": "counting" if counting else "blind"}  # fmt: skip
     for mode in modes:
-        alone: list[float] = []
-        together: list[float] = []
-        wrong = {"alone": [0, 0], "team": [0, 0]}
+        counts: dict[str, list[float]] = {label: [] for label, _ in arms}
+        wrong = {label: [0, 0] for label, _ in arms}
         missions = 0
         for name in maze_names():
             maze = load_bundled(name)
-            for route in bundled_routes(name):
+            for route in bundled_routes(name)[:routes]:
                 result = plan(PlanningProblem(maze, route.start, route.goal))
                 for faults in singles:
                     for seed in range(seeds):
                         missions += 1
                         pair = []
-                        for label, observers in (("alone", ()), ("team", team)):
+                        for label, observers in arms:
                             got = _mission(maze, route.start, result.actions, faults, seed,
                                            observers, mode == "active", noise,
                                            counting)  # fmt: skip
@@ -170,10 +177,13 @@ def run(
                             if right is not None:
                                 wrong[label][0] += int(not right)
                                 wrong[label][1] += 1
-                        if len(pair) == 2:
-                            alone.append(pair[0])
-                            together.append(pair[1])
-        out[mode] = _summary(missions, alone, together, wrong)
+                        if len(pair) == len(arms):
+                            for (label, _), n in zip(arms, pair, strict=True):
+                                counts[label].append(n)
+        out[mode] = {
+            "pose": _summary(missions, counts["alone"], counts["team"], wrong, "team"),
+            "wheels": _summary(missions, counts["alone"], counts["wheels"], wrong, "wheels"),
+        }
     return out
 
 
@@ -189,8 +199,10 @@ def _verdict(reduction: float, low: float, high: float, target: float) -> str:
 
 
 def _summary(
-    missions: int, alone: list[float], together: list[float], wrong: dict[str, list[int]]
-) -> dict[str, Any]:
+    missions: int, alone: list[float], together: list[float], wrong: dict[str, list[int]],
+    label: str,
+) -> dict[str, Any]:  # fmt: skip
+    """The alone arm against the team arm ``label`` (paired: the same missions)."""
     a, t = np.array(alone), np.array(together)
     med_a, med_t = float(np.median(a)), float(np.median(t))
     rng = np.random.default_rng(2024)
@@ -210,6 +222,22 @@ def _summary(
         iv = bootstrap_interval(capped)
         return None if iv is None else [iv.low, iv.high]
 
+    both = np.isfinite(a) & np.isfinite(t)  # paired mean cut, missions isolated in both arms
+    pa, pt = a[both], t[both]
+    mean_cut = 1.0 - float(pt.mean()) / float(pa.mean()) if len(pa) and pa.mean() > 0 else math.nan
+    if len(pa):
+        pd = rng.integers(0, len(pa), size=(2000, len(pa)))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            cuts = 1.0 - pt[pd].mean(axis=1) / pa[pd].mean(axis=1)
+        cuts = cuts[np.isfinite(cuts)]
+        mean_cut_interval = [float(q) for q in np.quantile(cuts, [0.025, 0.975])]
+    else:
+        mean_cut_interval = [math.nan, math.nan]
+
+    def mean_interval(values: np.ndarray) -> list[float] | None:
+        iv = bootstrap_interval([float(v) for v in values if math.isfinite(v)], statistic="mean")
+        return None if iv is None else [iv.low, iv.high]
+
     return {
         "missions": missions,
         "surprised": len(a),
@@ -221,11 +249,17 @@ def _summary(
         "mean_isolated_team": float(t[np.isfinite(t)].mean()),
         "reduction": reduction, "reduction_interval": [float(low), float(high)],
         "target_30pct": _verdict(reduction, float(low), float(high), 0.30),
+        "paired_isolated_both": int(both.sum()),
+        "mean_reduction_paired": mean_cut, "mean_reduction_paired_interval": mean_cut_interval,
+        "mean_target_30pct": _verdict(mean_cut, *mean_cut_interval, 0.30),
+        "mean_isolated_interval_alone": mean_interval(a),
+        "mean_isolated_interval_team": mean_interval(t),
         "wrong_alone": wrong["alone"][0] / max(1, wrong["alone"][1]),
-        "wrong_team": wrong["team"][0] / max(1, wrong["team"][1]),
+        "wrong_team": wrong[label][0] / max(1, wrong[label][1]),
+        "wrong_counts_alone": wrong["alone"], "wrong_counts_team": wrong[label],
         "wrong_target_1pct": "met"
         if max(wrong["alone"][0] / max(1, wrong["alone"][1]),
-               wrong["team"][0] / max(1, wrong["team"][1])) <= 0.01
+               wrong[label][0] / max(1, wrong[label][1])) <= 0.01
         else "not met",
     }  # fmt: skip
 
@@ -236,6 +270,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--range", type=int, default=3, dest="sensing")
     parser.add_argument("--noise", type=float, default=NOISE, help="the robot's own odometry")
     parser.add_argument("--observer-noise", type=float, default=None, help="default: --noise")
+    parser.add_argument("--routes", type=int, default=None, help="first N routes per maze")
     parser.add_argument("--modes", nargs="+", choices=("passive", "active"),
                         default=["passive", "active"])  # fmt: skip
     parser.add_argument(
@@ -245,13 +280,15 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     observer = args.noise if args.observer_noise is None else args.observer_noise
     counting = args.planner == "counting"
-    report = run(args.seeds, args.sensing, args.noise, observer, tuple(args.modes), counting)
+    report = run(args.seeds, args.sensing, args.noise, observer, tuple(args.modes), counting,
+                 args.routes)  # fmt: skip
     loadavg = Path("/proc/loadavg")
     report["load"] = loadavg.read_text().split()[:3] if loadavg.exists() else None
     print(json.dumps(report, indent=1))
     RESULTS.mkdir(exist_ok=True)
     suffix = "" if args.noise == NOISE and observer == NOISE else f"-{args.noise:g}-{observer:g}"
     suffix += "" if counting else "-blind"
+    suffix += "" if args.routes is None else f"-routes{args.routes}"
     (RESULTS / f"cooperative_diagnosis{suffix}.json").write_text(
         json.dumps(report, indent=1) + "\n"
     )

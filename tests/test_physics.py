@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 
 from extras import needs_extra
 from selfrepair.cli import main
-from selfrepair.errors import ProblemError
+from selfrepair.errors import InputError, ProblemError
 from selfrepair.execution.result import MissionSpec
 from selfrepair.execution.stepper import Stepper
 from selfrepair.geometry import Heading, Pose
@@ -306,14 +306,16 @@ def test_physics_run_cli_refuses_a_bad_video_name(tmp_path, capsys) -> None:
 def test_the_bundled_identified_domain_is_what_fidelity_measures_now() -> None:
     from importlib import resources
 
-    from selfrepair.physics.fidelity import measure
+    from selfrepair.physics.fidelity import measure, measure_in_sequence
 
     bundled = json.loads(
         resources.files("selfrepair")
         .joinpath("data", "physics", "four-wheel-physics.json")
         .read_text("utf-8")
     )
-    assert json.loads(json.dumps(measure().identified())) == bundled
+    report = measure(faulty=False)
+    sequence = measure_in_sequence(from_rest=report)
+    assert json.loads(json.dumps(report.identified(sequence=sequence))) == bundled
 
 
 @PHYSICS
@@ -406,3 +408,57 @@ def test_physics_experiment_refuses_an_unknown_robot_model(capsys) -> None:
     code = main(["physics", "experiment", "--robot", "hovercraft"])
     err = capsys.readouterr().err
     assert code == 2 and "four-wheel-confirmed" in err and err.count("\n") == 1
+
+
+def test_the_in_sequence_domain_keeps_only_what_holds_after_other_actions() -> None:
+    from selfrepair.physics.identified import CONFIRMED_NAME, IN_SEQUENCE_NAME
+
+    domain = load_identified(name=IN_SEQUENCE_NAME, in_sequence_only=True)
+    check_domain(domain)
+    kept = {a.code for a in domain.actions}
+    confirmed = {a.code for a in load_identified(name=CONFIRMED_NAME, confirmed_only=True).actions}
+    # docs/physics.md ("Fidelity in sequence"): 40 of the 65 confirmed from rest hold
+    assert len(kept) == 40 and kept < confirmed and domain.name == IN_SEQUENCE_NAME
+    assert {"FFFB", "FSFB", "FBFB", "BFBF", "FFSS", "SSSS"}.isdisjoint(kept)
+    assert {"FFFF", "BBBB", "BFFF", "FFSB", "FFFS"} <= kept
+    for fault in FOUR_WHEEL.faults:  # every single fault leaves a way to turn and drive
+        motions = {domain.motion_class(a) for a in domain.actions if domain.available(a, {fault})}
+        assert {"forward", "backward", "turn-left", "turn-right"} <= motions, fault
+
+
+def test_an_identified_file_without_in_sequence_marks_is_refused_for_that_robot() -> None:
+    from selfrepair.physics.identified import identified_domain
+
+    data = {"actions": [{"action": "FFFF", "forward": 1, "lateral": 0, "rotation": 0,
+                         "swept": [[0, 0], [1, 0]], "confirmed": True}]}  # fmt: skip
+    assert len(identified_domain(data, confirmed_only=True).actions) == 1
+    with pytest.raises(InputError, match="marked in_sequence"):
+        identified_domain(data, in_sequence_only=True)
+
+
+@PHYSICS
+def test_the_identified_file_marks_what_holds_in_sequence_as_the_bundled_one_does() -> None:
+    from selfrepair.physics.fidelity import measure, measure_in_sequence
+
+    few = [parse_action("FFFB"), parse_action("BFFF")]
+    report = measure(actions=few, faulty=False)
+    sequence = measure_in_sequence(actions=few, predecessors=("SFFS",), from_rest=report)
+    data = report.identified(sequence=sequence)
+    marks = {e["action"]: e["in_sequence"] for e in data["actions"]}
+    assert marks == {"FFFB": False, "BFFF": True}
+    assert data["in_sequence_after"] == ["SFFS", "itself"]
+    bundled = {a.code for a in load_identified(in_sequence_only=True).actions}
+    assert "FFFB" not in bundled and "BFFF" in bundled
+
+
+@PHYSICS
+def test_a_physics_mission_with_the_in_sequence_robot_plans_only_its_actions() -> None:
+    from selfrepair.experiment.physics import physics_mission_spec
+    from selfrepair.physics.identified import IN_SEQUENCE_NAME
+    from selfrepair.physics.mission import run_physics_mission
+
+    spec = physics_mission_spec("wide-short", 0, "FL:F", "replacement", IN_SEQUENCE_NAME)
+    done = run_physics_mission(spec)
+    kept = set(spec.domain.actions)
+    assert done.outcome.reached and done.outcome.wall_contacts == 0
+    assert done.steps and all(step.action in kept for step in done.steps)

@@ -70,7 +70,7 @@ def physics_fidelity(
     perform what the model says, compared with the lattice's motion of that action. With
     --in-sequence, a second table: every nominal action run tracked after each of FFFF, BBBB,
     SFFS, FBFB, BFBF and itself; it holds in sequence when within 0.05 cells and 3 degrees
-    after every one.
+    after every one (and --write-domain marks each kept action with whether it does).
     """
     from selfrepair.physics.fidelity import measure, measure_in_sequence
 
@@ -79,7 +79,7 @@ def physics_fidelity(
     if write_domain is not None:
         import json
 
-        text = json.dumps(report.identified(), indent=1) + "\n"
+        text = json.dumps(report.identified(sequence=sequence), indent=1) + "\n"
         write_domain.write_text(text, encoding="utf-8")
     if as_json:
         out: JSONObject = {
@@ -276,7 +276,8 @@ def physics_experiment(
             "--robot",
             metavar="MODEL",
             help="four-wheel (the lattice's 81 actions, hand-written table) or "
-            "four-wheel-confirmed (only the actions physics confirms, a generated table).",
+            "four-wheel-confirmed (only the actions physics confirms, a generated table) or "
+            "four-wheel-in-sequence (only those that also hold in sequence, a generated table).",
         ),
     ] = "four-wheel",
     workers: Annotated[

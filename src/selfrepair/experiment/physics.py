@@ -11,6 +11,8 @@ lattice completes physics completes too, and how many of those without touching 
 ``robot="four-wheel-confirmed"`` plans and repairs with only the actions physics confirms
 (:func:`selfrepair.physics.identified.identified_domain` with ``confirmed_only``) and a table
 generated for them; the lattice footing then simulates that robot too.
+``robot="four-wheel-in-sequence"`` does the same with only the actions that also hold in sequence
+(``in_sequence_only``).
 
 The default is small enough for a 2-core machine (two mazes, 96 missions per strategy); the four
 bundled mazes are one option away.
@@ -31,7 +33,7 @@ from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.result import MissionSpec
 from selfrepair.experiment.faultsets import PAPER_FAULT_SETS
 from selfrepair.experiment.keys import canonical_json
-from selfrepair.physics.identified import CONFIRMED_NAME, load_identified
+from selfrepair.physics.identified import CONFIRMED_NAME, IN_SEQUENCE_NAME, load_identified
 from selfrepair.physics.mission import run_physics_mission
 from selfrepair.repair.replacement import RecursionMode
 from selfrepair.repair.strategies import StrategyOptions
@@ -85,19 +87,24 @@ class FootingRow:
     deviations: int
 
 
-ROBOTS = ("four-wheel", CONFIRMED_NAME)
-"""The robot models a run may plan with: the lattice's four-wheel robot (hand-written table), or
-the one that commands only the 65 actions physics confirms (its generated fault-agnostic table,
-made once per process)."""
+ROBOTS = ("four-wheel", CONFIRMED_NAME, IN_SEQUENCE_NAME)
+"""The robot models a run may plan with: the lattice's four-wheel robot (hand-written table), the
+one that commands only the 65 actions physics confirms from rest, or the one that commands only
+the 40 that also hold in sequence (each of the identified ones with its generated fault-agnostic
+table, made once per process)."""
 
 _ROBOTS: BoundedCache[str, tuple[SomeDomain, SomeTable | None]] = BoundedCache(
-    "physics experiment robot models", 2, kind=CacheKind.INPUT
+    "physics experiment robot models", 3, kind=CacheKind.INPUT
 )
 
 
 def _make_robot(name: str) -> tuple[SomeDomain, SomeTable | None]:
-    if name == CONFIRMED_NAME:
-        domain = load_identified(name=CONFIRMED_NAME, confirmed_only=True)
+    if name in (CONFIRMED_NAME, IN_SEQUENCE_NAME):
+        domain = load_identified(
+            name=name,
+            confirmed_only=name == CONFIRMED_NAME,
+            in_sequence_only=name == IN_SEQUENCE_NAME,
+        )
         return domain, default_table(domain)  # generated: the identified robot ships none
     return FOUR_WHEEL, None
 

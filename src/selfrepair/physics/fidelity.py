@@ -127,9 +127,15 @@ class FidelityReport:
             }
         return out
 
-    def identified(self, name: str = "four-wheel-physics") -> dict[str, Any]:
+    def identified(
+        self, name: str = "four-wheel-physics", sequence: SequenceReport | None = None
+    ) -> dict[str, Any]:
         """The identified-domain file's content (:mod:`selfrepair.physics.identified`) from the
-        nominal rows: the actions that snap, then the dropped ones with why."""
+        nominal rows: the actions that snap, then the dropped ones with why. With ``sequence``
+        (:func:`measure_in_sequence` of the same actions), each kept action is also marked
+        ``in_sequence`` (it holds after every predecessor) with its worst errors there, and the
+        predecessors are recorded."""
+        held = {} if sequence is None else {r.action: r for r in sequence.rows}
         kept, dropped = [], []
         for row in self.nominal():
             if row.snapped is None:
@@ -146,7 +152,13 @@ class FidelityReport:
                 "heading_error": round(row.tracked_heading, 3),
                 "confirmed": row.confirmed,
             })  # fmt: skip
-        return {
+            if sequence is not None:
+                seq = held.get(row.action)
+                kept[-1]["in_sequence"] = seq is not None and seq.holds
+                if seq is not None:
+                    kept[-1]["in_sequence_position_error"] = round(seq.worst_position, 4)
+                    kept[-1]["in_sequence_heading_error"] = round(seq.worst_heading, 3)
+        out: dict[str, Any] = {
             "domain": name,
             "made_by": "selfrepair physics fidelity --write-domain",
             "snap": {"position_cells": SNAP_POSITION, "heading_degrees": SNAP_HEADING},
@@ -154,6 +166,9 @@ class FidelityReport:
             "actions": kept,
             "dropped": dropped,
         }
+        if sequence is not None:
+            out["in_sequence_after"] = [*sequence.predecessors, "itself"]
+        return out
 
 
 def _median(values: list[float]) -> float:

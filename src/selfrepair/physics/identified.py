@@ -9,7 +9,8 @@ motion it snapped to and the cells its centre passed, and of the actions dropped
 kept ones, its motion the identified one, its footprint the lattice footprint of that motion with
 every cell the centre passed, its durations, faults and text forms the four-wheel robot's.
 Register it (``examples/physics_robot.py`` does, as a plug-in) and tables are generated for it
-like for any robot. The bundled file, :data:`BUNDLED`, was written with the default parameters.
+like for any robot. The bundled file, :data:`BUNDLED`, was written with the default parameters,
+with ``--in-sequence``: each kept action also says whether it holds in sequence.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from selfrepair.robots.four_wheel import Action, Fault
 __all__ = [
     "BUNDLED",
     "CONFIRMED_NAME",
+    "IN_SEQUENCE_NAME",
     "SNAP_HEADING",
     "SNAP_POSITION",
     "IdentifiedMotion",
@@ -43,6 +45,10 @@ SNAP_HEADING = 15.0
 """An end heading within this many degrees of one of the four headings snaps to it."""
 CONFIRMED_NAME = "four-wheel-confirmed"
 """The name of the bundled identified domain's confirmed-only variant."""
+IN_SEQUENCE_NAME = "four-wheel-in-sequence"
+"""The name of the bundled identified domain's variant with only the actions that hold in
+sequence (``selfrepair physics fidelity --in-sequence``: within 5% of a cell and 3 degrees after
+each of a few other actions, not only from rest)."""
 BUNDLED = "four-wheel-physics.json"
 """The bundled identified domain (package data under ``selfrepair/data/physics``)."""
 
@@ -85,11 +91,14 @@ def identified_domain(
     name: str | None = None,
     source: str = "<identified>",
     confirmed_only: bool = False,
+    in_sequence_only: bool = False,
 ) -> Domain[Action, Fault]:
     """The domain of an identified-motion file's content (see the module docstring). With
     ``confirmed_only``, only the actions physics confirms (entries marked ``confirmed``: tracked
     within 5% of a cell and 3 degrees of the lattice), the robot that avoids what physics does
-    not do as the lattice says."""
+    not do as the lattice says. With ``in_sequence_only``, only the actions marked
+    ``in_sequence`` (within the same tolerances after each of a few other actions; the file must
+    have been written with ``selfrepair physics fidelity --in-sequence --write-domain``)."""
     entries = data.get("actions")
     if not isinstance(entries, list) or not entries:
         raise InputError("expected a non-empty list 'actions'", source=source)
@@ -97,6 +106,16 @@ def identified_domain(
         entries = [e for e in entries if isinstance(e, Mapping) and e.get("confirmed") is True]
         if not entries:
             raise InputError("expected at least one action marked confirmed", source=source)
+    if in_sequence_only:
+        if not all(isinstance(e, Mapping) and "in_sequence" in e for e in entries):
+            raise InputError(
+                "expected every action marked in_sequence (a file written with the "
+                "in-sequence fidelity measured)",
+                source=source,
+            )
+        entries = [e for e in entries if e["in_sequence"] is True]
+        if not entries:
+            raise InputError("expected at least one action marked in_sequence", source=source)
     motions: dict[Action, IdentifiedMotion] = {}
     for entry in entries:
         action, motion = _motion_of(entry, source)
@@ -154,7 +173,12 @@ def identified_domain(
         "description": "four-wheel robot as MuJoCo drives it: "
         f"{len(actions)} of 81 actions (identified from physics)",
     }
-    if confirmed_only:
+    if in_sequence_only:
+        kwargs["description"] = (
+            f"four-wheel robot, only the {len(actions)} actions MuJoCo confirms in sequence "
+            "(identified from physics)"
+        )
+    elif confirmed_only:
         kwargs["description"] = (
             f"four-wheel robot, only the {len(actions)} actions MuJoCo confirms (identified from "
             "physics)"
@@ -168,10 +192,14 @@ def identified_domain(
 
 
 def load_identified(
-    path: str | Path | None = None, *, name: str | None = None, confirmed_only: bool = False
+    path: str | Path | None = None,
+    *,
+    name: str | None = None,
+    confirmed_only: bool = False,
+    in_sequence_only: bool = False,
 ) -> Domain[Action, Fault]:
     """The identified domain of the JSON file ``path`` (``None``: the bundled one); see
-    :func:`identified_domain` for ``confirmed_only``."""
+    :func:`identified_domain` for ``confirmed_only`` and ``in_sequence_only``."""
     if path is None:
         text = resources.files("selfrepair").joinpath("data", "physics", BUNDLED).read_text("utf-8")
         source = f"<bundled {BUNDLED}>"
@@ -189,4 +217,10 @@ def load_identified(
         raise InputError(f"expected JSON: {exc.msg}", source=source, line=exc.lineno) from None
     if not isinstance(data, dict):
         raise InputError("expected a JSON object", source=source)
-    return identified_domain(data, name=name, source=source, confirmed_only=confirmed_only)
+    return identified_domain(
+        data,
+        name=name,
+        source=source,
+        confirmed_only=confirmed_only,
+        in_sequence_only=in_sequence_only,
+    )

@@ -19,6 +19,7 @@ from typing import Final, Generic, Literal, TypeVar
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
 from selfrepair.limits import MAX_LOOKUP_PATTERNS
 from selfrepair.repair.neighbourhood import (
+    NeighbourhoodWalk,
     action_index,
     neighbourhood_walk,
     occupancy_bit,
@@ -128,6 +129,7 @@ class FaultLookups(Generic[T]):
         "radius",
         "stored",
         "table",
+        "walk",
     )
 
     def __init__(
@@ -154,6 +156,8 @@ class FaultLookups(Generic[T]):
         self.stored = 0
         self.max_patterns = max_patterns
         self.radius = table_reach(table)
+        # one walk for every action: its memo of sub-neighbourhoods is shared between them
+        self.walk: NeighbourhoodWalk[object, object] | None = None
 
     def action(self, i: int) -> ActionLookup[T]:
         """The look-up of action ``i`` (compiled, and enumerated when small, on first use)."""
@@ -165,7 +169,10 @@ class FaultLookups(Generic[T]):
 
     def _compile(self, i: int) -> ActionLookup[T]:
         action = self.table.domain.actions[i]
-        walk = neighbourhood_walk(self.table, self.known, self.mode, self.max_depth)
+        walk = self.walk
+        if walk is None:
+            walk = neighbourhood_walk(self.table, self.known, self.mode, self.max_depth)
+            self.walk = walk
         replacing = self.guard | {action}
         cells = tuple(walk.cells(action, h, replacing, 0) for h in range(len(Heading)))
         lookup: ActionLookup[T] = ActionLookup(action, cells, self.radius)

@@ -154,6 +154,8 @@ class NeighbourhoodWalk(Generic[A, F]):
     memo: dict[tuple[A, int, frozenset[A], int, bool], frozenset[Cell]] = field(
         default_factory=dict
     )
+    usable: dict[int, bool] = field(default_factory=dict)
+    """Per action index: whether the action is available under ``known`` (asked once)."""
 
     def cells(
         self, action: A, heading: int, replacing: frozenset[A], depth: int, first: bool = True
@@ -169,27 +171,36 @@ class NeighbourhoodWalk(Generic[A, F]):
         self, action: A, heading: int, replacing: frozenset[A], depth: int, first: bool
     ) -> frozenset[Cell]:
         index = self.index
+        ids, footprints, moves = index.ids, index.footprints, index.moves
+        known = self.known
+        usable = self.usable
         available = self.table.domain.available
         out: set[Cell] = set()
-        for candidate in self.table.candidates(action, self.known):
+        for candidate in self.table.candidates(action, known):
             x = y = 0
             h = heading
             for k, b in enumerate(candidate):
                 if b in replacing:
                     break
-                i = index.of(b)
+                i = ids.get(id(b))
+                if i is None:
+                    i = index.of(b)
+                ok = usable.get(i)
+                if ok is None:
+                    ok = usable[i] = available(b, known)
                 runs_first = first and k == 0
-                if available(b, self.known):
-                    out.update((x + cx, y + cy) for cx, cy in index.footprints[i][h])
+                if ok:
+                    cells = footprints[i][h]
+                    out.update(cells if x == y == 0 else [(x + cx, y + cy) for cx, cy in cells])
                 elif b in self.deferrable:
                     if runs_first:
                         break
                 elif self.rule(b, action, depth):
                     sub = self.cells(b, h, replacing | {b}, depth + 1, runs_first)
-                    out.update((x + cx, y + cy) for cx, cy in sub)
+                    out.update(sub if x == y == 0 else [(x + cx, y + cy) for cx, cy in sub])
                 else:
                     break
-                dx, dy, h = index.moves[i][h]  # a nested replacement ends where b ends
+                dx, dy, h = moves[i][h]  # a nested replacement ends where b ends
                 x += dx
                 y += dy
         return frozenset(out)
