@@ -434,6 +434,12 @@ def test_an_identified_file_without_in_sequence_marks_is_refused_for_that_robot(
     assert len(identified_domain(data, confirmed_only=True).actions) == 1
     with pytest.raises(InputError, match="marked in_sequence"):
         identified_domain(data, in_sequence_only=True)
+    # an action that holds in sequence but is not confirmed from rest is not kept
+    data["actions"] += [{"action": "BBBB", "forward": -1, "lateral": 0, "rotation": 0,
+                         "swept": [[0, 0], [-1, 0]], "confirmed": False, "in_sequence": True}]
+    data["actions"][0]["in_sequence"] = True  # fmt: skip
+    kept = identified_domain(data, in_sequence_only=True).actions
+    assert [a.code for a in kept] == ["FFFF"]
 
 
 @PHYSICS

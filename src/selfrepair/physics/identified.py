@@ -96,13 +96,13 @@ def identified_domain(
     """The domain of an identified-motion file's content (see the module docstring). With
     ``confirmed_only``, only the actions physics confirms (entries marked ``confirmed``: tracked
     within 5% of a cell and 3 degrees of the lattice), the robot that avoids what physics does
-    not do as the lattice says. With ``in_sequence_only``, only the actions marked
+    not do as the lattice says. With ``in_sequence_only``, only the confirmed actions also marked
     ``in_sequence`` (within the same tolerances after each of a few other actions; the file must
     have been written with ``selfrepair physics fidelity --in-sequence --write-domain``)."""
     entries = data.get("actions")
     if not isinstance(entries, list) or not entries:
         raise InputError("expected a non-empty list 'actions'", source=source)
-    if confirmed_only:
+    if confirmed_only or in_sequence_only:  # in sequence: confirmed from rest, and after others
         entries = [e for e in entries if isinstance(e, Mapping) and e.get("confirmed") is True]
         if not entries:
             raise InputError("expected at least one action marked confirmed", source=source)
