@@ -330,5 +330,5 @@ def compiled_lookups(context: MissionContext, n_actions: int) -> CompiledLookups
 
 
 _LOOKUPS: BoundedCache[tuple[object, ...], CompiledLookups] = BoundedCache(
-    "compiled look-ups as arrays", 64, kind=CacheKind.REPAIR
+    "compiled look-ups as arrays", 64, kind=CacheKind.REPAIR, per_map=True
 )
