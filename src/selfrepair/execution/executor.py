@@ -56,7 +56,14 @@ import numpy as np
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import Detection
-from selfrepair.execution.result import MissionResult, MissionSpec, MissionStatus, MissionTally
+from selfrepair.execution.result import (
+    MissionResult,
+    MissionSpec,
+    MissionStatus,
+    MissionTally,
+    StepSource,
+    TraceStep,
+)
 from selfrepair.execution.simulator import Outcome, Simulator
 from selfrepair.execution.stepper import Stepper
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
@@ -203,6 +210,10 @@ class _Tally:
     """Per executed step, its (start state, action) as one integer (for the plan distance)."""
     executed_units: int = 0
     penalty: int = 0
+    trace: Sequence[TraceStep] | None = None
+    """The compiled loop's trace (``None``: the stepper's steps are the trace)."""
+    waits: int = 0
+    """The compiled loop's wait steps (counted from the trace's rows)."""
 
 
 def run_mission(
@@ -278,8 +289,9 @@ def _run_loop(
             spec, sim, stepper, tally.moved, lambda f: _why(f, spec, sim, stepper), penalty
         )
         if ended is not None:
-            status, reason, tally.executed_units, tally.penalty = ended
-            return status, reason, "compiled"
+            tally.executed_units, tally.penalty = ended.units, ended.penalty
+            tally.trace, tally.waits = ended.trace, ended.waits
+            return ended.status, ended.reason, "compiled"
     status, reason = _loop(spec, sim, stepper, tally)
     return status, reason, "python"
 
@@ -421,6 +433,13 @@ def _result(
     footing: str = "python",
 ) -> MissionResult:
     removed, added, motion_removed, motion_added = _plan_distances(spec, sim, tally, initial)
+    steps: Sequence[TraceStep]
+    if tally.trace is None:
+        steps = tuple(stepper.steps)
+        waits = sum(1 for s in steps if s.source is StepSource.WAIT)
+        bumps = sum(1 for s in steps if s.source is StepSource.BUMPED)
+    else:  # the compiled loop's: no step made (the kernel never bumps)
+        steps, waits, bumps = tally.trace, tally.waits, 0
     sums = MissionTally(
         len(tally.moved),
         tally.executed_units,
@@ -430,12 +449,14 @@ def _result(
         added,
         motion_removed,
         motion_added,
+        waits,
+        bumps,
     )
     return MissionResult(
         spec,
         status,
         reason,
-        tuple(stepper.steps),
+        steps,
         tuple(stepper.repairs),
         initial,
         planning_ns,
