@@ -85,6 +85,7 @@ from selfrepair.repair.tolerance_masks import tolerance_term
 from selfrepair.search.astar import PlanResult, PlanStatus
 from selfrepair.search.backend import use_numba
 from selfrepair.search.lattice import action_cost, cost_scale, plan, planning_actions
+from selfrepair.search.openmoves import open_moves
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.search.term import StepTerm
 from selfrepair.status import mission_status
@@ -300,15 +301,16 @@ NO_PLAN = MissionStatus.NO_INITIAL_PLAN
 
 
 def _prepare(spec: MissionSpec, table: SomeTable | None) -> None:
-    """Check the table's robot and load the compiled planner before anything is timed (the
-    table's geometry and the maze's free grid are made by :func:`mission_context`, also before),
-    so the first planning time and the first repair latency of a process are not inflated by
-    one-off costs."""
+    """Check the table's robot, derive the robot's open-plane moves and load the compiled planner
+    before anything is timed (the table's geometry and the maze's free grid are made by
+    :func:`mission_context`, also before), so the first planning time and the first repair
+    latency of a process are not inflated by one-off costs."""
     if table is not None and table.domain is not spec.domain:
         raise ProblemError(
             f"table {spec.options.table_label!r} is for the {table.domain.name!r} domain; "
             f"this mission's robot is {spec.domain.name!r}"
         )
+    open_moves(spec.domain)  # the domain's alone (kind prefilled: a cold run keeps it)
     if use_numba(spec.backend, spec.domain):
         from selfrepair.search.warmup import ensure_warm
 
