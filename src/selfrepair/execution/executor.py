@@ -411,7 +411,7 @@ def _penalty_buffer(grid: FreeGrid, maze: Maze, radius: int) -> Sequence[int]:
 
 
 _PENALTIES: BoundedCache[tuple[Maze, int, int], Sequence[int]] = BoundedCache(
-    "clearance penalties in free-grid layout", 8, kind=CacheKind.PLAN
+    "clearance penalties in free-grid layout", 8, kind=CacheKind.PLAN, per_map=True
 )
 
 

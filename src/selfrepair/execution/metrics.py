@@ -91,7 +91,7 @@ def motion_distance(
 
 
 _OPTIMUM: BoundedCache[tuple[Hashable, ...], Fraction | None] = BoundedCache(
-    "fault-free optimum ticks", 1024, kind=CacheKind.REFERENCE
+    "fault-free optimum ticks", 1024, kind=CacheKind.REFERENCE, per_map=True
 )
 
 
