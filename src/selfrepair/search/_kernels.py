@@ -385,7 +385,7 @@ def _padded_free(maze: Maze) -> npt.NDArray[np.uint8]:
 
 
 _FREE: BoundedCache[Maze, npt.NDArray[np.uint8]] = BoundedCache(
-    "padded free cells", 8, kind=CacheKind.PLAN
+    "padded free cells", 8, kind=CacheKind.PLAN, per_map=True
 )
 
 
@@ -407,7 +407,7 @@ def _neighbourhoods(maze: Maze) -> npt.NDArray[np.uint16]:
 
 
 _NEIGHBOURS: BoundedCache[Maze, npt.NDArray[np.uint16]] = BoundedCache(
-    "lattice neighbourhood masks", 8, kind=CacheKind.PLAN
+    "lattice neighbourhood masks", 8, kind=CacheKind.PLAN, per_map=True
 )
 
 
@@ -709,7 +709,7 @@ def _padded_penalty(maze: Maze, radius: int) -> tuple[npt.NDArray[np.int64], int
 
 
 _PENALTY: BoundedCache[tuple[Maze, int], tuple[npt.NDArray[np.int64], int]] = BoundedCache(
-    "padded clearance penalties", 8, kind=CacheKind.PLAN
+    "padded clearance penalties", 8, kind=CacheKind.PLAN, per_map=True
 )
 
 _NO_PENALTY = np.zeros(1, dtype=np.int64)
@@ -820,7 +820,7 @@ def _term_state(term: StepTerm, pw: int) -> _TermState:
 
 
 _TERM_STATES: BoundedCache[StepTerm, _TermState] = BoundedCache(
-    "step terms as the lattice kernel reads them", 16, kind=CacheKind.PLAN
+    "step terms as the lattice kernel reads them", 16, kind=CacheKind.PLAN, per_map=True
 )
 
 
