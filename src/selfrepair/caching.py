@@ -47,7 +47,7 @@ class CacheKind(StrEnum):
     """The simulator's own tables (time units, move tables); no plan or repair reads them."""
     PREFILLED = "prefilled"
     """Derived data every mission computes before its clocks start (a table's reach and its
-    candidates' geometry)."""
+    candidates' geometry, the robot's open-plane moves)."""
     PLAN = "plan"
     """Planner data: lattices, distances, occupancy and clearance grids, kernel inputs."""
     REPAIR = "repair"

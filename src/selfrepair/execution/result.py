@@ -8,7 +8,7 @@ the others.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 from fractions import Fraction
@@ -199,7 +199,8 @@ class MissionTally(NamedTuple):
     ``max(0, radius - clearance)`` per cell, counted only when the clearance weight is not zero,
     else 0); ``plan_removed``/``plan_added``: the plan distance between the initial plan and
     the executed one, ``motion_removed``/``motion_added`` the same by motion class (see
-    :mod:`selfrepair.execution.metrics`).
+    :mod:`selfrepair.execution.metrics`); ``waits``/``bumps``: the steps of source ``wait`` and
+    ``bumped``.
     :func:`selfrepair.execution.metrics.mission_row` falls back to recomputing these from the
     steps when a result has no tally; tests check both agree.
     """
@@ -212,6 +213,8 @@ class MissionTally(NamedTuple):
     plan_added: int
     motion_removed: int
     motion_added: int
+    waits: int
+    bumps: int
 
 
 @dataclass(frozen=True, slots=True)
@@ -219,12 +222,14 @@ class MissionResult:
     """The outcome of one mission; :func:`selfrepair.execution.metrics.mission_row` flattens it
     (columns in docs/replacement.md). ``tally`` holds sums the executor kept on the way
     (``None`` for a result made otherwise); ``footing`` the mission loop that ran it,
-    ``compiled`` or ``python`` (see :attr:`MissionSpec.footing`)."""
+    ``compiled`` or ``python`` (see :attr:`MissionSpec.footing`). ``steps`` is a tuple, or for
+    a compiled mission an :class:`~selfrepair.execution.compiled.trace.ArrayTrace` (the same
+    steps, made from the kernel's rows when read)."""
 
     spec: MissionSpec
     status: MissionStatus
     reason: str
-    steps: tuple[TraceStep, ...]
+    steps: Sequence[TraceStep]
     repairs: tuple[RepairRecord, ...]
     initial_plan: PlanResult
     initial_planning_ns: int
