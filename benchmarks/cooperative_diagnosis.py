@@ -34,7 +34,9 @@ four-wheel robot, the default ``stall`` behaviour, seeds ``0 .. --seeds - 1``):
 
 Reported per mode: missions with a surprise, the share isolated, median actions to isolate with
 its bootstrap interval (non-isolated missions count as infinite), the reduction ``1 -
-median(team) / median(alone)`` with a paired bootstrap interval, and the wrong-isolation rate.
+median(team) / median(alone)`` and the reduction of the mean over the missions isolated in both
+arms, each with its paired bootstrap interval (``selfrepair.stats.paired_cut_interval``: the
+pairs resampled together), and the wrong-isolation rate.
 
 Usage: ``python benchmarks/cooperative_diagnosis.py [--seeds N] [--range R] [--noise P]
 [--observer-noise P] [--routes N] [--modes passive active] [--planner counting|blind]``
@@ -73,7 +75,7 @@ from selfrepair.geometry import Pose
 from selfrepair.robots.four_wheel import FOUR_WHEEL
 from selfrepair.search.lattice import plan
 from selfrepair.search.problem import PlanningProblem
-from selfrepair.stats import bootstrap_interval
+from selfrepair.stats import Interval, bootstrap_interval, paired_cut_interval
 from selfrepair.world.bundled import bundled_routes, load_bundled, maze_names
 
 RESULTS = Path(__file__).resolve().parent / "results"
@@ -198,6 +200,11 @@ def _verdict(reduction: float, low: float, high: float, target: float) -> str:
     return "inconclusive"
 
 
+def _ends(cut: Interval | None) -> tuple[float, float, float]:
+    """Estimate, low and high of a paired cut (``nan`` when undefined)."""
+    return (math.nan,) * 3 if cut is None else (cut.estimate, cut.low, cut.high)
+
+
 def _summary(
     missions: int, alone: list[float], together: list[float], wrong: dict[str, list[int]],
     label: str,
@@ -205,14 +212,8 @@ def _summary(
     """The alone arm against the team arm ``label`` (paired: the same missions)."""
     a, t = np.array(alone), np.array(together)
     med_a, med_t = float(np.median(a)), float(np.median(t))
-    rng = np.random.default_rng(2024)
-    draws = rng.integers(0, len(a), size=(2000, len(a)))
-    ma, mt = np.median(a[draws], axis=1), np.median(t[draws], axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        reductions = 1.0 - mt / ma
-    reductions = reductions[np.isfinite(reductions)]
-    low, high = np.quantile(reductions, [0.025, 0.975]) if len(reductions) else (math.nan,) * 2
-    reduction = 1.0 - med_t / med_a if med_a > 0 and math.isfinite(med_a) else math.nan
+    median_cut = paired_cut_interval(alone, together, "median")
+    reduction, low, high = _ends(median_cut)
 
     def interval(values: np.ndarray) -> list[float] | None:
         finite = [float(v) for v in values if math.isfinite(v)]
@@ -223,16 +224,9 @@ def _summary(
         return None if iv is None else [iv.low, iv.high]
 
     both = np.isfinite(a) & np.isfinite(t)  # paired mean cut, missions isolated in both arms
-    pa, pt = a[both], t[both]
-    mean_cut = 1.0 - float(pt.mean()) / float(pa.mean()) if len(pa) and pa.mean() > 0 else math.nan
-    if len(pa):
-        pd = rng.integers(0, len(pa), size=(2000, len(pa)))
-        with np.errstate(invalid="ignore", divide="ignore"):
-            cuts = 1.0 - pt[pd].mean(axis=1) / pa[pd].mean(axis=1)
-        cuts = cuts[np.isfinite(cuts)]
-        mean_cut_interval = [float(q) for q in np.quantile(cuts, [0.025, 0.975])]
-    else:
-        mean_cut_interval = [math.nan, math.nan]
+    mean_cut, mean_low, mean_high = _ends(
+        paired_cut_interval([float(v) for v in a[both]], [float(v) for v in t[both]], "mean")
+    )
 
     def mean_interval(values: np.ndarray) -> list[float] | None:
         iv = bootstrap_interval([float(v) for v in values if math.isfinite(v)], statistic="mean")
@@ -250,8 +244,8 @@ def _summary(
         "reduction": reduction, "reduction_interval": [float(low), float(high)],
         "target_30pct": _verdict(reduction, float(low), float(high), 0.30),
         "paired_isolated_both": int(both.sum()),
-        "mean_reduction_paired": mean_cut, "mean_reduction_paired_interval": mean_cut_interval,
-        "mean_target_30pct": _verdict(mean_cut, *mean_cut_interval, 0.30),
+        "mean_reduction_paired": mean_cut, "mean_reduction_paired_interval": [mean_low, mean_high],
+        "mean_target_30pct": _verdict(mean_cut, mean_low, mean_high, 0.30),
         "mean_isolated_interval_alone": mean_interval(a),
         "mean_isolated_interval_team": mean_interval(t),
         "wrong_alone": wrong["alone"][0] / max(1, wrong["alone"][1]),

@@ -135,9 +135,9 @@ def profile(folder: Path, experiment: str, rate: int) -> dict[str, Any] | None:
     }
 
 
-def rewrite_ratios(table: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
+def paired_ratios(table: dict[str, dict[str, Any]]) -> dict[str, list[float]]:
     """Per maze: rewriting's repair compute over the replanner's on the same (route, faults),
-    paired median of the ratio with its range, per rewriting variant pooled."""
+    one ratio per rewriting mission (every rewriting variant)."""
     replan: dict[tuple[Any, ...], float] = {}
     rewrite: dict[tuple[Any, ...], list[float]] = defaultdict(list)
     for row in table.values():
@@ -154,6 +154,18 @@ def rewrite_ratios(table: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]
     for key, values in rewrite.items():
         if replan.get(key):
             per_maze[key[0]].extend(v / replan[key] for v in values)
+    return per_maze
+
+
+def rewrite_ratios(table: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Per maze: the paired median of :func:`paired_ratios` with its 95% percentile-bootstrap
+    interval and range."""
+    return ratio_summary(paired_ratios(table))
+
+
+def ratio_summary(per_maze: dict[str, list[float]]) -> dict[str, dict[str, Any]]:
+    """Per maze: the median of the paired ratios with its 95% percentile-bootstrap interval and
+    range."""
     from selfrepair.stats import bootstrap_interval
 
     out: dict[str, dict[str, Any]] = {}

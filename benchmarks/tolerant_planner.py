@@ -15,11 +15,11 @@ What each timed region contains:
 * ``hard`` and ``soft`` (penalty 1 per pair): ``tolerance_term(...)`` (the term, masks included)
   and ``plan(PlanningProblem(maze, start, goal, step_term=term), backend=...)``;
 * ``first``: a plan on a map not planned on: before **each** sample of **every** side, every
-  per-map cache is emptied (:data:`PER_MAP`: free grids, padded cells and neighbourhoods, goal
-  distances, canonical poses, occupancy codes, look-ups on grids, and the tolerant planner's
-  masks, terms and kernel cell rows). Process-wide data (motion tables, planner actions, the
-  compiled look-ups, the pattern book of :mod:`selfrepair.repair.tolerance_book`, already
-  filled) is kept for both;
+  per-map cache is emptied (``clear_caches(per_map=True)``, the caches whose keys hold a map:
+  free grids, padded cells and neighbourhoods, goal distances, canonical poses, occupancy codes,
+  look-ups on grids, the tolerant planner's masks, terms and kernel cell rows, among others).
+  Process-wide data (motion tables, planner actions, the compiled look-ups, the pattern book of
+  :mod:`selfrepair.repair.tolerance_book`, already filled) is kept for both;
 * ``later``: a plan on a map already planned on: each side planned once untimed, nothing emptied;
 * ``dense masks``: every pose's masks of a new map from the filled book (what the pure-Python
   search reads), over the plain ``first`` plan.
@@ -56,7 +56,6 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any
 
-from selfrepair import caching
 from selfrepair.caching import CacheKind, clear_caches
 from selfrepair.geometry import FreeGrid
 from selfrepair.repair.replacement import table_reach
@@ -79,34 +78,12 @@ BACKENDS = ("numba", "python")
 MODES = {"hard": None, "soft": Fraction(1)}
 TARGET = 2.0
 
-PER_MAP = frozenset(
-    {
-        "maze free grids",
-        "maze clearance maps",
-        "padded free cells",
-        "lattice neighbourhood masks",
-        "padded clearance penalties",
-        "canonical poses per maze",
-        "goal distances (mazes up to 512x512)",
-        "goal distances (larger mazes)",
-        "occupancy codes",
-        "compiled look-ups on grids",
-        "step terms as the lattice kernel reads them",
-        "tolerance masks",
-        "tolerance terms",
-    }
-)
-"""The caches keyed by a map (or a term made for one): emptied before every ``first`` sample of
-every side."""
-
 
 def _forget_maps() -> None:
-    """Empty every per-map cache (:data:`PER_MAP`), for the plain and the tolerant planner alike;
-    keep the process-wide ones (the pattern books among them)."""
-    caches = [c for c in caching._ALL if c.name in PER_MAP]
-    assert {c.name for c in caches} == PER_MAP, "a per-map cache was renamed"
-    for cache in caches:
-        cache.clear()
+    """Empty every per-map cache (those made with ``per_map=True``: :mod:`selfrepair.caching`),
+    for the plain and the tolerant planner alike; keep the process-wide ones (the pattern books
+    among them)."""
+    clear_caches(per_map=True)
 
 
 def _sample(fn: Callable[[], Any], before: Callable[[], Any] | None) -> float:

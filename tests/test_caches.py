@@ -1,15 +1,33 @@
-"""Caches by kind: every cache is a BoundedCache with a CacheKind, none hides elsewhere, and a
-cold run empties exactly the kinds the timing policy names."""
+"""Caches by kind: every cache is a BoundedCache with a CacheKind, none hides elsewhere, a cold
+run empties exactly the kinds the timing policy names, and every cache keyed by a map is marked
+per-map."""
 
 from __future__ import annotations
 
 import ast
+from fractions import Fraction
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import selfrepair
-from selfrepair.caching import BoundedCache, CacheKind, cache_stats, clear_caches
+from extras import NUMBA
+from selfrepair.caching import BoundedCache, CacheKind, cache_stats, caches, clear_caches
+from selfrepair.execution.executor import run_mission
+from selfrepair.execution.faults import FaultSchedule
+from selfrepair.execution.result import MissionSpec
+from selfrepair.geometry import FreeGrid
+from selfrepair.repair.strategies import StrategyName
+from selfrepair.repair.tolerance import fault_model
+from selfrepair.repair.tolerance_masks import tolerance_term
+from selfrepair.robots.four_wheel import FOUR_WHEEL
+from selfrepair.search.lattice import plan, planning_actions
+from selfrepair.search.problem import PlanningProblem
+from selfrepair.tables.fileformat import resolve_table
+from selfrepair.world.maze import Maze
+from selfrepair.world.mazegen import generate_maze
+from selfrepair.world.routes import random_routes
 
 SRC = Path(selfrepair.__file__).parent
 
@@ -162,3 +180,67 @@ def test_a_cold_run_empties_the_kinds_it_must_and_keeps_the_others(
     assert {s.name: at_cold[s.name] for s in cleared} == {s.name: 0 for s in cleared}
     assert {s.name: at_cold[s.name] for s in kept} == {s.name: s.size for s in kept}
     assert CacheKind.INPUT not in COLD_CLEARS and CacheKind.PLAN in COLD_CLEARS
+
+
+def _holds(value: object, maze: Maze, depth: int = 0) -> bool:
+    """Whether ``value`` (a cache key) holds ``maze``: the maze itself, one of its free grids, or
+    a tuple, set or slotted value with one of those inside (a lattice, a step term's source)."""
+    if isinstance(value, Maze):
+        return value == maze
+    if isinstance(value, FreeGrid):
+        return value == maze.free_grid(value.margin)
+    if depth >= 4 or isinstance(value, str | bytes | int | float | Fraction | np.ndarray | type):
+        return False
+    if isinstance(value, tuple | list | frozenset | set):
+        return any(_holds(v, maze, depth + 1) for v in value)
+    names = getattr(type(value), "__dataclass_fields__", None) or getattr(value, "__slots__", ())
+    return any(_holds(getattr(value, n, None), maze, depth + 1) for n in names)
+
+
+def _plans_on(maze: Maze, *, backend: str) -> None:
+    """Every kind of work that keeps data per map: plans with and without clearance, a tolerant
+    plan (masks and terms), and missions with a fault, with and without the compiled loop."""
+    route = random_routes(maze, 1, seed=3)[0]
+    start, goal = route.start, route.goal
+    plan(PlanningProblem(maze, start, goal), backend=backend)
+    plan(PlanningProblem(maze, start, goal, clearance_weight=Fraction(1)), backend=backend)
+    actions = planning_actions(FOUR_WHEEL, frozenset())
+    model = fault_model(FOUR_WHEEL, 1)
+    term = tolerance_term(resolve_table("handwritten"), maze.free_grid(), actions, model)
+    plan(PlanningProblem(maze, start, goal, step_term=term), backend=backend)
+    fault = FOUR_WHEEL.parse_faults("FL:F")
+    for strategy in (StrategyName.REPLACEMENT, StrategyName.REPLAN):
+        for footing in ("python", "compiled") if backend == "numba" else ("python",):
+            run_mission(
+                MissionSpec(
+                    maze, start, goal, schedule=FaultSchedule.permanent(fault),
+                    strategy=strategy, backend=backend, clearance_weight=Fraction(1),
+                    footing=footing,
+                )
+            )  # fmt: skip
+
+
+@pytest.mark.parametrize("backend", ["python", pytest.param("numba", marks=NUMBA)])
+def test_every_cache_keyed_by_a_map_is_marked_per_map(backend: str) -> None:
+    """Plan on a maze no other test makes: every cache whose keys then hold it (or its grid) says
+    ``per_map``, so ``clear_caches(per_map=True)`` forgets the map entirely."""
+    maze = generate_maze(13, 11, corridor=1, braid=0.4, seed=20261203)
+    _plans_on(maze, backend=backend)
+    holding = {c.name: c.per_map for c in caches() if any(_holds(k, maze) for k in c)}
+    assert len(holding) >= 8  # the walk finds the maze inside the keys
+    assert {name for name, marked in holding.items() if not marked} == set()
+    clear_caches(per_map=True)
+    assert [c.name for c in caches() if any(_holds(k, maze) for k in c)] == []
+    assert any(len(c) for c in caches() if not c.per_map)  # process-wide data is kept
+
+
+def test_clear_caches_per_map_keeps_the_others() -> None:
+    mapped = BoundedCache[int, int]("test per-map cache", 4, kind=CacheKind.PLAN, per_map=True)
+    shared = BoundedCache[int, int]("test process-wide cache", 4, kind=CacheKind.PLAN)
+    mapped.get(1, lambda: 1)
+    shared.get(1, lambda: 1)
+    clear_caches(per_map=True)
+    assert len(mapped) == 0 and len(shared) == 1
+    assert {s.name: s.per_map for s in cache_stats() if s.name.startswith("test per")} == {
+        "test per-map cache": True
+    }

@@ -6,6 +6,7 @@ schedules, strategies and recursion modes; and which missions each footing takes
 from __future__ import annotations
 
 import dataclasses
+import pickle
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -19,10 +20,11 @@ from golden import rows_of
 from selfrepair.caching import clear_caches
 from selfrepair.errors import ProblemError
 from selfrepair.execution.compiled.draws import MAX_SEED, MAX_WORD, draw53, threshold, uniform
+from selfrepair.execution.compiled.trace import ArrayTrace
 from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import Clock, Detection, FaultEvent, FaultSchedule, Persistence
 from selfrepair.execution.metrics import mission_row
-from selfrepair.execution.result import MissionResult, MissionSpec
+from selfrepair.execution.result import MissionResult, MissionSpec, StepSource
 from selfrepair.experiment.timing import COLD_CLEARS
 from selfrepair.geometry import Heading, Pose
 from selfrepair.repair.strategies import StrategyOptions
@@ -218,6 +220,35 @@ def test_compiled_loop_on_a_bundled_route_with_a_paper_fault_set(
     python, compiled = _both(spec, cold=True)
     _same(python, compiled)
     assert compiled.repairs and all(r.latency_ns > 0 for r in compiled.repairs)
+
+
+@NUMBA
+def test_the_compiled_trace_is_made_from_the_rows_and_is_the_python_loops() -> None:
+    maze = load_bundled("narrow-short")
+    route = bundled_routes("narrow-short")[1]
+    spec = MissionSpec(
+        maze, route.start, route.goal,
+        schedule=FaultSchedule.permanent(FOUR_WHEEL.parse_faults("FL:F,RR:B")),
+        strategy="replacement", options=StrategyOptions(table="handwritten"),
+    )  # fmt: skip
+    python, compiled = _both(spec)
+    trace, steps = compiled.steps, python.steps
+    assert isinstance(trace, ArrayTrace) and isinstance(steps, tuple)
+    assert trace == steps and steps == trace and tuple(trace) == steps
+    assert hash(trace) == hash(steps) and trace != steps[:-1]
+    n = len(steps)
+    assert [trace[i] for i in (0, 7, n - 1, -1, -n)] == [steps[i] for i in (0, 7, n - 1, -1, -n)]
+    assert trace[3:11] == steps[3:11] and trace[::-5] == steps[::-5]
+    for bad in (n, -n - 1):
+        with pytest.raises(IndexError):
+            trace[bad]
+    assert not trace.rows.flags.writeable
+    assert pickle.loads(pickle.dumps(trace)) == steps
+    assert trace.count_source(StepSource.FAILED_ATTEMPT) == sum(
+        s.source is StepSource.FAILED_ATTEMPT for s in steps
+    )
+    # the row from the tally (no step made) is the row measured from the steps
+    assert mission_row(compiled) == mission_row(dataclasses.replace(compiled, tally=None))
 
 
 @NUMBA

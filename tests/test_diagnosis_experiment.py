@@ -11,7 +11,7 @@ import pytest
 from selfrepair.cli import main
 from selfrepair.cli.experiments import resolve_experiment
 from selfrepair.diagnosis import FaultBelief, Observation, ObservationModel, fault_model
-from selfrepair.diagnosis.cooperative import Observer, SensingRange
+from selfrepair.diagnosis.cooperative import Observer, ObserverView, SensingRange
 from selfrepair.errors import ConfigError
 from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import Detection, FaultSchedule
@@ -89,6 +89,12 @@ def test_observers_enter_the_missions_only_when_present() -> None:
         ("observers = [0, 2]", "observers = [0, 0]", "distinct numbers of observers"),
         ("observers = [0, 2]", "observers = [9]", "less than or equal to 8"),
         ("observers = [0, 2]", "observers = [0, 2]\nobserver_range = -1", "greater than"),
+        ("observers = [0, 2]", 'observers = [0, 2]\nobserver_view = "eyes"',
+         "expected 'pose' or 'wheels'"),
+        ("observers = [0, 2]", 'observers = [0]\nobserver_view = "wheels"',
+         "observer_view needs observers"),
+        ('sets = ["FL:F", "RL:F", "FL:F,RR:B"]', 'sets = ["F"]\nobserver_view = "wheels"',
+         "needs a robot that declares actuators"),
     ],
 )
 def test_bad_observer_keys_name_file_line_and_expectation(
@@ -96,6 +102,9 @@ def test_bad_observer_keys_name_file_line_and_expectation(
 ) -> None:
     text = SMALL.replace(old, new)
     assert text != SMALL
+    if 'sets = ["F"]' in text:  # the three-action robot: no actuators, the oracle only
+        text = 'domain = "three-action"\n' + text.split("[[strategies]]")[0]
+        text += '[[strategies]]\nname = "oracle"\n'
     with pytest.raises(ConfigError, match=expected) as info:
         parse_config(text, source="x.toml")
     assert str(info.value).startswith("x.toml:")  # the file and the line
@@ -104,6 +113,27 @@ def test_bad_observer_keys_name_file_line_and_expectation(
     assert main(["experiment", str(path), "--db", str(tmp_path / "r.sqlite")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and str(path) in err
+
+
+def test_the_observer_view_reaches_the_observers_and_the_key_only_when_wheels() -> None:
+    wheels = SMALL.replace("observers = [0, 2]", 'observers = [0, 2]\nobserver_view = "wheels"')
+    pose = SMALL.replace("observers = [0, 2]", 'observers = [0, 2]\nobserver_view = "pose"')
+    assert parse_config(wheels).faults.observer_view is ObserverView.WHEELS
+    missions = {view: expand(parse_config(text)) for view, text in (
+        ("default", SMALL), ("pose", pose), ("wheels", wheels))}  # fmt: skip
+    assert [m.seed for m in missions["pose"]] == [m.seed for m in missions["default"]]
+    for mission in missions["wheels"]:
+        spec = to_spec(mission)
+        assert {o.view for o in spec.observers} <= {ObserverView.WHEELS}
+        if spec.observers:
+            assert mission.settings["observers"]["view"] == "wheels"
+    for mission in missions["pose"]:
+        assert {o.view for o in to_spec(mission).observers} <= {ObserverView.POSE}
+        assert "view" not in mission.settings.get("observers", {})  # older keys stay valid
+    alone = {m.seed for m in missions["wheels"] if not to_spec(m).observers}
+    assert alone <= {m.seed for m in missions["pose"]}  # the robot alone: the same missions
+    watched = {m.seed for m in missions["wheels"] if to_spec(m).observers}
+    assert not watched & {m.seed for m in missions["pose"]}  # a wheel team: other situations
 
 
 def _spec(observers: tuple[Observer, ...], strategy: str = "active-diagnosis") -> MissionSpec:

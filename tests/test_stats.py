@@ -4,6 +4,7 @@ hand-made samples with known answers, properties, and the team rows that use the
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import pytest
 from hypothesis import given
@@ -11,7 +12,13 @@ from hypothesis import strategies as st
 
 from selfrepair.errors import ProblemError
 from selfrepair.execution.metrics import latency_stats
-from selfrepair.stats import Interval, bootstrap_interval, lower_median, percentile
+from selfrepair.stats import (
+    Interval,
+    bootstrap_interval,
+    lower_median,
+    paired_cut_interval,
+    percentile,
+)
 from selfrepair.team import engine
 from selfrepair.team.metrics import team_row
 from selfrepair.team.result import RepairOutcome, TeamOptions
@@ -61,6 +68,57 @@ def test_bootstrap_interval_of_a_constant_sample_is_a_point() -> None:
     assert bootstrap_interval([]) is None
     interval = bootstrap_interval([1.0, 2.0, 3.0, 4.0, 100.0])
     assert interval is not None and interval.low <= interval.estimate <= interval.high
+
+
+def test_paired_cut_of_two_pairs_has_a_known_interval() -> None:
+    """Pairs (1, 0) and (1, 1): a resample holds both copies of one pair (probability 1/4
+    each, cut 1 or 0) or one of each (1/2, cut 0.5); its 2.5% and 97.5% quantiles are 0 and 1."""
+    for statistic in ("median", "mean"):
+        cut = paired_cut_interval([1.0, 1.0], [0.0, 1.0], statistic)
+        assert cut is not None
+        assert (cut.estimate, cut.low, cut.high, cut.n) == (0.5, 0.0, 1.0, 2)
+
+
+def test_paired_cut_resamples_the_pairs_together() -> None:
+    """Every ``after`` is half its ``before``: every resample of pairs cuts by exactly a half
+    (resampled apart, the two samples' statistics would scatter)."""
+    before = [1.0, 2.0, 3.0, 4.0, 10.0, 40.0]
+    after = [b / 2 for b in before]
+    for statistic in ("median", "mean"):
+        cut = paired_cut_interval(before, after, statistic)
+        assert cut is not None
+        assert cut.estimate == pytest.approx(0.5)
+        assert cut.low == pytest.approx(0.5) and cut.high == pytest.approx(0.5)
+
+
+def test_paired_cut_undefined_and_misuse() -> None:
+    assert paired_cut_interval([], []) is None
+    assert paired_cut_interval([0.0, 0.0], [1.0, 2.0]) is None  # nothing before to cut
+    assert paired_cut_interval([math.inf] * 3, [1.0, 2.0, 3.0]) is None  # median before infinite
+    # an infinite value counts as more than any finite one: the median stays finite
+    cut = paired_cut_interval([3.0, 3.0, math.inf], [2.0, 2.0, 2.0])
+    assert cut is not None and cut.estimate == pytest.approx(1 / 3)
+    with pytest.raises(ProblemError, match="as many values"):
+        paired_cut_interval([1.0, 2.0], [1.0])
+    with pytest.raises(ProblemError, match="median, mean"):
+        paired_cut_interval([1.0], [1.0], "mode")
+
+
+_counts = st.lists(
+    st.tuples(st.integers(1, 60), st.integers(0, 60)), min_size=1, max_size=40
+)
+
+
+@given(_counts, st.sampled_from(["median", "mean"]), st.integers(0, 2**32 - 1))
+def test_paired_cut_interval_holds_its_estimate_and_is_seeded(
+    pairs: list[tuple[int, int]], statistic: str, seed: int
+) -> None:
+    before = [float(b) for b, _ in pairs]
+    after = [float(a) for _, a in pairs]
+    cut = paired_cut_interval(before, after, statistic, seed=seed, resamples=200)
+    assert cut is not None
+    assert cut.low <= cut.estimate <= cut.high and cut.n == len(pairs)
+    assert paired_cut_interval(before, after, statistic, seed=seed, resamples=200) == cut
 
 
 def test_team_p99_of_fewer_than_100_repairs_is_the_slowest() -> None:

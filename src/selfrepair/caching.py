@@ -2,12 +2,17 @@
 
 Some values are expensive to derive and cheap to keep: a loaded table, the compiled look-ups of a
 table under a fault set, a maze's occupancy grid, the exact optimum of a fault set. Each such cache
-is a :class:`BoundedCache` made with a name, a :class:`CacheKind` and a maximum number of entries,
-evicting the least recently used one. Nothing hides scratch space inside frozen values, and no
-module keeps a cache any other way (no ``functools.cache``, no module-level dict filled on demand;
-a test scans the sources). :func:`cache_stats` lists every cache with its kind and size, so a user
-can see what the process keeps, and :func:`clear_caches` empties them all or those of some kinds
-(the experiment runner's cold runs clear by kind: :mod:`selfrepair.experiment.timing`).
+is a :class:`BoundedCache` made with a name, a :class:`CacheKind` and a maximum number of entries
+(evicting the least recently used one), and marked ``per_map=True`` where its keys hold a map (a
+maze, its free grid, or a value made for one map). Nothing hides scratch space inside frozen
+values, and no module keeps a cache any other way (no ``functools.cache``, no module-level dict
+filled on demand; a test scans the sources). :func:`cache_stats` lists every cache with its kind,
+mark and size, so a user can see what the process keeps, and :func:`clear_caches` empties them
+all, those of some kinds (the experiment runner's cold runs clear by kind:
+:mod:`selfrepair.experiment.timing`) or only the per-map ones (what a plan on a map never planned
+on finds empty while the process-wide caches stay filled: ``benchmarks/tolerant_planner.py``
+times its ``first`` plans so). A test plans on a fresh maze and checks that every cache whose
+keys then hold it is marked.
 
 Keys must be hashable with a cheap hash: values such as mazes and tables cache their own hash.
 """
@@ -15,12 +20,12 @@ Keys must be hashable with a cheap hash: values such as mazes and tables cache t
 from __future__ import annotations
 
 from collections import OrderedDict
-from collections.abc import Callable, Hashable, Iterable
+from collections.abc import Callable, Hashable, Iterable, Iterator
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any, Generic, TypeVar
 
-__all__ = ["BoundedCache", "CacheKind", "CacheStats", "cache_stats", "clear_caches"]
+__all__ = ["BoundedCache", "CacheKind", "CacheStats", "cache_stats", "caches", "clear_caches"]
 
 K = TypeVar("K", bound=Hashable)
 V = TypeVar("V")
@@ -42,7 +47,7 @@ class CacheKind(StrEnum):
     """The simulator's own tables (time units, move tables); no plan or repair reads them."""
     PREFILLED = "prefilled"
     """Derived data every mission computes before its clocks start (a table's reach and its
-    candidates' geometry)."""
+    candidates' geometry, the robot's open-plane moves)."""
     PLAN = "plan"
     """Planner data: lattices, distances, occupancy and clearance grids, kernel inputs."""
     REPAIR = "repair"
@@ -54,7 +59,7 @@ class CacheKind(StrEnum):
 @dataclass(frozen=True, slots=True)
 class CacheStats:
     """One cache's name, kind, bound, current size and hit/miss counts since it was made or
-    cleared."""
+    cleared, and whether its keys hold a map (``per_map``)."""
 
     name: str
     kind: CacheKind
@@ -62,19 +67,22 @@ class CacheStats:
     size: int
     hits: int
     misses: int
+    per_map: bool = False
 
 
 class BoundedCache(Generic[K, V]):
     """A named least-recently-used cache of at most ``maxsize`` entries of one ``kind`` (mutable
-    by nature)."""
+    by nature). ``per_map``: its keys hold a map (a maze, a free grid, or a value made for one
+    map such as a step term), so its entries serve that map only."""
 
-    __slots__ = ("_data", "hits", "kind", "maxsize", "misses", "name")
+    __slots__ = ("_data", "hits", "kind", "maxsize", "misses", "name", "per_map")
 
-    def __init__(self, name: str, maxsize: int, *, kind: CacheKind) -> None:
+    def __init__(self, name: str, maxsize: int, *, kind: CacheKind, per_map: bool = False) -> None:
         if maxsize < 1:
             raise ValueError(f"cache {name!r}: maxsize must be at least 1, got {maxsize}")
         self.name = name
         self.kind = kind
+        self.per_map = per_map
         self.maxsize = maxsize
         self._data: OrderedDict[K, V] = OrderedDict()
         self.hits = 0
@@ -100,6 +108,10 @@ class BoundedCache(Generic[K, V]):
     def __len__(self) -> int:
         return len(self._data)
 
+    def __iter__(self) -> Iterator[K]:
+        """The keys kept now, least recently used first (a snapshot: getting may reorder them)."""
+        return iter(tuple(self._data))
+
     def values(self) -> tuple[V, ...]:
         """The values kept now, least recently used first (e.g. to report their memory)."""
         return tuple(self._data.values())
@@ -115,7 +127,13 @@ class BoundedCache(Generic[K, V]):
     def stats(self) -> CacheStats:
         """This cache's :class:`CacheStats`."""
         return CacheStats(
-            self.name, self.kind, self.maxsize, len(self._data), self.hits, self.misses
+            self.name,
+            self.kind,
+            self.maxsize,
+            len(self._data),
+            self.hits,
+            self.misses,
+            self.per_map,
         )
 
 
@@ -127,10 +145,17 @@ def cache_stats() -> tuple[CacheStats, ...]:
     return tuple(sorted((c.stats() for c in _ALL), key=lambda s: s.name))
 
 
-def clear_caches(kinds: Iterable[CacheKind] | None = None) -> None:
-    """Empty every cache of the given ``kinds`` (every cache when ``None``), e.g. to measure the
-    first, cold call of something."""
+def caches() -> tuple[BoundedCache[Any, Any], ...]:
+    """Every cache made so far, in the order they were made (to read their keys, e.g. in a test
+    that every cache keyed by a map says so)."""
+    return tuple(_ALL)
+
+
+def clear_caches(kinds: Iterable[CacheKind] | None = None, *, per_map: bool = False) -> None:
+    """Empty every cache of the given ``kinds`` (every kind when ``None``), e.g. to measure the
+    first, cold call of something; with ``per_map`` only those of them marked per-map (what a
+    plan on a new map finds empty while the process-wide caches stay filled)."""
     chosen = frozenset(CacheKind) if kinds is None else frozenset(kinds)
     for cache in _ALL:
-        if cache.kind in chosen:
+        if cache.kind in chosen and (cache.per_map or not per_map):
             cache.clear()

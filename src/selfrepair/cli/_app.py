@@ -142,6 +142,14 @@ def command_group(*, help: str) -> typer.Typer:
     return _Typer(help=help, no_args_is_help=True)
 
 
+def option(flag: str, metavar: str, help: str, **more: Any) -> Any:
+    """The option ``flag METAVAR`` with ``help`` (every option that takes a value names both), for
+    ``name: Annotated[type, option(...)] = default``; ``more`` goes to :func:`typer.Option`
+    (``min``, ``max``, ``show_default``). A parameter typed ``list[...] | None`` makes it
+    repeatable. Flags without a value and options with a short name use :func:`typer.Option`."""
+    return typer.Option(flag, metavar=metavar, help=help, **more)
+
+
 app = _Typer(
     name="selfrepair",
     help="Self-repairing robot plans: replacement tables versus replanning from scratch.",
@@ -206,7 +214,7 @@ def echo_json(data: object) -> None:
 def limit_option(flag: str, help: str, *, least: int = 1) -> Any:
     """The option of one limit of :mod:`selfrepair.limits`: ``flag N``, a whole number of at least
     ``least``, with ``help`` (what is refused past it)."""
-    return typer.Option(flag, metavar="N", min=least, help=help)
+    return option(flag, "N", help, min=least)
 
 
 MaxCells = Annotated[

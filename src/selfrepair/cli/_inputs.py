@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from selfrepair.cli._app import option
 from selfrepair.errors import InputError
 
 if TYPE_CHECKING:
@@ -55,71 +56,48 @@ MazeArg = Annotated[
         show_default=False,
     ),
 ]
-Start = Annotated[
-    str, typer.Option("--start", metavar="X,Y,H", help="Start pose (heading H: N, E, S or W).")
-]
-GoalPose = Annotated[
-    str, typer.Option("--goal", metavar="X,Y[,H]", help="Goal cell, or goal pose X,Y,H.")
-]
+Start = Annotated[str, option("--start", "X,Y,H", "Start pose (heading H: N, E, S or W).")]
+GoalPose = Annotated[str, option("--goal", "X,Y[,H]", "Goal cell, or goal pose X,Y,H.")]
 TableArg = Annotated[
     str, typer.Argument(metavar="TABLE", help="Table file or bundled name (e.g. handwritten).")
 ]
 TraceArg = Annotated[
     Path, typer.Argument(metavar="TRACE", help="A JSON Lines trace written by run --trace.")
 ]
-TraceOut = Annotated[
-    Path | None, typer.Option("--trace", metavar="FILE", help="Write the JSON Lines trace here.")
-]
-Corridor = Annotated[int, typer.Option("--corridor", metavar="N", help="Corridor width in cells.")]
-Braid = Annotated[
-    float,
-    typer.Option("--braid", metavar="P", help="Share of dead ends to open (0 = perfect maze)."),
-]
+TraceOut = Annotated[Path | None, option("--trace", "FILE", "Write the JSON Lines trace here.")]
+Corridor = Annotated[int, option("--corridor", "N", "Corridor width in cells.")]
+Braid = Annotated[float, option("--braid", "P", "Share of dead ends to open (0 = perfect maze).")]
 Faults = Annotated[
     str,
-    typer.Option(
+    option(
         "--faults",
-        metavar="FAULTS",
-        help="The robot's faults, comma-separated (none: ''), e.g. {fault_examples}.",
+        "FAULTS",
+        "The robot's faults, comma-separated (none: ''), e.g. {fault_examples}.",
     ),
 ]
 DomainOpt = Annotated[
-    str,
-    typer.Option(
-        "--domain", metavar="NAME", help="The robot: a registered domain name ({domains})."
-    ),
+    str, option("--domain", "NAME", "The robot: a registered domain name ({domains}).")
 ]
 ClearanceWeight = Annotated[
     str,
-    typer.Option(
+    option(
         "--clearance-weight",
-        metavar="W",
-        help="Exact weight of the wall-clearance cost term, e.g. 1, 1/2 or 0.25.",
+        "W",
+        "Exact weight of the wall-clearance cost term, e.g. 1, 1/2 or 0.25.",
     ),
 ]
 Heuristic = Annotated[
-    str,
-    typer.Option(
-        "--heuristic", metavar="NAME", help="A* heuristic: grid-distance, manhattan or zero."
-    ),
+    str, option("--heuristic", "NAME", "A* heuristic: grid-distance, manhattan or zero.")
 ]
 Backend = Annotated[
     str,
-    typer.Option(
-        "--backend",
-        metavar="NAME",
-        help="Search backend: auto (numba when installed), numba or python.",
-    ),
+    option("--backend", "NAME", "Search backend: auto (numba when installed), numba or python."),
 ]
 Json = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
 MaxExpansions = Annotated[
-    int | None,
-    typer.Option("--max-expansions", metavar="N", help="Node budget of the search (expansions)."),
+    int | None, option("--max-expansions", "N", "Node budget of the search (expansions).")
 ]
-TimeLimit = Annotated[
-    float | None,
-    typer.Option("--time-limit", metavar="SECONDS", help="Time budget of the search."),
-]
+TimeLimit = Annotated[float | None, option("--time-limit", "SECONDS", "Time budget of the search.")]
 
 
 def checkout_root() -> Path | None:

@@ -24,6 +24,7 @@ from selfrepair.cli._app import (
     MaxLookupPatterns,
     MaxTableBytes,
     MaxTableCandidates,
+    option,
 )
 from selfrepair.cli._inputs import (
     Backend,
@@ -55,39 +56,35 @@ if TYPE_CHECKING:
 
 __all__ = ["MissionOptions", "check_choice", "mission_options"]
 
-Goal = Annotated[str, typer.Option("--goal", metavar="X,Y", help="Goal cell.")]
-At = Annotated[
-    int, typer.Option("--at", metavar="N", help="When the faults start (a step or a tick).")
-]
-ClockOpt = Annotated[
-    str, typer.Option("--clock", metavar="step|tick", help="What --at and --transient count.")
-]
+Goal = Annotated[str, option("--goal", "X,Y", "Goal cell.")]
+At = Annotated[int, option("--at", "N", "When the faults start (a step or a tick).")]
+ClockOpt = Annotated[str, option("--clock", "step|tick", "What --at and --transient count.")]
 Detect = Annotated[
     str,
-    typer.Option(
+    option(
         "--detect",
-        metavar="now|on-use|hidden",
-        help="Faults are known when they start (now), when a command fails (on-use), or never "
+        "now|on-use|hidden",
+        "Faults are known when they start (now), when a command fails (on-use), or never "
         "(hidden: the robot moves as its faults make it and diagnoses them from what it observes; "
         "see docs/diagnosis.md).",
     ),
 ]
 FaultBehaviourOpt = Annotated[
     str | None,
-    typer.Option(
+    option(
         "--fault-behaviour",
-        metavar="MODEL",
-        help="Faults hidden: what a forbidden command really does, a model of the robot (the "
+        "MODEL",
+        "Faults hidden: what a forbidden command really does, a model of the robot (the "
         "four-wheel robot: stall, runaway-backward, reverse). Default: the robot's first.",
         show_default=False,
     ),
 ]
 Noise = Annotated[
     float,
-    typer.Option(
+    option(
         "--noise",
-        metavar="P",
-        help="Faults hidden: odometry error rate, the chance that a pose reading names a wrong "
+        "P",
+        "Faults hidden: odometry error rate, the chance that a pose reading names a wrong "
         "cell or heading (0 to below 0.5).",
     ),
 ]
@@ -100,103 +97,90 @@ BumpSwitch = Annotated[
 ]
 ObserversOpt = Annotated[
     int,
-    typer.Option(
+    option(
         "--observers",
-        metavar="N",
-        help=f"Faults hidden: N teammates (0 to {MAX_OBSERVERS}) follow the robot, observer i "
+        "N",
+        f"Faults hidden: N teammates (0 to {MAX_OBSERVERS}) follow the robot, observer i "
         "where it was i commands before, and tell it what they see of each motion in range; "
         "active diagnosis plans its probes counting their readings (docs/diagnosis.md).",
     ),
 ]
 ObserverRange = Annotated[
     int,
-    typer.Option(
+    option(
         "--observer-range",
-        metavar="CELLS",
-        help="Faults hidden: how far an observer sees (Chebyshev cells, 0 to 64).",
+        "CELLS",
+        "Faults hidden: how far an observer sees (Chebyshev cells, 0 to 64).",
     ),
 ]
 ObserverNoise = Annotated[
     float | None,
-    typer.Option(
+    option(
         "--observer-noise",
-        metavar="P",
-        help="Faults hidden: the observers' odometry error rate (0 to below 0.5). Default: "
-        "--noise.",
+        "P",
+        "Faults hidden: the observers' odometry error rate (0 to below 0.5). Default: --noise.",
         show_default=False,
     ),
 ]
 ObserverViewOpt = Annotated[
     str,
-    typer.Option(
+    option(
         "--observer-view",
-        metavar="VIEW",
-        help="Faults hidden: what an observer sees of each motion in range: pose (the robot's "
+        "VIEW",
+        "Faults hidden: what an observer sees of each motion in range: pose (the robot's "
         "pose after it) or wheels (the pose and which wheels turn which way, each wheel misread "
         "at --observer-noise; a robot with actuators, docs/diagnosis.md).",
     ),
 ]
 MaxFaults = Annotated[
-    int,
-    typer.Option(
-        "--max-faults", metavar="K", min=0, help="Diagnosis: hypotheses of up to K faults."
-    ),
+    int, option("--max-faults", "K", "Diagnosis: hypotheses of up to K faults.", min=0)
 ]
 FaultPrior = Annotated[
-    float,
-    typer.Option(
-        "--fault-prior", metavar="Q", help="Diagnosis: prior probability of each fault (0 to 1)."
-    ),
+    float, option("--fault-prior", "Q", "Diagnosis: prior probability of each fault (0 to 1).")
 ]
 Confidence = Annotated[
     float,
-    typer.Option(
+    option(
         "--confidence",
-        metavar="E",
-        help="Diagnosis: a class is isolated, and the classes assumed cover what is possible, "
+        "E",
+        "Diagnosis: a class is isolated, and the classes assumed cover what is possible, "
         "at posterior mass 1 - E.",
     ),
 ]
 Transient = Annotated[
-    int | None,
-    typer.Option("--transient", metavar="N", help="Faults last N steps (or ticks), then heal."),
+    int | None, option("--transient", "N", "Faults last N steps (or ticks), then heal.")
 ]
 Intermittent = Annotated[
     float | None,
-    typer.Option(
-        "--intermittent", metavar="P", help="Faults are active at each step with probability P."
-    ),
+    option("--intermittent", "P", "Faults are active at each step with probability P."),
 ]
 Events = Annotated[
     str,
-    typer.Option(
+    option(
         "--events",
-        metavar="EVENTS",
-        help="World events, ';'-separated: X,Y@T (cell blocked from tick T), X,Y@T..U (blocked "
+        "EVENTS",
+        "World events, ';'-separated: X,Y@T (cell blocked from tick T), X,Y@T..U (blocked "
         "from T, free from U), -X,Y@T (free from T).",
     ),
 ]
 SensingOpt = Annotated[
     str,
-    typer.Option(
+    option(
         "--sensing",
-        metavar="MODE",
-        help="How the robot learns of blocked cells: range (sees cells within --sensing-range) "
+        "MODE",
+        "How the robot learns of blocked cells: range (sees cells within --sensing-range) "
         "or bump (only by bumping).",
     ),
 ]
 SensingRange = Annotated[
-    int,
-    typer.Option(
-        "--sensing-range", metavar="R", min=0, help="Chebyshev cells the robot sees around it."
-    ),
+    int, option("--sensing-range", "R", "Chebyshev cells the robot sees around it.", min=0)
 ]
 TableOpt = Annotated[
     str | None,
-    typer.Option(
+    option(
         "--table",
-        metavar="TABLE",
-        help="Replacement table: bundled name (handwritten, generated-agnostic, "
+        "TABLE",
+        "Replacement table: bundled name (handwritten, generated-agnostic, "
         "generated-indexed, three-action) or a table file. Default: the robot's own (handwritten "
         "for four-wheel, the bundled three-action table), else one generated from the robot "
         "model.",
@@ -204,34 +188,27 @@ TableOpt = Annotated[
     ),
 ]
 Recursion = Annotated[
-    str,
-    typer.Option(
-        "--recursion", metavar="MODE", help="Recursion in replacements: flat, guarded or layered."
-    ),
+    str, option("--recursion", "MODE", "Recursion in replacements: flat, guarded or layered.")
 ]
-MaxDepth = Annotated[
-    int, typer.Option("--max-depth", metavar="N", help="Depth bound of guarded recursion.")
-]
-Window = Annotated[
-    int, typer.Option("--window", metavar="K", help="Lookahead: actions after the faulty one.")
-]
+MaxDepth = Annotated[int, option("--max-depth", "N", "Depth bound of guarded recursion.")]
+Window = Annotated[int, option("--window", "K", "Lookahead: actions after the faulty one.")]
 MaxWait = Annotated[
     int,
-    typer.Option(
+    option(
         "--max-wait",
-        metavar="N",
-        min=0,
-        help="Steps the robot may wait in place, in all, when no plan exists under the faults "
+        "N",
+        "Steps the robot may wait in place, in all, when no plan exists under the faults "
         "it knows (they may clear; detection now only); 0 gives up at once.",
+        min=0,
     ),
 ]
 LpgTimeLimit = Annotated[
     float,
-    typer.Option(
+    option(
         "--lpg-time-limit",
-        metavar="SECONDS",
+        "SECONDS",
+        "lpg-adapt: wall-clock limit of each LPG-adapt call (a time-out falls back to A*).",
         min=0.001,
-        help="lpg-adapt: wall-clock limit of each LPG-adapt call (a time-out falls back to A*).",
     ),
 ]
 Rewrite = Annotated[
@@ -249,9 +226,7 @@ PlanWithFaults = Annotated[
         "--plan-with-faults", help="Make the initial plan knowing the faults sensed at step 0."
     ),
 ]
-Seed = Annotated[
-    int, typer.Option("--seed", metavar="S", help="Seed of intermittent faults.", min=0)
-]
+Seed = Annotated[int, option("--seed", "S", "Seed of intermittent faults.", min=0)]
 WarmUp = Annotated[
     bool,
     typer.Option(

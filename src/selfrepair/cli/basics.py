@@ -9,7 +9,16 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from selfrepair.cli._app import MaxCells, MaxFileBytes, app, echo, echo_json, maze_app, text_table
+from selfrepair.cli._app import (
+    MaxCells,
+    MaxFileBytes,
+    app,
+    echo,
+    echo_json,
+    maze_app,
+    option,
+    text_table,
+)
 from selfrepair.cli._inputs import (
     Braid,
     Corridor,
@@ -39,10 +48,10 @@ def actions(
     ] = False,
     domain_name: Annotated[
         str | None,
-        typer.Option(
+        option(
             "--domain",
-            metavar="NAME",
-            help="The robot: a registered domain name ({domains}); default four-wheel.",
+            "NAME",
+            "The robot: a registered domain name ({domains}); default four-wheel.",
             show_default=False,
         ),
     ] = None,  # not "four-wheel": a value given is coerced by pydantic, which is slow to import
@@ -158,12 +167,10 @@ def maze_show(
         typer.Option("--routes", help="Overlay the routes (bundled ones, or FILE.routes)."),
     ] = False,
     routes_file: Annotated[
-        Path | None,
-        typer.Option("--routes-file", metavar="FILE", help="Overlay the routes of this file."),
+        Path | None, option("--routes-file", "FILE", "Overlay the routes of this file.")
     ] = None,
     route: Annotated[
-        str | None,
-        typer.Option("--route", metavar="NAME", help="Overlay only the route with this name."),
+        str | None, option("--route", "NAME", "Overlay only the route with this name.")
     ] = None,
     max_cells: MaxCells = MAX_CELLS,
     max_file_bytes: MaxFileBytes = MAX_FILE_BYTES,
@@ -204,9 +211,7 @@ def maze_list() -> int:
     return 0
 
 
-_Seed = Annotated[
-    int, typer.Option("--seed", metavar="S", help="Random seed (non-negative integer).")
-]
+_Seed = Annotated[int, option("--seed", "S", "Random seed (non-negative integer).")]
 _Output = Annotated[
     Path | None,
     typer.Option("-o", "--output", metavar="FILE", help="Write the file here (default: print it)."),
@@ -220,17 +225,17 @@ def _check_seed(seed: int) -> None:
 
 @maze_app.command("generate")
 def maze_generate(
-    width: Annotated[int, typer.Option("--width", metavar="N", help="Columns, border included.")],
-    height: Annotated[int, typer.Option("--height", metavar="N", help="Rows, border included.")],
+    width: Annotated[int, option("--width", "N", "Columns, border included.")],
+    height: Annotated[int, option("--height", "N", "Rows, border included.")],
     seed: _Seed,
     corridor: Corridor = 1,
     braid: Braid = 0.0,
     routes: Annotated[
         int | None,
-        typer.Option(
+        option(
             "--routes",
-            metavar="N",
-            help="Also draw N seeded routes and write them next to the maze (FILE.routes).",
+            "N",
+            "Also draw N seeded routes and write them next to the maze (FILE.routes).",
         ),
     ] = None,
     output: _Output = None,

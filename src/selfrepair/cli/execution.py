@@ -24,6 +24,7 @@ from selfrepair.cli._app import (
     echo,
     echo_json,
     number_json,
+    option,
     table_app,
 )
 from selfrepair.cli._inputs import Json, TableArg, TraceArg, TraceOut, domain_named, find_input
@@ -152,10 +153,10 @@ def run(
     *,
     strategy: Annotated[
         str,
-        typer.Option(
+        option(
             "--strategy",
-            metavar="NAME",
-            help="Repair strategy: replan, replacement, lookahead, dstar-lite or lpg-adapt "
+            "NAME",
+            "Repair strategy: replan, replacement, lookahead, dstar-lite or lpg-adapt "
             "(pddl extra).",
         ),
     ] = "replacement",
@@ -221,10 +222,10 @@ def compare(
     *,
     strategies: Annotated[
         str,
-        typer.Option(
+        option(
             "--strategies",
-            metavar="NAMES",
-            help="Comma-separated strategies to run (default: every registered one that can "
+            "NAMES",
+            "Comma-separated strategies to run (default: every registered one that can "
             "run here; those that cannot are listed with the reason).",
             show_default=False,
         ),

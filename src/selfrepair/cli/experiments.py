@@ -15,6 +15,7 @@ from selfrepair.cli._app import (
     MaxTraceBytes,
     app,
     echo,
+    option,
 )
 from selfrepair.cli._inputs import TraceArg
 from selfrepair.cli._printing import (
@@ -88,51 +89,43 @@ def experiment(
         ),
     ],
     db: Annotated[
-        Path | None,
-        typer.Option(
-            "--db", metavar="FILE", help="Results database (default: results/NAME.sqlite)."
-        ),
+        Path | None, option("--db", "FILE", "Results database (default: results/NAME.sqlite).")
     ] = None,
     jobs: Annotated[
         int,
         typer.Option("--jobs", "-j", metavar="N", help="Local worker processes (-1: all cores)."),
     ] = -1,
     backend: Annotated[
-        str, typer.Option("--backend", metavar="NAME", help="Where to run: local, dask or ray.")
+        str, option("--backend", "NAME", "Where to run: local, dask or ray.")
     ] = "local",
     scheduler: Annotated[
         str | None,
-        typer.Option(
-            "--scheduler", metavar="ADDRESS", help="Dask scheduler address (with --backend dask)."
-        ),
+        option("--scheduler", "ADDRESS", "Dask scheduler address (with --backend dask)."),
     ] = None,
     address: Annotated[
         str | None,
-        typer.Option(
+        option(
             "--address",
-            metavar="ADDRESS",
-            help="Ray cluster address (with --backend ray; default: start a local Ray).",
+            "ADDRESS",
+            "Ray cluster address (with --backend ray; default: start a local Ray).",
         ),
     ] = None,
     export_csv: Annotated[
-        Path | None,
-        typer.Option("--export-csv", metavar="FILE", help="Also write every row to a CSV file."),
+        Path | None, option("--export-csv", "FILE", "Also write every row to a CSV file.")
     ] = None,
     export_parquet: Annotated[
         Path | None,
-        typer.Option(
-            "--export-parquet", metavar="FILE", help="Also write a Parquet file (needs pyarrow)."
-        ),
+        option("--export-parquet", "FILE", "Also write a Parquet file (needs pyarrow)."),
     ] = None,
     max_missions: MaxMissions = MAX_MISSIONS,
     max_cells: MaxCells = MAX_CELLS,
     max_file_bytes: MaxFileBytes = MAX_FILE_BYTES,
     repeats: Annotated[
         int | None,
-        typer.Option(
+        option(
             "--repeats",
-            metavar="N",
-            help="Warm timing runs per mission after one cold run (timings are their medians; "
+            "N",
+            "Warm timing runs per mission after one cold run (timings are their medians; "
             "default: the experiment's timing_repeats, else 1).",
             min=1,
             max=1000,
@@ -140,10 +133,10 @@ def experiment(
     ] = None,
     footing: Annotated[
         str,
-        typer.Option(
+        option(
             "--footing",
-            metavar="NAME",
-            help="Mission loop: auto (compiled where it can run, else Python), compiled or "
+            "NAME",
+            "Mission loop: auto (compiled where it can run, else Python), compiled or "
             "python (the reference); rows record the footing that ran.",
         ),
     ] = "auto",
@@ -329,10 +322,10 @@ def report(
     ],
     mission: Annotated[
         str | None,
-        typer.Option(
+        option(
             "--mission",
-            metavar="KEY",
-            help="Key (or key prefix) of the mission to draw (default: a telling one).",
+            "KEY",
+            "Key (or key prefix) of the mission to draw (default: a telling one).",
         ),
     ] = None,
 ) -> int:
@@ -358,16 +351,11 @@ def report(
 def animate(
     trace: TraceArg,
     out: Annotated[Path, typer.Option("--out", "-o", metavar="FILE", help="GIF file to write.")],
-    fps: Annotated[
-        int, typer.Option("--fps", metavar="N", help="Frames per second.", min=1, max=60)
-    ] = 4,
+    fps: Annotated[int, option("--fps", "N", "Frames per second.", min=1, max=60)] = 4,
     max_frames: Annotated[
         int,
-        typer.Option(
-            "--max-frames",
-            metavar="N",
-            help="At most this many frames (long traces are subsampled).",
-            min=1,
+        option(
+            "--max-frames", "N", "At most this many frames (long traces are subsampled).", min=1
         ),
     ] = 120,
     max_trace_bytes: MaxTraceBytes = MAX_TRACE_BYTES,

@@ -9,9 +9,7 @@ the command says what to install (exit code 2).
 import math
 from typing import TYPE_CHECKING, Annotated
 
-import typer
-
-from selfrepair.cli._app import app, echo, echo_json, limit_option
+from selfrepair.cli._app import app, echo, echo_json, limit_option, option
 from selfrepair.cli._inputs import Braid, Corridor, DomainOpt, Json
 from selfrepair.cli._mission import Recursion
 from selfrepair.errors import InputError
@@ -31,69 +29,47 @@ PAPER_FAULTS = "paper"
 @app.command("gym-eval")
 def gym_eval(
     policy: Annotated[
-        str, typer.Option("--policy", metavar="NAME", help="replacement, replan or random.")
+        str, option("--policy", "NAME", "replacement, replan or random.")
     ] = "replacement",
-    episodes: Annotated[
-        int, typer.Option("--episodes", metavar="N", min=1, help="Episodes to run.")
-    ] = 100,
-    seed: Annotated[
-        int, typer.Option("--seed", metavar="S", min=0, help="Seed of the episode seeds.")
-    ] = 0,
+    episodes: Annotated[int, option("--episodes", "N", "Episodes to run.", min=1)] = 100,
+    seed: Annotated[int, option("--seed", "S", "Seed of the episode seeds.", min=0)] = 0,
     domain: DomainOpt = "four-wheel",
     maze: Annotated[
         list[str] | None,
-        typer.Option(
-            "--maze", metavar="MAZE", help="bundled, a bundled name or a maze file (repeatable)."
-        ),
+        option("--maze", "MAZE", "bundled, a bundled name or a maze file (repeatable)."),
     ] = None,
     generate: Annotated[
         list[str] | None,
-        typer.Option(
-            "--generate",
-            metavar="WxH",
-            help="A fresh WIDTHxHEIGHT maze per episode (repeatable).",
-        ),
+        option("--generate", "WxH", "A fresh WIDTHxHEIGHT maze per episode (repeatable)."),
     ] = None,
     corridor: Corridor = 1,
     braid: Braid = 0.0,
-    routes: Annotated[
-        str, typer.Option("--routes", metavar="KIND", help="bundled or random.")
-    ] = "bundled",
+    routes: Annotated[str, option("--routes", "KIND", "bundled or random.")] = "bundled",
     faults: Annotated[
         list[str] | None,
-        typer.Option(
+        option(
             "--faults",
-            metavar="FAULTS",
-            help="A fault set, e.g. FL:F,RL:F (repeatable), or 'paper'; default: every single "
+            "FAULTS",
+            "A fault set, e.g. FL:F,RL:F (repeatable), or 'paper'; default: every single "
             "and double fault.",
         ),
     ] = None,
     persistence: Annotated[
         list[str] | None,
-        typer.Option(
-            "--persistence",
-            metavar="KIND",
-            help="permanent, transient or intermittent (repeatable).",
-        ),
+        option("--persistence", "KIND", "permanent, transient or intermittent (repeatable)."),
     ] = None,
     detection: Annotated[
-        list[str] | None,
-        typer.Option("--detection", metavar="KIND", help="now or on-use (repeatable)."),
+        list[str] | None, option("--detection", "KIND", "now or on-use (repeatable).")
     ] = None,
     at_max: Annotated[
-        int,
-        typer.Option("--at-max", metavar="N", min=0, help="Faults start at a step from 0 to this."),
+        int, option("--at-max", "N", "Faults start at a step from 0 to this.", min=0)
     ] = 0,
     table: Annotated[
-        str | None,
-        typer.Option(
-            "--table", metavar="TABLE", help="Table file or bundled name (default: per domain)."
-        ),
+        str | None, option("--table", "TABLE", "Table file or bundled name (default: per domain).")
     ] = None,
     recursion: Recursion = "flat",
     max_steps: Annotated[
-        int | None,
-        typer.Option("--max-steps", metavar="N", min=1, help="Steps per episode (default 4*w*h)."),
+        int | None, option("--max-steps", "N", "Steps per episode (default 4*w*h).", min=1)
     ] = None,
     max_episodes: Annotated[
         int, limit_option("--max-episodes", "Refuse more episodes than this.")

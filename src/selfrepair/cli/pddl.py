@@ -12,7 +12,7 @@ from typing import Annotated
 
 import typer
 
-from selfrepair.cli._app import app, echo, limit_option
+from selfrepair.cli._app import app, echo, limit_option, option
 from selfrepair.cli._inputs import (
     DomainOpt,
     Faults,
@@ -42,10 +42,7 @@ def pddl_command(
     ],
     faults: Faults = "",
     name: Annotated[
-        str,
-        typer.Option(
-            "--name", metavar="NAME", help="PDDL problem name (default: the maze's name)."
-        ),
+        str, option("--name", "NAME", "PDDL problem name (default: the maze's name).")
     ] = "",
     max_cells: Annotated[
         int,

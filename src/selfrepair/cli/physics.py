@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from selfrepair.cli._app import app, command_group, echo, echo_json, number_json
+from selfrepair.cli._app import app, command_group, echo, echo_json, number_json, option
 from selfrepair.cli._inputs import Json, TraceOut
 from selfrepair.cli._mission import MissionOptions, mission_options
 from selfrepair.cli._spec import mission_spec
@@ -52,8 +52,7 @@ def physics_fidelity(
         bool, typer.Option("--nominal", help="Only the fault-free robot's 81 rows.")
     ] = False,
     write_domain: Annotated[
-        Path | None,
-        typer.Option("--write-domain", metavar="FILE", help="Write the identified domain here."),
+        Path | None, option("--write-domain", "FILE", "Write the identified domain here.")
     ] = None,
     in_sequence: Annotated[
         bool,
@@ -195,14 +194,12 @@ def fidelity_markdown(report: "FidelityReport") -> str:
 def physics_run(
     *,
     strategy: Annotated[
-        str,
-        typer.Option("--strategy", metavar="NAME", help="Repair strategy (as for run)."),
+        str, option("--strategy", "NAME", "Repair strategy (as for run).")
     ] = "replacement",
     mission: MissionOptions,
     open_loop: OpenLoop = False,
     video: Annotated[
-        Path | None,
-        typer.Option("--video", metavar="FILE", help="Render the mission to a .gif or .mp4."),
+        Path | None, option("--video", "FILE", "Render the mission to a .gif or .mp4.")
     ] = None,
     trace: TraceOut = None,
     as_json: Json = False,
@@ -257,32 +254,28 @@ def outcome_json(done: "PhysicsMission") -> JSONObject:
 def physics_experiment(
     mazes: Annotated[
         list[str] | None,
-        typer.Option(
-            "--maze", metavar="NAME", help="A bundled maze (repeat it; default: the short two)."
-        ),
+        option("--maze", "NAME", "A bundled maze (repeat it; default: the short two)."),
     ] = None,
     strategies: Annotated[
         list[str] | None,
-        typer.Option(
+        option(
             "--strategy",
-            metavar="NAME",
-            help="replan, replacement, rewriting or lookahead (repeat it; default: all four).",
+            "NAME",
+            "replan, replacement, rewriting or lookahead (repeat it; default: all four).",
         ),
     ] = None,
     open_loop: OpenLoop = False,
     robot: Annotated[
         str,
-        typer.Option(
+        option(
             "--robot",
-            metavar="MODEL",
-            help="four-wheel (the lattice's 81 actions, hand-written table) or "
+            "MODEL",
+            "four-wheel (the lattice's 81 actions, hand-written table) or "
             "four-wheel-confirmed (only the actions physics confirms, a generated table) or "
             "four-wheel-in-sequence (only those that also hold in sequence, a generated table).",
         ),
     ] = "four-wheel",
-    workers: Annotated[
-        int, typer.Option("--workers", metavar="N", min=1, help="Processes to run missions in.")
-    ] = 1,
+    workers: Annotated[int, option("--workers", "N", "Processes to run missions in.", min=1)] = 1,
     as_json: Json = False,
 ) -> int:
     """The paper's missions (bundled mazes, routes, 12 fault sets) on the lattice and in MuJoCo.

@@ -22,6 +22,7 @@ from selfrepair.cli._app import (
     echo_json,
     exact_json,
     number_json,
+    option,
 )
 from selfrepair.cli._inputs import (
     Backend,
@@ -175,10 +176,7 @@ def plan_command(
     faults: Faults = "",
     clearance_weight: ClearanceWeight = "0",
     clearance_radius: Annotated[
-        int,
-        typer.Option(
-            "--clearance-radius", metavar="N", help="Clearance below which cells cost extra."
-        ),
+        int, option("--clearance-radius", "N", "Clearance below which cells cost extra.")
     ] = 2,
     heuristic: Heuristic = "grid-distance",
     max_expansions: MaxExpansions = None,
@@ -189,10 +187,10 @@ def plan_command(
     max_cells: MaxCells = MAX_CELLS,
     tolerance_k: Annotated[
         int | None,
-        typer.Option(
+        option(
             "--tolerance",
-            metavar="K",
-            help="Also show, per step, the sets of 1 to K faults the plan does not survive by "
+            "K",
+            "Also show, per step, the sets of 1 to K faults the plan does not survive by "
             "replacement (see `selfrepair tolerance`).",
         ),
     ] = None,
@@ -264,14 +262,14 @@ def _print_plan(problem: "PlanningProblem", result: "PlanResult", load_ns: int) 
 @app.command("path")
 def path_command(
     maze_spec: MazeArg,
-    source: Annotated[str, typer.Option("--from", metavar="X,Y", help="Start cell.")],
-    target: Annotated[str, typer.Option("--to", metavar="X,Y", help="Goal cell.")],
+    source: Annotated[str, option("--from", "X,Y", "Start cell.")],
+    target: Annotated[str, option("--to", "X,Y", "Goal cell.")],
     connectivity: Annotated[
         int,
-        typer.Option(
+        option(
             "--connectivity",
-            metavar="4|8",
-            help="4 or 8 neighbours (8: diagonals cost sqrt 2, no corner cutting).",
+            "4|8",
+            "4 or 8 neighbours (8: diagonals cost sqrt 2, no corner cutting).",
         ),
     ] = 8,
     picture: Annotated[
@@ -347,12 +345,9 @@ def check_scen_command(
         ),
     ],
     sample: Annotated[
-        int | None,
-        typer.Option("--sample", metavar="N", min=1, help="Check N lines spread evenly."),
+        int | None, option("--sample", "N", "Check N lines spread evenly.", min=1)
     ] = None,
-    seed: Annotated[
-        int, typer.Option("--seed", metavar="S", min=0, help="Offset of the evenly spread sample.")
-    ] = 0,
+    seed: Annotated[int, option("--seed", "S", "Offset of the evenly spread sample.", min=0)] = 0,
     backend: Backend = "auto",
     as_json: Json = False,
     max_cells: MaxCells = MAX_CELLS,

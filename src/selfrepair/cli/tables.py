@@ -16,6 +16,7 @@ from selfrepair.cli._app import (
     console,
     echo,
     echo_json,
+    option,
     table_app,
 )
 from selfrepair.cli._inputs import DomainOpt, Json, TableArg, domain_named, find_input
@@ -41,8 +42,7 @@ def _choice(value: str, allowed: Iterable[str], option: str) -> str:
 
 
 _FaultScope = Annotated[
-    str,
-    typer.Option("--faults", metavar="SCOPE", help="Fault sets: all, singles, doubles or none."),
+    str, option("--faults", "SCOPE", "Fault sets: all, singles, doubles or none.")
 ]
 
 
@@ -52,30 +52,17 @@ def table_generate(
         Path, typer.Option("-o", "--output", metavar="FILE", help="Where to write the table.")
     ],
     domain: DomainOpt = "four-wheel",
-    max_length: Annotated[
-        int, typer.Option("--max-length", metavar="N", help="Longest candidate, in actions.")
-    ] = 5,
-    per_action: Annotated[
-        int, typer.Option("--per-action", metavar="K", help="Candidates per entry.")
-    ] = 5,
+    max_length: Annotated[int, option("--max-length", "N", "Longest candidate, in actions.")] = 5,
+    per_action: Annotated[int, option("--per-action", "K", "Candidates per entry.")] = 5,
     faults: _FaultScope = "all",
     objective: Annotated[
-        str,
-        typer.Option("--objective", metavar="NAME", help="Cost: duration (ticks) or length."),
+        str, option("--objective", "NAME", "Cost: duration (ticks) or length.")
     ] = "duration",
     shape: Annotated[
-        str,
-        typer.Option(
-            "--shape", metavar="NAME", help="Table shape: fault-agnostic or fault-indexed."
-        ),
+        str, option("--shape", "NAME", "Table shape: fault-agnostic or fault-indexed.")
     ] = "fault-agnostic",
     priority: Annotated[
-        str,
-        typer.Option(
-            "--priority",
-            metavar="NAME",
-            help="Fault-agnostic tie-break after coverage: cost or walls.",
-        ),
+        str, option("--priority", "NAME", "Fault-agnostic tie-break after coverage: cost or walls.")
     ] = "cost",
 ) -> int:
     """Generate a replacement table as JSON.
@@ -125,19 +112,17 @@ def table_coverage(
     faults: _FaultScope = "all",
     objective: Annotated[
         str | None,
-        typer.Option(
+        option(
             "--objective",
-            metavar="NAME",
-            help="Cost for optimality: duration or length (default: the table's own).",
+            "NAME",
+            "Cost for optimality: duration or length (default: the table's own).",
         ),
     ] = None,
     recursion: Recursion = "flat",
     maze: Annotated[
         list[str] | None,
-        typer.Option(
-            "--maze",
-            metavar="MAZE",
-            help="Maze for wall coverage (repeatable; default: every bundled maze).",
+        option(
+            "--maze", "MAZE", "Maze for wall coverage (repeatable; default: every bundled maze)."
         ),
     ] = None,
     no_walls: Annotated[bool, typer.Option("--no-walls", help="Skip wall coverage.")] = False,
@@ -145,8 +130,7 @@ def table_coverage(
         bool, typer.Option("--per-fault", help="Also print one row per fault set.")
     ] = False,
     json_out: Annotated[
-        Path | None,
-        typer.Option("--json-out", metavar="FILE", help="Write the full report as JSON."),
+        Path | None, option("--json-out", "FILE", "Write the full report as JSON.")
     ] = None,
     as_json: Json = False,
     max_cells: MaxCells = MAX_CELLS,

@@ -23,6 +23,7 @@ from selfrepair.cli._app import (
     console,
     echo,
     echo_json,
+    option,
 )
 from selfrepair.cli._inputs import Backend, Json, TraceOut, find_input
 from selfrepair.cli._mission import Events, SensingOpt, check_choice
@@ -58,10 +59,10 @@ def _out() -> Any:
 
 RobotTable = Annotated[
     str | None,
-    typer.Option(
+    option(
         "--robot-table",
-        metavar="TABLE",
-        help="The robots' own table for their wheel faults: a bundled name or FILE.json "
+        "TABLE",
+        "The robots' own table for their wheel faults: a bundled name or FILE.json "
         "(default: the scenario's 'table', else the robot's default, generated for a robot "
         "without a bundled one).",
     ),
@@ -70,11 +71,11 @@ RobotTable = Annotated[
 
 TeamSensingRange = Annotated[
     int | None,
-    typer.Option(
+    option(
         "--sensing-range",
-        metavar="R",
+        "R",
+        "Chebyshev cells each robot sees around it (default: the scenario's).",
         min=0,
-        help="Chebyshev cells each robot sees around it (default: the scenario's).",
     ),
 ]
 
@@ -126,31 +127,24 @@ def _options(
 @team_app.command("run")
 def team_run(
     scenario: ScenarioArg,
-    strategy: Annotated[
-        str, typer.Option("--strategy", metavar="NAME", help=_STRATEGY_HELP)
-    ] = "team-replacement",
+    strategy: Annotated[str, option("--strategy", "NAME", _STRATEGY_HELP)] = "team-replacement",
     table: Annotated[
-        str,
-        typer.Option("--table", metavar="TABLE", help="Team table: handwritten or generated."),
+        str, option("--table", "TABLE", "Team table: handwritten or generated.")
     ] = "handwritten",
     robot_table: RobotTable = None,
     trace: TraceOut = None,
     as_json: Json = False,
     max_ticks: Annotated[
         int | None,
-        typer.Option(
-            "--max-ticks",
-            metavar="N",
-            help="End the mission after this many ticks (default: generous).",
-        ),
+        option("--max-ticks", "N", "End the mission after this many ticks (default: generous)."),
     ] = None,
     backend: Backend = "auto",
     detect: Annotated[
         str | None,
-        typer.Option(
+        option(
             "--detect",
-            metavar="MODE",
-            help="How robots learn their wheel faults: now or on-use (default: the scenario's).",
+            "MODE",
+            "How robots learn their wheel faults: now or on-use (default: the scenario's).",
         ),
     ] = None,
     events: Events = "",
@@ -236,14 +230,7 @@ def _print_result(result: "TeamResult", baseline: Any) -> None:
 def team_compare(
     scenario: ScenarioArg,
     repeats: Annotated[
-        int,
-        typer.Option(
-            "--repeats",
-            metavar="N",
-            help="Runs per strategy; latencies are medians.",
-            min=1,
-            max=1000,
-        ),
+        int, option("--repeats", "N", "Runs per strategy; latencies are medians.", min=1, max=1000)
     ] = 5,
     backend: Backend = "auto",
     robot_table: RobotTable = None,
@@ -367,11 +354,7 @@ def team_frame(
     out: Annotated[Path, typer.Option("--out", "-o", metavar="FILE", help="PNG file to write.")],
     tick: Annotated[
         float | None,
-        typer.Option(
-            "--tick",
-            metavar="T",
-            help="The moment to draw, in ticks (default: the first repair).",
-        ),
+        option("--tick", "T", "The moment to draw, in ticks (default: the first repair)."),
     ] = None,
     max_trace_bytes: MaxTraceBytes = MAX_TRACE_BYTES,
 ) -> int:

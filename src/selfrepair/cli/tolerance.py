@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
-from selfrepair.cli._app import MaxCells, app, echo, echo_json, exact_json, number_json
+from selfrepair.cli._app import MaxCells, app, echo, echo_json, exact_json, number_json, option
 from selfrepair.cli._inputs import (
     Backend,
     ClearanceWeight,
@@ -39,16 +39,13 @@ __all__ = [
     "tolerance_json",
 ]
 
-K = Annotated[
-    int,
-    typer.Option("--k", metavar="K", min=1, max=3, help="Fault model: every set of 1 to K faults."),
-]
+K = Annotated[int, option("--k", "K", "Fault model: every set of 1 to K faults.", min=1, max=3)]
 FaultSets = Annotated[
     list[str] | None,
-    typer.Option(
+    option(
         "--fault-set",
-        metavar="FAULTS",
-        help="A fault set of the model, e.g. FL:F,RR:B (repeat it; replaces --k).",
+        "FAULTS",
+        "A fault set of the model, e.g. FL:F,RR:B (repeat it; replaces --k).",
     ),
 ]
 

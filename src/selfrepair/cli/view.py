@@ -13,7 +13,7 @@ from typing import Annotated
 
 import typer
 
-from selfrepair.cli._app import MaxTraceBytes, app, echo, limit_option
+from selfrepair.cli._app import MaxTraceBytes, app, echo, limit_option, option
 from selfrepair.errors import InputError
 from selfrepair.limits import MAX_TRACE_BYTES
 
@@ -43,9 +43,7 @@ def view(
     out: Annotated[Path, typer.Option("--out", "-o", metavar="FILE", help="HTML file to write.")],
     key: Annotated[
         str | None,
-        typer.Option(
-            "--key", metavar="KEY", help="Key (or unique key prefix) of a mission in the database."
-        ),
+        option("--key", "KEY", "Key (or unique key prefix) of a mission in the database."),
     ] = None,
     max_steps: Annotated[
         int, limit_option("--max-steps", "Refuse missions with more steps.")
@@ -53,13 +51,13 @@ def view(
     max_trace_bytes: MaxTraceBytes = MAX_TRACE_BYTES,
     tolerance: Annotated[
         int,
-        typer.Option(
+        option(
             "--tolerance",
-            metavar="K",
+            "K",
+            "Heat strip of the initial plan's tolerance of every set of 1 to K faults "
+            "(replacement missions; 0: none).",
             min=0,
             max=3,
-            help="Heat strip of the initial plan's tolerance of every set of 1 to K faults "
-            "(replacement missions; 0: none).",
         ),
     ] = 1,
 ) -> int:

@@ -56,7 +56,14 @@ import numpy as np
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import Detection
-from selfrepair.execution.result import MissionResult, MissionSpec, MissionStatus, MissionTally
+from selfrepair.execution.result import (
+    MissionResult,
+    MissionSpec,
+    MissionStatus,
+    MissionTally,
+    StepSource,
+    TraceStep,
+)
 from selfrepair.execution.simulator import Outcome, Simulator
 from selfrepair.execution.stepper import Stepper
 from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
@@ -78,6 +85,7 @@ from selfrepair.repair.tolerance_masks import tolerance_term
 from selfrepair.search.astar import PlanResult, PlanStatus
 from selfrepair.search.backend import use_numba
 from selfrepair.search.lattice import action_cost, cost_scale, plan, planning_actions
+from selfrepair.search.openmoves import open_moves
 from selfrepair.search.problem import PlanningProblem
 from selfrepair.search.term import StepTerm
 from selfrepair.status import mission_status
@@ -203,6 +211,10 @@ class _Tally:
     """Per executed step, its (start state, action) as one integer (for the plan distance)."""
     executed_units: int = 0
     penalty: int = 0
+    trace: Sequence[TraceStep] | None = None
+    """The compiled loop's trace (``None``: the stepper's steps are the trace)."""
+    waits: int = 0
+    """The compiled loop's wait steps (counted from the trace's rows)."""
 
 
 def run_mission(
@@ -278,8 +290,9 @@ def _run_loop(
             spec, sim, stepper, tally.moved, lambda f: _why(f, spec, sim, stepper), penalty
         )
         if ended is not None:
-            status, reason, tally.executed_units, tally.penalty = ended
-            return status, reason, "compiled"
+            tally.executed_units, tally.penalty = ended.units, ended.penalty
+            tally.trace, tally.waits = ended.trace, ended.waits
+            return ended.status, ended.reason, "compiled"
     status, reason = _loop(spec, sim, stepper, tally)
     return status, reason, "python"
 
@@ -288,15 +301,16 @@ NO_PLAN = MissionStatus.NO_INITIAL_PLAN
 
 
 def _prepare(spec: MissionSpec, table: SomeTable | None) -> None:
-    """Check the table's robot and load the compiled planner before anything is timed (the
-    table's geometry and the maze's free grid are made by :func:`mission_context`, also before),
-    so the first planning time and the first repair latency of a process are not inflated by
-    one-off costs."""
+    """Check the table's robot, derive the robot's open-plane moves and load the compiled planner
+    before anything is timed (the table's geometry and the maze's free grid are made by
+    :func:`mission_context`, also before), so the first planning time and the first repair
+    latency of a process are not inflated by one-off costs."""
     if table is not None and table.domain is not spec.domain:
         raise ProblemError(
             f"table {spec.options.table_label!r} is for the {table.domain.name!r} domain; "
             f"this mission's robot is {spec.domain.name!r}"
         )
+    open_moves(spec.domain)  # the domain's alone (kind prefilled: a cold run keeps it)
     if use_numba(spec.backend, spec.domain):
         from selfrepair.search.warmup import ensure_warm
 
@@ -397,7 +411,7 @@ def _penalty_buffer(grid: FreeGrid, maze: Maze, radius: int) -> Sequence[int]:
 
 
 _PENALTIES: BoundedCache[tuple[Maze, int, int], Sequence[int]] = BoundedCache(
-    "clearance penalties in free-grid layout", 8, kind=CacheKind.PLAN
+    "clearance penalties in free-grid layout", 8, kind=CacheKind.PLAN, per_map=True
 )
 
 
@@ -421,6 +435,13 @@ def _result(
     footing: str = "python",
 ) -> MissionResult:
     removed, added, motion_removed, motion_added = _plan_distances(spec, sim, tally, initial)
+    steps: Sequence[TraceStep]
+    if tally.trace is None:
+        steps = tuple(stepper.steps)
+        waits = sum(1 for s in steps if s.source is StepSource.WAIT)
+        bumps = sum(1 for s in steps if s.source is StepSource.BUMPED)
+    else:  # the compiled loop's: no step made (the kernel never bumps)
+        steps, waits, bumps = tally.trace, tally.waits, 0
     sums = MissionTally(
         len(tally.moved),
         tally.executed_units,
@@ -430,12 +451,14 @@ def _result(
         added,
         motion_removed,
         motion_added,
+        waits,
+        bumps,
     )
     return MissionResult(
         spec,
         status,
         reason,
-        tuple(stepper.steps),
+        steps,
         tuple(stepper.repairs),
         initial,
         planning_ns,

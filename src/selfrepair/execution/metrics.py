@@ -91,7 +91,7 @@ def motion_distance(
 
 
 _OPTIMUM: BoundedCache[tuple[Hashable, ...], Fraction | None] = BoundedCache(
-    "fault-free optimum ticks", 1024, kind=CacheKind.REFERENCE
+    "fault-free optimum ticks", 1024, kind=CacheKind.REFERENCE, per_map=True
 )
 
 
@@ -349,10 +349,10 @@ def mission_row(result: MissionResult, *, optimum: Fraction | None = None) -> Ro
         "repair_attempts": json.dumps(
             dict(sorted(Counter(a for r in repairs for a in r.repair.attempts).items()))
         ),
-        "waits": sum(1 for s in result.steps if s.source is StepSource.WAIT),
+        "waits": tally.waits if tally is not None else _count(result, StepSource.WAIT),
         "world_events": len(spec.world.events),
         "detours": totals.detours,
-        "bumps": sum(1 for s in result.steps if s.source is StepSource.BUMPED),
+        "bumps": tally.bumps if tally is not None else _count(result, StepSource.BUMPED),
         **_diagnosis_columns(result),
     }
     return row
@@ -439,6 +439,11 @@ ROW_COLUMNS: tuple[str, ...] = (
     "classes_left",
 )
 """The row's columns, in order. Stable: the experiments' SQLite schema is built from it."""
+
+
+def _count(result: MissionResult, source: StepSource) -> int:
+    """The steps of ``source`` in a result without a tally."""
+    return sum(1 for s in result.steps if s.source is source)
 
 
 def _diagnosis_columns(result: MissionResult) -> Row:

@@ -8,7 +8,7 @@ the others.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import StrEnum
 from fractions import Fraction
@@ -18,6 +18,7 @@ from selfrepair.diagnosis.cooperative import Observer
 from selfrepair.diagnosis.observation import Observation, ObservationModel
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import FaultSchedule
+from selfrepair.execution.simulator import Outcome
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.repair.strategies import Repair, RepairSource, StrategyName, StrategyOptions
 from selfrepair.repair.tolerance import PlanObjective
@@ -30,6 +31,7 @@ from selfrepair.world.events import WorldSchedule
 from selfrepair.world.maze import Maze
 
 __all__ = [
+    "STEP_OF_OUTCOME",
     "STEP_OF_REPAIR",
     "MissionResult",
     "MissionSpec",
@@ -55,9 +57,9 @@ class StepSource(StrEnum):
     PLAN_REPAIR = RepairSource.PLAN_REPAIR.value
     DETOUR = RepairSource.DETOUR.value
     PROBE = RepairSource.PROBE.value
-    FAILED_ATTEMPT = "failed-attempt"
+    FAILED_ATTEMPT = Outcome.FAILED_ATTEMPT.value
     WAIT = "wait"
-    BUMPED = "bumped"
+    BUMPED = Outcome.BUMPED.value
 
 
 STEP_OF_REPAIR: Mapping[RepairSource, StepSource] = {
@@ -71,6 +73,13 @@ STEP_OF_REPAIR: Mapping[RepairSource, StepSource] = {
 """The step source of the actions a repair spliced in, by the repair's source: an explicit
 mapping, never a conversion by value (a plain dictionary, typed read-only: one look-up inside the
 timed repair)."""
+
+STEP_OF_OUTCOME: Mapping[Outcome, StepSource] = {
+    Outcome.FAILED_ATTEMPT: StepSource.FAILED_ATTEMPT,
+    Outcome.BUMPED: StepSource.BUMPED,
+}
+"""The step source of a command that did not move as commanded, by what the simulator says it
+did (the other outcomes keep the source of the queued action, or record nothing)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -190,7 +199,8 @@ class MissionTally(NamedTuple):
     ``max(0, radius - clearance)`` per cell, counted only when the clearance weight is not zero,
     else 0); ``plan_removed``/``plan_added``: the plan distance between the initial plan and
     the executed one, ``motion_removed``/``motion_added`` the same by motion class (see
-    :mod:`selfrepair.execution.metrics`).
+    :mod:`selfrepair.execution.metrics`); ``waits``/``bumps``: the steps of source ``wait`` and
+    ``bumped``.
     :func:`selfrepair.execution.metrics.mission_row` falls back to recomputing these from the
     steps when a result has no tally; tests check both agree.
     """
@@ -203,6 +213,8 @@ class MissionTally(NamedTuple):
     plan_added: int
     motion_removed: int
     motion_added: int
+    waits: int
+    bumps: int
 
 
 @dataclass(frozen=True, slots=True)
@@ -210,12 +222,14 @@ class MissionResult:
     """The outcome of one mission; :func:`selfrepair.execution.metrics.mission_row` flattens it
     (columns in docs/replacement.md). ``tally`` holds sums the executor kept on the way
     (``None`` for a result made otherwise); ``footing`` the mission loop that ran it,
-    ``compiled`` or ``python`` (see :attr:`MissionSpec.footing`)."""
+    ``compiled`` or ``python`` (see :attr:`MissionSpec.footing`). ``steps`` is a tuple, or for
+    a compiled mission an :class:`~selfrepair.execution.compiled.trace.ArrayTrace` (the same
+    steps, made from the kernel's rows when read)."""
 
     spec: MissionSpec
     status: MissionStatus
     reason: str
-    steps: tuple[TraceStep, ...]
+    steps: Sequence[TraceStep]
     repairs: tuple[RepairRecord, ...]
     initial_plan: PlanResult
     initial_planning_ns: int

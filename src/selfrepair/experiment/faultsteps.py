@@ -33,7 +33,7 @@ def optimum_steps(maze: Maze, route: Route, domain: SomeDomain) -> int:
 
 
 _STEPS: BoundedCache[tuple[Maze, Route, SomeDomain], int] = BoundedCache(
-    "optimal plan steps per route", 256, kind=CacheKind.REFERENCE
+    "optimal plan steps per route", 256, kind=CacheKind.REFERENCE, per_map=True
 )
 
 

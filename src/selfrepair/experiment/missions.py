@@ -24,7 +24,7 @@ from selfrepair.diagnosis import (
     DEFAULT_MAX_FAULTS,
     ObservationModel,
 )
-from selfrepair.diagnosis.cooperative import Observer, observer_team
+from selfrepair.diagnosis.cooperative import Observer, ObserverView, observer_team
 from selfrepair.errors import ConfigError
 from selfrepair.execution.faults import Detection, FaultEvent, FaultSchedule, canonical_order
 from selfrepair.execution.result import MissionSpec
@@ -214,6 +214,8 @@ def expand(
                     if config.faults.observer_noise is None
                     else config.faults.observer_noise,
                 }
+                if config.faults.observer_view is not ObserverView.POSE:  # older keys: pose
+                    situation["observers"]["view"] = config.faults.observer_view.value
         if domain is not FOUR_WHEEL:  # absent for the four-wheel robot, so older keys stay valid
             situation["domain"] = domain.name
         if plugins:
@@ -346,10 +348,14 @@ def _fault_step(
 
 def _observers(settings: dict[str, Any] | None) -> tuple[Observer, ...]:
     """The observing teammates of a mission's ``observers`` setting (none when absent), named
-    ``t1``, ``t2``, ... as in :mod:`selfrepair.diagnosis.cooperative`."""
+    ``t1``, ``t2``, ... as in :mod:`selfrepair.diagnosis.cooperative`, with the setting's
+    ``view`` (absent: ``pose``)."""
     if not settings:
         return ()
-    return observer_team(int(settings["count"]), float(settings["noise"]), int(settings["range"]))
+    view = ObserverView(settings.get("view", ObserverView.POSE.value))
+    return observer_team(
+        int(settings["count"]), float(settings["noise"]), int(settings["range"]), view
+    )
 
 
 def to_spec(mission: Mission) -> MissionSpec:

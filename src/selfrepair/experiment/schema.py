@@ -16,6 +16,7 @@ from typing import Annotated, Literal, TypeVar
 
 from pydantic import Field, ValidationInfo, field_validator, model_validator
 
+from selfrepair.diagnosis.cooperative import ObserverView
 from selfrepair.errors import InputError
 from selfrepair.execution.faults import Clock, Detection, Persistence
 from selfrepair.experiment.schema_physics import PhysicsConfig
@@ -166,6 +167,21 @@ class FaultsConfig(Frozen):
     """The observers' sensing range in cells (Chebyshev)."""
     observer_noise: Annotated[Float, Field(ge=0.0, lt=0.5)] | None = None
     """The observers' odometry error rate (absent: the mission's own ``noise`` rate)."""
+    observer_view: ObserverView = ObserverView.POSE
+    """What the observers see of each motion in range: ``pose`` (the robot's pose after the
+    command) or ``wheels`` (the pose and the robot's actuators; a robot that declares
+    actuators). See :class:`~selfrepair.diagnosis.cooperative.ObserverView`."""
+
+    @field_validator("observer_view")
+    @classmethod
+    def _observer_view(cls, value: ObserverView, info: ValidationInfo) -> ObserverView:
+        domain = _domain(info)
+        if value is ObserverView.WHEELS and domain.actuators is None:
+            raise ValueError(
+                f"observer_view = \"wheels\" needs a robot that declares actuators; "
+                f"{domain.name} does not (expected \"pose\")"
+            )
+        return value
 
     @field_validator("behaviour")
     @classmethod
@@ -187,6 +203,11 @@ class FaultsConfig(Frozen):
         if not hidden and (self.behaviour is not None or self.noise != (0.0,) or watched):
             raise ValueError(
                 'behaviour, noise and observers need detection = ["hidden"] (or a list with it)'
+            )
+        if self.observer_view is not ObserverView.POSE and not any(self.observers):
+            raise ValueError(
+                "observer_view needs observers: expected observers with a number above 0, "
+                f"got {list(self.observers)}"
             )
         if len(set(self.observers)) != len(self.observers):
             raise ValueError(f"expected distinct numbers of observers, got {list(self.observers)}")

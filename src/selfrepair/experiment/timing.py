@@ -45,7 +45,7 @@ COLD_CLEARS = frozenset({CacheKind.PLAN, CacheKind.REPAIR, CacheKind.RECORD})
 a fresh process would have to compute. Kept: parsed inputs (tables, mazes) and the reference
 optimum, filled before any clock starts; the simulator's move tables, which no plan or repair
 reads; and what every mission prefills before its clocks start (a table's reach, its candidates'
-geometry). Clearing those would only slow the sweep down."""
+geometry, the robot's open-plane moves). Clearing those would only slow the sweep down."""
 
 
 def execute_mission(

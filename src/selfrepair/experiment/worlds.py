@@ -42,7 +42,7 @@ def route_plan(
 
 
 _PLANS: BoundedCache[tuple[Maze, Pose, Cell, SomeDomain], tuple[tuple[Cell, ...], float]] = (
-    BoundedCache("route plans for world events", 256, kind=CacheKind.REFERENCE)
+    BoundedCache("route plans for world events", 256, kind=CacheKind.REFERENCE, per_map=True)
 )
 
 

@@ -57,7 +57,7 @@ class GridLookups(Generic[T]):
 
 
 _ON_GRIDS: BoundedCache[tuple[object, FreeGrid], object] = BoundedCache(
-    "compiled look-ups on grids", MAX_FAULT_LOOKUPS, kind=CacheKind.REPAIR
+    "compiled look-ups on grids", MAX_FAULT_LOOKUPS, kind=CacheKind.REPAIR, per_map=True
 )
 
 

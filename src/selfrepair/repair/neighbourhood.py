@@ -264,7 +264,7 @@ def _join(parts: tuple[int, ...]) -> int:
 
 
 _ROWS: BoundedCache[tuple[FreeGrid, int], list[list[int]]] = BoundedCache(
-    "occupancy codes", MAX_CODE_GRIDS, kind=CacheKind.REPAIR
+    "occupancy codes", MAX_CODE_GRIDS, kind=CacheKind.REPAIR, per_map=True
 )
 
 

@@ -87,7 +87,7 @@ def _masks(book: MaskBook, grid: FreeGrid) -> ToleranceMasks:
 
 
 _MASKS: BoundedCache[tuple[MaskBook, FreeGrid], ToleranceMasks] = BoundedCache(
-    "tolerance masks", 16, kind=CacheKind.REPAIR
+    "tolerance masks", 16, kind=CacheKind.REPAIR, per_map=True
 )
 
 _BOOKS: BoundedCache[tuple[object, ...], MaskBook] = BoundedCache(
@@ -143,5 +143,5 @@ def _term(book: MaskBook, grid: FreeGrid, penalty: Fraction | None, label: str) 
 
 
 _TERMS: BoundedCache[tuple[MaskBook, FreeGrid, Fraction | None], StepTerm] = BoundedCache(
-    "tolerance terms", 16, kind=CacheKind.REPAIR
+    "tolerance terms", 16, kind=CacheKind.REPAIR, per_map=True
 )

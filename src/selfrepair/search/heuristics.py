@@ -108,10 +108,10 @@ _SMALL_MAZE = 1 << 18
 
 _Distances = tuple[npt.NDArray[np.int32], int]
 _DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], _Distances] = BoundedCache(
-    "goal distances (mazes up to 512x512)", 32, kind=CacheKind.PLAN
+    "goal distances (mazes up to 512x512)", 32, kind=CacheKind.PLAN, per_map=True
 )
 _LARGE_DISTANCES: BoundedCache[tuple[_DistanceFn, Maze, Cell], _Distances] = BoundedCache(
-    "goal distances (larger mazes)", 4, kind=CacheKind.PLAN
+    "goal distances (larger mazes)", 4, kind=CacheKind.PLAN, per_map=True
 )
 
 

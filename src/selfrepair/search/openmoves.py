@@ -6,8 +6,12 @@ Several readers need this table in the same mission: the planner's kernel check
 (:mod:`selfrepair.search.lattice`, :mod:`selfrepair.search._kernels`) and the replacement
 look-ups' action index (:func:`selfrepair.repair.neighbourhood.action_index`). Each used to ask
 the domain for the same 4 x ``len(actions)`` moves itself; now one derivation serves them all.
-It is planner data (:attr:`~selfrepair.caching.CacheKind.PLAN`), so a cold run empties it and the
-first reader of the run derives it again.
+It depends on the domain alone (not on the maze, the faults or the goal), and every mission
+derives it before its clocks start (:func:`selfrepair.execution.executor.run_mission` asks for it
+in its preparation, as it loads the compiled planner there), so it is
+:attr:`~selfrepair.caching.CacheKind.PREFILLED` data: a cold run keeps it, as it keeps the
+simulator's move tables derived from the same ``apply`` and ``footprint``. Before, a cold run
+emptied it and every cold run derived it again, outside every clock.
 """
 
 from __future__ import annotations
@@ -61,10 +65,10 @@ def _open_moves(domain: SomeDomain) -> OpenMoves:
 
 
 _OPEN: BoundedCache[SomeDomain, OpenMoves] = BoundedCache(
-    "open-plane moves", 16, kind=CacheKind.PLAN
+    "open-plane moves", 16, kind=CacheKind.PREFILLED
 )
 
 
 def open_moves(domain: SomeDomain) -> OpenMoves:
-    """The :class:`OpenMoves` of ``domain`` (derived once per domain; emptied by a cold run)."""
+    """The :class:`OpenMoves` of ``domain`` (derived once per domain; a cold run keeps it)."""
     return _OPEN.get(domain, lambda: _open_moves(domain))

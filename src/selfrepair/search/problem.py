@@ -118,7 +118,7 @@ POSE_TABLE_CELLS = 1 << 16
 """The largest maze (cells) with a :func:`pose_table`: 256 x 256, 2 MB per table."""
 
 _POSES: BoundedCache[Maze, list[Pose | None]] = BoundedCache(
-    "canonical poses per maze", 16, kind=CacheKind.PLAN
+    "canonical poses per maze", 16, kind=CacheKind.PLAN, per_map=True
 )
 
 

@@ -200,7 +200,7 @@ def _grid_path(maze: Maze, start: Cell, goal: Cell) -> list[Cell]:
 # --- running --------------------------------------------------------------------------------------
 
 _BASELINES: BoundedCache[tuple[Maze, int, int, str, int, str], Fraction] = BoundedCache(
-    "team fault-free makespans", 512, kind=CacheKind.REFERENCE
+    "team fault-free makespans", 512, kind=CacheKind.REFERENCE, per_map=True
 )
 
 

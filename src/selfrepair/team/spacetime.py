@@ -234,10 +234,10 @@ def lattice_of(
 
 
 _LATTICES: BoundedCache[tuple[Maze, SomeDomain, tuple[object, ...], int], Lattice] = (
-    BoundedCache("team lattices", 32, kind=CacheKind.PLAN)
+    BoundedCache("team lattices", 32, kind=CacheKind.PLAN, per_map=True)
 )
 _COST_TO_GO: BoundedCache[tuple[Lattice, frozenset[Cell], Cell], list[int]] = BoundedCache(
-    "team cost-to-go maps", 512, kind=CacheKind.PLAN
+    "team cost-to-go maps", 512, kind=CacheKind.PLAN, per_map=True
 )
 
 

@@ -323,7 +323,7 @@ class TeamWorld:
 
 
 _KNOWN: BoundedCache[tuple[Maze, frozenset[Cell]], Maze] = BoundedCache(
-    "team known maps", 64, kind=CacheKind.PLAN
+    "team known maps", 64, kind=CacheKind.PLAN, per_map=True
 )
 
 

@@ -106,7 +106,7 @@ class Maze:
 
 
 _FREE_GRIDS: BoundedCache[tuple[Maze, int], FreeGrid] = BoundedCache(
-    "maze free grids", 8, kind=CacheKind.PLAN
+    "maze free grids", 8, kind=CacheKind.PLAN, per_map=True
 )
 
 
@@ -189,7 +189,7 @@ def clearance_map(maze: Maze) -> npt.NDArray[np.int32]:
 
 
 _CLEARANCE: BoundedCache[Maze, npt.NDArray[np.int32]] = BoundedCache(
-    "maze clearance maps", 8, kind=CacheKind.PLAN
+    "maze clearance maps", 8, kind=CacheKind.PLAN, per_map=True
 )
 
 
@@ -236,5 +236,5 @@ def _with_walls(maze: Maze, blocked: frozenset[Cell]) -> Maze:
 
 
 _BELIEVED: BoundedCache[tuple[Maze, frozenset[Cell]], Maze] = BoundedCache(
-    "mazes with believed-blocked cells", 4, kind=CacheKind.PLAN
+    "mazes with believed-blocked cells", 4, kind=CacheKind.PLAN, per_map=True
 )

@@ -176,6 +176,8 @@ class CompiledLookups:
         its deferred positions lie in :attr:`ans_act` and :attr:`ans_dpos`."""
         self.ans_act = np.zeros(256, dtype=np.int32)
         self._n_act = 0
+        self.longest = 0
+        """The most actions of any answer stored (what bounds a whole-plan rewrite's splice)."""
 
     def set_of(self, faults: tuple[object, ...]) -> npt.NDArray[np.int64]:
         """Per bit mask over ``faults`` (a schedule's), the id of its look-ups (-1: not met
@@ -284,6 +286,7 @@ class CompiledLookups:
         self.ans[aid, k.A_OFF], self.ans[aid, k.A_LEN] = self._n_act, len(acts)
         self.ans_act[self._n_act : self._n_act + len(acts)] = acts
         self._n_act += len(acts)
+        self.longest = max(self.longest, len(acts))
         return aid
 
     def _radius_index(self, radius: int) -> int:
@@ -327,5 +330,5 @@ def compiled_lookups(context: MissionContext, n_actions: int) -> CompiledLookups
 
 
 _LOOKUPS: BoundedCache[tuple[object, ...], CompiledLookups] = BoundedCache(
-    "compiled look-ups as arrays", 64, kind=CacheKind.REPAIR
+    "compiled look-ups as arrays", 64, kind=CacheKind.REPAIR, per_map=True
 )

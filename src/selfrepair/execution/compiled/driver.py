@@ -128,6 +128,10 @@ class CompiledMission:
         plan = [self.index.of(a) for a, _ in stepper.queue]
         n = len(plan)
         cap = max(64, 2 * n)
+        longest = 0 if self.lookups is None else self.lookups.longest
+        par[k.P_LONGEST] = longest
+        if par[k.P_REWRITE]:  # room for a rewrite of the whole plan: no growing inside its clock
+            cap = max(cap, n * max(longest, 1) + 2)
         self.qa = np.zeros(cap, dtype=np.int64)
         self.qs = np.zeros(cap, dtype=np.int64)
         self.qa[:n] = plan[::-1]
@@ -135,7 +139,7 @@ class CompiledMission:
         self.pend = np.zeros((cap, 2), dtype=np.int64)  # deferring: pending by marker
         self.tr = np.zeros((max(64, 2 * n), k.T_COLS), dtype=np.int64)
         self.rp = np.zeros((64, k.RP_COLS), dtype=np.int64)
-        self.rp_act = np.zeros(max(256, 4 * n), dtype=np.int64)
+        self.rp_act = np.zeros(max(256, 4 * n, n * (longest + 1) + longest + 64), dtype=np.int64)
         self.pb = np.zeros(max(64, n), dtype=np.int64)
         st = np.zeros(k.S_SIZE, dtype=np.int64)
         pose = sim.pose
@@ -192,6 +196,7 @@ class CompiledMission:
                 lk_arrays: tuple[Any, ...] = _NO_LOOKUPS  # int64 arrays, ans_act int32
             else:
                 lk_arrays = (lk.lk, lk.codes, lk.ht, lk.ans, lk.ans_act)
+                self.par[k.P_LONGEST] = lk.longest
             slots, codes, ht, ans, ans_act = lk_arrays
             deferring: tuple[Any, ...] = (
                 _NO_DEFERRING if lk is None else (self.pend, lk.gh, lk.ans_dpos)
@@ -232,11 +237,17 @@ class CompiledMission:
         elif code == k.NEED_PLANNER:
             self._load_planner(args[0], kernel_planner(self.spec, self.known(args[0])))
         elif code == k.GROW:
-            need = int(st[k.S_PLAN_LEN]) + int(st[k.S_QLEN]) + 2
+            qlen = int(st[k.S_QLEN])
+            need = int(st[k.S_PLAN_LEN]) + qlen + 2
+            acts = need + 64
+            if self.par[k.P_REWRITE]:  # the longest rewrite (kernel._rewrite_short)
+                longest = max(int(self.par[k.P_LONGEST]), 1)
+                need = max(need, qlen * longest + 2)
+                acts = max(acts, qlen * (longest + 1) + longest + 64)
             self.qa, self.qs = _grow(self.qa, need), _grow(self.qs, need)
             self.pend = _grow(self.pend, self.qa.shape[0])
             self.tr, self.rp = _grow(self.tr), _grow(self.rp)
-            self.rp_act = _grow(self.rp_act, int(st[k.S_NACT]) + need + 64)
+            self.rp_act = _grow(self.rp_act, int(st[k.S_NACT]) + acts)
             self.pb = _grow(self.pb, need)
         elif code == k.GROW_HEAP:
             rec, gen, heap, *scratch = self.search

@@ -198,7 +198,8 @@ P_SEED = 17  # the mission's seed (intermittent draws)
 P_DEFER = 18  # 1: the recursion mode defers faulty complex actions (primitive)
 P_BEFORE = 19  # lookahead: actions after the front checked for known faults (the horizon)
 P_WINDOW = 20  # lookahead: actions after the faulty one in the window
-P_SIZE = 21
+P_LONGEST = 21  # the longest answer of the look-ups so far (bounds what a rewrite splices)
+P_SIZE = 22
 
 # --- fault event kinds (ev[e, 2]) ------------------------------------------------------------
 EV_TRANSIENT = 0
@@ -412,8 +413,11 @@ def run_kernel(
                         break
                 if st[S_TRIES] >= par[P_MAX_TRIES]:
                     return TOO_MANY
-                if st[S_NREP] >= rp.shape[0] or rp_act.shape[0] - st[S_NACT] < qlen + 64:
+                room = rp_act.shape[0] - st[S_NACT]
+                if st[S_NREP] >= rp.shape[0] or room < qlen + 64:
                     return GROW  # before the clock starts: growing is no part of a repair
+                if par[P_REWRITE] and _rewrite_short(par, qlen, qa.shape[0], room) > 0:
+                    return GROW  # room for the longest rewrite the look-ups can splice
                 st[S_PHASE] = 1
                 st[S_T0] = _now()
                 if ahead >= 0:
@@ -715,6 +719,17 @@ def _repair(
                 hi = max(hi, after - p)
         st[S_PEND_HI] = hi
     return DONE
+
+
+@njit(cache=True, inline="always")
+def _rewrite_short(par: I64, qlen: int, queue_room: int, act_room: int) -> int:
+    """How many more entries a whole-plan rewrite of a queue of ``qlen`` actions may need than
+    ``queue_room`` (the queue's length) and ``act_room`` (the repair actions' free room) give,
+    at most: each queued action replaced by the longest answer (``par[P_LONGEST]``). Positive:
+    grow first (the driver's ``GROW`` makes the same room), so a warm rewrite never exits to
+    grow inside its clock."""
+    longest = max(int(par[P_LONGEST]), 1)
+    return max(qlen * longest + 2 - queue_room, qlen * (longest + 1) + longest + 64 - act_room)
 
 
 @njit(cache=True, inline="always")

@@ -9,22 +9,26 @@ state where the Python loop leaves it (the stepper's steps, repairs, known fault
 simulator's pose, step count and clock), so the executor makes the same
 :class:`~selfrepair.execution.result.MissionResult` from either. Nothing of this runs per step
 while the kernel runs: the trace and the repair records are made from the arrays once the
-mission has ended, outside every timed repair.
+mission has ended, outside every timed repair; the trace is not even made then: the result keeps
+the kernel's trace rows (:class:`~selfrepair.execution.compiled.trace.ArrayTrace`), whose steps
+are made when read.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from fractions import Fraction
+from typing import NamedTuple
+
+import numpy as np
 
 from selfrepair.errors import ProblemError
 from selfrepair.execution.compiled import kernel as k
 from selfrepair.execution.compiled.driver import REPAIR_STATUS, CompiledMission, Refused, warm
 from selfrepair.execution.compiled.footing import runs_compiled
-from selfrepair.execution.result import MissionSpec, RepairRecord, StepSource, TraceStep
+from selfrepair.execution.compiled.trace import ArrayTrace
+from selfrepair.execution.result import MissionSpec, RepairRecord, StepSource
 from selfrepair.execution.simulator import Simulator
 from selfrepair.execution.stepper import Stepper
-from selfrepair.geometry import Pose
 from selfrepair.repair.strategies import (
     Repair,
     RepairSource,
@@ -36,17 +40,19 @@ from selfrepair.status import REPAIR_OF_PLAN, MissionStatus, mission_status
 
 __all__ = ["LoopEnd", "compiled_loop"]
 
-LoopEnd = tuple[MissionStatus, str, int, int]
-"""How the loop ended (status, reason), the executed time in units and the clearance penalty."""
 
-_SOURCES = (
-    StepSource.PLAN,
-    StepSource.REPLACEMENT,
-    StepSource.REPLAN,
-    StepSource.FAILED_ATTEMPT,
-    StepSource.WAIT,
-    StepSource.LOOKAHEAD,
-)
+class LoopEnd(NamedTuple):
+    """How the compiled loop ended (status, reason), the executed time in units, the clearance
+    penalty, the trace (made from the kernel's rows when read) and its number of waits."""
+
+    status: MissionStatus
+    reason: str
+    units: int
+    penalty: int
+    trace: ArrayTrace
+    waits: int
+
+
 _STATUS_OF = {code: status for status, code in REPAIR_STATUS.items()}
 
 
@@ -73,54 +79,37 @@ def compiled_loop(
             raise ProblemError(f"footing 'compiled' cannot run this mission: {exc}") from None
         return None
     end = mission.run()
-    _write_back(mission, moved)
+    trace = _write_back(mission, moved)
     st = mission.st
     units, summed = int(st[k.S_EXEC_UNITS]), int(st[k.S_PENALTY])
+    waits = trace.count_source(StepSource.WAIT)
     if end == k.REACHED:
-        return MissionStatus.REACHED, "goal reached", units, summed
+        return LoopEnd(MissionStatus.REACHED, "goal reached", units, summed, trace, waits)
     if end == k.STEP_LIMIT:
-        limit = spec.step_limit()
-        return MissionStatus.STEP_LIMIT, f"{limit} steps without reaching the goal", units, summed
+        reason = f"{spec.step_limit()} steps without reaching the goal"
+        return LoopEnd(MissionStatus.STEP_LIMIT, reason, units, summed, trace, waits)
     if end == k.COLLISION:
         qa = mission.qa
         action = spec.domain.actions[int(qa[int(st[k.S_QLEN]) - 1])]
         name = spec.domain.format_action(action)
         reason = f"{name} at {sim.pose} would sweep a wall"
-        return MissionStatus.COLLISION, reason, units, summed
+        return LoopEnd(MissionStatus.COLLISION, reason, units, summed, trace, waits)
     failure = stepper.repairs[int(st[k.S_FAIL_REP])].repair
     stepper.failure, stepper.stopped = failure, True
-    return mission_status(failure.status), why(failure), units, summed
+    return LoopEnd(mission_status(failure.status), why(failure), units, summed, trace, waits)
 
 
-def _write_back(mission: CompiledMission, moved: list[int]) -> None:
+def _write_back(mission: CompiledMission, moved: list[int]) -> ArrayTrace:
     """Leave the stepper and the simulator as the Python loop would (see the module
-    docstring of :mod:`selfrepair.execution.compiled.driver`), from the arrays."""
+    docstring of :mod:`selfrepair.execution.compiled.driver`), from the arrays, but for the
+    stepper's steps: the mission's trace, returned (its steps are made when read)."""
     st, sim, stepper, spec = mission.st, mission.sim, mission.stepper, mission.spec
     actions = spec.domain.actions
     n_actions = len(actions)
-    unit = sim.unit
-    durations: dict[int, Fraction] = {}
-    poses: dict[int, Pose] = {}
-
-    def pose(x: int, y: int, h: int) -> Pose:
-        key = (y << 34) | (x << 2) | h
-        found = poses.get(key)
-        if found is None:
-            found = poses[key] = mission.pose(x, y, h)
-        return found
-
     n = int(st[k.S_NSTEPS])
     tr = mission.tr[:n]
-    steps = stepper.steps
-    for row in tr.tolist():
-        step, a, x, y, h, ex, ey, eh, units, source, known = row
-        duration = durations.get(units)
-        if duration is None:
-            duration = durations[units] = Fraction(units, unit)
-        steps.append(
-            TraceStep(step, actions[a], pose(x, y, h), pose(ex, ey, eh), duration,
-                      _SOURCES[source], mission.known(known))
-        )  # fmt: skip
+    known = {mask: mission.known(mask) for mask in np.unique(tr[:, k.T_KNOWN]).tolist()}
+    trace = ArrayTrace.of(tr, tuple(actions), known, sim.unit)
     ran = tr[tr[:, k.T_SOURCE] != k.SRC_FAILED]
     keys = ((ran[:, k.T_Y] << 32) + 4 * ran[:, k.T_X] + ran[:, k.T_H]) * n_actions + ran[
         :, k.T_ACTION
@@ -130,8 +119,9 @@ def _write_back(mission: CompiledMission, moved: list[int]) -> None:
         stepper.repairs.append(_record(mission, row))
     stepper.known = mission.known(int(st[k.S_KNOWN]))
     stepper.waits = int(st[k.S_WAITS])
-    sim.pose = pose(int(st[k.S_X]), int(st[k.S_Y]), int(st[k.S_H]))
+    sim.pose = mission.pose(int(st[k.S_X]), int(st[k.S_Y]), int(st[k.S_H]))
     sim.steps, sim.units = int(st[k.S_STEP]), int(st[k.S_UNITS])
+    return trace
 
 
 def _record(mission: CompiledMission, row: list[int]) -> RepairRecord:

@@ -124,7 +124,7 @@ def _make(spec: MissionSpec, known: frozenset[Any]) -> KernelPlanner | None:
 
 
 _PLANNERS: BoundedCache[tuple[Any, ...], KernelPlanner | None] = BoundedCache(
-    "compiled-loop planners", 64, kind=CacheKind.PLAN
+    "compiled-loop planners", 64, kind=CacheKind.PLAN, per_map=True
 )
 
 
