@@ -63,7 +63,7 @@ def test_bad_text_names_the_event(text: str, message: str) -> None:
 def test_json_round_trip() -> None:
     world = WorldSchedule(parse_events("3,1@5..8;2,2@1"), Sensing.BUMP, 3)
     assert WorldSchedule.from_json(world.to_json()) == world
-    with pytest.raises(InputError, match="sensing in range, bump"):
+    with pytest.raises(InputError, match="expected one of range, bump"):
         WorldSchedule((), "sonar")  # type: ignore[arg-type]
 
 

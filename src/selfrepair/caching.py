@@ -25,14 +25,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import Any, Generic, TypeVar
 
-__all__ = [
-    "BoundedCache",
-    "CacheKind",
-    "CacheStats",
-    "cache_stats",
-    "caches",
-    "clear_caches",
-]
+__all__ = ["BoundedCache", "CacheKind", "CacheStats", "cache_stats", "caches", "clear_caches"]
 
 K = TypeVar("K", bound=Hashable)
 V = TypeVar("V")

@@ -9,7 +9,7 @@ column where known, and what was expected.
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import TypeVar
+from typing import TypedDict, TypeVar, Unpack
 
 __all__ = [
     "ConfigError",
@@ -19,6 +19,7 @@ __all__ = [
     "SelfRepairError",
     "TableError",
     "TraceError",
+    "Where",
     "choice",
 ]
 
@@ -29,11 +30,20 @@ class SelfRepairError(Exception):
     """Root of every error that selfrepair raises on purpose."""
 
 
+class Where(TypedDict, total=False):
+    """Where in an input an :class:`InputError` is (the keywords of every input error):
+    ``source``, a file path or a short label such as ``"<string>"`` or ``"--faults"``, and the
+    1-based ``line`` and ``column`` (``None`` when they do not apply)."""
+
+    source: str
+    line: int | None
+    column: int | None
+
+
 class InputError(SelfRepairError, ValueError):
     """Text that does not parse: a maze, scenario, action, fault, route, table or trace.
 
-    ``source`` is a file path or a short label such as ``"<string>"`` or ``"--faults"``;
-    ``line`` and ``column`` are 1-based and ``None`` when they do not apply.
+    ``source``, ``line`` and ``column`` say where (:class:`Where`).
     """
 
     def __init__(
@@ -73,21 +83,14 @@ class LimitError(InputError):
         *,
         limit: str,
         note: str | None = None,
-        source: str = "<input>",
-        line: int | None = None,
-        column: int | None = None,
+        **where: Unpack[Where],
     ) -> None:
         self.limit = limit
         self.message = message
         """The message without the note on the limit."""
         flag = "--" + limit.replace("_", "-")
         note = f"raise it with {flag}" if note is None else note
-        super().__init__(
-            f"{message} (limit {limit}; {note})",
-            source=source,
-            line=line,
-            column=column,
-        )
+        super().__init__(f"{message} (limit {limit}; {note})", **where)
 
 
 class TableError(InputError):
@@ -107,11 +110,15 @@ class ProblemError(SelfRepairError, ValueError):
     strategy or heuristic name, a negative budget."""
 
 
-def choice(kind: type[_E], value: object, what: str) -> _E:
+def choice(kind: type[_E], value: object, what: str, *, source: str | None = None) -> _E:
     """``value`` as a member of the string enum ``kind``; anything else raises
-    :class:`ProblemError` naming ``what`` and the allowed values."""
+    :class:`ProblemError` naming ``what`` and the allowed values, or, for a value read from input
+    ``source``, an :class:`InputError` naming it."""
     try:
         return kind(value)  # type: ignore[arg-type]  # any value may be tried
     except ValueError:
         allowed = ", ".join(member.value for member in kind)
-        raise ProblemError(f"unknown {what} {value!r}; expected one of {allowed}") from None
+        message = f"unknown {what} {value!r}; expected one of {allowed}"
+        if source is None:
+            raise ProblemError(message) from None
+        raise InputError(message, source=source) from None

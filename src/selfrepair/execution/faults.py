@@ -48,7 +48,7 @@ from typing import Any, TypeVar
 
 import numpy as np
 
-from selfrepair.errors import InputError
+from selfrepair.errors import InputError, choice
 from selfrepair.robots.domain import A, Domain, F, SomeDomain
 from selfrepair.textio import JSONObject, JSONValue
 
@@ -59,6 +59,7 @@ __all__ = [
     "FaultEvent",
     "FaultSchedule",
     "Persistence",
+    "lasting_problem",
 ]
 
 
@@ -85,18 +86,26 @@ class Detection(StrEnum):
     HIDDEN = "hidden"
 
 
-def _member(kind: type[_E], value: object, what: str) -> _E:
-    try:
-        return kind(value)  # type: ignore[arg-type]  # any value may be tried
-    except ValueError:
-        allowed = ", ".join(m.value for m in kind)
-        raise InputError(
-            f"expected {what} in {allowed}, got {value!r}", source="<fault schedule>"
-        ) from None
+_SOURCE = "<fault schedule>"
+"""The source named by the errors of a fault schedule made in code."""
 
-
-_E = TypeVar("_E", bound=StrEnum)
 _H = TypeVar("_H", bound=Hashable)
+
+
+def lasting_problem(
+    persistence: Persistence, duration: int | None, probability: float | None
+) -> str | None:
+    """What is wrong with how a fault lasts, or ``None``: a transient fault needs a ``duration``
+    >= 1 and an intermittent one a ``probability`` in [0, 1]. The rule of a robot's
+    :class:`FaultEvent` and of a team's :class:`~selfrepair.team.model.TeamFault` alike (each
+    raises its own error with this message)."""
+    if persistence is Persistence.TRANSIENT and (duration is None or duration < 1):
+        return f"a transient fault needs a duration >= 1, got {duration}"
+    if persistence is Persistence.INTERMITTENT and (
+        probability is None or not 0.0 <= probability <= 1.0
+    ):
+        return f"an intermittent fault needs a probability in [0, 1], got {probability}"
+    return None
 
 
 @dataclass(frozen=True, slots=True)
@@ -111,26 +120,15 @@ class FaultEvent:
     probability: float | None = None
 
     def __post_init__(self) -> None:
-        where = "<fault schedule>"
-        object.__setattr__(
-            self, "persistence", _member(Persistence, self.persistence, "persistence")
-        )
-        object.__setattr__(self, "clock", _member(Clock, self.clock, "clock"))
+        where = _SOURCE
+        persistence = choice(Persistence, self.persistence, "persistence", source=where)
+        object.__setattr__(self, "persistence", persistence)
+        object.__setattr__(self, "clock", choice(Clock, self.clock, "clock", source=where))
         if self.at < 0:
             raise InputError(f"expected a start 'at' >= 0, got {self.at}", source=where)
-        if self.persistence is Persistence.TRANSIENT and (
-            self.duration is None or self.duration < 1
-        ):
-            raise InputError(
-                f"expected a transient fault duration >= 1, got {self.duration}", source=where
-            )
-        if self.persistence is Persistence.INTERMITTENT and (
-            self.probability is None or not 0.0 <= self.probability <= 1.0
-        ):
-            raise InputError(
-                f"expected an intermittent fault probability in [0, 1], got {self.probability}",
-                source=where,
-            )
+        problem = lasting_problem(self.persistence, self.duration, self.probability)
+        if problem is not None:
+            raise InputError(problem, source=where)
 
     def active(self, index: int, step: int, tick: Fraction, seed: int) -> bool:
         """Whether this event (number ``index`` in its schedule) is active at ``step``/``tick``."""
@@ -160,16 +158,16 @@ class FaultEvent:
 
     @classmethod
     def from_json(
-        cls, data: Mapping[str, Any], domain: SomeDomain, source: str = "<fault schedule>"
+        cls, data: Mapping[str, Any], domain: SomeDomain, source: str = _SOURCE
     ) -> FaultEvent:
         """Read what :meth:`to_json` wrote."""
         try:
             return cls(
                 fault=_one_fault(domain, str(data["fault"]), source),
                 at=int(data.get("at", 0)),
-                clock=_member(Clock, data.get("clock", "step"), "clock"),
-                persistence=_member(
-                    Persistence, data.get("persistence", "permanent"), "persistence"
+                clock=choice(Clock, data.get("clock", "step"), "clock", source=source),
+                persistence=choice(
+                    Persistence, data.get("persistence", "permanent"), "persistence", source=source
                 ),
                 duration=None if data.get("duration") is None else int(data["duration"]),
                 probability=None if data.get("probability") is None else float(data["probability"]),
@@ -190,7 +188,8 @@ class FaultSchedule:
     detection: Detection = Detection.NOW
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "detection", _member(Detection, self.detection, "detection"))
+        detection = choice(Detection, self.detection, "detection", source=_SOURCE)
+        object.__setattr__(self, "detection", detection)
 
     @classmethod
     def permanent(
@@ -241,7 +240,7 @@ class FaultSchedule:
 
     @classmethod
     def from_json(
-        cls, data: Mapping[str, Any], domain: SomeDomain, source: str = "<fault schedule>"
+        cls, data: Mapping[str, Any], domain: SomeDomain, source: str = _SOURCE
     ) -> FaultSchedule:
         """Read what :meth:`to_json` wrote."""
         events = data.get("events", [])

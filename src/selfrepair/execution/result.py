@@ -18,6 +18,7 @@ from selfrepair.diagnosis.cooperative import Observer
 from selfrepair.diagnosis.observation import Observation, ObservationModel
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import FaultSchedule
+from selfrepair.execution.simulator import Outcome
 from selfrepair.geometry import Cell, Heading, Pose
 from selfrepair.repair.strategies import Repair, RepairSource, StrategyName, StrategyOptions
 from selfrepair.repair.tolerance import PlanObjective
@@ -30,6 +31,7 @@ from selfrepair.world.events import WorldSchedule
 from selfrepair.world.maze import Maze
 
 __all__ = [
+    "STEP_OF_OUTCOME",
     "STEP_OF_REPAIR",
     "MissionResult",
     "MissionSpec",
@@ -55,9 +57,9 @@ class StepSource(StrEnum):
     PLAN_REPAIR = RepairSource.PLAN_REPAIR.value
     DETOUR = RepairSource.DETOUR.value
     PROBE = RepairSource.PROBE.value
-    FAILED_ATTEMPT = "failed-attempt"
+    FAILED_ATTEMPT = Outcome.FAILED_ATTEMPT.value
     WAIT = "wait"
-    BUMPED = "bumped"
+    BUMPED = Outcome.BUMPED.value
 
 
 STEP_OF_REPAIR: Mapping[RepairSource, StepSource] = {
@@ -71,6 +73,13 @@ STEP_OF_REPAIR: Mapping[RepairSource, StepSource] = {
 """The step source of the actions a repair spliced in, by the repair's source: an explicit
 mapping, never a conversion by value (a plain dictionary, typed read-only: one look-up inside the
 timed repair)."""
+
+STEP_OF_OUTCOME: Mapping[Outcome, StepSource] = {
+    Outcome.FAILED_ATTEMPT: StepSource.FAILED_ATTEMPT,
+    Outcome.BUMPED: StepSource.BUMPED,
+}
+"""The step source of a command that did not move as commanded, by what the simulator says it
+did (the other outcomes keep the source of the queued action, or record nothing)."""
 
 
 @dataclass(frozen=True, slots=True)

@@ -225,12 +225,16 @@ class Simulator:
             swept: tuple[Cell, ...] = (start.cell,)
         else:  # the footprint of the move table, shifted (a collision moves nothing)
             x, y = start.x, start.y
-            performed = self.last_action if self._hidden else action
-            shape = self.table.shapes[performed][start.heading]
+            shape = self.table.shapes[self.performed(action)][start.heading]
             swept = tuple([(x + dx, y + dy) for dx, dy in shape])
         return StepOutcome(
             status, step, action, start, self.pose, swept, self.last_duration, self.last_blocking
         )
+
+    def performed(self, action: object) -> object:
+        """The action the wheels performed for ``action``, the command just executed: with the
+        faults hidden the effective action (:attr:`last_action`), else the command itself."""
+        return self.last_action if self._hidden else action
 
     def advance(self, action: object) -> Outcome:
         """Command ``action`` and advance the world; what it did is left in ``pose``,

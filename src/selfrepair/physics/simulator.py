@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from fractions import Fraction
 
-from selfrepair.execution.faults import Detection, FaultSchedule
+from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.simulator import Outcome, Simulator
 from selfrepair.geometry import Pose
 from selfrepair.physics.model import DEFAULT_PARAMS, RobotParams
@@ -99,7 +99,6 @@ class PhysicsSimulator(Simulator):
         self.physics_steps: list[PhysicsStep] = []
         self.deviated = False
         self._motions: dict[object, LatticeMotion] = {}
-        self._hidden_faults = schedule.detection is Detection.HIDDEN
 
     def advance(self, action: object) -> Outcome:
         """The lattice simulator's step, then, for a move, the physics run and localisation.
@@ -113,7 +112,7 @@ class PhysicsSimulator(Simulator):
             if status is not Outcome.COLLISION:  # the robot stays; time passes
                 self.physics.settle(self.params.seconds(self.last_duration))
             return status
-        performed = self.last_action if self._hidden_faults else action
+        performed = self.performed(action)
         lattice_end = self.pose
         motion = self._motions.get(performed)
         if motion is None:

@@ -126,6 +126,12 @@ def _put(hk1: Any, hk2: Any, hn: Any, pos: Any, i: int, k1: int, k2: int, n: int
     pos[n] = i
 
 
+@_inline
+def _move(hk1: Any, hk2: Any, hn: Any, pos: Any, i: int, j: int) -> None:
+    """Move the entry of heap slot ``j`` to slot ``i`` (:func:`_put`)."""
+    _put(hk1, hk2, hn, pos, i, hk1[j], hk2[j], hn[j])
+
+
 @_kernel
 def _sift_up(hk1: I64, hk2: I64, hn: I64, pos: I64, i: int) -> None:
     k1, k2, n = hk1[i], hk2[i], hn[i]
@@ -133,7 +139,7 @@ def _sift_up(hk1: I64, hk2: I64, hn: I64, pos: I64, i: int) -> None:
         up = (i - 1) >> 1
         if not _less(k1, k2, n, hk1[up], hk2[up], hn[up]):
             break
-        _put(hk1, hk2, hn, pos, i, hk1[up], hk2[up], hn[up])
+        _move(hk1, hk2, hn, pos, i, up)
         i = up
     _put(hk1, hk2, hn, pos, i, k1, k2, n)
 
@@ -149,7 +155,7 @@ def _sift_down(hk1: I64, hk2: I64, hn: I64, pos: I64, i: int, size: int) -> None
             c += 1
         if not _less(hk1[c], hk2[c], hn[c], k1, k2, n):
             break
-        _put(hk1, hk2, hn, pos, i, hk1[c], hk2[c], hn[c])
+        _move(hk1, hk2, hn, pos, i, c)
         i = c
     _put(hk1, hk2, hn, pos, i, k1, k2, n)
 
@@ -164,13 +170,31 @@ def _remove(hk1: I64, hk2: I64, hn: I64, pos: I64, sc: I64, u: int) -> None:
     sc[SIZE] = size
     if i == size:
         return
-    _put(hk1, hk2, hn, pos, i, hk1[size], hk2[size], hn[size])
+    _move(hk1, hk2, hn, pos, i, size)
     if i > 0 and _less(
         hk1[i], hk2[i], hn[i], hk1[(i - 1) >> 1], hk2[(i - 1) >> 1], hn[(i - 1) >> 1]
     ):
         _sift_up(hk1, hk2, hn, pos, i)
     else:
         _sift_down(hk1, hk2, hn, pos, i, size)
+
+
+@_inline
+def _best_step(
+    free: U8, pen: I64, dur: I64, step: I64, nsw: I64, sw: I64, g: I64, wmul: int, u: int
+) -> tuple[int, int, int]:
+    """The best step out of node ``u``: ``(c + g, k, c)`` for the class ``k`` of least cost ``c``
+    plus ``g`` of its end (ties: the lowest class); ``(INF, -1, 0)`` when no step has both
+    finite. ``rhs(u)`` is its first element (away from the goal), the plan follows its class."""
+    h = u & 3
+    best, bk, bc = INF, -1, 0
+    for k in range(dur.shape[0]):
+        c = _cost(free, pen, dur, nsw, sw, wmul, u, k)
+        if c < INF:
+            gv = g[u + step[k, h]]
+            if gv < INF and c + gv < best:
+                best, bk, bc = c + gv, k, c
+    return best, bk, bc
 
 
 @_kernel
@@ -205,15 +229,7 @@ def _update(
     """Recompute ``rhs(u)`` from its successors, then requeue it."""
     goal = sc[NODES]
     if u != goal:
-        wmul = sc[WMUL]
-        h = u & 3
-        best = INF
-        for k in range(dur.shape[0]):
-            c = _cost(free, pen, dur, nsw, sw, wmul, u, k)
-            if c < INF:
-                gv = g[u + step[k, h]]
-                if gv < INF and c + gv < best:
-                    best = c + gv
+        best, _, _ = _best_step(free, pen, dur, step, nsw, sw, g, sc[WMUL], u)
         if _at_goal(sc, free, u) and g[goal] < best:
             best = g[goal]
         rhs[u] = best
@@ -294,47 +310,46 @@ def compute(
         n1 = m + _h(sc, u) + sc[KM]
         if _less(o1, o2, 0, n1, m, 0):
             _requeue(g, rhs, hk1, hk2, hn, pos, sc, u)
-        elif gu > ru:  # over-consistent: settle it; its predecessors may now go through it
+            continue
+        settled = gu > ru  # over-consistent: settle it; its predecessors may now go through it
+        if settled:
             g[u] = ru
-            if u == goal:
-                if free[gcell] != 0:
-                    for h in range(4):
-                        if gh < 0 or h == gh:
-                            p = 4 * gcell + h
-                            if ru < rhs[p]:
-                                rhs[p] = ru
-                                _requeue(g, rhs, hk1, hk2, hn, pos, sc, p)
-                continue
-            he = u & 3
-            for i in range(nback[he]):
-                p = u - backo[he, i]
-                if not 0 <= p < goal:
-                    continue
-                c = _cost(free, pen, dur, nsw, sw, wmul, p, backk[he, i])
-                if c < INF and c + ru < rhs[p]:
-                    rhs[p] = c + ru
-                    _requeue(g, rhs, hk1, hk2, hn, pos, sc, p)
         else:  # under-consistent: forget it; recompute whoever went through it
             g[u] = INF
             _update(free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, u)
-            if u == goal:
-                if free[gcell] != 0:
-                    for h in range(4):
-                        if gh < 0 or h == gh:
-                            p = 4 * gcell + h
-                            if rhs[p] == gu:
-                                _update(
-                                    free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, p
-                                )
+        through = ru if settled else gu
+        graph = (free, pen, dur, step, nsw, sw)
+        if u == goal:  # the goal's predecessors: the goal cell's poses, at no cost
+            if free[gcell] != 0:
+                for h in range(4):
+                    if gh < 0 or h == gh:
+                        _via(graph, g, rhs, hk1, hk2, hn, pos, sc, 4 * gcell + h, through, settled)
+            continue
+        he = u & 3
+        for i in range(nback[he]):
+            p = u - backo[he, i]
+            if not 0 <= p < goal:
                 continue
-            he = u & 3
-            for i in range(nback[he]):
-                p = u - backo[he, i]
-                if not 0 <= p < goal:
-                    continue
-                c = _cost(free, pen, dur, nsw, sw, wmul, p, backk[he, i])
-                if c < INF and rhs[p] == c + gu:
-                    _update(free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, p)
+            c = _cost(free, pen, dur, nsw, sw, wmul, p, backk[he, i])
+            if c < INF:
+                _via(graph, g, rhs, hk1, hk2, hn, pos, sc, p, c + through, settled)
+
+
+@_inline
+def _via(
+    graph: Any, g: I64, rhs: I64, hk1: I64, hk2: I64, hn: I64, pos: I64, sc: I64,
+    p: int, cost: int, settled: bool,
+) -> None:  # fmt: skip
+    """Predecessor ``p`` of a node whose ``g`` changed, ``cost`` its cost through that node at
+    the node's old (``settled``: new) ``g``: a settled node lowers ``rhs(p)`` to ``cost``; a
+    forgotten one makes ``p`` recompute ``rhs`` when it went through the node."""
+    if settled:
+        if cost < rhs[p]:
+            rhs[p] = cost
+            _requeue(g, rhs, hk1, hk2, hn, pos, sc, p)
+    elif rhs[p] == cost:
+        free, pen, dur, step, nsw, sw = graph
+        _update(free, pen, dur, step, nsw, sw, g, rhs, hk1, hk2, hn, pos, sc, p)
 
 
 @_allocating
@@ -352,16 +367,7 @@ def walk(
     n = 0
     total = 0
     while not _at_goal(sc, free, u):
-        h = u & 3
-        best = INF
-        bk = -1
-        bc = 0
-        for k in range(dur.shape[0]):
-            c = _cost(free, pen, dur, nsw, sw, wmul, u, k)
-            if c < INF:
-                gv = g[u + step[k, h]]
-                if gv < INF and c + gv < best:
-                    best, bk, bc = c + gv, k, c
+        _, bk, bc = _best_step(free, pen, dur, step, nsw, sw, g, wmul, u)
         if bk < 0 or n > goal:
             return np.empty(0, dtype=np.int64)
         if n + 1 >= out.shape[0]:
@@ -371,7 +377,7 @@ def walk(
         out[n] = bk
         n += 1
         total += bc
-        u += step[bk, h]
+        u += step[bk, u & 3]
     out[n] = total
     return out[: n + 1].copy()
 

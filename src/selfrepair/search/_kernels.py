@@ -87,6 +87,8 @@ CHUNK = 1 << 15
 """Expansions per kernel call when a time limit is set (between two looks at the clock)."""
 
 _PAUSED, _SOLVED, _UNSOLVABLE, _GROW, _MISS = 0, 1, 2, 3, 4
+_GOING = -1
+"""What :func:`_halt` says of a search that goes on (never returned by a kernel)."""
 _SIZE, _COUNTER, _EXPANSIONS, _FOUND, _CODE = 0, 1, 2, 3, 4
 _WITH, _HARD, _PER, _PW, _FSTRIDE, _FBASE = 0, 1, 2, 3, 4, 5
 """The lattice kernel's step-term parameters: whether there is a term, whether it is hard, the
@@ -120,6 +122,22 @@ def _less(f1: Any, h1: Any, c1: Any, f2: Any, h2: Any, c2: Any) -> bool:
     return bool(c1 < c2)
 
 
+@njit(cache=True, inline="always")
+def _put(heap: Any, pos: Any, i: int, f: Any, h: Any, c: Any, node: Any) -> None:
+    """Put the record ``(f, h, c, node)`` in slot ``i`` and record the slot."""
+    heap[i, 0] = f
+    heap[i, 1] = h
+    heap[i, 2] = c
+    heap[i, 3] = node
+    pos[int(node)] = i
+
+
+@njit(cache=True, inline="always")
+def _move(heap: Any, pos: Any, i: int, j: int) -> None:
+    """Move the record of slot ``j`` to slot ``i`` (:func:`_put`)."""
+    _put(heap, pos, i, heap[j, 0], heap[j, 1], heap[j, 2], heap[j, 3])
+
+
 @_search_kernel
 def _sift_up(heap: Any, pos: Any, i: int, f: Any, h: Any, c: Any, node: Any) -> None:
     """Place the record ``(f, h, c, node)`` at slot ``i`` or above (a push when ``i`` is the
@@ -128,17 +146,9 @@ def _sift_up(heap: Any, pos: Any, i: int, f: Any, h: Any, c: Any, node: Any) -> 
         up = (i - 1) >> 2
         if not _less(f, h, c, heap[up, 0], heap[up, 1], heap[up, 2]):
             break
-        heap[i, 0] = heap[up, 0]
-        heap[i, 1] = heap[up, 1]
-        heap[i, 2] = heap[up, 2]
-        heap[i, 3] = heap[up, 3]
-        pos[int(heap[i, 3])] = i
+        _move(heap, pos, i, up)
         i = up
-    heap[i, 0] = f
-    heap[i, 1] = h
-    heap[i, 2] = c
-    heap[i, 3] = node
-    pos[int(node)] = i
+    _put(heap, pos, i, f, h, c, node)
 
 
 @_search_kernel
@@ -161,11 +171,7 @@ def _pop(heap: Any, pos: Any, size: int) -> int:
                     heap[child, 0], heap[child, 1], heap[child, 2],
                 ):  # fmt: skip
                     child = other
-            heap[i, 0] = heap[child, 0]
-            heap[i, 1] = heap[child, 1]
-            heap[i, 2] = heap[child, 2]
-            heap[i, 3] = heap[child, 3]
-            pos[int(heap[i, 3])] = i
+            _move(heap, pos, i, child)
             i = child
         _sift_up(heap, pos, i, f, h, c, node)
     return size
@@ -188,6 +194,14 @@ _TIE_BITS = 31
 _TIE_MASK = (1 << _TIE_BITS) - 1
 
 
+@njit(cache=True, inline="always")
+def _put2(heap: Any, rec: Any, i: int, key: int, tie: int) -> None:
+    """Put the record ``(key, tie)`` in slot ``i`` and record the slot in its state's record."""
+    heap[_BASE + i, 0] = key
+    heap[_BASE + i, 1] = tie
+    rec[tie & _TIE_MASK, _SLOT] = i
+
+
 @_search_kernel
 def _sift_up2(heap: Any, rec: Any, i: int, key: int, tie: int) -> None:
     """Place the record ``(key, tie)`` at slot ``i`` or above (a push when ``i`` is the heap's
@@ -198,13 +212,9 @@ def _sift_up2(heap: Any, rec: Any, i: int, key: int, tie: int) -> None:
         ut = heap[_BASE + up, 1]
         if key > uk or (key == uk and tie > ut):
             break
-        heap[_BASE + i, 0] = uk
-        heap[_BASE + i, 1] = ut
-        rec[ut & _TIE_MASK, _SLOT] = i
+        _put2(heap, rec, i, uk, ut)
         i = up
-    heap[_BASE + i, 0] = key
-    heap[_BASE + i, 1] = tie
-    rec[tie & _TIE_MASK, _SLOT] = i
+    _put2(heap, rec, i, key, tie)
 
 
 @_search_kernel
@@ -233,15 +243,40 @@ def _pop2(heap: Any, rec: Any, size: int) -> int:
                 ot = heap[_BASE + other, 1]
                 if (ok < ck) | ((ok == ck) & (ot < ct)):
                     child, ck, ct = other, ok, ot
-            heap[_BASE + i, 0] = ck
-            heap[_BASE + i, 1] = ct
-            rec[ct & _TIE_MASK, _SLOT] = i
+            _put2(heap, rec, i, ck, ct)
             i = child
         _sift_up2(heap, rec, i, key, tie)
     return size
 
 
+# --- the stop test of the resumable searches -------------------------------------------------
+
+
+@njit(cache=True, inline="always")
+def _halt(size: int, room: int, expansions: int, limit: int) -> int:
+    """Why a resumable search (:func:`_lattice`, :func:`_grid`) stops before its next expansion:
+    its open list is empty (``_UNSOLVABLE``), this call's budget is spent (``_PAUSED``) or the
+    heap has no room for the next expansion's pushes (``_GROW``); ``_GOING`` when it goes on."""
+    if size <= 0:
+        return _UNSOLVABLE
+    if expansions >= limit:
+        return _PAUSED
+    if size > room:
+        return _GROW
+    return _GOING
+
+
 # --- breadth-first distances -------------------------------------------------------------------
+
+
+@njit(cache=True, inline="always")
+def _visit(dist: Any, queue: Any, q: int, d: int, head: int, count: int, mask: int) -> int:
+    """Give unvisited cell ``q`` distance ``d`` and queue it; returns the new queue length."""
+    if dist[q] == -1:
+        dist[q] = d
+        queue[(head + count) & mask] = q
+        count += 1
+    return count
 
 
 @_search_kernel
@@ -259,26 +294,10 @@ def _bfs(pw: int, dist: Any, queue: Any, st: Any) -> int:
         head = (head + 1) & mask
         count -= 1
         d = dist[p] + 1
-        q = p - pw
-        if dist[q] == -1:
-            dist[q] = d
-            queue[(head + count) & mask] = q
-            count += 1
-        q = p + 1
-        if dist[q] == -1:
-            dist[q] = d
-            queue[(head + count) & mask] = q
-            count += 1
-        q = p + pw
-        if dist[q] == -1:
-            dist[q] = d
-            queue[(head + count) & mask] = q
-            count += 1
-        q = p - 1
-        if dist[q] == -1:
-            dist[q] = d
-            queue[(head + count) & mask] = q
-            count += 1
+        count = _visit(dist, queue, p - pw, d, head, count, mask)
+        count = _visit(dist, queue, p + 1, d, head, count, mask)
+        count = _visit(dist, queue, p + pw, d, head, count, mask)
+        count = _visit(dist, queue, p - 1, d, head, count, mask)
     st[0], st[1] = head, count
     return 0
 
@@ -309,6 +328,15 @@ class _Scratch:
 _local = threading.local()
 
 
+def _per_thread(name: str) -> dict[str, Any]:
+    """This thread's dict ``name`` of reused arrays (made empty on first use)."""
+    cache: dict[str, Any] | None = getattr(_local, name, None)
+    if cache is None:
+        cache = {}
+        setattr(_local, name, cache)
+    return cache
+
+
 def _scratch(tag: str, n: int, spec: tuple[tuple[str, Any], ...], mark_max: int) -> _Scratch:
     """Scratch arrays of ``n`` states kept per thread and reused across searches.
 
@@ -317,9 +345,7 @@ def _scratch(tag: str, n: int, spec: tuple[tuple[str, Any], ...], mark_max: int)
     any size from a quarter of theirs up; ``mark`` starts zeroed (lazily, by the OS), the others
     are never read before a search writes them. The heap is allocated small and grown on demand.
     """
-    cache = getattr(_local, "scratch", None)
-    if cache is None:
-        cache = _local.scratch = {}
+    cache = _per_thread("scratch")
     entry = cache.get(tag)
     if entry is None or not n <= entry.size <= 4 * n:
         arrays = {
@@ -334,9 +360,7 @@ def _records(tag: str, n: int, dtype: Any, mark_max: int) -> _Scratch:
     """Per-thread records of ``n`` lattice states (``[g, word, heap slot]`` rows, see
     :data:`_G`), zeroed lazily by the OS and reused across searches like :func:`_scratch`'s
     arrays; ``arrays["mark"]`` is the view of the words."""
-    cache = getattr(_local, "scratch", None)
-    if cache is None:
-        cache = _local.scratch = {}
+    cache = _per_thread("scratch")
     entry = cache.get(tag)
     if entry is None or not n <= entry.size <= 4 * n:
         rec = np.zeros((n, 3), dtype=dtype)
@@ -347,9 +371,7 @@ def _records(tag: str, n: int, dtype: Any, mark_max: int) -> _Scratch:
 def _heap(tag: str, dtype: Any, need: int, columns: int = 4) -> npt.NDArray[Any]:
     """The per-thread heap array of ``tag``, at least ``need`` records of ``columns`` words long,
     starting on a 64-byte boundary."""
-    cache = getattr(_local, "heaps", None)
-    if cache is None:
-        cache = _local.heaps = {}
+    cache = _per_thread("heaps")
     heap = cache.get(tag)
     if heap is None or heap.shape[0] < need:
         size = max(_FIRST_HEAP, need, 0 if heap is None else 2 * heap.shape[0])
@@ -527,14 +549,8 @@ def _lattice(
     size, counter, expansions = scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS]
     nmoves = mt.shape[1]
     room = heap.shape[0] - _BASE - nmoves - 4
-    status = _UNSOLVABLE
-    while size > 0:
-        if expansions >= limit:
-            status = _PAUSED
-            break
-        if size > room:
-            status = _GROW
-            break
+    status = _halt(size, room, expansions, limit)
+    while status == _GOING:
         s = heap[_BASE, 1] & _TIE_MASK
         cell = s >> 2
         head = s & 3
@@ -602,6 +618,7 @@ def _lattice(
                 _sift_up2(heap, rec, size, key, (counter << _TIE_BITS) | ns)
                 size += 1
                 heap[_BASE + size + 3, 0] = _NO_KEY
+        status = _halt(size, room, expansions, limit)
     scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS] = size, counter, expansions
     return status
 
@@ -1067,14 +1084,8 @@ def _grid(
     sqrt2 = np.sqrt(2.0)
     keys = (diagonal, sqrt2, opened, closed)
     arrays = (free, g, word, heap, pos)
-    status = _UNSOLVABLE
-    while size > 0:
-        if expansions >= limit:
-            status = _PAUSED
-            break
-        if size > room:
-            status = _GROW
-            break
+    status = _halt(size, room, expansions, limit)
+    while status == _GOING:
         p = int(heap[0, _NODE])
         size = _pop(heap, pos, size)
         word[p] = (closed << 3) | (word[p] & 7)
@@ -1114,6 +1125,7 @@ def _grid(
                 size, counter = _relax(
                     p - pw - 1, 7, sqrt2, ex - 1, ey - 1, gp, keys, arrays, size, counter
                 )
+        status = _halt(size, room, expansions, limit)
     scal[_SIZE], scal[_COUNTER], scal[_EXPANSIONS] = size, counter, expansions
     return status
 

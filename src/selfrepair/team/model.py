@@ -33,7 +33,7 @@ from dataclasses import dataclass, field, replace
 from enum import StrEnum
 
 from selfrepair.errors import InputError, ProblemError
-from selfrepair.execution.faults import Detection, Persistence
+from selfrepair.execution.faults import Detection, Persistence, lasting_problem
 from selfrepair.geometry import Cell, Pose
 from selfrepair.robots.domain import SomeDomain
 from selfrepair.robots.four_wheel import FOUR_WHEEL
@@ -180,16 +180,11 @@ class TeamFault:
             raise ProblemError(
                 "only a robot's wheel faults (immobilised, wheels) can be intermittent"
             )
-        if intermittent != (self.probability is not None) or not (
-            self.probability is None or 0.0 <= self.probability <= 1.0
-        ):
-            raise ProblemError(
-                "an intermittent team fault needs a probability in [0, 1], and only it has one"
-            )
-        if self.persistence is Persistence.TRANSIENT and (
-            self.duration is None or self.duration < 1
-        ):
-            raise ProblemError(f"a transient team fault needs a duration >= 1, got {self.duration}")
+        if not intermittent and self.probability is not None:
+            raise ProblemError("only an intermittent team fault has a probability")
+        problem = lasting_problem(self.persistence, self.duration, self.probability)
+        if problem is not None:
+            raise ProblemError(problem)
         if self.kind is TeamFaultKind.BLOCKED and (self.robot or not self.cells):
             raise ProblemError("a blocked fault names cells and no robot")
         if self.kind is not TeamFaultKind.BLOCKED and not self.robot:

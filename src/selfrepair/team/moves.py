@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from selfrepair.errors import ProblemError
 from selfrepair.execution.faults import Detection
-from selfrepair.execution.result import StepSource
+from selfrepair.execution.result import STEP_OF_OUTCOME
 from selfrepair.execution.simulator import Outcome
 from selfrepair.geometry import Cell
 from selfrepair.team.driving import (
@@ -109,8 +109,9 @@ def command(world: TeamWorld, robot: RobotState, step: TimedStep, t: int) -> int
         end = sim.units
         robot.busy_until, robot.footprint = end, (pose.cell,)
         failed = outcome is Outcome.FAILED_ATTEMPT
-        source = StepSource.FAILED_ATTEMPT if failed else StepSource.BUMPED
-        world.moves.append(MoveRecord(robot.name, t, end, step.action, pose, pose, source))
+        world.moves.append(
+            MoveRecord(robot.name, t, end, step.action, pose, pose, STEP_OF_OUTCOME[outcome])
+        )
         if failed:
             know(world, robot, stepper.known, t)
         else:  # it touched blocked cells: its stepper learned them, the team hears of them

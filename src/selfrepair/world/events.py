@@ -43,7 +43,7 @@ from typing import Any
 
 import numpy as np
 
-from selfrepair.errors import InputError
+from selfrepair.errors import InputError, choice
 from selfrepair.geometry import Cell
 from selfrepair.limits import DEFAULT_SENSING_RANGE
 from selfrepair.textio import JSONObject
@@ -107,13 +107,8 @@ class WorldSchedule:
     sensing_range: int = DEFAULT_SENSING_RANGE
 
     def __post_init__(self) -> None:
-        try:
-            object.__setattr__(self, "sensing", Sensing(self.sensing))
-        except ValueError:
-            allowed = ", ".join(s.value for s in Sensing)
-            raise InputError(
-                f"expected sensing in {allowed}, got {self.sensing!r}", source="<events>"
-            ) from None
+        sensing = choice(Sensing, self.sensing, "sensing", source="<events>")
+        object.__setattr__(self, "sensing", sensing)
         if self.sensing_range < 0:
             raise InputError(
                 f"expected a sensing range >= 0, got {self.sensing_range}", source="<events>"
