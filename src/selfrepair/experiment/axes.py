@@ -5,6 +5,11 @@ sets, fault times, detections, replicates and strategy variants; team experiment
 (:mod:`selfrepair.experiment.teams`) cross team sizes, loads, equipment and replicates. Both
 expand through :func:`cross`, one :func:`itertools.product` whose last axis varies fastest, so the
 order of missions is defined by the order of the axes and of their values.
+
+Both count their missions with :func:`total` and say how the count comes about with
+:func:`describe`, over the same axes, before any mission is built. A factor whose values cannot
+be built yet (the routes of maze files not read) enters the count as a :class:`Tally`: its name
+and its size alone.
 """
 
 from __future__ import annotations
@@ -15,17 +20,38 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["Axis", "cross", "describe", "total"]
+__all__ = ["Axis", "Factor", "Tally", "cross", "describe", "total"]
 
 
 @dataclass(frozen=True, slots=True)
 class Axis:
     """One factor of an experiment: ``name`` (the key in each point of :func:`cross`), its
-    ``values`` in order, and ``what`` they are, in the plural, for messages ("fault sets")."""
+    ``values`` in order, and ``what`` they are, in the plural, for messages ("fault sets").
+
+    An axis whose only value is ``None`` stands for a section the experiment does not have (no
+    ``[world]``, no ``[physics]``): it multiplies by one and :func:`describe` leaves it out."""
 
     name: str
     values: tuple[object, ...]
     what: str
+
+    @property
+    def size(self) -> int:
+        """How many values the axis has."""
+        return len(self.values)
+
+
+@dataclass(frozen=True, slots=True)
+class Tally:
+    """A factor counted from the configuration before its values are built: ``what`` it
+    counts, in the plural, and its ``size``."""
+
+    what: str
+    size: int
+
+
+Factor = Axis | Tally
+"""What :func:`total` and :func:`describe` multiply."""
 
 
 def cross(axes: Sequence[Axis]) -> Iterator[dict[str, Any]]:
@@ -36,11 +62,18 @@ def cross(axes: Sequence[Axis]) -> Iterator[dict[str, Any]]:
         yield dict(zip(names, values, strict=True))
 
 
-def total(axes: Sequence[Axis]) -> int:
-    """How many points :func:`cross` gives: the product of the axes' lengths."""
-    return math.prod(len(axis.values) for axis in axes)
+def total(factors: Sequence[Factor]) -> int:
+    """How many points :func:`cross` gives: the product of the factors' sizes."""
+    return math.prod(factor.size for factor in factors)
 
 
-def describe(axes: Sequence[Axis]) -> str:
-    """How :func:`total` comes about, for a message: ``"routes 16 x fault sets 12"``."""
-    return " x ".join(f"{axis.what} {len(axis.values):,}" for axis in axes)
+def describe(factors: Sequence[Factor]) -> str:
+    """How :func:`total` comes about, for a message: ``"routes 16 x fault sets 12"`` (an absent
+    section's axis left out, see :class:`Axis`)."""
+    return " x ".join(
+        f"{factor.what} {factor.size:,}" for factor in factors if not _absent(factor)
+    )
+
+
+def _absent(factor: Factor) -> bool:
+    return isinstance(factor, Axis) and factor.values == (None,)

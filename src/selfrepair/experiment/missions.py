@@ -1,8 +1,10 @@
 """Expand an :class:`ExperimentConfig` into missions, each with a stable key and an explicit seed.
 
 The missions of an experiment are one cross product (:func:`selfrepair.experiment.axes.cross`)
-over its factor axes: (maze, route), fault set, fault time, detection, replicate and (strategy
-variant, clearance weight), the last varying fastest. Keys and seeds are made as described in
+over its factor axes: (maze, route), fault set, fault time, detection, noise, observers,
+replicate, world setting, (strategy variant, clearance weight) and simulator, the last varying
+fastest; :func:`count_missions` multiplies the same axes, with the routes and variants counted
+from the configuration. Keys and seeds are made as described in
 :mod:`selfrepair.experiment.keys`; fault sets come from :mod:`selfrepair.experiment.faultsets`,
 mazes and routes from :mod:`selfrepair.experiment.mazes`, strategy variants from
 :mod:`selfrepair.experiment.variants`.
@@ -15,6 +17,7 @@ loaded once with the default table limits, so a bad table stops the experiment b
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from fractions import Fraction
 from typing import Any
 
@@ -28,7 +31,7 @@ from selfrepair.diagnosis.cooperative import Observer, ObserverView, observer_te
 from selfrepair.errors import ConfigError
 from selfrepair.execution.faults import Detection, FaultEvent, FaultSchedule, canonical_order
 from selfrepair.execution.result import MissionSpec
-from selfrepair.experiment.axes import Axis, cross
+from selfrepair.experiment.axes import Axis, Factor, Tally, cross, describe, total
 from selfrepair.experiment.faultsets import fault_profile
 from selfrepair.experiment.faultsteps import random_fault_step
 from selfrepair.experiment.keys import (
@@ -81,11 +84,29 @@ def count_missions(config: ExperimentConfig) -> int:
     not subtracted, so :func:`expand` may give fewer. Bundled maze names must be valid
     (:func:`expand` checks them first).
     """
-    return _mission_factors(config)[0]
+    return total(_count_factors(config, _situation_axes(config, get_domain(config.domain))))
 
 
-def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
-    """The mission count and how it came about, as text for a message."""
+def _situation_axes(config: ExperimentConfig, domain: SomeDomain) -> tuple[Axis, ...]:
+    """The axes between the route and the strategy variant: what happens to the robot (fault
+    set, fault time, detection, noise, observers), the replicate and the world setting."""
+    faults = config.faults
+    return (
+        Axis("faults", fault_profile(faults.sets, domain), "fault sets"),
+        Axis("fault_at", (RANDOM,) if faults.at_random else faults.at, "fault times"),
+        Axis("detection", tuple(faults.detection), "detections"),
+        Axis("noise", tuple(faults.noise), "noise rates"),
+        Axis("observers", tuple(faults.observers), "observer counts"),
+        Axis("replicate", tuple(range(config.repeats)), "repeats"),
+        Axis("world", _worlds(config), "world settings"),
+    )
+
+
+def _count_factors(config: ExperimentConfig, situation: Sequence[Axis]) -> tuple[Factor, ...]:
+    """The factors of :func:`expand`'s cross product, with the routes and strategy variants
+    counted from the configuration (no maze file read): routes x ``situation`` x variants x
+    simulators, or, when a strategy is limited to some mazes, the variants times their routes
+    as one factor."""
     routes: dict[str, int] = {}
     for entry in config.mazes:
         label = entry_label(entry)
@@ -97,29 +118,12 @@ def _mission_factors(config: ExperimentConfig) -> tuple[int, str]:
         variants += count
         mazes = strategy.mazes
         runs += count * (all_routes if mazes is None else sum(routes.get(m, 0) for m in mazes))
-    faults = config.faults
-    filtered = any(s.mazes is not None for s in config.strategies)
-    factors = [
-        (runs, "strategy variants and weights x their routes")
-        if filtered
-        else (all_routes, "routes"),
-        (len(fault_profile(faults.sets, get_domain(config.domain))), "fault sets"),
-        (1 if faults.at_random else len(faults.at), "fault times"),
-        (len(faults.detection), "detections"),
-        (len(faults.noise), "noise rates"),
-        (len(faults.observers), "observer counts"),
-        (config.repeats, "repeats"),
-    ]
-    if config.world is not None:
-        factors.append((len(config.world.rates) * len(config.world.sensing), "world settings"))
-    if config.physics is not None:
-        factors.append((len(config.physics.simulators), "simulators"))
-    if not filtered:
-        factors.append((variants, "strategy variants and weights"))
-    total = 1
-    for count, _ in factors:
-        total *= count
-    return total, " x ".join(f"{what} {count:,}" for count, what in factors)
+    simulators = Axis("simulator", _simulators(config), "simulators")
+    if any(s.mazes is not None for s in config.strategies):
+        joint = Tally("strategy variants and weights x their routes", runs)
+        return (joint, *situation, simulators)
+    variant = Tally("strategy variants and weights", variants)
+    return (Tally("routes", all_routes), *situation, variant, simulators)
 
 
 def expand(
@@ -139,13 +143,15 @@ def expand(
         maze_identity(entry, config.base_dir, config.source, index, max_cells)
         for index, entry in enumerate(config.mazes)
     ]
-    total, factors = _mission_factors(config)
+    domain = get_domain(config.domain)
+    situation_axes = _situation_axes(config, domain)
+    factors = _count_factors(config, situation_axes)
     check_limit(
-        total,
+        total(factors),
         max_missions,
         name="max_missions",
         what="missions",
-        detail=factors,
+        detail=describe(factors),
         source=config.source,
     )
     labels = [maze_label(identity) for identity in identities]
@@ -156,7 +162,6 @@ def expand(
         for weight in weights
     )
     plugins = plugin_identities(config)
-    domain = get_domain(config.domain)
     routes = tuple(
         (label, identity, route)
         for index, (entry, identity, label) in enumerate(
@@ -164,17 +169,11 @@ def expand(
         )
         for route in routes_of(entry, identity, config.seed, config.source, index, max_cells)
     )
-    fault_sets = fault_profile(config.faults.sets, domain)
-    fault_count = {text: len(domain.parse_faults(text)) for text in fault_sets}  # the robot's word
+    fault_sets = next(axis.values for axis in situation_axes if axis.name == "faults")
+    fault_count = {text: len(domain.parse_faults(str(text))) for text in fault_sets}  # robot's word
     axes = (
         Axis("route", routes, "routes"),
-        Axis("faults", fault_sets, "fault sets"),
-        Axis("fault_at", (RANDOM,) if config.faults.at_random else config.faults.at, "fault times"),
-        Axis("detection", tuple(config.faults.detection), "detections"),
-        Axis("noise", tuple(config.faults.noise), "noise rates"),
-        Axis("observers", tuple(config.faults.observers), "observer counts"),
-        Axis("replicate", tuple(range(config.repeats)), "repeats"),
-        Axis("world", _worlds(config), "world settings"),
+        *situation_axes,
         Axis("variant", variants, "strategy variants and weights"),
         Axis("simulator", _simulators(config), "simulators"),
     )
