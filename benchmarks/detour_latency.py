@@ -43,7 +43,8 @@ from collections.abc import Callable
 from typing import Any
 
 from _common import write_report
-from selfrepair.execution.executor import mission_context, run_mission
+from selfrepair.execution.context import mission_context
+from selfrepair.execution.executor import run_mission
 from selfrepair.execution.result import MissionSpec
 from selfrepair.execution.stepper import ActionView  # the queue view the stepper asks with
 from selfrepair.repair.strategies import RepairRequest, ReplacementRepairer, get_strategy, replan

@@ -184,7 +184,8 @@ def warm_hit(n: int) -> dict[str, float]:
     import selfrepair as sr
     from selfrepair.execution.compiled import kernel as k
     from selfrepair.execution.compiled.arrays import compiled_lookups
-    from selfrepair.execution.executor import mission_context, run_mission
+    from selfrepair.execution.context import mission_context
+    from selfrepair.execution.executor import run_mission
 
     robot = sr.get_domain("four-wheel")
     maze = sr.load_bundled("narrow-long")

@@ -49,7 +49,8 @@ from pathlib import Path
 from typing import Any
 
 from selfrepair.caching import clear_caches
-from selfrepair.execution.executor import mission_context, run_mission
+from selfrepair.execution.context import mission_context
+from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.result import MissionResult, MissionSpec
 from selfrepair.experiment.faultsets import PAPER_FAULT_SETS

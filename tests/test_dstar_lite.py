@@ -12,7 +12,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from selfrepair.execution.executor import mission_context, run_mission
+from selfrepair.execution.context import mission_context
+from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import FaultSchedule
 from selfrepair.execution.result import MissionSpec
 from selfrepair.geometry import Heading, Pose

@@ -13,7 +13,8 @@ from hypothesis import strategies as st
 
 from selfrepair.caching import cache_stats, clear_caches
 from selfrepair.errors import ProblemError
-from selfrepair.execution.executor import mission_context, run_mission
+from selfrepair.execution.context import mission_context
+from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import Detection, FaultSchedule
 from selfrepair.execution.result import MissionSpec, MissionStatus
 from selfrepair.execution.trace import parse_trace, replay, trace_lines

@@ -17,7 +17,8 @@ from extras import LPG
 from selfrepair.baselines import adapt
 from selfrepair.cli import main
 from selfrepair.errors import ProblemError
-from selfrepair.execution.executor import mission_context, run_mission
+from selfrepair.execution.context import mission_context
+from selfrepair.execution.executor import run_mission
 from selfrepair.execution.faults import FaultEvent, FaultSchedule
 from selfrepair.execution.metrics import mission_row
 from selfrepair.execution.result import MissionSpec, MissionStatus, StepSource

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from selfrepair.errors import ProblemError
-from selfrepair.execution.executor import mission_context
+from selfrepair.execution.context import mission_context
 from selfrepair.execution.moves import move_table
 from selfrepair.execution.result import MissionSpec, StepSource
 from selfrepair.execution.simulator import Outcome

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from extras import NUMBA
 from selfrepair.errors import ProblemError
-from selfrepair.execution.executor import mission_context
+from selfrepair.execution.context import mission_context
 from selfrepair.execution.result import MissionSpec
 from selfrepair.geometry import Heading, Pose
 from selfrepair.limits import MAX_LOOKUP_PATTERNS

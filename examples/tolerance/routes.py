@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from fractions import Fraction
 
-from selfrepair.execution.executor import mission_context
+from selfrepair.execution.context import mission_context
 from selfrepair.execution.result import MissionSpec
 from selfrepair.repair.strategies import StrategyOptions
 from selfrepair.repair.tolerance import PlanObjective, fault_model, plan_tolerance

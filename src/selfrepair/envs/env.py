@@ -71,7 +71,7 @@ from selfrepair.envs.settings import (
     observation_space,
 )
 from selfrepair.errors import ProblemError, choice
-from selfrepair.execution.executor import mission_context
+from selfrepair.execution.context import mission_context
 from selfrepair.execution.faults import Detection
 from selfrepair.execution.result import MissionSpec
 from selfrepair.execution.simulator import FAILED_ATTEMPT_TICKS, Outcome, Simulator, StepOutcome

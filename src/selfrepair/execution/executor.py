@@ -4,8 +4,9 @@
 returns a :class:`MissionResult` (status, every executed step, every repair, and the metrics).
 
 The strategy is started once per mission (its factory gets a
-:class:`~selfrepair.repair.strategies.MissionContext` built here: the planner, the free-cell test
-and the step cost on this mission's map). The initial plan, the strategy and the known faults go
+:class:`~selfrepair.repair.strategies.MissionContext` built by
+:func:`selfrepair.execution.context.mission_context`: the planner, the free-cell test and the step
+cost on this mission's map). The initial plan, the strategy and the known faults go
 into a :class:`~selfrepair.execution.stepper.Stepper`, which holds the queue, repairs and splices
 it, and records the steps and repairs. :func:`run_mission` runs it to the end; per step:
 
@@ -48,13 +49,14 @@ import time
 from array import array
 from collections import Counter
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from fractions import Fraction
 
 import numpy as np
 
 from selfrepair.caching import BoundedCache, CacheKind
 from selfrepair.errors import ProblemError
+from selfrepair.execution.context import mission_context, start_repairer
 from selfrepair.execution.faults import Detection
 from selfrepair.execution.result import (
     MissionResult,
@@ -66,141 +68,24 @@ from selfrepair.execution.result import (
 )
 from selfrepair.execution.simulator import Outcome, Simulator
 from selfrepair.execution.stepper import Stepper
-from selfrepair.geometry import Cell, FreeGrid, Heading, Pose
-from selfrepair.repair.replacement import FreeTest, table_reach
+from selfrepair.geometry import FreeGrid
 from selfrepair.repair.strategies import (
     ROBOT,
-    Belief,
-    MissionContext,
     Repair,
-    Repairer,
     RepairStatus,
     diagnosis_report,
     get_strategy,
     strategy_entry,
     uses_table,
 )
-from selfrepair.repair.tolerance import PlanObjective, fault_model
-from selfrepair.repair.tolerance_masks import tolerance_term
 from selfrepair.search.astar import PlanResult, PlanStatus
 from selfrepair.search.backend import use_numba
-from selfrepair.search.lattice import action_cost, cost_scale, plan, planning_actions
 from selfrepair.search.openmoves import open_moves
-from selfrepair.search.problem import PlanningProblem
-from selfrepair.search.term import StepTerm
 from selfrepair.status import mission_status
 from selfrepair.tables.model import SomeTable
-from selfrepair.world.maze import Maze, believed_maze, clearance_penalties
+from selfrepair.world.maze import Maze, clearance_penalties
 
-__all__ = ["mission_context", "run_mission", "start_repairer"]
-
-
-def mission_context(spec: MissionSpec, table: SomeTable | None) -> MissionContext:
-    """The :class:`~selfrepair.repair.strategies.MissionContext` of ``spec``: its planner, free
-    test and step cost on its map, with ``table`` (``None`` for strategies without one)."""
-    settings = spec.planner
-    weight = Fraction(settings.clearance_weight)
-    maze, domain, radius = spec.maze, spec.domain, settings.clearance_radius
-    heuristic, backend = settings.heuristic, settings.backend
-
-    objective = spec.objective
-    belief = Belief()
-
-    def plan_to(
-        start: Pose,
-        goal: Cell,
-        heading: Heading | None,
-        known: frozenset[object],
-        budget: int | None,
-    ) -> PlanResult:
-        blocked = belief.blocked
-        if blocked and goal in blocked and goal != start.cell:  # no way in while it is blocked
-            return PlanResult(PlanStatus.UNSOLVABLE, (), (), None, Fraction(0), 0, 0)
-        world = believed_maze(maze, blocked - {start.cell}) if blocked else maze
-        problem = PlanningProblem(world, start, goal, heading, known, weight, radius, domain)
-        if objective is not None and not known:  # the tolerant objective: before any fault
-            term = _objective_term(spec, objective, table)
-            found = plan(
-                replace(problem, step_term=term), heuristic=heuristic, max_expansions=budget,
-                backend=backend,
-            )  # fmt: skip
-            if found.status is not PlanStatus.UNSOLVABLE or objective.penalty is not None:
-                return found  # a hard objective without a tolerant plan: the plain optimum
-        return plan(problem, heuristic=heuristic, max_expansions=budget, backend=backend)
-
-    def cost(pose: Pose, action: object) -> Fraction:
-        return action_cost(
-            maze, pose, action, clearance_weight=weight, clearance_radius=radius, domain=domain
-        )
-
-    margin = max(2, table_reach(table)) if table is not None else 2
-    grid = maze.free_grid(margin)
-    return MissionContext(
-        domain=domain,
-        goal=spec.goal,
-        goal_heading=spec.goal_heading,
-        options=spec.options,
-        table=table,
-        plan=plan_to,
-        replan_budget=settings.max_expansions,
-        free=free_test(grid),
-        grid=grid,
-        cost=cost,
-        world=spec.maze,
-        cost_scale=cost_scale(spec.domain, weight),
-        start=spec.start,
-        clearance_weight=weight,
-        clearance_radius=radius,
-        backend=backend,
-        belief=belief,
-        behaviour=spec.behaviour,
-        observers=spec.observers if spec.schedule.detection is Detection.HIDDEN else (),
-    )
-
-
-def start_repairer(spec: MissionSpec, context: MissionContext) -> Repairer:
-    """The repairer of ``spec``'s strategy started for a mission (or a team robot's drive) on
-    ``context``; in a changing world a strategy that repairs blocked actions itself prepares for
-    them (``expect_blocked``) before the clock runs."""
-    repairer = get_strategy(spec.strategy)(context)
-    if spec.world and (expect := getattr(repairer, "expect_blocked", None)) is not None:
-        expect()
-    return repairer
-
-
-def _objective_term(
-    spec: MissionSpec, objective: PlanObjective, table: SomeTable | None
-) -> StepTerm:
-    """The tolerance term of ``objective`` for the mission's first plan: masks of the
-    replacement strategy with the mission's table (or the one its options name) and recursion."""
-    chosen = table if table is not None else spec.options.resolved_table()
-    options = spec.options
-    return tolerance_term(
-        chosen,
-        spec.maze.free_grid(max(2, table_reach(chosen))),
-        planning_actions(spec.domain, frozenset()),
-        fault_model(spec.domain, objective.k),
-        penalty=objective.penalty,
-        mode=options.recursion,
-        max_depth=options.max_depth,
-        max_patterns=options.max_lookup_patterns,
-    )
-
-
-def free_test(grid: FreeGrid) -> FreeTest:
-    """``grid.all_free`` as one closure over the buffer (no method call per cell)."""
-    data, stride, margin = grid.data, grid.stride, grid.margin
-    width, height = grid.width, grid.height
-
-    def all_free(cells: tuple[Cell, ...]) -> bool:
-        for x, y in cells:
-            if not (
-                0 <= x < width and 0 <= y < height and data[(y + margin) * stride + x + margin]
-            ):
-                return False
-        return True
-
-    return all_free
+__all__ = ["run_mission"]
 
 
 @dataclass(slots=True)

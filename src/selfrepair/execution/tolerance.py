@@ -8,7 +8,7 @@ from collections.abc import Sequence
 from fractions import Fraction
 
 from selfrepair.errors import ProblemError
-from selfrepair.execution.executor import mission_context
+from selfrepair.execution.context import mission_context
 from selfrepair.execution.result import MissionSpec
 from selfrepair.repair.strategies import StrategyName
 from selfrepair.repair.tolerance import FaultModel, PlanTolerance, plan_tolerance

@@ -2,7 +2,7 @@
 
 A drive starts (:func:`begin_drive`) the way a single-robot mission does: the robot's own
 :class:`~selfrepair.repair.strategies.MissionContext` is built by
-:func:`selfrepair.execution.executor.mission_context` on the *known* map, the lattice planner
+:func:`selfrepair.execution.context.mission_context` on the *known* map, the lattice planner
 (``context.plan``) plans with the robot's known wheel faults, and the robot's single-robot
 strategy is started from its factory (the strategy lifecycle); plan, strategy and known faults
 go into a :class:`~selfrepair.execution.stepper.Stepper`, the single-robot executor's own loop.
@@ -25,7 +25,7 @@ from collections.abc import Mapping
 from enum import StrEnum
 from types import MappingProxyType
 
-from selfrepair.execution.executor import mission_context, start_repairer
+from selfrepair.execution.context import mission_context, start_repairer
 from selfrepair.execution.result import MissionSpec, StepSource
 from selfrepair.execution.stepper import Stepper, splice
 from selfrepair.geometry import Cell
