@@ -44,13 +44,15 @@ from _common import write_report
 from selfrepair.execution.executor import run_mission
 from selfrepair.experiment.faultsets import PAPER_FAULT_SETS
 from selfrepair.experiment.physics import physics_mission_spec
+from selfrepair.geometry import Pose
 from selfrepair.physics.fidelity import PREDECESSORS, measure, measure_in_sequence
 from selfrepair.physics.model import ORIGIN
 from selfrepair.physics.simulator import PhysicsSimulator
-from selfrepair.physics.tracker import ContinuousPose
-from selfrepair.physics.world import PhysicsWorld
+from selfrepair.physics.tracker import ContinuousPose, wrap
+from selfrepair.physics.world import PhysicsWorld, lattice_pose
 from selfrepair.robots.four_wheel import parse_action
 from selfrepair.world.bundled import bundled_routes
+from selfrepair.world.maze import Maze
 
 
 def _offset(pose: ContinuousPose, cell: float) -> tuple[float, float]:
@@ -58,6 +60,30 @@ def _offset(pose: ContinuousPose, cell: float) -> tuple[float, float]:
     dx, dy = pose.x - round(pose.x), pose.y - round(pose.y)
     deg = math.degrees(pose.yaw)
     return math.hypot(dx, dy) * cell * 100, abs((deg + 45) % 90 - 45)
+
+
+def _signed(pose: ContinuousPose, lattice: Pose, cell: float) -> tuple[float, float, float]:
+    """``pose`` against the lattice pose ``lattice``: along and across its heading (cm, forward
+    and right positive) and in heading (degrees, clockwise positive)."""
+    t = lattice_pose(lattice)
+    dx, dy = pose.x - t.x, pose.y - t.y
+    c, s = math.cos(t.yaw), math.sin(t.yaw)
+    along, right = c * dx + s * dy, s * dx - c * dy
+    return along * cell * 100, right * cell * 100, -math.degrees(wrap(pose.yaw - t.yaw))
+
+
+def _surroundings(maze: Maze, pose: Pose) -> tuple[str, str]:
+    """Which of the front, right, back and left neighbours of ``pose`` are walls (``FRBL``
+    letters), and what that makes the cell: ``corridor`` (walls on two opposite sides: a
+    one-cell corridor), ``corner`` (two adjacent sides), ``dead end`` (three), ``side`` (one),
+    ``open`` (none)."""
+    fx, fy = pose.heading.vector
+    rx, ry = pose.heading.right
+    around = ((fx, fy, "F"), (rx, ry, "R"), (-fx, -fy, "B"), (-rx, -ry, "L"))
+    walls = "".join(n for dx, dy, n in around if not maze.is_free(pose.x + dx, pose.y + dy))
+    kinds = {0: "open", 1: "side", 3: "dead end", 4: "closed"}
+    kind = kinds.get(len(walls)) or ("corridor" if walls in ("FB", "RL") else "corner")
+    return walls, kind
 
 
 def mission_contacts(job: tuple[str, int, str, str, str]) -> dict[str, Any]:
@@ -80,8 +106,10 @@ def mission_contacts(job: tuple[str, int, str, str, str]) -> dict[str, Any]:
             if g1 in walls or g2 in walls:
                 touched.add(names[g2] if g1 in walls else names[g1])
         if touched and current[0] is not None:
-            index, start = current[0]
-            e = episodes.setdefault(index, {"updates": 0, "geoms": set(), "start": start})
+            index, start, lattice, speed = current[0]
+            e = episodes.setdefault(index, {
+                "updates": 0, "geoms": set(), "start": start, "lattice": lattice, "speed": speed,
+            })  # fmt: skip
             e["updates"] += 1
             e["geoms"] |= touched
 
@@ -96,7 +124,9 @@ def mission_contacts(job: tuple[str, int, str, str, str]) -> dict[str, Any]:
         advance = sim.advance
 
         def traced(action: object) -> Any:
-            current[0] = (len(sim.physics_steps), world.pose())
+            v = world.data.qvel
+            speed = (math.hypot(v[0], v[1]) * 100, math.degrees(v[5]))
+            current[0] = (len(sim.physics_steps), world.pose(), sim.pose, speed)
             return advance(action)
 
         sim.advance = traced  # type: ignore[method-assign]
@@ -111,10 +141,15 @@ def mission_contacts(job: tuple[str, int, str, str, str]) -> dict[str, Any]:
         if index >= len(steps):
             continue
         off, deg = _offset(e["start"], world.params.cell)
+        along, across, heading = _signed(e["start"], e["lattice"], world.params.cell)
+        walls, kind = _surroundings(spec.maze, e["lattice"])
         out.append({
             "action": str(steps[index].action), "updates": e["updates"],
+            "before": str(steps[index - 1].action) if index else "",
             "geoms": sorted(e["geoms"]), "start_offset_cm": off, "start_heading_deg": deg,
-            "end_error": steps[index].position_error,
+            "start_along_cm": along, "start_across_cm": across, "start_yaw_deg": heading,
+            "start_speed_cm_s": e["speed"][0], "start_yaw_rate_deg_s": e["speed"][1],
+            "walls": walls, "cell": kind, "end_error": steps[index].position_error,
         })  # fmt: skip
     return {
         "mission": list(job), "lattice_reached": lattice.reached, "reached": result.reached,
@@ -147,6 +182,17 @@ def missions(maze: str, strategy: str, robot: str, workers: int) -> dict[str, An
             f"  the robot's distance from its cell centre when they began: median "
             f"{statistics.median(offsets):.1f} cm, {sum(o > 4.8 for o in offsets)} over 4.8 cm"
         )
+    pairs = Counter(f"{e['before']} -> {e['action']}" for e in episodes)
+    print(f"  after which action: {dict(pairs.most_common(12))}")
+    print(f"  the robot's cell: {dict(Counter(e['cell'] for e in episodes).most_common())}")
+    for e in episodes:
+        print(
+            f"    {e['before']:>4} -> {e['action']}: {e['updates']:3d} updates, start "
+            f"along {e['start_along_cm']:+.1f} cm, across {e['start_across_cm']:+.1f} cm, "
+            f"yaw {e['start_yaw_deg']:+.1f} deg, speed {e['start_speed_cm_s']:.1f} cm/s "
+            f"{e['start_yaw_rate_deg_s']:+.0f} deg/s, walls {e['walls'] or '-'} "
+            f"({e['cell']}), end error {e['end_error']:.3f}, {','.join(e['geoms'])}"
+        )
     print("end error per action in these missions (cells): runs, median, max, over 0.05")
     table = {}
     for action, v in sorted(errors.items(), key=lambda kv: -max(kv[1])):
@@ -155,7 +201,10 @@ def missions(maze: str, strategy: str, robot: str, workers: int) -> dict[str, An
         table[action] = row
         print(f"  {action}: {row['runs']}, {row['median']:.3f}, {row['max']:.3f}, {row['over']}")
     return {"missions": len(done), "completed": len(completed), "without_contact": clean,
-            "episodes": episodes, "by_action": dict(by_action), "end_errors": table}  # fmt: skip
+            "episodes": episodes, "by_action": dict(by_action), "end_errors": table,
+            "runs": [{"mission": d["mission"], "reached": d["reached"],
+                      "contacts": sum(e["updates"] for e in d["episodes"]),
+                      "actions": [a for a, _ in d["steps"]]} for d in done]}  # fmt: skip
 
 
 def sequence() -> dict[str, Any]:

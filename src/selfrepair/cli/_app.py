@@ -18,10 +18,13 @@ type labels such as ``<bool>``, and the same text on a terminal and in a pipe.
 
 from __future__ import annotations
 
+import functools
+import inspect
 import json
 import math
 import sys
 from collections.abc import Callable, Sequence
+from dataclasses import MISSING, fields
 from fractions import Fraction
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, TypeVar
@@ -142,12 +145,67 @@ def command_group(*, help: str) -> typer.Typer:
     return _Typer(help=help, no_args_is_help=True)
 
 
-def option(flag: str, metavar: str, help: str, **more: Any) -> Any:
-    """The option ``flag METAVAR`` with ``help`` (every option that takes a value names both), for
-    ``name: Annotated[type, option(...)] = default``; ``more`` goes to :func:`typer.Option`
+def option(name: str, metavar: str, help: str, **more: Any) -> Any:
+    """The option ``name METAVAR`` with ``help`` (every option that takes a value names both), for
+    ``param: Annotated[type, option(...)] = default``; ``more`` goes to :func:`typer.Option`
     (``min``, ``max``, ``show_default``). A parameter typed ``list[...] | None`` makes it
-    repeatable. Flags without a value and options with a short name use :func:`typer.Option`."""
-    return typer.Option(flag, metavar=metavar, help=help, **more)
+    repeatable. An option with a short name too (``-o``) uses :func:`typer.Option` itself."""
+    return typer.Option(name, metavar=metavar, help=help, **more)
+
+
+def flag(name: str, help: str) -> Any:
+    """The on/off option ``name`` (``--json``, or a pair ``--warm-up/--no-warm-up``) with
+    ``help``, for ``param: Annotated[bool, flag(...)] = default``."""
+    return typer.Option(name, help=help)
+
+
+def option_group(group: type, parameter: str) -> Callable[[Callable[..., int]], Callable[..., int]]:
+    """A decorator that gives a command every field of the dataclass ``group`` as a parameter of
+    its own (Typer reads them from the signature), in place of its parameter ``parameter``, which
+    it is then called with: the fields' values gathered in one ``group``.
+
+    Each field is typed with an option alias (or an argument) and has the option's default; the
+    dataclass's module does not use ``from __future__ import annotations`` (Typer needs the field
+    types as objects). Use it below ``@app.command()``; the command's other parameters keep their
+    place around the group's."""
+    names = tuple(f.name for f in fields(group))
+    shared = [
+        inspect.Parameter(
+            f.name,
+            inspect.Parameter.KEYWORD_ONLY,
+            annotation=f.type,
+            default=inspect.Parameter.empty if f.default is MISSING else f.default,
+        )
+        for f in fields(group)
+    ]
+
+    def decorate(command: Callable[..., int]) -> Callable[..., int]:
+        own = inspect.signature(command).parameters
+        if parameter not in own or set(names) & set(own):
+            from selfrepair.errors import ProblemError
+
+            raise ProblemError(
+                f"{command.__name__}: expected a parameter {parameter!r} and none named as a "
+                f"field of {group.__name__}"
+            )
+        params: list[inspect.Parameter] = []
+        for param in own.values():
+            keyword = param.replace(kind=inspect.Parameter.KEYWORD_ONLY)
+            params.extend(shared if param.name == parameter else [keyword])
+
+        @functools.wraps(command)
+        def with_group(**values: Any) -> int:
+            gathered = group(**{name: values.pop(name) for name in names})
+            return command(**{parameter: gathered}, **values)
+
+        with_group.__signature__ = inspect.Signature(  # type: ignore[attr-defined]
+            params, return_annotation=int
+        )
+        with_group.__annotations__ = {p.name: p.annotation for p in params}
+        with_group.__annotations__["return"] = int
+        return with_group
+
+    return decorate
 
 
 app = _Typer(
@@ -171,10 +229,10 @@ FLOAT_DIGITS = 6
 def _global_options(
     plugin: Annotated[
         list[Path] | None,
-        typer.Option(
+        option(
             "--plugin",
-            metavar="FILE",
-            help="A Python file that registers a robot domain (repeatable); see docs/extending.md.",
+            "FILE",
+            "A Python file that registers a robot domain (repeatable); see docs/extending.md.",
         ),
     ] = None,
 ) -> None:

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
-from selfrepair.cli._app import option
+from selfrepair.cli._app import flag, option
 from selfrepair.errors import InputError
 
 if TYPE_CHECKING:
@@ -93,7 +93,7 @@ Backend = Annotated[
     str,
     option("--backend", "NAME", "Search backend: auto (numba when installed), numba or python."),
 ]
-Json = Annotated[bool, typer.Option("--json", help="Print JSON instead of text.")]
+Json = Annotated[bool, flag("--json", "Print JSON instead of text.")]
 MaxExpansions = Annotated[
     int | None, option("--max-expansions", "N", "Node budget of the search (expansions).")
 ]

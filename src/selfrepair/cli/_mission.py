@@ -12,19 +12,17 @@ Like the command modules, this module does not use ``from __future__ import anno
 Typer reads the field types as the parameter types of the commands.
 """
 
-import functools
-import inspect
-from dataclasses import MISSING, dataclass, fields
-from typing import TYPE_CHECKING, Annotated, Any
-
-import typer
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Annotated
 
 from selfrepair.cli._app import (
     MaxCells,
     MaxLookupPatterns,
     MaxTableBytes,
     MaxTableCandidates,
+    flag,
     option,
+    option_group,
 )
 from selfrepair.cli._inputs import (
     Backend,
@@ -35,7 +33,7 @@ from selfrepair.cli._inputs import (
     MazeArg,
     Start,
 )
-from selfrepair.errors import InputError, ProblemError
+from selfrepair.errors import InputError
 from selfrepair.limits import (
     DEFAULT_CONFIDENCE,
     DEFAULT_FAULT_PRIOR,
@@ -51,7 +49,7 @@ from selfrepair.limits import (
 )
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Sequence
+    from collections.abc import Sequence
 
 
 __all__ = ["MissionOptions", "check_choice", "mission_options"]
@@ -90,10 +88,7 @@ Noise = Annotated[
 ]
 BumpSwitch = Annotated[
     bool,
-    typer.Option(
-        "--bumps/--no-bumps",
-        help="Faults hidden: the robot senses when a motion stops at a wall.",
-    ),
+    flag("--bumps/--no-bumps", "Faults hidden: the robot senses when a motion stops at a wall."),
 ]
 ObserversOpt = Annotated[
     int,
@@ -213,25 +208,22 @@ LpgTimeLimit = Annotated[
 ]
 Rewrite = Annotated[
     bool,
-    typer.Option(
+    flag(
         "--rewrite",
-        help="Replacement: once a fault is known, substitute every faulty action of the rest of "
+        "Replacement: once a fault is known, substitute every faulty action of the rest of "
         "the plan that has a valid replacement (whole-plan rewriting); in a changing world, "
         "every later blocked window that has a detour too.",
     ),
 ]
 PlanWithFaults = Annotated[
-    bool,
-    typer.Option(
-        "--plan-with-faults", help="Make the initial plan knowing the faults sensed at step 0."
-    ),
+    bool, flag("--plan-with-faults", "Make the initial plan knowing the faults sensed at step 0.")
 ]
 Seed = Annotated[int, option("--seed", "S", "Seed of intermittent faults.", min=0)]
 WarmUp = Annotated[
     bool,
-    typer.Option(
+    flag(
         "--warm-up/--no-warm-up",
-        help="Run the mission once untimed first, so latencies leave out one-off costs "
+        "Run the mission once untimed first, so latencies leave out one-off costs "
         "(loading tables, first allocations).",
     ),
 ]
@@ -285,45 +277,10 @@ class MissionOptions:
     max_lookup_patterns: MaxLookupPatterns = MAX_LOOKUP_PATTERNS
 
 
-def mission_options(command: "Callable[..., int]") -> "Callable[..., int]":
-    """``command`` with every field of :class:`MissionOptions` as a parameter of its own (Typer
-    reads them from the signature), in place of its parameter ``mission``, which it is then
-    called with: the fields' values gathered in one :class:`MissionOptions`.
-
-    Use it below ``@app.command()``; the command's other parameters keep their place around
-    the mission options."""
-    own = inspect.signature(command).parameters
-    names = tuple(f.name for f in fields(MissionOptions))
-    if "mission" not in own or set(names) & set(own):
-        raise ProblemError(
-            f"{command.__name__}: expected a parameter 'mission' and none named as a field of "
-            "MissionOptions"
-        )
-    keyword = inspect.Parameter.KEYWORD_ONLY
-    shared = [
-        inspect.Parameter(
-            f.name,
-            keyword,
-            annotation=f.type,
-            default=inspect.Parameter.empty if f.default is MISSING else f.default,
-        )
-        for f in fields(MissionOptions)
-    ]
-    params: list[inspect.Parameter] = []
-    for param in own.values():
-        params.extend(shared if param.name == "mission" else [param.replace(kind=keyword)])
-
-    @functools.wraps(command)
-    def with_mission_options(**values: Any) -> int:
-        mission = MissionOptions(**{name: values.pop(name) for name in names})
-        return command(mission=mission, **values)
-
-    with_mission_options.__signature__ = inspect.Signature(  # type: ignore[attr-defined]
-        params, return_annotation=int
-    )
-    with_mission_options.__annotations__ = {p.name: p.annotation for p in params}
-    with_mission_options.__annotations__["return"] = int
-    return with_mission_options
+mission_options = option_group(MissionOptions, "mission")
+"""``command`` with every field of :class:`MissionOptions` as a parameter of its own, in place of
+its parameter ``mission``, which it is then called with (see
+:func:`~selfrepair.cli._app.option_group`). Use it below ``@app.command()``."""
 
 
 def check_choice(value: str, choices: "Sequence[str]", option: str) -> None:

@@ -15,6 +15,7 @@ from selfrepair.cli._app import (
     app,
     echo,
     echo_json,
+    flag,
     maze_app,
     option,
     text_table,
@@ -41,10 +42,7 @@ __all__ = ["actions", "maze_generate", "maze_list", "maze_routes", "maze_show", 
 def actions(
     as_json: Json = False,
     as_markdown: Annotated[
-        bool,
-        typer.Option(
-            "--markdown", help="Print the Markdown table of docs/robot.md (four-wheel only)."
-        ),
+        bool, flag("--markdown", "Print the Markdown table of docs/robot.md (four-wheel only).")
     ] = False,
     domain_name: Annotated[
         str | None,
@@ -163,8 +161,7 @@ def route_picture(maze: "Maze", routes: "Sequence[Route]") -> str:
 def maze_show(
     spec: MazeArg,
     routes: Annotated[
-        bool,
-        typer.Option("--routes", help="Overlay the routes (bundled ones, or FILE.routes)."),
+        bool, flag("--routes", "Overlay the routes (bundled ones, or FILE.routes).")
     ] = False,
     routes_file: Annotated[
         Path | None, option("--routes-file", "FILE", "Overlay the routes of this file.")

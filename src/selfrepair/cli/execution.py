@@ -13,8 +13,6 @@ planning time or a repair latency), and by default the mission runs once untimed
 
 from typing import TYPE_CHECKING, Annotated
 
-import typer
-
 from selfrepair.cli._app import (
     MaxTableBytes,
     MaxTableCandidates,
@@ -23,6 +21,7 @@ from selfrepair.cli._app import (
     console,
     echo,
     echo_json,
+    flag,
     number_json,
     option,
     table_app,
@@ -342,10 +341,7 @@ def _comparison_json(comparison: "Comparison", load_ns: int) -> JSONObject:
 
 
 _Partial = Annotated[
-    bool,
-    typer.Option(
-        "--partial", help="Accept a trace without a summary line (a run that was cut short)."
-    ),
+    bool, flag("--partial", "Accept a trace without a summary line (a run that was cut short).")
 ]
 
 

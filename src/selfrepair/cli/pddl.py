@@ -12,7 +12,7 @@ from typing import Annotated
 
 import typer
 
-from selfrepair.cli._app import app, echo, limit_option, option
+from selfrepair.cli._app import app, echo, flag, limit_option, option
 from selfrepair.cli._inputs import (
     DomainOpt,
     Faults,
@@ -49,7 +49,7 @@ def pddl_command(
         limit_option("--max-cells", "Largest maze (width x height) to export (raise with care)."),
     ] = PDDL_CELLS_DEFAULT,
     with_plan: Annotated[
-        bool, typer.Option("--plan", help="Also write the lattice planner's plan as plan.pddl.")
+        bool, flag("--plan", "Also write the lattice planner's plan as plan.pddl.")
     ] = False,
     domain_name: DomainOpt = "four-wheel",
 ) -> int:

@@ -14,9 +14,7 @@ install (exit 2).
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
-import typer
-
-from selfrepair.cli._app import app, command_group, echo, echo_json, number_json, option
+from selfrepair.cli._app import app, command_group, echo, echo_json, flag, number_json, option
 from selfrepair.cli._inputs import Json, TraceOut
 from selfrepair.cli._mission import MissionOptions, mission_options
 from selfrepair.cli._spec import mission_spec
@@ -40,25 +38,19 @@ physics_app = command_group(help="The four-wheel robot in MuJoCo: model fidelity
 app.add_typer(physics_app, name="physics")
 
 OpenLoop = Annotated[
-    bool,
-    typer.Option("--open-loop", help="Run wheel speeds open loop instead of tracking the lattice."),
+    bool, flag("--open-loop", "Run wheel speeds open loop instead of tracking the lattice.")
 ]
 
 
 @physics_app.command("fidelity")
 def physics_fidelity(
     as_json: Json = False,
-    nominal: Annotated[
-        bool, typer.Option("--nominal", help="Only the fault-free robot's 81 rows.")
-    ] = False,
+    nominal: Annotated[bool, flag("--nominal", "Only the fault-free robot's 81 rows.")] = False,
     write_domain: Annotated[
         Path | None, option("--write-domain", "FILE", "Write the identified domain here.")
     ] = None,
     in_sequence: Annotated[
-        bool,
-        typer.Option(
-            "--in-sequence", help="Also run every nominal action after each of a few others."
-        ),
+        bool, flag("--in-sequence", "Also run every nominal action after each of a few others.")
     ] = False,
 ) -> int:
     """Run every action in physics and compare its end pose with the lattice's.

@@ -16,6 +16,7 @@ from selfrepair.cli._app import (
     console,
     echo,
     echo_json,
+    flag,
     option,
     table_app,
 )
@@ -125,10 +126,8 @@ def table_coverage(
             "--maze", "MAZE", "Maze for wall coverage (repeatable; default: every bundled maze)."
         ),
     ] = None,
-    no_walls: Annotated[bool, typer.Option("--no-walls", help="Skip wall coverage.")] = False,
-    per_fault: Annotated[
-        bool, typer.Option("--per-fault", help="Also print one row per fault set.")
-    ] = False,
+    no_walls: Annotated[bool, flag("--no-walls", "Skip wall coverage.")] = False,
+    per_fault: Annotated[bool, flag("--per-fault", "Also print one row per fault set.")] = False,
     json_out: Annotated[
         Path | None, option("--json-out", "FILE", "Write the full report as JSON.")
     ] = None,

@@ -7,6 +7,7 @@ trace re-simulates with no conflict and no teleport, 1 otherwise; bad input is e
 are imported inside the commands, so ``selfrepair --help`` stays cheap.
 """
 
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -24,6 +25,7 @@ from selfrepair.cli._app import (
     echo,
     echo_json,
     option,
+    option_group,
 )
 from selfrepair.cli._inputs import Backend, Json, TraceOut, find_input
 from selfrepair.cli._mission import Events, SensingOpt, check_choice
@@ -36,10 +38,11 @@ from selfrepair.limits import (
 )
 
 if TYPE_CHECKING:
+    from selfrepair.team.model import TeamScenario
     from selfrepair.team.result import TeamResult
     from selfrepair.team.summary import TeamSummary
 
-__all__ = ["print_team_summary", "team_app"]
+__all__ = ["ScenarioLimits", "print_team_summary", "team_app"]
 
 team_app = command_group(help="Team missions: several robots that repair each other.")
 app.add_typer(team_app, name="team")
@@ -110,6 +113,28 @@ ScenarioArg = Annotated[
 """The scenario argument of ``team run`` and ``team compare``: one declaration, one help text."""
 
 
+@dataclass(frozen=True, slots=True)
+class ScenarioLimits:
+    """The limits of reading a scenario, one flag each, as ``team run`` and ``team compare``
+    take them (:class:`selfrepair.team.randomteam.Limits` in the library)."""
+
+    max_robots: MaxRobots = MAX_ROBOTS
+    max_tasks: MaxTasks = MAX_TASKS
+    max_cells: MaxCells = MAX_CELLS
+    max_file_bytes: MaxFileBytes = MAX_FILE_BYTES
+
+    def read(self, scenario: str) -> "TeamScenario":
+        """The bundled scenario or scenario file ``scenario``, read within these limits."""
+        from selfrepair.team.scenario import Limits, resolve_scenario
+
+        limits = Limits(self.max_robots, self.max_tasks, self.max_cells, self.max_file_bytes)
+        return resolve_scenario(scenario, limits=limits)
+
+
+scenario_limits = option_group(ScenarioLimits, "limits")
+"""A command with the four limit options in place of its parameter ``limits``."""
+
+
 def _options(
     strategy: str, table: str, max_ticks: int | None, backend: str, robot_table: str | None = None
 ) -> Any:
@@ -125,7 +150,9 @@ def _options(
 
 
 @team_app.command("run")
+@scenario_limits
 def team_run(
+    *,
     scenario: ScenarioArg,
     strategy: Annotated[str, option("--strategy", "NAME", _STRATEGY_HELP)] = "team-replacement",
     table: Annotated[
@@ -150,10 +177,7 @@ def team_run(
     events: Events = "",
     sensing: SensingOpt = "",
     sensing_range: TeamSensingRange = None,
-    max_robots: MaxRobots = MAX_ROBOTS,
-    max_tasks: MaxTasks = MAX_TASKS,
-    max_cells: MaxCells = MAX_CELLS,
-    max_file_bytes: MaxFileBytes = MAX_FILE_BYTES,
+    limits: ScenarioLimits,
 ) -> int:
     """Run one team mission.
 
@@ -163,12 +187,9 @@ def team_run(
     """
     from selfrepair.team.engine import run_team
     from selfrepair.team.metrics import team_row
-    from selfrepair.team.scenario import Limits, resolve_scenario
     from selfrepair.team.trace import write_team_trace
 
-    parsed = resolve_scenario(
-        scenario, limits=Limits(max_robots, max_tasks, max_cells, max_file_bytes)
-    )
+    parsed = limits.read(scenario)
     if detect is not None:
         from dataclasses import replace
 
@@ -227,17 +248,16 @@ def _print_result(result: "TeamResult", baseline: Any) -> None:
 
 
 @team_app.command("compare")
+@scenario_limits
 def team_compare(
+    *,
     scenario: ScenarioArg,
     repeats: Annotated[
         int, option("--repeats", "N", "Runs per strategy; latencies are medians.", min=1, max=1000)
     ] = 5,
     backend: Backend = "auto",
     robot_table: RobotTable = None,
-    max_robots: MaxRobots = MAX_ROBOTS,
-    max_tasks: MaxTasks = MAX_TASKS,
-    max_cells: MaxCells = MAX_CELLS,
-    max_file_bytes: MaxFileBytes = MAX_FILE_BYTES,
+    limits: ScenarioLimits,
 ) -> int:
     """Run a scenario with every team strategy, side by side.
 
@@ -251,11 +271,8 @@ def team_compare(
     from selfrepair.repair.strategies import StrategyName
     from selfrepair.team.engine import run_team
     from selfrepair.team.model import TeamTableName
-    from selfrepair.team.scenario import Limits, resolve_scenario
 
-    parsed = resolve_scenario(
-        scenario, limits=Limits(max_robots, max_tasks, max_cells, max_file_bytes)
-    )
+    parsed = limits.read(scenario)
     variants = [
         (StrategyName.TEAM_REPLACEMENT, TeamTableName.HANDWRITTEN),
         (StrategyName.TEAM_REPLACEMENT, TeamTableName.GENERATED),

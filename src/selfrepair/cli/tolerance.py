@@ -9,9 +9,16 @@ plan is tolerant), 1 otherwise or when no plan exists; bad input is exit 2.
 
 from typing import TYPE_CHECKING, Annotated, Any
 
-import typer
-
-from selfrepair.cli._app import MaxCells, app, echo, echo_json, exact_json, number_json, option
+from selfrepair.cli._app import (
+    MaxCells,
+    app,
+    echo,
+    echo_json,
+    exact_json,
+    flag,
+    number_json,
+    option,
+)
 from selfrepair.cli._inputs import (
     Backend,
     ClearanceWeight,
@@ -134,7 +141,7 @@ def tolerance_command(
     clearance_weight: ClearanceWeight = "0",
     backend: Backend = "auto",
     per_step: Annotated[
-        bool, typer.Option("--per-step/--summary", help="List every step (default) or not.")
+        bool, flag("--per-step/--summary", "List every step (default) or not.")
     ] = True,
     as_json: Json = False,
     max_cells: MaxCells = MAX_CELLS,
