@@ -66,6 +66,33 @@ def test_the_bundled_design_is_the_issue_s() -> None:
     assert count_missions(quick) == 16 * 12 * 3 * 2 * 5
 
 
+def test_the_bundled_wheel_variant_judges_g3() -> None:
+    """`experiment diagnosis-wheels`: diagnosis-quick's noisy situations, active diagnosis alone
+    or watched with the wheel view; its alone missions are diagnosis-quick's (same keys), and its
+    rows pair up for G3 (and only the findings its design can judge apply)."""
+    config = load_config(resolve_experiment("diagnosis-wheels"))
+    faults = config.faults
+    assert faults.observer_view is ObserverView.WHEELS and faults.observers == (0, 2)
+    assert faults.noise == (0.01, 0.05) and faults.sets == "paper"
+    assert [s.name for s in config.strategies] == ["active-diagnosis"]
+    missions = expand(config)
+    assert len(missions) == count_missions(config) == 16 * 12 * 2 * 2 == 768
+    quick = {m.key for m in expand(load_config(resolve_experiment("diagnosis-quick")))}
+    alone = {m.key for m in missions if "observers" not in m.settings}
+    assert len(alone) == 384 and alone <= quick  # the view enters only a watched robot's key
+    rows = []
+    for mission in missions:
+        s = mission.settings
+        watched = "observers" in s
+        rows.append({**dict(mission.labels), "observation_noise": s["noise"],
+                     "observers": 2 if watched else 0, "surprise_step": 1,
+                     "isolation_actions": 1 if watched else 3, "isolated_right": 1,
+                     "reached": 1, "ticks_float": 10.0, "bumps": 0})  # fmt: skip
+    found = _by_number(rows)
+    assert found["G3"].outcome is Outcome.HELD and len(found["G3"].lines) == 1 + 2
+    assert found["G4"].applies and not found["G1"].applies and not found["G2"].applies
+
+
 def test_observers_enter_the_missions_only_when_present() -> None:
     missions = expand(parse_config(SMALL))
     assert len(missions) == 3 * 2 * 2 * 4

@@ -3,27 +3,42 @@ which way (the effective command, ``Domain.effective``), each wheel misread at i
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from selfrepair.diagnosis import FaultBelief, Observation, ProbePlanner, fault_model
+from selfrepair.diagnosis import (
+    FaultBelief,
+    Observation,
+    ObservationModel,
+    ProbePlanner,
+    fault_model,
+)
 from selfrepair.diagnosis.cooperative import (
     Observer,
     ObserverView,
     SensingRange,
     observer_streams,
+    observer_team,
     team_observations,
 )
 from selfrepair.diagnosis.observation import actuators_of, read_actuators
 from selfrepair.errors import ProblemError
+from selfrepair.execution.executor import mission_context, run_mission, start_repairer
+from selfrepair.execution.faults import Detection, FaultSchedule
+from selfrepair.execution.metrics import mission_row
+from selfrepair.execution.result import MissionSpec
 from selfrepair.geometry import Heading, Pose
 from selfrepair.robots.four_wheel import FOUR_WHEEL, parse_action
 from selfrepair.robots.three_action import THREE_ACTION
+from selfrepair.world.bundled import bundled_routes, load_bundled
 from selfrepair.world.maze import parse_maze
 
 ROOM = parse_maze("\n".join(["." * 11] * 11) + "\n", name="room")
 WHEELS = ObserverView.WHEELS
+HIDDEN = Detection.HIDDEN
 
 
 def _outcome(start: Pose, action: object, faults: frozenset[object]) -> tuple[Pose, object]:
@@ -157,3 +172,53 @@ def test_the_probe_planner_counts_wheel_readings() -> None:
     assert planner.view(pose).label[a, fl] != planner.view(pose).label[a, rl]
     c = model.index[chosen]
     assert planner.view(pose).label[c, fl] != planner.view(pose).label[c, rl]
+
+
+def _watched_repairer(noise: float) -> Any:
+    spec = MissionSpec(
+        ROOM, Pose(5, 5, Heading.N), (5, 1), strategy="active-diagnosis", seed=0,
+        schedule=FaultSchedule.permanent(FOUR_WHEEL.parse_faults("FR:B"), detection=HIDDEN),
+        observation=ObservationModel(noise), observers=observer_team(2, noise, 3, WHEELS),
+    )  # fmt: skip
+    return start_repairer(spec, mission_context(spec, spec.options.resolved_table()))
+
+
+def test_a_wheel_the_teammates_see_stalled_is_a_surprise_without_going_astray() -> None:
+    # FBFB under FR:B performs FSFB, the same turn on the spot: the pose reading is as commanded
+    start, turn = Pose(5, 5, Heading.N), parse_action("FBFB")
+    end = FOUR_WHEEL.apply(start, turn)
+    assert end == FOUR_WHEEL.apply(start, parse_action("FSFB"))
+    own = Observation(0, turn, start, end, False, False, 0.01)
+    stalled = Observation(0, turn, start, end, None, False, 0.01, "t1", parse_action("FSFB"))
+    right = stalled._replace(source="t2", wheels=turn)
+    repairer = _watched_repairer(0.01)
+    repairer.observe(own, False, True, (stalled, right))  # one misread wheel: not yet evidence
+    assert repairer.surprise_step is None and not repairer.assumption().known
+    repairer = _watched_repairer(0.01)
+    assert repairer.observe(own, False, True, (stalled, stalled._replace(source="t2")))
+    assert repairer.surprise_step == 0  # confirmed: diagnosis starts, a probe comes next
+    assert FOUR_WHEEL.parse_faults("FR:B") <= repairer.assumption().known
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.01])
+def test_a_team_with_the_wheel_view_starts_diagnosing_at_the_turn_that_shows_the_fault(
+    noise: float,
+) -> None:
+    # narrow-short's first route under FR:B,RL:S: its 7th command, FBFB, turns as commanded
+    # (FSFB), so the robot alone is surprised only at the 14th; its watched twin was never
+    # surprised, and never isolated, before the wheel readings could start diagnosis
+    route = bundled_routes("narrow-short")[0]
+    rows = {}
+    for count in (0, 2):
+        spec = MissionSpec(
+            load_bundled("narrow-short"), route.start, route.goal, strategy="active-diagnosis",
+            schedule=FaultSchedule.permanent(FOUR_WHEEL.parse_faults("FR:B,RL:S"),
+                                             detection=HIDDEN),
+            seed=3, observation=ObservationModel(noise),
+            observers=observer_team(count, noise, 3, WHEELS) if count else (),
+        )  # fmt: skip
+        rows[count] = mission_row(run_mission(spec))
+    assert rows[0]["surprise_step"] == 13 and rows[2]["surprise_step"] == 6
+    for row in rows.values():
+        assert row["reached"] == 1 and row["isolated_right"] == 1
+    assert rows[2]["isolation_actions"] < rows[0]["isolation_actions"]

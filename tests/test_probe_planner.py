@@ -202,3 +202,25 @@ def test_two_watching_teammates_confirm_in_the_same_command() -> None:
     alone = _noisy_isolation("FL:F", "FFFF", counting=True, watched=False)
     team = _noisy_isolation("FL:F", "FFFF", counting=True, watched=True)
     assert (alone, team) == (3, 2)
+
+
+def test_a_noisy_plan_is_made_for_the_classes_every_reading_agrees_with() -> None:
+    # narrow-long's second route under FL:F at 1% noise, the robot alone (a mission of `experiment
+    # diagnosis-wheels`): after the surprise the first probe's reading contradicts FR:F once;
+    # planning as if FR:F might still be the truth made the next probe hedge for it (4 commands
+    # to isolate); as inside the plan, it is a rival to contradict again: 3
+    from selfrepair.cli.experiments import resolve_experiment
+    from selfrepair.execution.executor import run_mission
+    from selfrepair.execution.metrics import mission_row
+    from selfrepair.experiment.config import load_config
+    from selfrepair.experiment.missions import expand, to_spec
+
+    (mission,) = [
+        m for m in expand(load_config(resolve_experiment("diagnosis-wheels")))
+        if dict(m.labels)["maze"] == "narrow-long" and dict(m.labels)["route"] == "r2"
+        and dict(m.labels)["faults"] == "FL:F" and m.settings["noise"] == 0.01
+        and "observers" not in m.settings
+    ]  # fmt: skip
+    row = mission_row(run_mission(to_spec(mission)))
+    assert row["surprise_step"] == 2 and row["isolated_right"] == 1
+    assert row["isolation_actions"] == 3

@@ -336,26 +336,29 @@ class ProbePlanner:
         classes = np.asarray(model.classes_in(alive), dtype=np.intp)
         if len(classes) < 2:
             return None
-        mass = belief.class_posterior()[classes]
-        if float(mass.sum()) <= 0:
-            mass = np.ones(len(classes))
-        sizes = [min(len(model.sets[h]) for h in model.members(model.classes[c])) for c in classes]
-        fewest = min(sizes)
-        primary = np.zeros(len(model.classes))
-        primary[classes[np.asarray(sizes) == fewest]] = 1.0
         misses = np.zeros(len(classes), dtype=np.int64)
         if self.noise > 0 or any(o.noise > 0 for o, _ in watchers):
             seen = belief.misses
             for j, c in enumerate(classes):
                 misses[j] = round(min(seen[h] for h in model.members(model.classes[c] & alive)))
             misses = np.minimum(misses - misses.min(), CONFIRMATIONS - 1)
+        # the candidates: the classes every reading so far agrees with, as inside the plan (a
+        # class a reading contradicted stays a rival to contradict again, not a truth to plan for)
+        cand = misses == 0
+        mass = np.where(cand, belief.class_posterior()[classes], 0.0)
+        if float(mass.sum()) <= 0:
+            mass = cand.astype(float)
+        sizes = np.asarray(
+            [min(len(model.sets[h]) for h in model.members(model.classes[c])) for c in classes]
+        )
+        primary = np.zeros(len(model.classes))
+        primary[classes[cand & (sizes == sizes[cand].min())]] = 1.0
         watchers = tuple(watchers)
         if watchers != self._watchers:
             self._watchers = watchers
             self._evidence.clear()
             self._views.clear()
         self._memo.clear()  # the weights and the parsimonious classes change with the belief
-        cand = np.ones(len(classes), dtype=bool)
         found = self._search(
             classes, misses, cand, mass / mass.sum(), primary, pose, depth, root=True
         )

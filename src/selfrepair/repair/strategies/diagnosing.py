@@ -48,6 +48,7 @@ from selfrepair.diagnosis import (
     fault_model,
     isolating_probe,
 )
+from selfrepair.diagnosis.belief import CONFIRMATIONS
 from selfrepair.diagnosis.cooperative import following
 from selfrepair.geometry import Pose
 from selfrepair.repair.strategies.names import RepairSource, StrategyName
@@ -177,8 +178,9 @@ class DiagnosingRepairer:
             noisy = noisy or reading.noise > 0
         if noisy:
             self._margin = self._error
+        calm = self.surprise_step is None
         self._record(observation, deviated or not moved)
-        if belief.alive != before or noisy:
+        if belief.alive != before or noisy or (calm and self.surprise_step is not None):
             self._relaxed = False
             self._known = self._assume()
         rejoin = False
@@ -214,9 +216,9 @@ class DiagnosingRepairer:
             and self._ambiguous()
         )
 
-    def _record(self, observation: Observation, surprising: bool) -> None:
+    def _record(self, observation: Observation, deviated: bool) -> None:
         if self.surprise_step is None:
-            if not surprising:
+            if not (deviated or self._fault_ruled_out()):
                 return
             self.surprise_step = observation.step
         elif self.isolation_actions is not None:
@@ -227,8 +229,28 @@ class DiagnosingRepairer:
         if found is not None:
             self.isolated_class, self.isolation_actions = found, self._after
 
+    def _fault_ruled_out(self) -> bool:
+        """Whether the readings rule out the fault-free class (class 0): with exact readings,
+        no hypothesis of it is still possible; with noisy ones, it is no longer in the running
+        (:meth:`FaultBelief.contenders`: neither credible nor within
+        :data:`~selfrepair.diagnosis.belief.CONFIRMATIONS` contradictions of the best). The
+        robot may learn of a fault without going astray: a teammate with the wheel view sees a
+        wheel that did not do what it was told, where the motion ends where it should."""
+        healthy = self.model.classes[0] & self.belief.alive
+        if not healthy:
+            return True
+        if self._margin == 0:
+            return False
+        misses = self.belief.misses
+        if min(misses[i] for i in self.model.members(healthy)) < CONFIRMATIONS:
+            return False  # within CONFIRMATIONS of any best: in the running (a shortcut)
+        return not self._contenders() & healthy
+
     def _assume(self) -> frozenset[object]:
-        """The faults assumed now (see the module docstring)."""
+        """The faults assumed now (see the module docstring): none before the first surprise
+        (one noisy reading that a fault explains better is not yet evidence of one)."""
+        if self.surprise_step is None:
+            return frozenset()
         faults = self.belief.most_probable()[1]
         if not faults or self._policy is Policy.MOST_PROBABLE or self._relaxed:
             return faults
